@@ -1,0 +1,57 @@
+"""Cost of forward sensitivities for the six LuGre parameters against one plain run.
+
+Run: python benchmarks/bench_sensitivities.py   (installed package or PYTHONPATH=src)
+Prints median wall times (compilation excluded) and the ratio, for the valve-driven and
+the pressure-driven vgt-paper slow cycle, and for central finite differences (the
+alternative: 2 × 6 extra runs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+import warnings
+
+import pneumact as pa
+from pneumact.simulation.sensitivity import simulate_sensitivities
+
+PARAMETERS = ["sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs"]
+
+
+def median_time(fn, repeats: int) -> float:
+    fn()  # warm-up (compilation or cache load)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args()
+    warnings.simplefilter("ignore", pa.PassivityWarning)
+    params = pa.load_params("vgt-paper")
+    cases = [
+        ("valve-driven (CommandValve, CommandCycle 20 s)",
+         pa.Actuator(params, valve=pa.CommandValve()), pa.CommandCycle(period=20.0)),
+        ("pressure-driven (PressureSource, PressureCycle 20 s)",
+         pa.Actuator(params), pa.PressureCycle(period=20.0)),
+    ]
+    solver = pa.Rodas4(rtol=1e-6)
+    print(f"{'case':55s} {'plain [ms]':>11s} {'sens 6p [ms]':>13s} {'ratio':>6s} "
+          f"{'FD 12 runs/plain':>17s}")
+    for label, actuator, experiment in cases:
+        plain = median_time(lambda: pa.simulate(actuator, experiment, solver), args.repeats)
+        sens = median_time(
+            lambda: simulate_sensitivities(actuator, experiment, PARAMETERS, solver),
+            args.repeats)
+        print(f"{label:55s} {plain * 1e3:11.2f} {sens * 1e3:13.2f} {sens / plain:6.2f} "
+              f"{12.0:17.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,104 @@
+"""Experiments on the actuator: what is applied (pressure, command or set-point) and for
+how long. An experiment is data; the actuator's valve says what its signal means."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ExperimentError
+from .signals import PiecewiseLinear, Signal, Triangle
+
+QUANTITIES = {
+    "pressure": "Pa", "command": "1", "force": "N", "velocity": "m/s", "position": "m",
+    "spring": "m",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Experiment:
+    """A drive signal of a named quantity applied from ``t_start`` to ``t_end``.
+
+    ``n_points`` output samples are written on a uniform grid unless ``t_eval`` is
+    given to ``simulate``.
+    """
+
+    drive: Signal
+    quantity: str
+    t_end: float
+    t_start: float = 0.0
+    n_points: int = 2001
+    name: str = "experiment"
+    extra_breakpoints: tuple[float, ...] = field(default=())
+
+    def __post_init__(self):
+        if self.quantity not in QUANTITIES:
+            raise ExperimentError(
+                f"{self.name}: quantity = {self.quantity!r}; allowed: {', '.join(QUANTITIES)}"
+            )
+        if not (np.isfinite(self.t_end) and self.t_end > self.t_start):
+            raise ExperimentError(
+                f"{self.name}: t_end = {self.t_end} s must be finite and > t_start = "
+                f"{self.t_start} s"
+            )
+        if int(self.n_points) < 2:
+            raise ExperimentError(f"{self.name}: n_points = {self.n_points}, must be >= 2")
+
+    @property
+    def unit(self) -> str:
+        return QUANTITIES[self.quantity]
+
+    def breakpoints(self) -> np.ndarray:
+        """Times the integrator must stop at, within [t_start, t_end]."""
+        bp = np.concatenate([self.drive.breakpoints(), self.extra_breakpoints,
+                             [self.t_start, self.t_end]])
+        bp = np.unique(bp)
+        return bp[(bp >= self.t_start) & (bp <= self.t_end)]
+
+    def output_times(self) -> np.ndarray:
+        return np.linspace(self.t_start, self.t_end, int(self.n_points))
+
+    def with_duration(self, t_end: float) -> Experiment:
+        """The same input over another duration."""
+        return Experiment(self.drive, self.quantity, t_end, self.t_start, self.n_points,
+                          self.name, self.extra_breakpoints)
+
+
+def PressureCycle(high: float = 100e3, low: float = 20e3, period: float = 20.0,
+                  cycles: int = 1, n_points: int = 4001) -> Experiment:
+    """Slow triangular pressure cycle, ``high`` → ``low`` → ``high`` [Pa absolute]: the
+    quasi-static hysteresis test of the paper's Figs. 5-6."""
+    if not (low > 0 and high > low):
+        raise ExperimentError(f"PressureCycle: need 0 < low < high, got low = {low} Pa, "
+                              f"high = {high} Pa")
+    return Experiment(Triangle(high, low, period, cycles), "pressure", period * cycles,
+                      n_points=n_points, name="PressureCycle")
+
+
+def CommandCycle(low: float = 0.0, high: float = 1.0, period: float = 20.0, cycles: int = 1,
+                 n_points: int = 4001) -> Experiment:
+    """Slow triangular valve command cycle ``low`` → ``high`` → ``low`` (u ∈ [0, 1])."""
+    if not (0.0 <= low < high <= 1.0):
+        raise ExperimentError(f"CommandCycle: need 0 <= low < high <= 1, got {low}, {high}")
+    return Experiment(Triangle(low, high, period, cycles), "command", period * cycles,
+                      n_points=n_points, name="CommandCycle")
+
+
+def from_samples(time, values, quantity: str, name: str = "measured input",
+                 n_points: int | None = None) -> Experiment:
+    """A measured input (e.g. a recorded pressure), linear between samples."""
+    time = np.asarray(time, dtype=float)
+    sig = PiecewiseLinear(time, values)
+    n = int(n_points) if n_points else int(min(max(time.size, 2), 20001))
+    return Experiment(sig, quantity, float(time[-1]), float(time[0]), n, name)
+
+
+def from_csv(path: str | Path) -> Experiment:
+    """An input signal read from a CSV (``time [s]`` and one of pressure / command / ...)."""
+    from ..io import read_signal_csv
+
+    name, time, values = read_signal_csv(path)
+    quantity = "pressure" if name == "setpoint" else name
+    return from_samples(time, values, quantity, name=f"{Path(path).name}")

@@ -1,0 +1,21 @@
+"""Models: friction laws, chamber and valves, the assembled actuator and the test rig."""
+
+from .actuator import Actuator
+from .friction import BoucWen, CoulombViscous, Dahl, FrictionModel, LuGre, StribeckMap
+from .pneumatics import (
+    Adiabatic,
+    ChamberLaw,
+    Isothermal,
+    Polytropic,
+    flow_function_values,
+    orifice_mass_flow,
+)
+from .rig import FrictionRig
+from .valves import CommandValve, PressureRegulator, PressureSource, Valve
+
+__all__ = [
+    "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve", "CoulombViscous",
+    "Dahl", "FrictionModel", "FrictionRig", "Isothermal", "LuGre", "Polytropic",
+    "PressureRegulator", "PressureSource", "StribeckMap", "Valve", "flow_function_values",
+    "orifice_mass_flow",
+]

@@ -1,0 +1,295 @@
+"""Plots of results and records, in display units (kPa, mm, mm/s, µm, N).
+
+Files and results stay SI; only the axes convert. Functions return the matplotlib
+Axes or Figure and never call ``plt.show()``. Importing this module does not choose a
+matplotlib backend (the CLI selects "Agg" itself).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pneumact.errors import DataError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "DISPLAY_UNITS",
+    "FRICTION_TEST_KINDS",
+    "plot_friction_test",
+    "plot_hysteresis",
+    "plot_time_series",
+    "save_figure",
+]
+
+#: SI unit -> (display unit, factor applied to SI values).
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {
+    "Pa": ("kPa", 1e-3),
+    "m": ("mm", 1e3),
+    "m/s": ("mm/s", 1e3),
+    "N": ("N", 1.0),
+    "s": ("s", 1.0),
+    "1": ("1", 1.0),
+}
+#: Signals shown in finer units than their SI unit suggests.
+_SIGNAL_DISPLAY: dict[str, tuple[str, float]] = {
+    "bristle": ("µm", 1e6),
+    "bristle_rate": ("µm/s", 1e6),
+}
+_DEFAULT_SIGNALS = ("pressure", "position", "velocity", "friction")
+FRICTION_TEST_KINDS = ("steady-state", "presliding", "frictional-lag", "break-away",
+                       "stick-slip")
+PNG_DPI = 120
+
+
+# --------------------------------------------------------------------------- access
+
+
+def _get(source: Any, name: str) -> np.ndarray:
+    """Signal ``name`` (or "time") of a Result, Record, DataFrame or mapping, as floats."""
+    if hasattr(source, "result") and hasattr(source, "kind"):  # a FrictionTestResult
+        source = source.result
+    try:
+        import pandas as pd
+
+        if isinstance(source, pd.DataFrame):
+            if name in source.columns:
+                return source[name].to_numpy(dtype=float)
+            if name == "time" and source.index.name == "time":
+                return source.index.to_numpy(dtype=float)
+            raise KeyError(name)
+        values = source[name]
+    except KeyError:
+        raise DataError(
+            f"cannot plot: the data has no signal {name!r}; available: {_names(source)}"
+        ) from None
+    return np.asarray(values, dtype=float)
+
+
+def _names(source: Any) -> str:
+    names = getattr(source, "signals", None) or getattr(source, "columns", None) or source
+    try:
+        return ", ".join(map(str, list(names)))
+    except TypeError:
+        return "(unknown)"
+
+
+def _has(source: Any, name: str) -> bool:
+    if hasattr(source, "result") and hasattr(source, "kind"):
+        source = source.result
+    if hasattr(source, "columns"):
+        return name in source.columns or (name == "time" and source.index.name == "time")
+    signals = getattr(source, "signals", None)
+    if isinstance(signals, dict):
+        return name == "time" or name in signals
+    try:
+        return name in source
+    except (TypeError, KeyError):
+        return False
+
+
+def _unit_of(source: Any, name: str) -> str:
+    if hasattr(source, "result") and hasattr(source, "kind"):
+        source = source.result
+    units = getattr(source, "units", None)
+    if units is None and hasattr(source, "attrs"):
+        units = source.attrs.get("units")
+    if units and name in units:
+        return str(units[name])
+    from pneumact.io import KNOWN_SIGNALS
+
+    if name.startswith("drive_"):
+        return {"force": "N", "velocity": "m/s", "position": "m", "spring": "m",
+                "pressure": "Pa", "command": "1"}.get(name[6:], "")
+    return KNOWN_SIGNALS.get(name, "")
+
+
+def _display(source: Any, name: str) -> tuple[np.ndarray, str]:
+    """(values in display units, axis label "name [unit]")."""
+    values = _get(source, name)
+    unit = _unit_of(source, name)
+    shown, factor = _SIGNAL_DISPLAY.get(name) or DISPLAY_UNITS.get(unit, (unit, 1.0))
+    label = name.replace("_", " ")
+    return values * factor, f"{label} [{shown}]" if shown else label
+
+
+def _new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(nrows, 1, sharex=sharex, squeeze=False,
+                             figsize=(7.0, max(height, 2.2 * nrows)))
+    return fig, list(axes[:, 0])
+
+
+# --------------------------------------------------------------------------- plots
+
+
+def plot_hysteresis(result_or_frame: Any, ax: Axes | None = None, label: str | None = None,
+                    reference: Any = None, **line_kw) -> Axes:
+    """Applied pressure [kPa abs] (x) against position [mm] (y), like the paper's
+    Figs. 5-6; ``reference`` (a Result, Record or DataFrame, e.g. a measurement) is
+    overlaid as a dashed black line. Returns the Axes."""
+    if ax is None:
+        _, (ax,) = _new_axes()
+    pressure = _get(result_or_frame, "pressure") * 1e-3
+    position = _get(result_or_frame, "position") * 1e3
+    ax.plot(pressure, position, label=label or ("simulated" if reference is not None
+                                                 else None), **line_kw)
+    if reference is not None:
+        ax.plot(_get(reference, "pressure") * 1e-3, _get(reference, "position") * 1e3,
+                "k--", linewidth=1.0, label="measured")
+    ax.set_xlabel("pressure [kPa abs]")
+    ax.set_ylabel("position [mm]")
+    ax.grid(True, alpha=0.3)
+    if label is not None or reference is not None:
+        ax.legend()
+    return ax
+
+
+def plot_time_series(result: Any, signals: Sequence[str] | None = None,
+                     axes: Sequence[Axes] | None = None) -> Figure:
+    """One panel per signal (default: pressure, position, velocity, friction, those
+    present), in display units, over a shared time axis [s]. Returns the Figure."""
+    if signals is None:
+        signals = [s for s in _DEFAULT_SIGNALS if _has(result, s)]
+        signals += [s for s in _names(result).split(", ") if s.startswith("drive_")]
+    if isinstance(signals, str):
+        signals = [signals]
+    if not signals:
+        raise DataError("plot_time_series: no signal to plot; pass signals=[...]")
+    if axes is None:
+        fig, axes = _new_axes(len(signals))
+    else:
+        axes = list(np.ravel(axes))
+        if len(axes) < len(signals):
+            raise DataError(f"plot_time_series: {len(signals)} signals but {len(axes)} axes")
+        fig = axes[0].figure
+    time = _get(result, "time")
+    for ax, name in zip(axes, signals, strict=False):
+        values, ylabel = _display(result, name)
+        ax.plot(time, values)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+    axes[len(signals) - 1].set_xlabel("time [s]")
+    return fig
+
+
+def _drive_force_name(result: Any) -> str | None:
+    for name in ("drive_force", "drive_drive_force"):
+        if _has(result, name):
+            return name
+    return None
+
+
+def _xy(ax: Axes, source: Any, x: str, ys: Sequence[str], **kw) -> None:
+    xv, xlabel = _display(source, x)
+    for y in ys:
+        yv, ylabel = _display(source, y)
+        ax.plot(xv, yv, label=y.replace("_", " "), **kw)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel if len(ys) == 1 else "force [N]")
+    if len(ys) > 1:
+        ax.legend()
+    ax.grid(True, alpha=0.3)
+
+
+def _column(table: Any, *names: str) -> str | None:
+    """First column of ``table`` named ``name`` or ``name [unit]``, among ``names``."""
+    columns = [str(c) for c in table.columns]
+    for name in names:
+        for column in columns:
+            if column == name or column.startswith(f"{name} ["):
+                return column
+    return None
+
+
+def _curve_from_table(ax: Axes, table: Any, kind: str) -> bool:
+    """Friction against velocity from a friction test's table; False if not possible."""
+    vel = _column(table, "velocity")
+    simulated = _column(table, "friction")
+    model = _column(table, "steady-state friction")
+    if vel is None or (simulated is None and model is None):
+        return False
+    group = _column(table, "frequency")
+    parts = table.groupby(group) if kind == "frictional-lag" and group else [(None, table)]
+    for key, part in parts:
+        v = part[vel].to_numpy(float) * 1e3
+        label = f"{key:g} Hz" if key is not None else "simulated"
+        if simulated is not None:
+            ax.plot(v, part[simulated].to_numpy(float), "o" if key is None else "-",
+                    label=label, markersize=4)
+    if model is not None:
+        order = np.argsort(table[vel].to_numpy(float))
+        v = table[vel].to_numpy(float)[order] * 1e3
+        f = table[model].to_numpy(float)[order]
+        gap = np.flatnonzero(np.diff(np.sign(v)) != 0) + 1  # no line across v = 0
+        ax.plot(np.insert(v, gap, np.nan), np.insert(f, gap, np.nan), "k--", linewidth=1.0,
+                label="steady-state map")
+    speeds = np.abs(table[vel].to_numpy(float)) * 1e3
+    if kind == "steady-state" and np.any(speeds > 0):
+        # Stribeck region and sliding region both visible: log-like in each direction.
+        ax.set_xscale("symlog", linthresh=float(np.min(speeds[speeds > 0])))
+    ax.set_xlabel("velocity [mm/s]")
+    ax.set_ylabel("friction [N]")
+    ax.legend()
+    ax.grid(True, alpha=0.3)
+    return True
+
+
+def plot_friction_test(result: Any, kind: str) -> Figure:
+    """Axes that suit each classic friction experiment of a friction rig result (or a
+    FrictionTestResult, whose ``.table`` is used for the steady-state curve):
+
+    steady-state and frictional-lag: friction vs velocity; presliding: friction and drive
+    force vs position [µm]; break-away: drive force and position vs time; stick-slip:
+    position, velocity and friction vs time. Returns the Figure.
+    """
+    if kind not in FRICTION_TEST_KINDS:
+        raise DataError(f"friction test kind = {kind!r}; allowed: {', '.join(FRICTION_TEST_KINDS)}")
+    table = getattr(result, "table", None)
+    drive_force = _drive_force_name(result)
+    if kind in ("steady-state", "frictional-lag"):
+        fig, (ax,) = _new_axes()
+        if table is None or not _curve_from_table(ax, table, kind):
+            _xy(ax, result, "velocity", ["friction"])
+    elif kind == "presliding":
+        fig, (ax,) = _new_axes()
+        ys = ["friction"] + ([drive_force] if drive_force else [])
+        xv = _get(result, "position") * 1e6
+        for y in ys:
+            ax.plot(xv, _get(result, y), label=y.replace("_", " "))
+        ax.set_xlabel("position [µm]")
+        ax.set_ylabel("force [N]")
+        ax.legend()
+        ax.grid(True, alpha=0.3)
+    elif kind == "break-away":
+        names = [drive_force or "friction", "position"]
+        fig = plot_time_series(result, names)
+    else:  # stick-slip
+        fig = plot_time_series(result, ["position", "velocity", "friction"])
+    fig.suptitle(kind)
+    return fig
+
+
+# --------------------------------------------------------------------------- saving
+
+
+def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike[str]:
+    """Write ``fig`` (a Figure, or the Figure of an Axes) as PNG (dpi 120), atomically."""
+    from pathlib import Path
+
+    from pneumact.io import atomic_write
+
+    figure = getattr(fig, "figure", None) if not hasattr(fig, "savefig") else fig
+    if figure is None or not hasattr(figure, "savefig"):
+        raise DataError(f"save_figure: expected a matplotlib Figure or Axes, got {type(fig)}")
+    target = Path(path)
+    with atomic_write(target) as tmp:
+        figure.savefig(tmp, format="png", dpi=PNG_DPI, bbox_inches="tight")
+    return target

@@ -1,0 +1,56 @@
+"""Dense LU with partial pivoting for the small (≤ 10 states) systems of the integrator.
+
+LAPACK through ``np.linalg`` allocates and dispatches on every call, which costs more
+than the factorisation itself at this size; these loops are compiled into the kernel.
+"""
+
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def lu_factor(a, piv, n):  # pragma: no cover - compiled
+    """In-place LU of a[:n, :n]; returns False if the matrix is singular."""
+    for k in range(n):
+        p = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big = abs(a[i, k])
+                p = i
+        piv[k] = p
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(n):
+                tmp = a[k, j]
+                a[k, j] = a[p, j]
+                a[p, j] = tmp
+        inv = 1.0 / a[k, k]
+        for i in range(k + 1, n):
+            a[i, k] *= inv
+            f = a[i, k]
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= f * a[k, j]
+    return True
+
+
+@njit(cache=True, inline="always")
+def lu_solve(a, piv, b, n):  # pragma: no cover - compiled
+    """Solve in place with the factors of ``lu_factor``."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= a[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= a[i, j] * b[j]
+        b[i] = s / a[i, i]

@@ -1,0 +1,76 @@
+"""Tolerances and reference values of the physics, integrator and loop tests, in one place.
+
+Every number says where it comes from: a closed-form result, the paper (seed paper Table
+I, via the vgt-paper set), or a numerical-accuracy budget (floating point, finite
+differences, integrator tolerance) with the reason for its size.
+"""
+
+from __future__ import annotations
+
+# --------------------------------------------------------------------------- friction
+FRICTION_RTOL = 1e-12  # closed-form identities evaluated in float64: only round-off
+STEADY_ZDOT_RTOL = 1e-12  # dz/dt at the steady bristle state is v·(1 − 1): round-off of |v|
+SLIDING_VELOCITIES = (1e-6, 1e1, 61)  # log grid [m/s] from deep presliding to fast sliding
+STATIC_MAP_MIN_SPEED_FACTOR = 50.0  # |v| ≥ 50·v_reg: tanh(50) = 1 to 1e-43, sign is exact
+FD_REL_STEP = 1e-6  # central difference step relative to the variable's scale
+FD_RTOL = 2e-6  # central differences: O(step²) truncation + O(eps/step) round-off ≈ 1e-7
+FD_SAMPLES = 200  # random (v, z) points per model in the partial-derivative check
+FD_SPEED_RANGE = (1e-5, 1e-1)  # |v| [m/s] of those points: away from the kink at v = 0
+
+# -------------------------------------------------------------------------- pneumatics
+GAMMA_AIR = 1.4  # ratio of specific heats of dry air (vgt-paper, assumed standard value)
+R_AIR = 287.0  # J/(kg·K), specific gas constant of dry air
+CHOKED_PHI = (2.0 / (GAMMA_AIR + 1.0)) ** ((GAMMA_AIR + 1.0) / (2.0 * (GAMMA_AIR - 1.0)))
+CRITICAL_RATIO = (2.0 / (GAMMA_AIR + 1.0)) ** (GAMMA_AIR / (GAMMA_AIR - 1.0))  # ≈ 0.528
+CHOKED_FLOW_COEFF = 0.0404  # kg·K^½/(s·m²·Pa): sqrt(γ/R)·Φ_c for air, textbook 0.0404
+CHOKED_FLOW_RTOL = 1e-3  # the textbook constant is rounded to 3 digits (exact 0.040418)
+PHI_GRID_POINTS = 200_001  # Φ(r) continuity grid on [0, 1]: dr = 5e-6
+PHI_JUMP_SLACK = 1.01  # max |ΔΦ| on that grid ≤ 1.01 × (largest slope) × dr: no jump
+FLOW_ANTISYMMETRY_RTOL = 1e-12  # ṁ(p1, p2) = −ṁ(p2, p1) is exact up to round-off
+
+# ---------------------------------------------------------------------------- signals
+SIGNAL_RTOL = 1e-12  # piecewise-linear and sine evaluation: round-off only
+
+# -------------------------------------------------------------------------- Jacobians
+JAC_FD_REL_STEP = 1e-6  # central difference step relative to each state's scale
+JAC_RTOL = 1e-5  # entry error / largest scaled entry of its row (FD truncation ≈ 1e-9)
+
+# --------------------------------------------------------------- actuator integration
+TIGHT_RTOL = 1e-8  # Rodas4 rtol of the invariant checks: errors ≪ the tolerances below
+MASS_BALANCE_RATE_RTOL = 1e-3  # np.gradient on a 1e-4 s grid: O(dt²·p''') ≈ 2e-4 measured
+MASS_BALANCE_INTEGRAL_RTOL = 1e-5  # trapezoid on 1e-4 s + rtol 1e-8: ≈ 5e-8 measured
+ADIABATIC_INVARIANT_RTOL = 1e-6  # p·V^n of a closed chamber: integration error only
+STOP_ENERGY_RTOL = 1e-6  # energy rise allowed (× energy scale) at rtol 1e-8; measured 5e-9
+REGULATOR_STEADY_ERROR = 1.0  # Pa: PI control has no steady error (measured 3e-8 Pa); 1e-5 p_atm
+REGULATOR_RAMP_ERROR = 100.0  # Pa: lag of the PI loop on a 6 kPa/s ramp (measured 14 Pa)
+EQUILIBRIUM_DRIFT_POSITION = 1e-9  # m: an equilibrium start must not creep (stroke 20 mm)
+EQUILIBRIUM_DRIFT_VELOCITY = 1e-7  # m/s: same, for the velocity
+LOAD_SHIFT_RTOL = 1e-6  # −F/k shift, viscous only, fully settled (decay e^-94)
+
+# ------------------------------------------------------------- integrator validation
+RADAU_RTOL = 1e-10  # scipy Radau reference: 10x tighter than the tightest Rodas4 run
+RADAU_ATOL_FACTOR = 1e-2  # Radau atol = 1e-10·(state scales)·1e-2: absolute floor ≪ errors
+# max |x_Rodas4 − x_Radau| [m] at Rodas4 rtol (1e-6, 1e-9), 2 s cycles over ~15 mm of travel;
+# measured 1.6e-8 / 2.4e-11 (source), 1.1e-8 / 1.7e-11 (command): ~8x margin
+RODAS_VS_RADAU = {
+    "source_delta2": (1e-7, 2e-10),
+    "source_delta1": (1e-7, 2e-10),
+    "command_delta2": (1e-7, 2e-10),
+}
+ORDER_STEPS_RODAS = (0.2, 0.1, 0.05, 0.025)  # s, fixed steps (ω_d·h ≤ 0.28): errors 1e-5..3e-9
+ORDER_STEPS_DOPRI = (0.4, 0.2, 0.1, 0.05)  # s, fixed steps: errors 5e-5..1e-9, above round-off
+RODAS_ORDER_RANGE = (3.5, 4.6)  # RODAS is order 4 (Hairer & Wanner); measured 4.00-4.01
+DOPRI_ORDER_RANGE = (4.5, 5.6)  # Dormand-Prince 5(4) advances order 5; measured 5.01-5.16
+DOPRI_VS_RODAS_TOL = 1e-7  # m: both at rtol 1e-10 on a 0.5 m non-stiff swing
+
+# ----------------------------------------------------------- quasi-static loop (paper)
+QUASI_STATIC_CYCLE = (100e3, 20e3, 20.0)  # Pa, Pa, s: the paper's slow cycle (Figs. 5-6)
+# ±5 %: at the cycle's ~1.6 mm/s the sliding level is g(v) + σ2·v ≈ Fc + 1.2 % (v ≈ 3·vs),
+# and the delta = 1 stick-slip steps (~0.1 mm, i.e. ±0.44 kPa locally) average out over
+# the 20-80 % grid of the width estimate. Measured: +1.0 % (pressure), +0.9 % (position);
+# wrong levels are far outside (Fs instead of Fc: +23 %, Fc once instead of twice: −50 %).
+LOOP_WIDTH_RTOL = 0.05
+VALVE_LOOP_WIDTH_RTOL = 0.05  # 20 s period: chamber dynamics add little (measured +0.7-0.9 %)
+BREAKAWAY_THRESHOLD_FACTOR = 2.0  # "moved" = 2·Fs/σ0 (twice the largest presliding)
+LOOP_CLOSURE_TOL = 1e-6  # m: back on the rest stop at the end (preload F0 > Fs)
+NO_COULOMB_WIDTH_FRACTION = 0.02  # Fc = 0: width 2·σ2·v/A_d ≈ 4 Pa ≪ 2 % of 1.78 kPa

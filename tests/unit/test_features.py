@@ -1,0 +1,137 @@
+"""Hysteresis features on synthetic records with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pneumact import features
+from pneumact.errors import DataError
+
+# --- reference values and tolerances (one block) -------------------------------------
+P_ATM = 1e5  # Pa
+AREA = 2.92246e-3  # m^2
+PRELOAD = 32.68  # N
+STIFFNESS = 12850.0  # N/m
+COULOMB = 2.6  # N
+X_MAX = 0.02  # m
+P_HIGH, P_LOW = 100e3, 20e3  # Pa
+SAMPLES_PER_BRANCH = 2001
+REL_TOL = 1e-9  # exact answers on piecewise-linear data, up to rounding
+
+
+def coulomb_play(cycles: int = 1, friction: float = COULOMB):
+    """Ideal Coulomb play: x = clip(((p_atm − p)·A − F0 ∓ Fc)/k) on falling/rising branches."""
+    down = np.linspace(P_HIGH, P_LOW, SAMPLES_PER_BRANCH)
+    up = down[::-1][1:]
+    p_cycle = np.concatenate([down, up])
+    sign_cycle = np.concatenate([np.ones_like(down), -np.ones_like(up)])
+    pressure = np.concatenate([p_cycle] + [p_cycle[1:]] * (cycles - 1))
+    signs = np.concatenate([sign_cycle] + [sign_cycle[1:]] * (cycles - 1))
+    position = np.clip(((P_ATM - pressure) * AREA - PRELOAD - signs * friction) / STIFFNESS,
+                       0.0, X_MAX)
+    time = np.linspace(0.0, 20.0 * cycles, pressure.size)
+    return time, pressure, position
+
+
+@pytest.mark.parametrize("cycles", [1, 3])
+def test_coulomb_play_widths_are_2Fc_over_A_and_2Fc_over_k(cycles):
+    _, p, x = coulomb_play(cycles)
+    assert features.loop_width_pressure(p, x) == pytest.approx(2 * COULOMB / AREA,
+                                                                rel=REL_TOL)
+    assert features.loop_width_position(p, x) == pytest.approx(2 * COULOMB / STIFFNESS,
+                                                                rel=REL_TOL)
+
+
+def test_pure_line_has_zero_width_and_zero_area():
+    _, p, x = coulomb_play(friction=0.0)
+    assert features.loop_width_pressure(p, x) == pytest.approx(0.0, abs=1e-9)
+    assert features.loop_width_position(p, x) == pytest.approx(0.0, abs=1e-15)
+    assert features.loop_area(p, x) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_coulomb_play_area_is_width_times_travel():
+    _, p, x = coulomb_play()
+    # Between the two branches the pressure gap is 2Fc/A at every position both reach;
+    # the rising branch reaches 2Fc/k further, so the area lies between the two products.
+    width = 2 * COULOMB / AREA
+    top_falling = ((P_ATM - P_LOW) * AREA - PRELOAD - COULOMB) / STIFFNESS
+    top_rising = top_falling + 2 * COULOMB / STIFFNESS
+    assert width * top_falling <= features.loop_area(p, x) <= width * top_rising
+
+
+def test_rectangle_loop_area():
+    p1, p2, x1, x2 = 30e3, 90e3, 0.001, 0.004
+    n = 101
+    pressure = np.concatenate([np.linspace(p2, p1, n), np.full(n, p1)[1:],
+                               np.linspace(p1, p2, n)[1:], np.full(n, p2)[1:]])
+    position = np.concatenate([np.full(n, x1), np.linspace(x1, x2, n)[1:],
+                               np.full(n, x2)[1:], np.linspace(x2, x1, n)[1:]])
+    assert features.loop_area(pressure, position) == pytest.approx((p2 - p1) * (x2 - x1),
+                                                                   rel=REL_TOL)
+
+
+def test_stroke_is_max_minus_min():
+    assert features.stroke([0.0, 0.003, -0.001, 0.002]) == pytest.approx(0.004)
+
+
+def test_breakaway_ignores_presliding_and_finds_motion():
+    time = np.linspace(0.0, 10.0, 1001)
+    pressure = P_HIGH - 8e3 * time  # falling 8 kPa/s
+    presliding = 30e-6 * np.clip(time / 2.0, 0.0, 1.0)  # 30 µm creep, not motion
+    sliding = np.clip(time - 5.0, 0.0, None) * 1e-3  # 1 mm/s from t = 5 s
+    position = presliding + sliding
+    # default threshold: a fraction of the stroke, but never below the minimum
+    threshold = max(features.BREAKAWAY_STROKE_FRACTION * features.stroke(position),
+                    features.BREAKAWAY_MIN_THRESHOLD)
+    assert threshold > 30e-6  # the creep stays below it
+    t_move = 5.0 + (threshold - 30e-6) / 1e-3
+    expected = P_HIGH - 8e3 * t_move
+    assert features.breakaway_pressure(time, pressure, position) == pytest.approx(
+        expected, rel=1e-9)
+
+
+def test_breakaway_is_nan_without_motion():
+    time = np.linspace(0, 1, 11)
+    assert np.isnan(features.breakaway_pressure(time, 1e5 - time, np.full(11, 1e-6)))
+
+
+def test_errors_against_reference():
+    time = np.linspace(0, 1, 101)
+    position = 0.001 * time
+    ref_time = np.linspace(0, 1, 11)
+    ref_position = 0.001 * ref_time + 0.0002
+    assert features.rms_error(time, position, ref_time, ref_position) == pytest.approx(2e-4)
+    assert features.max_error(time, position, ref_time, ref_position) == pytest.approx(2e-4)
+
+
+def test_summary_has_every_feature_with_a_unit():
+    time, p, x = coulomb_play()
+    summary = features.hysteresis_summary(time, p, x)
+    assert set(summary) == {"stroke", "loop_width_pressure", "loop_width_position",
+                            "loop_area", "breakaway_pressure"}
+    assert set(summary) <= set(features.FEATURE_UNITS)
+    assert all(np.isfinite(v) for v in summary.values())
+
+
+def test_step_response_has_no_loop():
+    time = np.linspace(0, 1, 101)
+    p = np.where(time < 0.1, P_HIGH, P_LOW)
+    x = np.where(time < 0.1, 0.0, 0.01)
+    assert np.isnan(features.loop_width_pressure(p, x))
+    assert np.isnan(features.loop_area(p, x))
+
+
+def test_length_mismatch_is_a_clear_data_error():
+    with pytest.raises(DataError, match=r"position has 4 samples but pressure has 5"):
+        features.loop_width_pressure(np.arange(5.0), np.arange(4.0))
+
+
+def test_too_few_samples_is_a_clear_data_error():
+    with pytest.raises(DataError, match=r"pressure: has 2 samples; .* at least 3"):
+        features.loop_area([1.0, 2.0], [0.0, 1.0])
+
+
+def test_nan_is_a_clear_data_error():
+    with pytest.raises(DataError, match=r"position: sample 1 is nan"):
+        features.stroke([0.0, np.nan, 1.0])

@@ -1,0 +1,127 @@
+"""The generated kernels' analytic Jacobian ``jac`` equals a central finite difference of
+their ``rhs``, for every friction law and every valve, at states away from the
+non-smooth points (v ≠ 0, inside the stroke or well inside an end stop, u_raw in (0, 1)).
+
+Each component combination is compiled once (~5-10 s) and cached on disk afterwards.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pneumact.experiments.actuator import Experiment
+from pneumact.experiments.signals import Constant, PiecewiseLinear, Ramp
+from pneumact.models import (
+    Actuator,
+    BoucWen,
+    CommandValve,
+    CoulombViscous,
+    Dahl,
+    FrictionRig,
+    LuGre,
+    PressureRegulator,
+    PressureSource,
+    StribeckMap,
+)
+from pneumact.simulation import Rodas4
+from pneumact.simulation.simulate import prepare
+from reference import JAC_FD_REL_STEP, JAC_RTOL
+
+pytestmark = pytest.mark.integration  # compiles kernels the first time
+
+# typical size of each state [x m, v m/s, z m, p Pa, u, i]: sets the FD step and the
+# scaling of the comparison (a change of y_j by its scale, seen in f_i)
+STATE_SCALES = np.array([1e-3, 1e-2, 1e-5, 1e4, 1.0, 1.0])
+
+# (x, v, z) samples: mid-stroke sliding both ways, presliding, and inside both end stops
+# with the stop pushing (-k_stop·x − c_stop·v > 0)
+MECHANICAL_STATES = [
+    (5e-3, 2e-3, 1.5e-5),
+    (12e-3, -7e-4, -2e-5),
+    (8e-3, 3e-5, 5e-6),
+    (-1e-6, -1e-3, -2.5e-5),
+    (20.001e-3, 1e-3, 2.5e-5),
+]
+
+
+def _fd_check(kernel, prm, sig, ptr, t, ts, y, label):
+    n = y.size
+    analytic = np.zeros((n, n))
+    kernel.jac(t, ts, y, prm, sig, ptr, analytic)
+    numeric = np.zeros((n, n))
+    f_plus, f_minus = np.empty(n), np.empty(n)
+    for j in range(n):
+        h = JAC_FD_REL_STEP * max(abs(y[j]), STATE_SCALES[j])
+        y_plus, y_minus = y.copy(), y.copy()
+        y_plus[j] += h
+        y_minus[j] -= h
+        kernel.rhs(t, ts, y_plus, prm, sig, ptr, f_plus)
+        kernel.rhs(t, ts, y_minus, prm, sig, ptr, f_minus)
+        numeric[:, j] = (f_plus - f_minus) / (2.0 * h)
+    scales = STATE_SCALES[:n]
+    row_size = np.max(np.abs(numeric * scales), axis=1, keepdims=True) + 1e-300
+    error = np.abs(analytic - numeric) * scales / row_size
+    worst = np.unravel_index(np.argmax(error), error.shape)
+    assert error.max() <= JAC_RTOL, (
+        f"{label}: d f[{worst[0]}] / d y[{worst[1]}] analytic {analytic[worst]:.6g}, "
+        f"finite difference {numeric[worst]:.6g} at y = {y.tolist()}"
+    )
+
+
+FRICTIONS = [LuGre(), LuGre(decaying_damping=True), Dahl(), BoucWen(), CoulombViscous(),
+             StribeckMap()]
+
+
+@pytest.mark.parametrize("friction", FRICTIONS, ids=lambda f: f.kernel)
+def test_actuator_pressure_source_jacobian(friction, vgt):
+    # a load map with a slope exercises the ∂F_ext/∂x entry; a ramp in pressure the time
+    load_map = PiecewiseLinear([0.0, 0.02], [0.0, 60.0])
+    model = Actuator(vgt, friction=friction, valve=PressureSource(), load_map=load_map,
+                     load=Constant(3.0))
+    experiment = Experiment(Ramp(90e3, 30e3, duration=2.0), "pressure", t_end=2.0)
+    kernel, prm, sig, ptr, bp, *_ = prepare(model, experiment, Rodas4())
+    ts = 0.5 * (bp[0] + bp[1])
+    for x, v, z in MECHANICAL_STATES:
+        if not friction.has_state:
+            z = 0.0
+        _fd_check(kernel, prm, sig, ptr, 0.7, ts, np.array([x, v, z]), friction.kernel)
+
+
+PRESSURES = (20e3, 55e3, 85e3, 99.99e3)  # choked, subsonic, near-laminar, laminar inflow
+
+
+def test_actuator_command_valve_jacobian(vgt):
+    model = Actuator(vgt, friction=LuGre(), valve=CommandValve())
+    for command in (0.2, 0.5, 0.9):
+        experiment = Experiment(Constant(command), "command", t_end=1.0)
+        kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
+        for x, v, z in MECHANICAL_STATES:
+            for p in PRESSURES:
+                y = np.array([x, v, z, p])
+                _fd_check(kernel, prm, sig, ptr, 0.3, 0.5, y, f"command u={command}")
+
+
+def test_actuator_pressure_regulator_jacobian(vgt):
+    model = Actuator(vgt, friction=LuGre(), valve=PressureRegulator())
+    p_set = 55e3
+    experiment = Experiment(Constant(p_set), "pressure", t_end=1.0)
+    kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
+    kp = vgt["reg_kp"] if "reg_kp" in vgt else 20.0
+    for x, v, z in MECHANICAL_STATES:
+        for p in PRESSURES:
+            for opening in (0.1, 0.6):
+                # integral state chosen so that u_raw = kp·(p − p_set)/p_atm + i = 0.5
+                integral = 0.5 - kp * (p - p_set) / vgt["p_atm"]
+                y = np.array([x, v, z, p, opening, integral])
+                _fd_check(kernel, prm, sig, ptr, 0.3, 0.5, y, "regulator")
+
+
+@pytest.mark.parametrize("friction", [LuGre(), CoulombViscous()], ids=lambda f: f.kernel)
+def test_friction_rig_spring_drive_jacobian(friction, canudas):
+    model = FrictionRig(canudas, friction=friction, drive="spring")
+    experiment = Experiment(Ramp(0.0, 1.0, duration=10.0), "spring", t_end=10.0)
+    kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
+    for x, v, z in [(0.1, 0.05, 1e-5), (0.3, -0.02, -1.2e-5), (0.2, 2e-4, 3e-6)]:
+        y = np.array([x, v, z if friction.has_state else 0.0])
+        _fd_check(kernel, prm, sig, ptr, 3.0, 5.0, y, friction.kernel)

@@ -1,0 +1,254 @@
+"""The classic friction experiments of Canudas de Wit et al. (1995) on the FrictionRig:
+known answers (analytic steady states, the Dahl closed form, presliding stiffness) and
+the qualitative behaviour the paper reports (frictional lag, varying break-away force,
+periodic stick-slip), plus an independent-solver check of the stick-slip run."""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from pneumact.errors import ExperimentError
+from pneumact.experiments import Experiment, PiecewiseLinear
+from pneumact.experiments.friction import (
+    KINDS,
+    break_away_experiment,
+    default_solver,
+    lag_loop_width,
+    run_friction_test,
+    slip_onsets,
+    stick_slip_experiment,
+)
+from pneumact.models.friction import BoucWen, Dahl, LuGre
+from pneumact.models.rig import FrictionRig
+from pneumact.parameters import load_params
+from pneumact.simulation.simulate import prepare, simulate
+
+pytestmark = pytest.mark.validation
+
+# --- tolerances and reference values -----------------------------------------------------
+# Steady-state plateaus are held 15 bristle time constants (residual e^-15 ≈ 3e-7) and
+# integrated at rtol 1e-7; 1e-4 leaves a wide margin (measured: 6e-7).
+STEADY_STATE_RTOL = 1e-4
+# Presliding stiffness from a 0 → 0.01·Fs ramp: dF/dx = sigma0·(1 − F/g) drops by < 1 %
+# over the fit range, the ramp-following transient (ζ = 0.5, 316 rad/s) is gone after 50 ms.
+STIFFNESS_RTOL = 0.03
+# The bristle bound |z| <= Fs/sigma0 holds exactly in the model; allow rounding of rtol 1e-7.
+BRISTLE_BOUND_RTOL = 1e-6
+# Dahl closed form in space vs simulation (rtol 1e-7): force error in units of Fc.
+DAHL_FORCE_ATOL = 1e-4
+# Bouc-Wen (beta = 1, gamma = 0, n = 1) vs Dahl: the same ODE, only round-off apart.
+BOUC_WEN_DAHL_ATOL = 1e-6
+# Break-away at the slowest rate (0.01 N/s) within 1 % of Fs; at the fastest (30 N/s) the
+# peak friction has dropped to within 25 % of (Fs − Fc) above Fc (measured 1.024 N).
+BREAK_AWAY_FS_RTOL = 0.01
+BREAK_AWAY_FAST_FRACTION = 0.25
+# Stick-slip: slip onsets (velocity > 10·vs) repeat with a constant period (measured
+# spread 1e-8 relative) and start when the spring force is about Fs (measured 1.491 N).
+STICK_SLIP_DURATION = 40.0
+PERIOD_RTOL = 1e-3
+ONSET_FORCE_RTOL = 0.02
+# Rodas4 (default solver, rtol 1e-7) vs scipy Radau (rtol 1e-10, atol 1e-12) over the
+# first stick phase and the first slip (0-10 s): the slip covers about 0.5 m at up to
+# 0.37 m/s, so 1e-7 relative accuracy on the slip distance is ~5e-8 m; allow 1e-6 m.
+RADAU_SPAN = 10.0
+RADAU_POSITION_ATOL = 1e-6
+
+
+@pytest.fixture(scope="module")
+def params():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # canudas1995 breaks the sigma1 passivity bound
+        return load_params("canudas1995")
+
+
+@pytest.fixture(scope="module")
+def all_runs(params):
+    return {kind: run_friction_test(kind, params) for kind in KINDS}
+
+
+@pytest.mark.parametrize("delta", [1.0, 2.0])
+def test_lugre_steady_state_matches_stribeck_curve(params, delta):
+    p = params.replace(delta=delta)
+    table = run_friction_test("steady-state", p).table
+    v = table["velocity [m/s]"].to_numpy()
+    g = p["Fc"] + (p["Fs"] - p["Fc"]) * np.exp(-((np.abs(v) / p["vs"]) ** delta))
+    expected = np.sign(v) * g + p["sigma2"] * v
+    assert np.all(v[:25] < 0) and np.all(v[25:] > 0)
+    np.testing.assert_allclose(table["friction [N]"], expected, rtol=STEADY_STATE_RTOL)
+    np.testing.assert_allclose(table["steady-state friction [N]"], expected, rtol=1e-12)
+
+
+def test_presliding_initial_stiffness_is_sigma0(params):
+    setup = break_away_experiment(params, rate=0.03, final_force=0.01 * params["Fs"],
+                                  n_points=2001)
+    r = simulate(FrictionRig(params, LuGre(), "force"), setup.experiment,
+                 default_solver(params))
+    fit = r.time >= 0.05
+    slope = np.polyfit(r["drive_force"][fit], r["position"][fit], 1)[0]
+    assert 1.0 / slope == pytest.approx(params["sigma0"], rel=STIFFNESS_RTOL)
+
+
+def test_presliding_loop_is_hysteretic_and_below_break_away(params, all_runs):
+    table = all_runs["presliding"].table
+    force = table["force [N]"].to_numpy()
+    x = table["position [m]"].to_numpy()
+    # displacement stays in the presliding range (a few Fs/sigma0), never gross sliding
+    assert np.max(np.abs(x)) < 5 * params["Fs"] / params["sigma0"]
+    # at the same force (0) the falling and rising branches sit at different positions
+    t = all_runs["presliding"].result.time
+    falling = (t > 1.0) & (t < 3.0)
+    rising = t > 3.0
+    x_fall = np.interp(0.0, force[falling][::-1], x[falling][::-1])
+    x_rise = np.interp(0.0, force[rising], x[rising])
+    assert x_fall - x_rise > 0.1 * params["Fs"] / params["sigma0"]
+
+
+def test_bristle_deflection_bounded_in_every_experiment(params, all_runs):
+    bound = params["Fs"] / params["sigma0"] * (1 + BRISTLE_BOUND_RTOL)
+    for kind, outcome in all_runs.items():
+        runs = outcome.runs.values() if outcome.runs else [outcome.result]
+        for r in runs:
+            assert np.max(np.abs(r["bristle"])) <= bound, kind
+
+
+def test_dahl_steady_state_is_coulomb_plus_viscous(params):
+    table = run_friction_test("steady-state", params, friction=Dahl()).table
+    v = table["velocity [m/s]"].to_numpy()
+    np.testing.assert_allclose(table["friction [N]"],
+                               np.sign(v) * params["Fc"] + params["sigma2"] * v,
+                               rtol=STEADY_STATE_RTOL)
+
+
+def _reversal_experiment(amplitude: float) -> Experiment:
+    """Position 0 → +A → −A → +A, slow (Dahl is rate independent without sigma2)."""
+    drive = PiecewiseLinear([0.0, 1.0, 3.0, 5.0], [0.0, amplitude, -amplitude, amplitude])
+    return Experiment(drive, "position", 5.0, n_points=2001, name="reversals")
+
+
+def _dahl_closed_form(x: np.ndarray, fc: float, sigma0: float) -> np.ndarray:
+    """dF/dx = sigma0·(1 − F·s/Fc) on each monotone leg, from F = 0 at x = 0."""
+    force = np.empty_like(x)
+    f_rev, x_rev = 0.0, x[0]
+    direction = 1.0
+    for i, xi in enumerate(x):
+        step = np.sign(xi - x[i - 1]) if i else 1.0
+        if step != 0 and step != direction:  # a reversal at the previous sample
+            f_rev, x_rev, direction = force[i - 1], x[i - 1], step
+        force[i] = direction * fc - (direction * fc - f_rev) * np.exp(
+            -sigma0 * abs(xi - x_rev) / fc)
+    return force
+
+
+def test_dahl_follows_closed_form_through_reversals(params):
+    p = params.replace(sigma2=0.0)
+    amplitude = 5 * p["Fc"] / p["sigma0"]
+    r = simulate(FrictionRig(p, Dahl(), "position"), _reversal_experiment(amplitude),
+                 default_solver(p))
+    expected = _dahl_closed_form(r["position"], p["Fc"], p["sigma0"])
+    np.testing.assert_allclose(r["friction"], expected, atol=DAHL_FORCE_ATOL * p["Fc"])
+    assert np.max(np.abs(r["friction"])) > 0.99 * p["Fc"]  # saturated on each leg
+
+
+def test_bouc_wen_reduces_to_dahl(params):
+    p = params.replace(sigma2=0.0, bw_beta=1.0, bw_gamma=0.0, bw_n=1.0)
+    exp = _reversal_experiment(5 * p["Fc"] / p["sigma0"])
+    dahl = simulate(FrictionRig(p, Dahl(), "position"), exp, default_solver(p))
+    bouc_wen = simulate(FrictionRig(p, BoucWen(), "position"), exp, default_solver(p))
+    np.testing.assert_allclose(bouc_wen["friction"], dahl["friction"],
+                               atol=BOUC_WEN_DAHL_ATOL * p["Fc"])
+
+
+def test_bouc_wen_steady_sliding_is_coulomb_plus_viscous(params):
+    table = run_friction_test("steady-state", params, friction=BoucWen()).table
+    v = table["velocity [m/s]"].to_numpy()
+    np.testing.assert_allclose(table["friction [N]"],
+                               np.sign(v) * params["Fc"] + params["sigma2"] * v,
+                               rtol=STEADY_STATE_RTOL)
+
+
+def test_frictional_lag_loop_opens_with_frequency(params, all_runs):
+    table = all_runs["frictional-lag"].table
+    widths = {}
+    for f, part in table.groupby("frequency [Hz]"):
+        v = part["velocity [m/s]"].to_numpy()
+        assert np.all(v > 0)  # never reverses
+        widths[f] = lag_loop_width(v, part["friction [N]"].to_numpy())
+    freqs = sorted(widths)
+    assert all(widths[a] < widths[b] for a, b in itertools.pairwise(freqs))
+    assert widths[freqs[-1]] > 0.05 * (params["Fs"] - params["Fc"])
+    # the slowest loop hugs the steady-state (Stribeck) curve more closely than the fastest
+    slow = table[table["frequency [Hz]"] == freqs[0]]
+    fast = table[table["frequency [Hz]"] == freqs[-1]]
+    dev = [np.max(np.abs(t["friction [N]"] - t["steady-state friction [N]"]))
+           for t in (slow, fast)]
+    assert dev[0] < 0.25 * dev[1]
+
+
+def test_break_away_force_falls_with_force_rate(params, all_runs):
+    table = all_runs["break-away"].table
+    rates = table["force rate [N/s]"].to_numpy()
+    peak = table["break-away force [N]"].to_numpy()
+    applied = table["applied force at break-away [N]"].to_numpy()
+    assert np.all(np.diff(rates) > 0)
+    assert np.all(np.diff(peak) < 0)  # Canudas et al. 1995: varying break-away force
+    fs, fc = params["Fs"], params["Fc"]
+    assert peak[0] == pytest.approx(fs, rel=BREAK_AWAY_FS_RTOL)
+    assert applied[0] == pytest.approx(fs, rel=BREAK_AWAY_FS_RTOL)
+    assert fc < peak[-1] < fc + BREAK_AWAY_FAST_FRACTION * (fs - fc)
+    assert np.all(applied >= peak - 1e-9)  # the applied force also accelerates the mass
+
+
+def test_stick_slip_is_periodic_with_slip_at_static_friction(params):
+    outcome = run_friction_test("stick-slip", params, t_end=STICK_SLIP_DURATION)
+    r = outcome.result
+    assert outcome.table is None and outcome.drive_quantity == "spring"
+    onsets = slip_onsets(r, 10 * params["vs"])
+    assert onsets.size >= 4
+    periods = np.diff(onsets)[1:]
+    assert np.ptp(periods) < PERIOD_RTOL * np.mean(periods)
+    spring_force = params["k_drive"] * (r["drive_spring"] - r["position"])
+    np.testing.assert_allclose(np.interp(onsets, r.time, spring_force), params["Fs"],
+                               rtol=ONSET_FORCE_RTOL)
+    # between slips the body sticks: velocity back to (almost) zero in every cycle
+    for a, b in itertools.pairwise(onsets):
+        inside = (r.time > a) & (r.time < b)
+        assert np.min(np.abs(r["velocity"][inside])) < 1e-3 * params["v_drive"]
+        assert np.max(r["velocity"][inside]) > params["v_drive"]
+
+
+def test_stick_slip_rodas4_agrees_with_scipy_radau(params):
+    setup = stick_slip_experiment(params, duration=RADAU_SPAN)
+    rig = FrictionRig(params, LuGre(), "spring")
+    solver = default_solver(params)
+    r = simulate(rig, setup.experiment, solver)
+    kernel, prm, sig, ptr, bp, _, y0, _ = prepare(rig, setup.experiment, solver)
+    assert list(bp) == [0.0, RADAU_SPAN]
+    ts = 0.5 * (bp[0] + bp[1])
+
+    def rhs(t, y):
+        dydt = np.empty(3)
+        kernel.rhs(t, ts, y, prm, sig, ptr, dydt)
+        return dydt
+
+    def jac(t, y):
+        out = np.zeros((3, 3))
+        kernel.jac(t, ts, y, prm, sig, ptr, out)
+        return out
+
+    ref = solve_ivp(rhs, (0.0, RADAU_SPAN), y0, method="Radau", t_eval=r.time, jac=jac,
+                    rtol=1e-10, atol=1e-12)
+    assert ref.success
+    assert np.max(r["velocity"]) > params["v_drive"]  # the span includes a slip
+    assert np.max(np.abs(r["position"] - ref.y[0])) < RADAU_POSITION_ATOL
+
+
+def test_unknown_kind_and_misplaced_duration_are_rejected(params):
+    with pytest.raises(ExperimentError, match="stick-slip"):
+        run_friction_test("stiction", params)
+    with pytest.raises(ExperimentError, match="t_end"):
+        run_friction_test("break-away", params, t_end=1.0)
