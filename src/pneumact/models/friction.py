@@ -54,7 +54,7 @@ def stribeck_curve(v, prm):  # pragma: no cover - compiled
     return fc + ds * e, dg
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lugre_core(v, z, prm, s1, ds1):  # pragma: no cover - compiled
     s0 = prm[I_SIGMA0]
     g, dg = stribeck_curve(v, prm)
@@ -69,13 +69,13 @@ def _lugre_core(v, z, prm, s1, ds1):  # pragma: no cover - compiled
     return zdot, force, dzdot_dv, dzdot_dz, df_dv, df_dz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lugre(v, z, prm):  # pragma: no cover - compiled
     """LuGre (paper eqs. 6-8) with constant micro-damping σ1."""
     return _lugre_core(v, z, prm, prm[I_SIGMA1], 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lugre_decaying_damping(v, z, prm):  # pragma: no cover - compiled
     """LuGre with σ1(v) = σ1·exp(−(v/vs)²): micro-damping that fades once sliding."""
     vs = prm[I_VS]
@@ -83,7 +83,7 @@ def lugre_decaying_damping(v, z, prm):  # pragma: no cover - compiled
     return _lugre_core(v, z, prm, s1, -2.0 * v / (vs * vs) * s1)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def dahl(v, z, prm):  # pragma: no cover - compiled
     """Dahl: dz/dt = v·φ(1 − σ0·z·sgn(v)/Fc), φ(s) = |s|^α·sgn(s); F = σ0·z + σ2·v."""
     s0 = prm[I_SIGMA0]
@@ -99,7 +99,7 @@ def dahl(v, z, prm):  # pragma: no cover - compiled
     return zdot, s0 * z + sigma2 * v, phi, -s0 * abs(v) * dphi / fc, sigma2, s0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bouc_wen(v, z, prm):  # pragma: no cover - compiled
     """Bouc-Wen, normalised so that steady sliding gives F = ±Fc + σ2·v.
 
@@ -124,7 +124,7 @@ def bouc_wen(v, z, prm):  # pragma: no cover - compiled
     return zdot, s0 * z + sigma2 * v, dzdot_dv, dzdot_dz, sigma2, s0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def coulomb_viscous(v, z, prm):  # pragma: no cover - compiled
     """Static map F = Fc·sgn(v) + σ2·v, sign regularised as tanh(v/v_reg)."""
     vr = prm[I_VREG]
@@ -134,7 +134,7 @@ def coulomb_viscous(v, z, prm):  # pragma: no cover - compiled
     return 0.0, fc * th + sigma2 * v, 0.0, 0.0, fc * (1.0 - th * th) / vr + sigma2, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stribeck_map(v, z, prm):  # pragma: no cover - compiled
     """Static map F = g(v)·sgn(v) + σ2·v (the LuGre steady state), sign regularised."""
     vr = prm[I_VREG]

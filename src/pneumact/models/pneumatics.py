@@ -32,7 +32,7 @@ def critical_ratio(gamma):  # pragma: no cover - compiled
     return (2.0 / (gamma + 1.0)) ** (gamma / (gamma - 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _phi_subsonic(r, gamma):  # pragma: no cover - compiled
     """Subsonic Φ and dΦ/dr; every power of r is a product of a = r^(1/γ) and r."""
     a = r ** (1.0 / gamma)
@@ -79,7 +79,7 @@ def _phi_fast(r, prm):  # pragma: no cover - compiled
     return slope * (1.0 - r), -slope
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def orifice(p1, p2, area, prm):  # pragma: no cover - compiled
     """Mass flow [kg/s] from side 1 to side 2 through effective area ``area``.
 

@@ -18,14 +18,14 @@ from .friction import FrictionModel, LuGre
 from .layout import CH_DRIVE, I_KDRIVE
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def force_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """A force F(t) [N] applied to the mass."""
     f = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
     return False, 0.0, 0.0, f, 0.0, 0.0, f, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def spring_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """A spring k_drive whose free end follows x_d(t) [m] pulls the mass (stick-slip)."""
     xd = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
@@ -33,14 +33,14 @@ def spring_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     return False, 0.0, 0.0, kd * (xd - y[0]), -kd, 0.0, xd, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def velocity_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """The velocity v(t) [m/s] of the mass is prescribed."""
     v, a = channel_eval(sig, ptr, CH_DRIVE, t, ts)
     return True, v, a, 0.0, 0.0, 0.0, v, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def position_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """The position x(t) [m] of the mass is prescribed (velocity = its slope)."""
     x, v = channel_eval(sig, ptr, CH_DRIVE, t, ts)

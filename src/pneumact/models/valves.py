@@ -9,6 +9,7 @@ integral state i.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -38,30 +39,30 @@ from .pneumatics import orifice
 SOURCE_NSTATE = 3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def source_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """Chamber pressure prescribed by the drive signal."""
     return channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def source_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
     pass
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def source_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
     pass
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def source_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """(opening u, ṁ_in, ṁ_out): not modelled for a prescribed pressure."""
     return 0.0, 0.0, 0.0
 
 
 # ------------------------------------------------------- chamber shared by the valves
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _chamber_rate(y, prm, mdot):  # pragma: no cover - compiled
     """dp/dt = n/V·(R·T·ṁ + p·A_d·v), with the chamber volume V = V0 − A_d·x."""
     ad = prm[I_AD]
@@ -69,7 +70,7 @@ def _chamber_rate(y, prm, mdot):  # pragma: no cover - compiled
     return prm[I_NPOLY] / vol * (prm[I_R] * prm[I_T] * mdot + y[3] * ad * y[1])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _chamber_jac(y, prm, mdot, dmdot_dp, jac):  # pragma: no cover - compiled
     """Row of the pressure state in the Jacobian (∂/∂x, ∂/∂v, ∂/∂p)."""
     ad = prm[I_AD]
@@ -81,7 +82,7 @@ def _chamber_jac(y, prm, mdot, dmdot_dp, jac):  # pragma: no cover - compiled
     jac[3, 3] = n / vol * (rt * dmdot_dp + ad * y[1])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _valve_flows(p, u, prm, sig, ptr):  # pragma: no cover - compiled
     """Flows in (atmosphere -> chamber) and out (chamber -> reservoir) at opening u.
 
@@ -103,26 +104,26 @@ def _valve_flows(p, u, prm, sig, ptr):  # pragma: no cover - compiled
 COMMAND_NSTATE = 4
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def command_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     return y[3]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def command_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
     q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
     dydt[3] = _chamber_rate(y, prm, q_in - q_out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def command_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
     q_in, q_out, dq_dp, _ = _valve_flows(y[3], u, prm, sig, ptr)
     _chamber_jac(y, prm, q_in - q_out, dq_dp, jac)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def command_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
     q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
@@ -133,7 +134,7 @@ def command_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
 REGULATOR_NSTATE = 6
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _regulator_law(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     """PI law on the normalised pressure error with back-calculation anti-windup.
 
@@ -153,12 +154,12 @@ def _regulator_law(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     return u_raw, kp / patm, 1.0, e, False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def regulator_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     return y[3]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def regulator_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
     u = y[4]
     q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
@@ -169,7 +170,7 @@ def regulator_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
     dydt[5] = (u_cmd - y[5]) / prm[I_REG_TI]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def regulator_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
     u = y[4]
     q_in, q_out, dq_dp, dq_du = _valve_flows(y[3], u, prm, sig, ptr)
@@ -187,7 +188,7 @@ def regulator_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
     jac[5, 5] = (du_di - 1.0) / ti
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def regulator_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
     q_in, q_out, _, _ = _valve_flows(y[3], y[4], prm, sig, ptr)
     return y[4], q_in, q_out
@@ -222,7 +223,9 @@ class PressureSource(Valve):
     required: ClassVar[tuple[str, ...]] = ()
 
 
+@functools.cache
 def _linear_map(rising: bool) -> Signal:
+    """The default area map: linear from closed to fully open over u ∈ [0, 1]."""
     from ..experiments.signals import PiecewiseLinear
 
     return PiecewiseLinear([0.0, 1.0], [0.0, 1.0] if rising else [1.0, 0.0])

@@ -77,8 +77,25 @@ def generate_source(model: str, components: dict[str, str]) -> str:
     ])
 
 
+_BY_COMBINATION: dict[tuple, ModuleType] = {}
+
+
 def load_kernel(model: str, components: dict[str, str], key: str) -> ModuleType:
-    """The compiled kernel module for this combination (generated on first use)."""
+    """The compiled kernel module for this combination (generated on first use).
+
+    Looked up in-process first: generating and hashing the source costs about a
+    millisecond, as much as a whole simulation.
+    """
+    combination = (model, key, tuple(sorted(components.items())))
+    module = _BY_COMBINATION.get(combination)
+    if module is not None:
+        return module
+    module = _load_kernel(model, components, key)
+    _BY_COMBINATION[combination] = module
+    return module
+
+
+def _load_kernel(model: str, components: dict[str, str], key: str) -> ModuleType:
     source = generate_source(model, components)
     digest = hashlib.sha256()
     digest.update(source.encode())
