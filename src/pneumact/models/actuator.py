@@ -13,6 +13,11 @@ from .pneumatics import ChamberLaw, Isothermal, orifice_mass_flow
 from .valves import CommandValve, PressureRegulator, PressureSource, Valve
 
 MECHANICS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
+# What the static-equilibrium start depends on (friction is unloaded at rest).
+EQUILIBRIUM_PARAMETERS = frozenset({
+    "F0", "k", "x_max", "k_stop", "A_d", "p_atm", "p_res", "A_res", "A_atm", "gamma", "R",
+    "T", "r_lin",
+})
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,6 +36,7 @@ class Actuator:
     load: Signal | None = None
     load_map: Signal | None = None
     model: ClassVar[str] = "actuator"
+    initial_state_parameters: ClassVar[frozenset[str]] = EQUILIBRIUM_PARAMETERS
 
     def __post_init__(self):
         needed = [*MECHANICS, *self.friction.required, *self.valve.required]

@@ -66,6 +66,7 @@ class FrictionRig:
     friction: FrictionModel = field(default_factory=LuGre)
     drive: str = "force"
     model: ClassVar[str] = "rig"
+    initial_state_parameters: ClassVar[frozenset[str]] = frozenset()  # set by the drive
 
     def __post_init__(self):
         from ..errors import ExperimentError

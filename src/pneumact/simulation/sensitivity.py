@@ -9,9 +9,10 @@ analysis ``relative()`` gives θ·∂y/∂θ, comparable across parameters.
 
 from __future__ import annotations
 
+import functools
 import time as _time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -26,24 +27,40 @@ from .solvers import Rodas4
 
 @dataclass(eq=False)
 class SensitivityResult:
-    """The simulation and, per signal, an array (n_time × n_parameters) of ∂signal/∂θ."""
+    """The simulation and, per signal, an array (n_time × n_parameters) of ∂signal/∂θ.
+
+    State sensitivities come from the integration; those of derived outputs (friction,
+    pressure of a source, flows) are computed by the chain rule on first access only.
+    """
 
     result: Result
     parameters: list[str]
     values: np.ndarray
     sensitivities: dict[str, np.ndarray]
+    _derived: dict[str, Callable[[], np.ndarray]] = field(default_factory=dict, repr=False)
+
+    @property
+    def signals(self) -> list[str]:
+        return list(self.sensitivities) + [n for n in self._derived
+                                           if n not in self.sensitivities]
 
     def __getitem__(self, signal: str) -> np.ndarray:
+        if signal not in self.sensitivities:
+            if signal not in self._derived:
+                raise KeyError(f"no sensitivity of {signal!r}; signals: "
+                               f"{', '.join(self.signals)}")
+            self.sensitivities[signal] = self._derived[signal]()
         return self.sensitivities[signal]
 
     def relative(self, signal: str) -> np.ndarray:
         """θ·∂signal/∂θ: the change of the signal per relative change of each parameter."""
-        return self.sensitivities[signal] * self.values[None, :]
+        return self[signal] * self.values[None, :]
 
     def to_pandas(self) -> pd.DataFrame:
         """Long table: time, signal, parameter, sensitivity (SI units of signal/parameter)."""
         frames = []
-        for name, arr in self.sensitivities.items():
+        for name in self.signals:
+            arr = self[name]
             for k, par in enumerate(self.parameters):
                 frames.append(pd.DataFrame({
                     "time": self.result.time, "signal": name, "parameter": par,
@@ -72,6 +89,10 @@ def _initial_sensitivity(model, experiment, names: list[str]) -> np.ndarray:
     base = model.params
     cols = []
     for name in names:
+        if name not in model.initial_state_parameters:
+            cols.append(np.zeros(len(model.initial_state(experiment.drive,
+                                                         experiment.t_start))))
+            continue
         value = base[name]
         step = 1e-6 * (abs(value) if value != 0 else 1.0)
         ys = []
@@ -115,18 +136,27 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     if info[0] != 0:
         raise SolverError(f"Rodas4 with sensitivities failed at t = {info[1]:.9g} s: "
                           f"{STATUS_TEXT.get(int(info[0]), 'unknown failure')}; state {y_end}")
-    k = np.clip(np.searchsorted(bp, t_out, side="right") - 1, 0, bp.size - 2)
-    ts_out = 0.5 * (bp[k] + bp[k + 1])
-    d_out = np.empty((t_out.size, kernel.NOUT, len(names)))
-    kernel.output_sensitivities(t_out, ts_out, y_out, s_out, prm, pidx, sig, ptr, d_out)
     result = Result.from_kernel(kernel, model, experiment, solver, t_out, y_out, out, info,
                                 wall)
     sens: dict[str, np.ndarray] = {}
     for i, name in enumerate(kernel.STATE_NAMES):
         sens[name] = s_out[:, i, :].copy()
+    derived: dict[str, Callable[[], np.ndarray]] = {}
+    all_outputs: list[np.ndarray] = []
+
+    def output_column(i: int) -> np.ndarray:
+        if not all_outputs:  # one pass computes every output's sensitivity
+            k = np.clip(np.searchsorted(bp, t_out, side="right") - 1, 0, bp.size - 2)
+            ts_out = 0.5 * (bp[k] + bp[k + 1])
+            d_out = np.empty((t_out.size, kernel.NOUT, len(names)))
+            kernel.output_sensitivities(t_out, ts_out, y_out, s_out, prm, pidx, sig, ptr,
+                                        d_out)
+            all_outputs.append(d_out)
+        return all_outputs[0][:, i, :].copy()
+
     for i, name in enumerate(kernel.OUTPUT_NAMES):
         if name == "drive":
             name = f"drive_{experiment.quantity}"
         if name not in sens and name in result.signals:
-            sens[name] = d_out[:, i, :].copy()
-    return SensitivityResult(result, names, prm[pidx].copy(), sens)
+            derived[name] = functools.partial(output_column, i)
+    return SensitivityResult(result, names, prm[pidx].copy(), sens, derived)

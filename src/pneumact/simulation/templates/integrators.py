@@ -15,6 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
+from pneumact.models.layout import I_GAMMA, I_R, I_RLIN, I_T
 from pneumact.models.pneumatics import derive_flow_constants
 from pneumact.simulation.linalg import lu_factor, lu_solve
 
@@ -104,12 +105,20 @@ def _write_point(t, ts, y, prm, sig, ptr, j, y_out, out, obuf):  # pragma: no co
         out[j, i] = obuf[i]
 
 
+@njit(cache=True)
+def _enters_flow_constants(i):  # pragma: no cover - compiled
+    """Whether parameter slot ``i`` changes the derived orifice-flow constants."""
+    return i == I_GAMMA or i == I_R or i == I_T or i == I_RLIN
+
+
 @njit(cache=True, inline="always")
-def _directional(t, ts, y, dy, prm, prm_p, eps, f_base, sig, ptr, ybuf, fbuf, q, n):
+def _directional(t, ts, y, dy, prm, prm_p, eps, f_base, sig, ptr, ybuf, fbuf, q, n,
+                 flow_parameter):
     """(f(t, y + eps·dy, θ + eps·e_j) − f_base)/eps: J·dy + ∂f/∂θ_j in one evaluation."""
     for a in range(n):
         ybuf[a] = y[a] + eps * dy[a]
-    derive_flow_constants(prm_p)
+    if flow_parameter:
+        derive_flow_constants(prm_p)
     rhs(t, ts, ybuf, prm_p, sig, ptr, fbuf)
     for a in range(n):
         q[a] = (fbuf[a] - f_base[a]) / eps
@@ -225,10 +234,13 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
         rhs(t, ts, y, prm, sig, ptr, f0)
         n_rhs += 1
         for p_ in range(npar):
+            flowp = _enters_flow_constants(pidx[p_])
             prm_p[pidx[p_]] = prm[pidx[p_]] + eps_p[p_]
             _directional(t, ts, y, sens[:, p_], prm, prm_p, eps_p[p_], f0, sig, ptr, ybuf2,
-                         fbuf, q, n)
+                         fbuf, q, n, flowp)
             prm_p[pidx[p_]] = prm[pidx[p_]]
+            if flowp:
+                derive_flow_constants(prm_p)
             for a in range(n):
                 sdot0[a, p_] = q[a]
         while t < t_end:
@@ -357,6 +369,7 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
                 for p_ in range(npar):
                     pi = pidx[p_]
                     kf = pfast[p_]
+                    flowp = _enters_flow_constants(pi)
                     prm_p[pi] = prm[pi] + eps_p[p_]
                     ep = eps_p[p_]
                     # time derivative of the sensitivity right-hand side (mixed difference)
@@ -371,7 +384,7 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
                         for a in range(n):
                             dy[a] = sens[a, p_]
                         _directional(t + dts, ts, y, dy, prm, prm_p, ep, fbt, sig, ptr, ybuf2,
-                                     fbuf, qt, n)
+                                     fbuf, qt, n, flowp)
                         for a in range(n):
                             sft[a] = (qt[a] - sdot0[a, p_]) / dts
                     for st in range(6):
@@ -405,7 +418,7 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
                             tc = t + (C2 * h if st == 1 else C3 * h if st == 2 else
                                       C4 * h if st == 3 else h)
                             _directional(tc, ts, yst[st], dy, prm, prm_p, ep, fst[st], sig,
-                                         ptr, ybuf2, fbuf, q, n)
+                                         ptr, ybuf2, fbuf, q, n, flowp)
                         for a in range(n):
                             if st == 0:
                                 r = q[a] + h * D1 * sft[a]
@@ -437,11 +450,13 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
                         for a in range(n):
                             dy[a] = snew[a, p_]
                         _directional(t_new, ts, ynew, dy, prm, prm_p, ep, f1, sig, ptr, ybuf2,
-                                     fbuf, q, n)
+                                     fbuf, q, n, flowp)
                         for a in range(n):
                             sdot1[a, p_] = q[a]
                         n_rhs += 7
                     prm_p[pi] = prm[pi]
+                    if flowp:
+                        derive_flow_constants(prm_p)
                 j0 = j
                 j = _dense(t, t_new - t, y, f0, ynew, f1, t_out, j, ts, prm, sig, ptr, y_out,
                            out, ybuf, obuf, t_end)
@@ -655,10 +670,13 @@ def output_sensitivities(t_out, ts_out, y_out, s_out, prm, pidx, sig, ptr,
             scale = abs(prm[pi])
             ep = 1e-7 * (scale if scale > 0.0 else 1.0)
             prm_p[pi] = prm[pi] + ep
-            derive_flow_constants(prm_p)
+            if _enters_flow_constants(pi):
+                derive_flow_constants(prm_p)
             for a in range(NSTATE):
                 ybuf[a] = y_out[jj, a] + ep * s_out[jj, a, p_]
             outputs(t_out[jj], ts_out[jj], ybuf, prm_p, sig, ptr, pert)
             for k in range(NOUT):
                 res[jj, k, p_] = (pert[k] - base[k]) / ep
             prm_p[pi] = prm[pi]
+            if _enters_flow_constants(pi):
+                derive_flow_constants(prm_p)
