@@ -44,6 +44,7 @@ import pandas as pd
 from . import features as _features
 from .errors import DataError, ParameterError, PneumactError
 from .experiments.actuator import Experiment
+from .models.actuator import rest_position
 from .parameters import INDEX, SPECS, ParameterSet, validate
 from .simulation.simulate import STATUS_TEXT, prepare
 from .simulation.solvers import Rodas4, Solver
@@ -193,7 +194,8 @@ class _Runner:
         model = self.spec.model
         if not self.init_columns:
             return y0, problems
-        if getattr(model, "model", "") == "actuator" and model.valve.prefix == "source":
+        if (getattr(model, "model", "") == "actuator" and model.valve.prefix == "source"
+                and model.load is None and model.load_map is None):
             y0[:, 0] = _source_equilibrium(self.p0, prms)
             return y0, problems
         cache: dict[tuple, np.ndarray] = {}
@@ -330,16 +332,11 @@ def _initial_state_columns(model, columns: Sequence[str]) -> tuple[str, ...]:
 
 
 def _source_equilibrium(p0: float, prms: np.ndarray) -> np.ndarray:
-    """Rest position under pressure ``p0`` for each parameter row: vectorised
-    ``Actuator.initial_state`` for the pressure source (same operations, same bits)."""
-    p_atm, a_d, f0 = prms[:, INDEX["p_atm"]], prms[:, INDEX["A_d"]], prms[:, INDEX["F0"]]
-    k, k_stop, x_max = prms[:, INDEX["k"]], prms[:, INDEX["k_stop"]], prms[:, INDEX["x_max"]]
-    net0 = (p_atm - p0) * a_d - f0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_free = np.where(k > 0, net0 / k, np.where(net0 <= 0, 0.0, x_max))
-        low = net0 / (k + k_stop)
-        high = x_max + (net0 - k * x_max) / (k + k_stop)
-    return np.where(x_free <= 0.0, low, np.where(x_free >= x_max, high, x_free))
+    """Rest position under pressure ``p0`` for each parameter row: the vectorised
+    ``Actuator.initial_state`` of an unloaded actuator on a pressure source."""
+    net0 = (prms[:, INDEX["p_atm"]] - p0) * prms[:, INDEX["A_d"]] - prms[:, INDEX["F0"]]
+    return rest_position(net0, prms[:, INDEX["k"]], prms[:, INDEX["k_stop"]],
+                         prms[:, INDEX["x_max"]])
 
 
 _RUNNERS: dict[str, _Runner] = {}

@@ -20,6 +20,18 @@ EQUILIBRIUM_PARAMETERS = frozenset({
 })
 
 
+def rest_position(net0, k, k_stop, x_max):
+    """Where the spring (and an end stop) balance the net force ``net0`` [N] that acts at
+    x = 0 towards larger x; works elementwise on arrays (the batch engine uses it)."""
+    net0, k, k_stop, x_max = np.broadcast_arrays(*(np.asarray(a, dtype=float)
+                                                   for a in (net0, k, k_stop, x_max)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_free = np.where(k > 0, net0 / k, np.where(net0 <= 0, 0.0, x_max))
+        low = net0 / (k + k_stop)
+        high = x_max + (net0 - k * x_max) / (k + k_stop)
+    return np.where(x_free <= 0.0, low, np.where(x_free >= x_max, high, x_free))
+
+
 @dataclass(frozen=True, eq=False)
 class Actuator:
     """A spring-return vacuum diaphragm actuator.
@@ -108,14 +120,8 @@ class Actuator:
         return y0
 
     def _rest_position(self, net0: float) -> float:
-        """Where the spring (and an end stop) balance the net force ``net0`` at x = 0."""
         p = self.params
-        x_free = net0 / p["k"] if p["k"] > 0 else (0.0 if net0 <= 0 else p["x_max"])
-        if x_free <= 0.0:
-            return net0 / (p["k"] + p["k_stop"])
-        if x_free >= p["x_max"]:
-            return p["x_max"] + (net0 - p["k"] * p["x_max"]) / (p["k"] + p["k_stop"])
-        return x_free
+        return float(rest_position(net0, p["k"], p["k_stop"], p["x_max"]))
 
     def _net_flow(self, pressure: float, u: float) -> float:
         p = self.params

@@ -9,6 +9,7 @@ analysis ``relative()`` gives θ·∂y/∂θ, comparable across parameters.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time as _time
 from collections.abc import Callable, Sequence
@@ -97,10 +98,7 @@ def _initial_sensitivity(model, experiment, names: list[str]) -> np.ndarray:
         step = 1e-6 * (abs(value) if value != 0 else 1.0)
         ys = []
         for sign in (1.0, -1.0):
-            changed = type(model).__new__(type(model))
-            for f in model.__dataclass_fields__:
-                object.__setattr__(changed, f, getattr(model, f))
-            object.__setattr__(changed, "params", base.replace({name: value + sign * step}))
+            changed = dataclasses.replace(model, params=base.replace({name: value + sign * step}))
             ys.append(changed.initial_state(experiment.drive, experiment.t_start))
         cols.append((ys[0] - ys[1]) / (2 * step))
     return np.column_stack(cols)

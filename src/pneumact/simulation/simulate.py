@@ -44,12 +44,13 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None)
     kernel = kernel_for(model)
     prm = model.vector()
     derive_flow_constants(prm)  # complete vector, also for callers of kernel.rhs/jac
-    sig, ptr = pack_channels(model.channels(experiment.drive))
+    channels = model.channels(experiment.drive)
+    sig, ptr = pack_channels(channels)
     bp = experiment.breakpoints()
-    for extra in (model.channels(experiment.drive)[1],):
-        if extra is not None:
-            bp = np.unique(np.concatenate([bp, extra.breakpoints()]))
-            bp = bp[(bp >= experiment.t_start) & (bp <= experiment.t_end)]
+    load = channels[1]  # a load against time has corners of its own
+    if load is not None:
+        bp = np.unique(np.concatenate([bp, load.breakpoints()]))
+        bp = bp[(bp >= experiment.t_start) & (bp <= experiment.t_end)]
     t_out = experiment.output_times() if t_eval is None else np.asarray(t_eval, dtype=float)
     if t_out.ndim != 1 or t_out.size == 0 or np.any(np.diff(t_out) < 0) or \
             t_out[0] < experiment.t_start or t_out[-1] > experiment.t_end:
