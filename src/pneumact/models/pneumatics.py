@@ -43,17 +43,29 @@ def _phi_subsonic(r, gamma):  # pragma: no cover - compiled
     return phi, dq / (2.0 * phi) if phi > 0.0 else 0.0
 
 
+@njit(cache=True, inline="always")
+def _flow_constants(gamma, r_lin):  # pragma: no cover - compiled
+    """(r_c, choked Φ, slope of the laminar branch) for γ and r_lin."""
+    rc = critical_ratio(gamma)
+    phi_choked = (2.0 / (gamma + 1.0)) ** ((gamma + 1.0) / (2.0 * (gamma - 1.0)))
+    return rc, phi_choked, _phi_subsonic(r_lin, gamma)[0] / (1.0 - r_lin)
+
+
+@njit(cache=True, inline="always")
+def _phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover - compiled
+    """Φ(r), dΦ/dr: choked below r_c, subsonic up to r_lin, linear (laminar) up to 1."""
+    if r <= rc:
+        return phi_choked, 0.0
+    if r < r_lin:
+        return _phi_subsonic(r, gamma)
+    return lin_slope * (1.0 - r), -lin_slope
+
+
 @njit(cache=True)
 def flow_function(r, gamma, r_lin):  # pragma: no cover - compiled
     """Φ(r) and dΦ/dr for 0 ≤ r ≤ 1 (choked, subsonic, laminar near r = 1)."""
-    rc = critical_ratio(gamma)
-    if r <= rc:
-        return (2.0 / (gamma + 1.0)) ** ((gamma + 1.0) / (2.0 * (gamma - 1.0))), 0.0
-    if r < r_lin:
-        return _phi_subsonic(r, gamma)
-    phi_lin, _ = _phi_subsonic(r_lin, gamma)
-    slope = phi_lin / (1.0 - r_lin)
-    return slope * (1.0 - r), -slope
+    rc, phi_choked, lin_slope = _flow_constants(gamma, r_lin)
+    return _phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope)
 
 
 @njit(cache=True)
@@ -61,22 +73,18 @@ def derive_flow_constants(prm):  # pragma: no cover - compiled
     """Fill the derived slots of ``prm`` (r_c, choked Φ, √(γ/(R·T)), laminar slope) from
     γ, R, T and r_lin; the kernels call it once per run, not once per orifice."""
     gamma = prm[I_GAMMA]
-    r_lin = prm[I_RLIN]
-    prm[I_FLOW_RCRIT] = critical_ratio(gamma)
-    prm[I_FLOW_PHICHOKED] = (2.0 / (gamma + 1.0)) ** ((gamma + 1.0) / (2.0 * (gamma - 1.0)))
+    rc, phi_choked, lin_slope = _flow_constants(gamma, prm[I_RLIN])
+    prm[I_FLOW_RCRIT] = rc
+    prm[I_FLOW_PHICHOKED] = phi_choked
     prm[I_FLOW_COEF] = math.sqrt(gamma / (prm[I_R] * prm[I_T]))
-    prm[I_FLOW_LINSLOPE] = _phi_subsonic(r_lin, gamma)[0] / (1.0 - r_lin)
+    prm[I_FLOW_LINSLOPE] = lin_slope
 
 
 @njit(cache=True, inline="always")
 def _phi_fast(r, prm):  # pragma: no cover - compiled
-    """Φ(r), dΦ/dr with the derived constants (same law as ``flow_function``)."""
-    if r <= prm[I_FLOW_RCRIT]:
-        return prm[I_FLOW_PHICHOKED], 0.0
-    if r < prm[I_RLIN]:
-        return _phi_subsonic(r, prm[I_GAMMA])
-    slope = prm[I_FLOW_LINSLOPE]
-    return slope * (1.0 - r), -slope
+    """Φ(r), dΦ/dr with the derived constants of ``prm``."""
+    return _phi_law(r, prm[I_GAMMA], prm[I_RLIN], prm[I_FLOW_RCRIT], prm[I_FLOW_PHICHOKED],
+                    prm[I_FLOW_LINSLOPE])
 
 
 @njit(cache=True, inline="always")

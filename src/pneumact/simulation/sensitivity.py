@@ -85,14 +85,13 @@ def _check_names(parameters: Sequence[str]) -> list[str]:
     return names
 
 
-def _initial_sensitivity(model, experiment, names: list[str]) -> np.ndarray:
+def _initial_sensitivity(model, experiment, names: list[str], n_state: int) -> np.ndarray:
     """∂y0/∂θ of the static-equilibrium start, by central differences."""
     base = model.params
     cols = []
     for name in names:
         if name not in model.initial_state_parameters:
-            cols.append(np.zeros(len(model.initial_state(experiment.drive,
-                                                         experiment.t_start))))
+            cols.append(np.zeros(n_state))
             continue
         value = base[name]
         step = 1e-6 * (abs(value) if value != 0 else 1.0)
@@ -120,7 +119,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     pidx = np.array([INDEX[n] for n in names], dtype=np.int64)
     pfast = np.array([FRICTION_SENS.index(n) if n in FRICTION_SENS else -1 for n in names],
                      dtype=np.int64)
-    s0 = _initial_sensitivity(model, experiment, names)
+    s0 = _initial_sensitivity(model, experiment, names, y0.size)
     y_out = np.empty((t_out.size, kernel.NSTATE))
     out = np.empty((t_out.size, kernel.NOUT))
     s_out = np.empty((t_out.size, kernel.NSTATE, len(names)))
