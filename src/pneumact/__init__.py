@@ -3,75 +3,112 @@
     import pneumact as pa
     params = pa.load_params("vgt-paper")
     actuator = pa.Actuator(params, friction=pa.LuGre(), valve=pa.PressureSource())
-    result = pa.simulate(actuator, pa.experiments.PressureCycle(high=100e3, low=20e3))
+    result = pa.simulate(actuator, pa.PressureCycle(high=100e3, low=20e3))
     result.to_pandas(); result.save("run.csv"); result.plot_hysteresis()
+
+Names are imported on first use (PEP 562), so ``import pneumact`` is quick and a
+command pays only for what it needs.
 """
 
-from . import experiments
-from .batch import BatchResult, simulate_batch
-from .errors import (
-    DataError,
-    ExperimentError,
-    ParameterError,
-    PassivityWarning,
-    PneumactError,
-    SolverError,
-)
-from .experiments import CommandCycle, Experiment, PressureCycle
-from .models import (
-    Actuator,
-    Adiabatic,
-    BoucWen,
-    CommandValve,
-    CoulombViscous,
-    Dahl,
-    FrictionRig,
-    Isothermal,
-    LuGre,
-    Polytropic,
-    PressureRegulator,
-    PressureSource,
-    StribeckMap,
-)
-from .parameters import ParameterSet, available_params, load_params
-from .simulation import DormandPrince, Result, Rodas4, simulate
-from .simulation.sensitivity import SensitivityResult, simulate_sensitivities
+from __future__ import annotations
 
-__version__ = "0.1.0"
+import importlib
+from typing import TYPE_CHECKING
 
-__all__ = [
-    "Actuator",
-    "Adiabatic",
-    "BatchResult",
-    "BoucWen",
-    "CommandCycle",
-    "CommandValve",
-    "CoulombViscous",
-    "Dahl",
-    "DataError",
-    "DormandPrince",
-    "Experiment",
-    "ExperimentError",
-    "FrictionRig",
-    "Isothermal",
-    "LuGre",
-    "ParameterError",
-    "ParameterSet",
-    "PassivityWarning",
-    "PneumactError",
-    "Polytropic",
-    "PressureCycle",
-    "PressureRegulator",
-    "PressureSource",
-    "Result",
-    "Rodas4",
-    "SensitivityResult",
-    "SolverError",
-    "StribeckMap",
-    "available_params",
-    "experiments",
-    "load_params",
-    "simulate",
-    "simulate_batch",
-    "simulate_sensitivities",
-]
+__version__ = "0.2.0"
+
+#: public name -> module that defines it
+_EXPORTS: dict[str, str] = {
+    "experiments": "pneumact.experiments",
+    "Experiment": "pneumact.experiments",
+    "PressureCycle": "pneumact.experiments",
+    "CommandCycle": "pneumact.experiments",
+    "Actuator": "pneumact.models",
+    "Adiabatic": "pneumact.models",
+    "BoucWen": "pneumact.models",
+    "CommandValve": "pneumact.models",
+    "CoulombViscous": "pneumact.models",
+    "Dahl": "pneumact.models",
+    "FrictionRig": "pneumact.models",
+    "Isothermal": "pneumact.models",
+    "LuGre": "pneumact.models",
+    "Polytropic": "pneumact.models",
+    "PressureRegulator": "pneumact.models",
+    "PressureSource": "pneumact.models",
+    "StribeckMap": "pneumact.models",
+    "ParameterSet": "pneumact.parameters",
+    "available_params": "pneumact.parameters",
+    "load_params": "pneumact.parameters",
+    "write_params": "pneumact.parameters",
+    "Assembly": "pneumact.simulation",
+    "DormandPrince": "pneumact.simulation",
+    "Result": "pneumact.simulation",
+    "Rodas4": "pneumact.simulation",
+    "SensitivityResult": "pneumact.simulation",
+    "simulate": "pneumact.simulation",
+    "simulate_sensitivities": "pneumact.simulation",
+    "BatchResult": "pneumact.simulation.batch",
+    "simulate_batch": "pneumact.simulation.batch",
+    "DataError": "pneumact.errors",
+    "ExperimentError": "pneumact.errors",
+    "ParameterError": "pneumact.errors",
+    "PassivityWarning": "pneumact.errors",
+    "PneumactError": "pneumact.errors",
+    "SolverError": "pneumact.errors",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'pneumact' has no attribute {name!r}")
+    value = importlib.import_module(module)
+    if name != module.rpartition(".")[2]:
+        value = getattr(value, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    from pneumact import experiments
+    from pneumact.errors import (
+        DataError,
+        ExperimentError,
+        ParameterError,
+        PassivityWarning,
+        PneumactError,
+        SolverError,
+    )
+    from pneumact.experiments import CommandCycle, Experiment, PressureCycle
+    from pneumact.models import (
+        Actuator,
+        Adiabatic,
+        BoucWen,
+        CommandValve,
+        CoulombViscous,
+        Dahl,
+        FrictionRig,
+        Isothermal,
+        LuGre,
+        Polytropic,
+        PressureRegulator,
+        PressureSource,
+        StribeckMap,
+    )
+    from pneumact.parameters import ParameterSet, available_params, load_params, write_params
+    from pneumact.simulation import (
+        Assembly,
+        DormandPrince,
+        Result,
+        Rodas4,
+        SensitivityResult,
+        simulate,
+        simulate_sensitivities,
+    )
+    from pneumact.simulation.batch import BatchResult, simulate_batch

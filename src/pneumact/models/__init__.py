@@ -1,7 +1,15 @@
 """Models: friction laws, chamber and valves, the assembled actuator and the test rig."""
 
 from .actuator import Actuator
-from .friction import BoucWen, CoulombViscous, Dahl, FrictionModel, LuGre, StribeckMap
+from .friction import (
+    BoucWen,
+    CoulombViscous,
+    Dahl,
+    FrictionModel,
+    LuGre,
+    StribeckMap,
+    friction_models,
+)
 from .pneumatics import (
     Adiabatic,
     ChamberLaw,
@@ -11,11 +19,11 @@ from .pneumatics import (
     orifice_mass_flow,
 )
 from .rig import FrictionRig
-from .valves import CommandValve, PressureRegulator, PressureSource, Valve
+from .valves import VALVES, CommandValve, PressureRegulator, PressureSource, Valve
 
 __all__ = [
-    "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve", "CoulombViscous",
-    "Dahl", "FrictionModel", "FrictionRig", "Isothermal", "LuGre", "Polytropic",
-    "PressureRegulator", "PressureSource", "StribeckMap", "Valve", "flow_function_values",
-    "orifice_mass_flow",
+    "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve",
+    "CoulombViscous", "Dahl", "FrictionModel", "FrictionRig", "Isothermal", "LuGre",
+    "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
+    "flow_function_values", "friction_models", "orifice_mass_flow",
 ]

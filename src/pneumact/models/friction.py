@@ -1,11 +1,23 @@
-"""Friction models behind one interface: LuGre, Dahl, Bouc-Wen and static maps.
+"""Friction laws behind one interface: LuGre, Dahl, Bouc-Wen and two static maps.
 
-Every model is a compiled scalar function ``f(v, z, prm)`` of the sliding velocity ``v``
-and one internal state ``z`` (bristle deflection; unused and constant for static maps),
-returning ``(dz/dt, F, d(dz/dt)/dv, d(dz/dt)/dz, dF/dv, dF/dz)``. The partial derivatives
-feed the analytic Jacobian of the implicit integrator. A small strategy object per model
-names its kernel and the parameters it needs; the same object is passed to an
-``Actuator`` or a ``FrictionRig``.
+Each law is a compiled scalar function ``law(v, z, p, o)`` of the sliding velocity
+``v``, one internal state ``z`` (bristle deflection; unused and constant for static
+maps) and the law's parameter block, which starts at offset ``o`` of the vector ``p``
+(``p[o + LG_SIGMA0]``; whole vectors and offsets, not slices). It returns
+
+    (dz/dt, F, ∂(dz/dt)/∂v, ∂(dz/dt)/∂z, ∂F/∂v, ∂F/∂z),
+
+and ``law_params(v, z, p, o, g, rz, rf)`` fills g[rz, o + k] = ∂(dz/dt)/∂p_k and
+g[rf, o + k] = ∂F/∂p_k for every entry k of the block (analytic, for forward
+sensitivities and identification).
+
+Speed: numba counts references on every array passed to a call that it does not inline
+(two atomic operations per array). So the functions the hot loop calls are thin
+wrappers inlined by numba (``inline="always"``) that read the block and call the law's
+scalar-only function (``lugre_law``), which needs no reference counting. A strategy
+object per law names its block, its functions and its command-line name; the same
+object is passed to an ``Actuator`` or a ``FrictionRig``. Adding a law means adding its
+functions and class here.
 """
 
 from __future__ import annotations
@@ -17,301 +29,420 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
-from .layout import (
-    I_BW_BETA,
-    I_BW_GAMMA,
-    I_BW_N,
-    I_DAHL_ALPHA,
-    I_DELTA,
-    I_FC,
-    I_FS,
-    I_SIGMA0,
-    I_SIGMA1,
-    I_SIGMA2,
-    I_VREG,
-    I_VS,
+from ..parameters.catalogue import ParameterSpec, declare, declare_relation
+from .component import Block, Part, StateSpec
+
+P = ParameterSpec
+declare(
+    P("sigma0", "N/m", "bristle stiffness", None, 0.0, True, group="friction"),
+    P("sigma1", "N*s/m", "bristle (micro-)damping", 0.0, 0.0, group="friction"),
+    P("sigma2", "N*s/m", "viscous friction coefficient (the only viscous term)", 0.0, 0.0,
+      group="friction"),
+    P("Fc", "N", "Coulomb friction force", None, 0.0, group="friction"),
+    P("Fs", "N", "static (break-away) friction force, Fs >= Fc", None, 0.0, group="friction"),
+    P("vs", "m/s", "Stribeck velocity", None, 0.0, True, group="friction"),
+    P("delta", "", "Stribeck exponent (paper eq. 8: 1; usual LuGre: 2)", 2.0, 0.0, True,
+      group="friction"),
+    P("v_reg", "m/s", "sign regularisation velocity of the static friction maps", 1e-4, 0.0,
+      True, group="friction"),
+    P("dahl_alpha", "", "Dahl shape exponent", 1.0, 0.0, True, group="friction"),
+    P("bw_beta", "", "Bouc-Wen shape parameter beta", 0.5, 0.0, True, group="friction"),
+    P("bw_gamma", "", "Bouc-Wen shape parameter gamma (-beta <= gamma <= beta)", 0.5,
+      group="friction"),
+    P("bw_n", "", "Bouc-Wen exponent n", 1.0, 0.0, True, group="friction"),
 )
+declare_relation(("Fs", "Fc"), lambda fs, fc: fs >= fc,
+                 lambda fs, fc: f"must be >= Fc = {fc:g} N (static friction is at least "
+                                "the Coulomb friction)")
+declare_relation(("bw_gamma", "bw_beta"), lambda g, b: abs(g) <= b,
+                 lambda g, b: f"must be within [-bw_beta, bw_beta] = [{-b:g}, {b:g}]")
+
+LUGRE_BLOCK = Block.of("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs", "delta")
+LG_SIGMA0 = LUGRE_BLOCK.index("sigma0")
+LG_SIGMA1 = LUGRE_BLOCK.index("sigma1")
+LG_SIGMA2 = LUGRE_BLOCK.index("sigma2")
+LG_FC = LUGRE_BLOCK.index("Fc")
+LG_FS = LUGRE_BLOCK.index("Fs")
+LG_VS = LUGRE_BLOCK.index("vs")
+LG_DELTA = LUGRE_BLOCK.index("delta")
+LUGRE_SIZE = len(LUGRE_BLOCK)
+
+DAHL_BLOCK = Block.of("sigma0", "Fc", "sigma2", "dahl_alpha")
+DH_SIGMA0 = DAHL_BLOCK.index("sigma0")
+DH_FC = DAHL_BLOCK.index("Fc")
+DH_SIGMA2 = DAHL_BLOCK.index("sigma2")
+DH_ALPHA = DAHL_BLOCK.index("dahl_alpha")
+DAHL_SIZE = len(DAHL_BLOCK)
+
+BOUC_WEN_BLOCK = Block.of("sigma0", "Fc", "sigma2", "bw_beta", "bw_gamma", "bw_n")
+BW_SIGMA0 = BOUC_WEN_BLOCK.index("sigma0")
+BW_FC = BOUC_WEN_BLOCK.index("Fc")
+BW_SIGMA2 = BOUC_WEN_BLOCK.index("sigma2")
+BW_BETA = BOUC_WEN_BLOCK.index("bw_beta")
+BW_GAMMA = BOUC_WEN_BLOCK.index("bw_gamma")
+BW_N = BOUC_WEN_BLOCK.index("bw_n")
+BOUC_WEN_SIZE = len(BOUC_WEN_BLOCK)
+
+COULOMB_BLOCK = Block.of("Fc", "sigma2", "v_reg")
+CV_FC = COULOMB_BLOCK.index("Fc")
+CV_SIGMA2 = COULOMB_BLOCK.index("sigma2")
+CV_VREG = COULOMB_BLOCK.index("v_reg")
+COULOMB_SIZE = len(COULOMB_BLOCK)
+
+STRIBECK_BLOCK = Block.of("Fc", "Fs", "vs", "delta", "sigma2", "v_reg")
+SM_FC = STRIBECK_BLOCK.index("Fc")
+SM_FS = STRIBECK_BLOCK.index("Fs")
+SM_VS = STRIBECK_BLOCK.index("vs")
+SM_DELTA = STRIBECK_BLOCK.index("delta")
+SM_SIGMA2 = STRIBECK_BLOCK.index("sigma2")
+SM_VREG = STRIBECK_BLOCK.index("v_reg")
+STRIBECK_SIZE = len(STRIBECK_BLOCK)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _sign(v):  # pragma: no cover - compiled
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
-@njit(cache=True, inline="always")
-def stribeck_curve(v, prm):  # pragma: no cover - compiled
+@njit(cache=True)
+def stribeck_curve(v, fc, fs, vs, delta):  # pragma: no cover - compiled
     """g(v) = Fc + (Fs − Fc)·exp(−(|v|/vs)^δ) and its derivative dg/dv."""
-    fc = prm[I_FC]
-    ds = prm[I_FS] - fc
-    vs = prm[I_VS]
-    delta = prm[I_DELTA]
+    ds = fs - fc
     a = abs(v) / vs
     if a == 0.0:
         return fc + ds, 0.0
     ad = a**delta
     e = math.exp(-ad)
-    dg = -ds * e * delta * ad / a * _sign(v) / vs
-    return fc + ds * e, dg
+    return fc + ds * e, -ds * e * delta * ad / a * _sign(v) / vs
 
 
-@njit(cache=True, inline="always")
-def _lugre_core(v, z, prm, s1, ds1):  # pragma: no cover - compiled
-    s0 = prm[I_SIGMA0]
-    g, dg = stribeck_curve(v, prm)
+@njit(cache=True)
+def stribeck_curve_params(v, fc, fs, vs, delta):  # pragma: no cover - compiled
+    """(∂g/∂Fc, ∂g/∂Fs, ∂g/∂vs, ∂g/∂δ) of the Stribeck curve."""
+    a = abs(v) / vs
+    if a == 0.0:
+        return 0.0, 1.0, 0.0, 0.0
+    ad = a**delta
+    e = math.exp(-ad)
+    ds = fs - fc
+    return 1.0 - e, e, ds * e * delta * ad / vs, -ds * e * ad * math.log(a)
+
+
+# --------------------------------------------------------------------------- LuGre
+@njit(cache=True)
+def lugre_law(v, z, s0, s1, ds1_dv, s2, fc, fs, vs, delta):  # pragma: no cover - compiled
+    """LuGre with micro-damping s1 (and its derivative ds1_dv along v)."""
+    g, dg = stribeck_curve(v, fc, fs, vs, delta)
     av = abs(v)
     zdot = v - s0 * av * z / g
     dzdot_dv = 1.0 - s0 * z * (_sign(v) * g - av * dg) / (g * g)
     dzdot_dz = -s0 * av / g
-    sigma2 = prm[I_SIGMA2]
-    force = s0 * z + s1 * zdot + sigma2 * v
-    df_dv = ds1 * zdot + s1 * dzdot_dv + sigma2
-    df_dz = s0 + s1 * dzdot_dz
-    return zdot, force, dzdot_dv, dzdot_dz, df_dv, df_dz
+    force = s0 * z + s1 * zdot + s2 * v
+    df_dv = ds1_dv * zdot + s1 * dzdot_dv + s2
+    return zdot, force, dzdot_dv, dzdot_dz, df_dv, s0 + s1 * dzdot_dz
+
+
+@njit(cache=True)
+def _lugre_rate_params(v, z, s0, fc, fs, vs, delta):  # pragma: no cover - compiled
+    """dz/dt and its derivatives in σ0, Fc, Fs, vs, δ (σ1, σ2 do not enter it)."""
+    g = stribeck_curve(v, fc, fs, vs, delta)[0]
+    dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
+    av = abs(v)
+    dz_dg = s0 * av * z / (g * g)
+    return (v - s0 * av * z / g, -av * z / g, dz_dg * dg_dfc, dz_dg * dg_dfs,
+            dz_dg * dg_dvs, dz_dg * dg_ddelta)
+
+
+@njit(cache=True)
+def _lugre_params(v, z, p, o, s1, ds1_dsigma1, ds1_dvs, g, rz, rf):  # pragma: no cover
+    zdot, d_s0, d_fc, d_fs, d_vs, d_delta = _lugre_rate_params(
+        v, z, p[o + LG_SIGMA0], p[o + LG_FC], p[o + LG_FS], p[o + LG_VS], p[o + LG_DELTA])
+    g[rz, o + LG_SIGMA0] = d_s0
+    g[rz, o + LG_SIGMA1] = 0.0
+    g[rz, o + LG_SIGMA2] = 0.0
+    g[rz, o + LG_FC] = d_fc
+    g[rz, o + LG_FS] = d_fs
+    g[rz, o + LG_VS] = d_vs
+    g[rz, o + LG_DELTA] = d_delta
+    for k in range(LUGRE_SIZE):
+        g[rf, o + k] = s1 * g[rz, o + k]
+    g[rf, o + LG_SIGMA0] += z
+    g[rf, o + LG_SIGMA1] = ds1_dsigma1 * zdot
+    g[rf, o + LG_SIGMA2] = v
+    g[rf, o + LG_VS] += ds1_dvs * zdot
 
 
 @njit(cache=True, inline="always")
-def lugre(v, z, prm):  # pragma: no cover - compiled
+def lugre(v, z, p, o):  # pragma: no cover - compiled
     """LuGre (paper eqs. 6-8) with constant micro-damping σ1."""
-    return _lugre_core(v, z, prm, prm[I_SIGMA1], 0.0)
+    return lugre_law(v, z, p[o + LG_SIGMA0], p[o + LG_SIGMA1], 0.0, p[o + LG_SIGMA2],
+                     p[o + LG_FC], p[o + LG_FS], p[o + LG_VS], p[o + LG_DELTA])
+
+
+@njit(cache=True)
+def lugre_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    _lugre_params(v, z, p, o, p[o + LG_SIGMA1], 1.0, 0.0, g, rz, rf)
+
+
+@njit(cache=True)
+def _decaying_damping(v, sigma1, vs):  # pragma: no cover - compiled
+    """σ1(v) = σ1·exp(−(v/vs)²) and its derivatives in v, σ1 and vs."""
+    w = math.exp(-((v / vs) ** 2))
+    s1 = sigma1 * w
+    return s1, -2.0 * v / (vs * vs) * s1, w, s1 * 2.0 * v * v / (vs * vs * vs)
 
 
 @njit(cache=True, inline="always")
-def lugre_decaying_damping(v, z, prm):  # pragma: no cover - compiled
+def lugre_decaying(v, z, p, o):  # pragma: no cover - compiled
     """LuGre with σ1(v) = σ1·exp(−(v/vs)²): micro-damping that fades once sliding."""
-    vs = prm[I_VS]
-    s1 = prm[I_SIGMA1] * math.exp(-((v / vs) ** 2))
-    return _lugre_core(v, z, prm, s1, -2.0 * v / (vs * vs) * s1)
+    s1, ds1_dv, _, _ = _decaying_damping(v, p[o + LG_SIGMA1], p[o + LG_VS])
+    return lugre_law(v, z, p[o + LG_SIGMA0], s1, ds1_dv, p[o + LG_SIGMA2], p[o + LG_FC],
+                     p[o + LG_FS], p[o + LG_VS], p[o + LG_DELTA])
 
 
-@njit(cache=True, inline="always")
-def dahl(v, z, prm):  # pragma: no cover - compiled
-    """Dahl: dz/dt = v·φ(1 − σ0·z·sgn(v)/Fc), φ(s) = |s|^α·sgn(s); F = σ0·z + σ2·v."""
-    s0 = prm[I_SIGMA0]
-    fc = prm[I_FC]
-    alpha = prm[I_DAHL_ALPHA]
-    sv = _sign(v)
-    s = 1.0 - s0 * z * sv / fc
+@njit(cache=True)
+def lugre_decaying_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    s1, _, w, ds1_dvs = _decaying_damping(v, p[o + LG_SIGMA1], p[o + LG_VS])
+    _lugre_params(v, z, p, o, s1, w, ds1_dvs, g, rz, rf)
+
+
+@njit(cache=True)
+def lugre_scales(p, o):  # pragma: no cover - compiled
+    """(typical bristle deflection Fs/σ0, bristle stiffness σ0, regularisation speed 0)."""
+    return p[o + LG_FS] / p[o + LG_SIGMA0], p[o + LG_SIGMA0], 0.0
+
+
+@njit(cache=True)
+def _clear(g, rz, rf, o, size):  # pragma: no cover - compiled
+    for k in range(size):
+        g[rz, o + k] = 0.0
+        g[rf, o + k] = 0.0
+
+
+# --------------------------------------------------------------------------- Dahl
+@njit(cache=True)
+def _dahl_shape(v, z, s0, fc, alpha):  # pragma: no cover - compiled
+    """s = 1 − σ0·z·sgn(v)/Fc, φ(s) = |s|^α·sgn(s) and dφ/ds."""
+    s = 1.0 - s0 * z * _sign(v) / fc
     a = max(abs(s), 1e-300)
-    phi = a**alpha * _sign(s)
-    dphi = alpha * a ** (alpha - 1.0)
-    zdot = v * phi
-    sigma2 = prm[I_SIGMA2]
-    return zdot, s0 * z + sigma2 * v, phi, -s0 * abs(v) * dphi / fc, sigma2, s0
+    return s, a**alpha * _sign(s), alpha * a ** (alpha - 1.0)
+
+
+@njit(cache=True)
+def dahl_law(v, z, s0, fc, s2, alpha):  # pragma: no cover - compiled
+    _, phi, dphi = _dahl_shape(v, z, s0, fc, alpha)
+    return v * phi, s0 * z + s2 * v, phi, -s0 * abs(v) * dphi / fc, s2, s0
 
 
 @njit(cache=True, inline="always")
-def bouc_wen(v, z, prm):  # pragma: no cover - compiled
+def dahl(v, z, p, o):  # pragma: no cover - compiled
+    """Dahl: dz/dt = v·φ(1 − σ0·z·sgn(v)/Fc), φ(s) = |s|^α·sgn(s); F = σ0·z + σ2·v."""
+    return dahl_law(v, z, p[o + DH_SIGMA0], p[o + DH_FC], p[o + DH_SIGMA2], p[o + DH_ALPHA])
+
+
+@njit(cache=True)
+def dahl_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    s0, fc = p[o + DH_SIGMA0], p[o + DH_FC]
+    s, phi, dphi = _dahl_shape(v, z, s0, fc, p[o + DH_ALPHA])
+    sv = _sign(v)
+    _clear(g, rz, rf, o, DAHL_SIZE)
+    g[rz, o + DH_SIGMA0] = v * dphi * (-z * sv / fc)
+    g[rz, o + DH_FC] = v * dphi * (s0 * z * sv / (fc * fc))
+    g[rz, o + DH_ALPHA] = v * phi * math.log(abs(s)) if s != 0.0 else 0.0
+    g[rf, o + DH_SIGMA0] = z
+    g[rf, o + DH_SIGMA2] = v
+
+
+@njit(cache=True)
+def dahl_scales(p, o):  # pragma: no cover - compiled
+    return p[o + DH_FC] / p[o + DH_SIGMA0], p[o + DH_SIGMA0], 0.0
+
+
+# --------------------------------------------------------------------------- Bouc-Wen
+@njit(cache=True)
+def _bouc_wen_terms(v, z, s0, fc, beta, gam, n):  # pragma: no cover - compiled
+    """s = σ0·z/Fc, |s|^(n−1), the hysteretic numerator N and the norm β + γ."""
+    s = s0 * z / fc
+    an1 = max(abs(s), 1e-300) ** (n - 1.0)
+    numerator = beta * abs(v) * an1 * s + gam * v * abs(s) * an1
+    return s, an1, numerator, beta + gam
+
+
+@njit(cache=True)
+def bouc_wen_law(v, z, s0, fc, s2, beta, gam, n):  # pragma: no cover - compiled
+    s, an1, numerator, norm = _bouc_wen_terms(v, z, s0, fc, beta, gam, n)
+    an = abs(s) * an1
+    zdot = v - numerator / norm
+    dzdot_dv = 1.0 - (beta * _sign(v) * an1 * s + gam * an) / norm
+    dzdot_dz = -(s0 / fc) * n * an1 * (beta * abs(v) + gam * v * _sign(s)) / norm
+    return zdot, s0 * z + s2 * v, dzdot_dv, dzdot_dz, s2, s0
+
+
+@njit(cache=True, inline="always")
+def bouc_wen(v, z, p, o):  # pragma: no cover - compiled
     """Bouc-Wen, normalised so that steady sliding gives F = ±Fc + σ2·v.
 
     dz/dt = v − (β·|v|·|s|^(n−1)·s + γ·v·|s|^n)/(β + γ), s = σ0·z/Fc; F = σ0·z + σ2·v.
     With β = 1, γ = 0, n = 1 it is the Dahl model.
     """
-    s0 = prm[I_SIGMA0]
-    fc = prm[I_FC]
-    beta = prm[I_BW_BETA]
-    gam = prm[I_BW_GAMMA]
-    n = prm[I_BW_N]
-    norm = beta + gam
-    s = s0 * z / fc
-    a = abs(s)
-    an1 = max(a, 1e-300) ** (n - 1.0)
-    an = a * an1
-    av = abs(v)
-    zdot = v - (beta * av * an1 * s + gam * v * an) / norm
-    dzdot_dv = 1.0 - (beta * _sign(v) * an1 * s + gam * an) / norm
-    dzdot_dz = -(s0 / fc) * n * an1 * (beta * av + gam * v * _sign(s)) / norm
-    sigma2 = prm[I_SIGMA2]
-    return zdot, s0 * z + sigma2 * v, dzdot_dv, dzdot_dz, sigma2, s0
+    return bouc_wen_law(v, z, p[o + BW_SIGMA0], p[o + BW_FC], p[o + BW_SIGMA2],
+                        p[o + BW_BETA], p[o + BW_GAMMA], p[o + BW_N])
+
+
+@njit(cache=True)
+def bouc_wen_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    s0, fc = p[o + BW_SIGMA0], p[o + BW_FC]
+    beta, gam, n = p[o + BW_BETA], p[o + BW_GAMMA], p[o + BW_N]
+    s, an1, numerator, norm = _bouc_wen_terms(v, z, s0, fc, beta, gam, n)
+    an = abs(s) * an1
+    dzdot_ds = -n * an1 * (beta * abs(v) + gam * v * _sign(s)) / norm
+    _clear(g, rz, rf, o, BOUC_WEN_SIZE)
+    g[rz, o + BW_SIGMA0] = dzdot_ds * z / fc
+    g[rz, o + BW_FC] = -dzdot_ds * s / fc
+    g[rz, o + BW_BETA] = -(abs(v) * an1 * s - numerator / norm) / norm
+    g[rz, o + BW_GAMMA] = -(v * an - numerator / norm) / norm
+    g[rz, o + BW_N] = -math.log(abs(s)) * numerator / norm if s != 0.0 else 0.0
+    g[rf, o + BW_SIGMA0] = z
+    g[rf, o + BW_SIGMA2] = v
+
+
+@njit(cache=True)
+def bouc_wen_scales(p, o):  # pragma: no cover - compiled
+    return p[o + BW_FC] / p[o + BW_SIGMA0], p[o + BW_SIGMA0], 0.0
+
+
+# --------------------------------------------------------------------------- static maps
+@njit(cache=True)
+def coulomb_viscous_law(v, fc, s2, vr):  # pragma: no cover - compiled
+    th = math.tanh(v / vr)
+    return 0.0, fc * th + s2 * v, 0.0, 0.0, fc * (1.0 - th * th) / vr + s2, 0.0
 
 
 @njit(cache=True, inline="always")
-def coulomb_viscous(v, z, prm):  # pragma: no cover - compiled
+def coulomb_viscous(v, z, p, o):  # pragma: no cover - compiled
     """Static map F = Fc·sgn(v) + σ2·v, sign regularised as tanh(v/v_reg)."""
-    vr = prm[I_VREG]
+    return coulomb_viscous_law(v, p[o + CV_FC], p[o + CV_SIGMA2], p[o + CV_VREG])
+
+
+@njit(cache=True)
+def coulomb_viscous_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    vr = p[o + CV_VREG]
     th = math.tanh(v / vr)
-    fc = prm[I_FC]
-    sigma2 = prm[I_SIGMA2]
-    return 0.0, fc * th + sigma2 * v, 0.0, 0.0, fc * (1.0 - th * th) / vr + sigma2, 0.0
+    _clear(g, rz, rf, o, COULOMB_SIZE)
+    g[rf, o + CV_FC] = th
+    g[rf, o + CV_SIGMA2] = v
+    g[rf, o + CV_VREG] = -p[o + CV_FC] * (1.0 - th * th) * v / (vr * vr)
+
+
+@njit(cache=True)
+def static_scales_coulomb(p, o):  # pragma: no cover - compiled
+    return 1.0, 0.0, p[o + CV_VREG]
+
+
+@njit(cache=True)
+def stribeck_map_law(v, fc, fs, vs, delta, s2, vr):  # pragma: no cover - compiled
+    th = math.tanh(v / vr)
+    g, dg = stribeck_curve(v, fc, fs, vs, delta)
+    df_dv = dg * th + g * (1.0 - th * th) / vr + s2
+    return 0.0, g * th + s2 * v, 0.0, 0.0, df_dv, 0.0
 
 
 @njit(cache=True, inline="always")
-def stribeck_map(v, z, prm):  # pragma: no cover - compiled
+def stribeck_map(v, z, p, o):  # pragma: no cover - compiled
     """Static map F = g(v)·sgn(v) + σ2·v (the LuGre steady state), sign regularised."""
-    vr = prm[I_VREG]
+    return stribeck_map_law(v, p[o + SM_FC], p[o + SM_FS], p[o + SM_VS], p[o + SM_DELTA],
+                            p[o + SM_SIGMA2], p[o + SM_VREG])
+
+
+@njit(cache=True)
+def stribeck_map_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
+    vr = p[o + SM_VREG]
     th = math.tanh(v / vr)
-    g, dg = stribeck_curve(v, prm)
-    sigma2 = prm[I_SIGMA2]
-    df_dv = dg * th + g * (1.0 - th * th) / vr + sigma2
-    return 0.0, g * th + sigma2 * v, 0.0, 0.0, df_dv, 0.0
-
-
-# --- parameter derivatives: d[k] = (∂(dz/dt)/∂θ_k, ∂F/∂θ_k), θ = FRICTION_SENS -------------
-FRICTION_SENS = ("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs")
-_SENS_SLOTS = (I_SIGMA0, I_SIGMA1, I_SIGMA2, I_FC, I_FS, I_VS)
-
-
-@njit(cache=True)
-def _lugre_dtheta_core(v, z, prm, s1, ds1_dsigma1, ds1_dvs, d):  # pragma: no cover
-    s0 = prm[I_SIGMA0]
-    fc = prm[I_FC]
-    ds = prm[I_FS] - fc
-    vs = prm[I_VS]
-    delta = prm[I_DELTA]
-    a = abs(v) / vs
-    if a == 0.0:
-        e = 1.0
-        dg_dvs = 0.0
-    else:
-        ad = a**delta
-        e = math.exp(-ad)
-        dg_dvs = ds * e * delta * ad / vs
-    g = fc + ds * e
-    av = abs(v)
-    zdot = v - s0 * av * z / g
-    dzd_dg = s0 * av * z / (g * g)
-    dzd_ds0 = -av * z / g
-    d[0, 0] = dzd_ds0
-    d[0, 1] = z + s1 * dzd_ds0
-    d[1, 0] = 0.0
-    d[1, 1] = ds1_dsigma1 * zdot
-    d[2, 0] = 0.0
-    d[2, 1] = v
-    d[3, 0] = dzd_dg * (1.0 - e)
-    d[3, 1] = s1 * d[3, 0]
-    d[4, 0] = dzd_dg * e
-    d[4, 1] = s1 * d[4, 0]
-    d[5, 0] = dzd_dg * dg_dvs
-    d[5, 1] = s1 * d[5, 0] + ds1_dvs * zdot
+    fc, fs, vs, delta = p[o + SM_FC], p[o + SM_FS], p[o + SM_VS], p[o + SM_DELTA]
+    gv = stribeck_curve(v, fc, fs, vs, delta)[0]
+    dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
+    _clear(g, rz, rf, o, STRIBECK_SIZE)
+    g[rf, o + SM_FC] = dg_dfc * th
+    g[rf, o + SM_FS] = dg_dfs * th
+    g[rf, o + SM_VS] = dg_dvs * th
+    g[rf, o + SM_DELTA] = dg_ddelta * th
+    g[rf, o + SM_SIGMA2] = v
+    g[rf, o + SM_VREG] = -gv * (1.0 - th * th) * v / (vr * vr)
 
 
 @njit(cache=True)
-def lugre_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Analytic ∂(dz/dt)/∂θ and ∂F/∂θ of ``lugre`` for θ = FRICTION_SENS."""
-    _lugre_dtheta_core(v, z, prm, prm[I_SIGMA1], 1.0, 0.0, d)
+def static_scales_stribeck(p, o):  # pragma: no cover - compiled
+    return 1.0, 0.0, p[o + SM_VREG]
 
 
-@njit(cache=True)
-def lugre_decaying_damping_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Analytic parameter derivatives of ``lugre_decaying_damping``."""
-    vs = prm[I_VS]
-    w = math.exp(-((v / vs) ** 2))
-    s1 = prm[I_SIGMA1] * w
-    _lugre_dtheta_core(v, z, prm, s1, w, s1 * 2.0 * v * v / (vs * vs * vs), d)
-
-
-@njit(cache=True, inline="always")
-def _fd_slot(prm, k):  # pragma: no cover - compiled
-    slot = _SENS_SLOTS[k]
-    scale = abs(prm[slot])
-    return slot, 1e-7 * (scale if scale > 0.0 else 1.0)
-
-
-@njit(cache=True)
-def dahl_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Parameter derivatives of ``dahl`` by forward differences of the law alone."""
-    base = dahl(v, z, prm)
-    p = prm.copy()
-    for k in range(6):
-        slot, h = _fd_slot(prm, k)
-        p[slot] = prm[slot] + h
-        r = dahl(v, z, p)
-        d[k, 0] = (r[0] - base[0]) / h
-        d[k, 1] = (r[1] - base[1]) / h
-        p[slot] = prm[slot]
-
-
-@njit(cache=True)
-def bouc_wen_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Parameter derivatives of ``bouc_wen`` by forward differences of the law alone."""
-    base = bouc_wen(v, z, prm)
-    p = prm.copy()
-    for k in range(6):
-        slot, h = _fd_slot(prm, k)
-        p[slot] = prm[slot] + h
-        r = bouc_wen(v, z, p)
-        d[k, 0] = (r[0] - base[0]) / h
-        d[k, 1] = (r[1] - base[1]) / h
-        p[slot] = prm[slot]
-
-
-@njit(cache=True)
-def coulomb_viscous_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Parameter derivatives of ``coulomb_viscous`` (only Fc and σ2 enter)."""
-    for k in range(6):
-        d[k, 0] = 0.0
-        d[k, 1] = 0.0
-    d[2, 1] = v
-    d[3, 1] = math.tanh(v / prm[I_VREG])
-
-
-@njit(cache=True)
-def stribeck_map_dtheta(v, z, prm, d):  # pragma: no cover - compiled
-    """Parameter derivatives of ``stribeck_map`` by forward differences of the law alone."""
-    base = stribeck_map(v, z, prm)
-    p = prm.copy()
-    for k in range(6):
-        slot, h = _fd_slot(prm, k)
-        p[slot] = prm[slot] + h
-        r = stribeck_map(v, z, p)
-        d[k, 0] = 0.0
-        d[k, 1] = (r[1] - base[1]) / h
-        p[slot] = prm[slot]
-
-
-@njit(cache=True)
-def _evaluate_many(fn_id, v, z, prm, out):  # pragma: no cover - compiled
-    for i in range(v.shape[0]):
-        if fn_id == 0:
-            r = lugre(v[i], z[i], prm)
-        elif fn_id == 1:
-            r = lugre_decaying_damping(v[i], z[i], prm)
-        elif fn_id == 2:
-            r = dahl(v[i], z[i], prm)
-        elif fn_id == 3:
-            r = bouc_wen(v[i], z[i], prm)
-        elif fn_id == 4:
-            r = coulomb_viscous(v[i], z[i], prm)
-        else:
-            r = stribeck_map(v[i], z[i], prm)
-        for j in range(6):
-            out[i, j] = r[j]
-
-
-_KERNEL_IDS = {
-    "lugre": 0, "lugre_decaying_damping": 1, "dahl": 2, "bouc_wen": 3,
-    "coulomb_viscous": 4, "stribeck_map": 5,
-}
+# --------------------------------------------------------------------------- strategies
+_BY_CLI_NAME: dict[str, type[FrictionModel]] = {}
 
 
 class FrictionModel:
-    """Strategy object: which compiled friction law to use and what it needs."""
+    """Strategy object: which compiled friction law a model uses, and its parameters.
 
-    kernel: ClassVar[str]
-    required: ClassVar[tuple[str, ...]]
+    Subclasses set ``block`` (the parameters, in the order the law reads them),
+    ``functions`` (the law, its parameter derivatives and its scales, by name in this
+    module) and ``cli_name`` (the ``--friction`` choice of the command line).
+    """
+
+    block: ClassVar[Block]
+    law: ClassVar[str]
+    cli_name: ClassVar[str]
     has_state: ClassVar[bool] = True
-    module: ClassVar[str] = "pneumact.models.friction"
 
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "cli_name" in cls.__dict__:
+            _BY_CLI_NAME[cls.cli_name] = cls
+
+    @property
+    def required(self) -> tuple[str, ...]:
+        """The parameters this law reads."""
+        return self.block.parameters
+
+    @property
+    def kernel(self) -> str:
+        """Name of the compiled law in this module (part of the kernel's key)."""
+        return self.law
+
+    def part(self) -> Part:
+        module = __name__
+        scales = getattr(self, "scales", f"{self.law}_scales")
+        return Part(
+            role="friction", block=self.block,
+            states=(StateSpec("bristle", "m", monotone=self.has_state),),
+            functions={"friction_eval": f"{module}:{self.law}",
+                       "friction_params": f"{module}:{self.law}_params",
+                       "friction_scales": f"{module}:{scales}"},
+            label=repr(self), key=self.law,
+        )
+
+    # -- evaluation outside a simulation (tests, plots) ------------------------------
     def evaluate(self, v, z, params) -> dict[str, np.ndarray]:
-        """Evaluate the law at arrays ``v``, ``z`` (outside any simulation), for tests and
-        plots: returns dz/dt, force and the partial derivatives."""
-        v = np.atleast_1d(np.asarray(v, dtype=np.float64))
-        z = np.broadcast_to(np.asarray(z, dtype=np.float64), v.shape).copy()
-        out = np.empty((v.size, 6))
-        _evaluate_many(_KERNEL_IDS[self.kernel], v, z, _vector(params), out)
-        keys = ("zdot", "force", "dzdot_dv", "dzdot_dz", "dforce_dv", "dforce_dz")
-        return {k: out[:, i] for i, k in enumerate(keys)}
+        """The law at arrays ``v``, ``z``: dz/dt, force and the partial derivatives."""
+        from ..simulation.assembly import friction_law_values
+
+        return friction_law_values(self, v, z, params)
+
+    def parameter_derivatives(self, v, z, params) -> dict[str, np.ndarray]:
+        """∂(dz/dt)/∂θ and ∂F/∂θ of the law at arrays ``v``, ``z``: name -> (n, 2) array."""
+        from ..simulation.assembly import friction_law_parameter_derivatives
+
+        return friction_law_parameter_derivatives(self, v, z, params)
 
     def steady_state(self, v, params) -> np.ndarray:
         """Friction force in steady sliding at velocity ``v`` (dz/dt = 0)."""
         v = np.atleast_1d(np.asarray(v, dtype=np.float64))
-        p = _vector(params)
         if not self.has_state:
             return self.evaluate(v, 0.0, params)["force"]
-        z = np.sign(v) * self._steady_z(np.abs(v), p)
+        z = np.sign(v) * self.steady_deflection(np.abs(v), params)
         return self.evaluate(v, z, params)["force"]
 
-    def _steady_z(self, speed, p):
-        return p[I_FC] / p[I_SIGMA0] * np.ones_like(speed)
+    def steady_deflection(self, speed, params) -> np.ndarray:
+        """Bristle deflection |z| in steady sliding at ``speed``: Fc/σ0 unless overridden."""
+        return params["Fc"] / params["sigma0"] * np.ones_like(np.asarray(speed, float))
 
     @property
     def name(self) -> str:
@@ -321,16 +452,10 @@ class FrictionModel:
         return f"{self.name}()"
 
     def __eq__(self, other: object) -> bool:
-        return type(self) is type(other) and self.kernel == other.kernel
+        return type(self) is type(other) and self.law == other.law
 
     def __hash__(self) -> int:
-        return hash((type(self).__name__, self.kernel))
-
-
-def _vector(params) -> np.ndarray:
-    if isinstance(params, np.ndarray):
-        return params
-    return params.vector()
+        return hash((type(self).__name__, self.law))
 
 
 @dataclass(frozen=True, eq=False)
@@ -341,16 +466,19 @@ class LuGre(FrictionModel):
     """
 
     decaying_damping: bool = False
-    required: ClassVar[tuple[str, ...]] = ("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs",
-                                           "delta")
+    block: ClassVar[Block] = LUGRE_BLOCK
+    cli_name: ClassVar[str] = "lugre"
+    scales: ClassVar[str] = "lugre_scales"
 
     @property
-    def kernel(self) -> str:  # type: ignore[override]
-        return "lugre_decaying_damping" if self.decaying_damping else "lugre"
+    def law(self) -> str:  # type: ignore[override]
+        return "lugre_decaying" if self.decaying_damping else "lugre"
 
-    def _steady_z(self, speed, p):
-        g = p[I_FC] + (p[I_FS] - p[I_FC]) * np.exp(-((speed / p[I_VS]) ** p[I_DELTA]))
-        return g / p[I_SIGMA0]
+    def steady_deflection(self, speed, params) -> np.ndarray:
+        speed = np.asarray(speed, dtype=float)
+        g = params["Fc"] + (params["Fs"] - params["Fc"]) * np.exp(
+            -((speed / params["vs"]) ** params["delta"]))
+        return g / params["sigma0"]
 
     def __repr__(self) -> str:
         return f"LuGre(decaying_damping={self.decaying_damping})"
@@ -359,31 +487,39 @@ class LuGre(FrictionModel):
 class Dahl(FrictionModel):
     """Dahl friction (Dahl 1976): a rate-independent hysteresis with no Stribeck dip."""
 
-    kernel = "dahl"
-    required = ("sigma0", "Fc", "sigma2", "dahl_alpha")
+    block = DAHL_BLOCK
+    law = "dahl"
+    cli_name = "dahl"
 
 
 class BoucWen(FrictionModel):
     """Bouc-Wen hysteresis used as a friction model (normalised to slide at ±Fc)."""
 
-    kernel = "bouc_wen"
-    required = ("sigma0", "Fc", "sigma2", "bw_beta", "bw_gamma", "bw_n")
-
-    def _steady_z(self, speed, p):
-        return p[I_FC] / p[I_SIGMA0] * np.ones_like(speed)
+    block = BOUC_WEN_BLOCK
+    law = "bouc_wen"
+    cli_name = "bouc-wen"
 
 
 class CoulombViscous(FrictionModel):
     """Static Coulomb + viscous map, sign regularised over ``v_reg``."""
 
-    kernel = "coulomb_viscous"
-    required = ("Fc", "sigma2", "v_reg")
+    block = COULOMB_BLOCK
+    law = "coulomb_viscous"
+    cli_name = "coulomb"
     has_state = False
+    scales = "static_scales_coulomb"
 
 
 class StribeckMap(FrictionModel):
     """Static Stribeck map g(v)·sgn(v) + σ2·v, sign regularised over ``v_reg``."""
 
-    kernel = "stribeck_map"
-    required = ("Fc", "Fs", "vs", "delta", "sigma2", "v_reg")
+    block = STRIBECK_BLOCK
+    law = "stribeck_map"
+    cli_name = "stribeck"
     has_state = False
+    scales = "static_scales_stribeck"
+
+
+def friction_models() -> dict[str, type[FrictionModel]]:
+    """Command-line name -> friction model class, for every law defined here."""
+    return dict(_BY_CLI_NAME)

@@ -1,9 +1,16 @@
 """Compressible flow through orifices and the chamber law (paper eqs. 2-5).
 
-``flow_function`` is Φ(r) of the pressure ratio r = p_d/p_u: choked below the critical
-ratio, subsonic above it, and a short linear (laminar) branch on [r_lin, 1] so that the
-right-hand side is Lipschitz and its Jacobian finite at r → 1. ``orifice`` gives the mass
-flow from side 1 to side 2 and reverses it when p2 > p1.
+``phi`` is Φ(r) of the pressure ratio r = p_d/p_u: choked below the critical ratio,
+subsonic above it, and a short linear (laminar) branch on [r_lin, 1] so that the
+right-hand side is Lipschitz and its Jacobian finite at r → 1. ``orifice`` gives the
+mass flow per unit effective area from side 1 to side 2 and reverses it when p2 > p1.
+Like every component function it reads its block at offset ``o`` of the vector ``p``.
+
+The chamber block ``CHAMBER_BLOCK`` (diaphragm area and volume, pressures, orifice
+areas, gas) is the first part of every valve's block (``models.valves``); its derived
+entries, the orifice-flow constants and the polytropic index, are computed by
+``derive_chamber`` whenever a value changes. The chamber law (isothermal, adiabatic,
+polytropic) is a strategy object that fixes two settings of the block: n = a + b·γ.
 """
 
 from __future__ import annotations
@@ -14,25 +21,67 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .layout import (
-    I_FLOW_COEF,
-    I_FLOW_LINSLOPE,
-    I_FLOW_PHICHOKED,
-    I_FLOW_RCRIT,
-    I_GAMMA,
-    I_R,
-    I_RLIN,
-    I_T,
+from ..errors import ParameterError
+from ..parameters.catalogue import ParameterSpec, declare, declare_relation
+from .component import Block
+
+P = ParameterSpec
+declare(
+    P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, group="pneumatics"),
+    P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 0.0, True, group="pneumatics"),
+    P("V0", "m^3", "chamber volume at the rest stop (x = 0)", None, 0.0, True,
+      group="pneumatics"),
+    P("p_res", "Pa", "vacuum reservoir pressure (absolute), below p_atm", None, 0.0,
+      group="pneumatics"),
+    P("gamma", "", "ratio of specific heats of air", 1.4, 1.0, True, group="pneumatics"),
+    P("R", "J/(kg*K)", "specific gas constant of air", 287.0, 0.0, True, group="pneumatics"),
+    P("T", "K", "gas temperature (upstream and chamber)", 293.15, 0.0, True,
+      group="pneumatics"),
+    P("r_lin", "", "pressure ratio where the orifice flow turns linear (laminar branch)",
+      0.999, 0.53, True, 1.0, group="pneumatics"),
+    P("A_res", "m^2", "max effective area chamber -> vacuum reservoir", None, 0.0,
+      group="valve"),
+    P("A_atm", "m^2", "max effective area atmosphere -> chamber", None, 0.0, group="valve"),
 )
+declare_relation(("p_res", "p_atm"), lambda p_res, p_atm: p_res < p_atm,
+                 lambda p_res, p_atm: f"must be < p_atm = {p_atm:g} Pa (the vacuum reservoir "
+                                      "is below atmospheric pressure)")
+declare_relation(("V0", "A_d", "x_max"), lambda v0, a, x: v0 > a * x,
+                 lambda v0, a, x: f"must be > A_d*x_max = {a * x:g} m^3 (the chamber volume "
+                                  "V0 - A_d*x must stay positive over the stroke)")
+
+CHAMBER_BLOCK = Block.of(
+    "A_d", "V0", "p_atm", "p_res", "A_res", "A_atm", "gamma", "R", "T", "r_lin",
+    settings=("chamber_n_offset", "chamber_n_gamma"),
+    derived=("n_poly", "flow_rc", "flow_phi_choked", "flow_coef", "flow_lin_slope"),
+)
+PN_AD = CHAMBER_BLOCK.index("A_d")
+PN_V0 = CHAMBER_BLOCK.index("V0")
+PN_PATM = CHAMBER_BLOCK.index("p_atm")
+PN_PRES = CHAMBER_BLOCK.index("p_res")
+PN_ARES = CHAMBER_BLOCK.index("A_res")
+PN_AATM = CHAMBER_BLOCK.index("A_atm")
+PN_GAMMA = CHAMBER_BLOCK.index("gamma")
+PN_R = CHAMBER_BLOCK.index("R")
+PN_T = CHAMBER_BLOCK.index("T")
+PN_RLIN = CHAMBER_BLOCK.index("r_lin")
+PN_N_OFFSET = CHAMBER_BLOCK.index("chamber_n_offset")
+PN_N_GAMMA = CHAMBER_BLOCK.index("chamber_n_gamma")
+PN_N = CHAMBER_BLOCK.index("n_poly")
+PN_RC = CHAMBER_BLOCK.index("flow_rc")
+PN_PHI_CHOKED = CHAMBER_BLOCK.index("flow_phi_choked")
+PN_COEF = CHAMBER_BLOCK.index("flow_coef")
+PN_LIN_SLOPE = CHAMBER_BLOCK.index("flow_lin_slope")
 
 
-@njit(cache=True, inline="always")
+# --------------------------------------------------------------------------- Φ(r)
+@njit(cache=True)
 def critical_ratio(gamma):  # pragma: no cover - compiled
     """r_c = (2/(γ+1))^(γ/(γ−1)), ≈ 0.528 for air."""
     return (2.0 / (gamma + 1.0)) ** (gamma / (gamma - 1.0))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _phi_subsonic(r, gamma):  # pragma: no cover - compiled
     """Subsonic Φ and dΦ/dr; every power of r is a product of a = r^(1/γ) and r."""
     a = r ** (1.0 / gamma)
@@ -43,16 +92,31 @@ def _phi_subsonic(r, gamma):  # pragma: no cover - compiled
     return phi, dq / (2.0 * phi) if phi > 0.0 else 0.0
 
 
-@njit(cache=True, inline="always")
-def _flow_constants(gamma, r_lin):  # pragma: no cover - compiled
+@njit(cache=True)
+def _phi_subsonic_dgamma(r, gamma):  # pragma: no cover - compiled
+    """∂Φ/∂γ of the subsonic branch at fixed r."""
+    a = r ** (1.0 / gamma)
+    a2 = a * a
+    lr = math.log(r)
+    q = 2.0 / (gamma - 1.0) * (a2 - r * a)
+    if q <= 0.0:
+        return 0.0
+    g2 = gamma * gamma
+    dq = (-2.0 / (gamma - 1.0) ** 2 * (a2 - r * a)
+          + 2.0 / (gamma - 1.0) * (-2.0 * lr / g2 * a2 + lr / g2 * r * a))
+    return dq / (2.0 * math.sqrt(q))
+
+
+@njit(cache=True)
+def flow_constants(gamma, r_lin):  # pragma: no cover - compiled
     """(r_c, choked Φ, slope of the laminar branch) for γ and r_lin."""
     rc = critical_ratio(gamma)
     phi_choked = (2.0 / (gamma + 1.0)) ** ((gamma + 1.0) / (2.0 * (gamma - 1.0)))
     return rc, phi_choked, _phi_subsonic(r_lin, gamma)[0] / (1.0 - r_lin)
 
 
-@njit(cache=True, inline="always")
-def _phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover - compiled
+@njit(cache=True)
+def phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover - compiled
     """Φ(r), dΦ/dr: choked below r_c, subsonic up to r_lin, linear (laminar) up to 1."""
     if r <= rc:
         return phi_choked, 0.0
@@ -62,91 +126,115 @@ def _phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def flow_function(r, gamma, r_lin):  # pragma: no cover - compiled
-    """Φ(r) and dΦ/dr for 0 ≤ r ≤ 1 (choked, subsonic, laminar near r = 1)."""
-    rc, phi_choked, lin_slope = _flow_constants(gamma, r_lin)
-    return _phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope)
+def derive_chamber(p, o):  # pragma: no cover - compiled
+    """Fill the derived entries of the chamber block (at offset ``o`` of ``p``) from its
+    parameters and settings."""
+    gamma = p[o + PN_GAMMA]
+    rc, phi_choked, lin_slope = flow_constants(gamma, p[o + PN_RLIN])
+    p[o + PN_N] = p[o + PN_N_OFFSET] + p[o + PN_N_GAMMA] * gamma
+    p[o + PN_RC] = rc
+    p[o + PN_PHI_CHOKED] = phi_choked
+    p[o + PN_COEF] = math.sqrt(gamma / (p[o + PN_R] * p[o + PN_T]))
+    p[o + PN_LIN_SLOPE] = lin_slope
+
+
+# --------------------------------------------------------------------------- orifices
+@njit(cache=True)
+def _forward(p1, p2, coef, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover
+    """Flow per unit area from p1 to p2 <= p1: (q, ∂q/∂p1, ∂q/∂p2, r)."""
+    r = p2 / p1
+    phi, dphi = phi_law(r, gamma, r_lin, rc, phi_choked, lin_slope)
+    return coef * p1 * phi, coef * (phi - r * dphi), coef * dphi, r
 
 
 @njit(cache=True)
-def derive_flow_constants(prm):  # pragma: no cover - compiled
-    """Fill the derived slots of ``prm`` (r_c, choked Φ, √(γ/(R·T)), laminar slope) from
-    γ, R, T and r_lin; the kernels call it once per run, not once per orifice."""
-    gamma = prm[I_GAMMA]
-    rc, phi_choked, lin_slope = _flow_constants(gamma, prm[I_RLIN])
-    prm[I_FLOW_RCRIT] = rc
-    prm[I_FLOW_PHICHOKED] = phi_choked
-    prm[I_FLOW_COEF] = math.sqrt(gamma / (prm[I_R] * prm[I_T]))
-    prm[I_FLOW_LINSLOPE] = lin_slope
-
-
-@njit(cache=True, inline="always")
-def _phi_fast(r, prm):  # pragma: no cover - compiled
-    """Φ(r), dΦ/dr with the derived constants of ``prm``."""
-    return _phi_law(r, prm[I_GAMMA], prm[I_RLIN], prm[I_FLOW_RCRIT], prm[I_FLOW_PHICHOKED],
-                    prm[I_FLOW_LINSLOPE])
-
-
-@njit(cache=True, inline="always")
-def orifice(p1, p2, area, prm):  # pragma: no cover - compiled
-    """Mass flow [kg/s] from side 1 to side 2 through effective area ``area``.
-
-    Returns (ṁ, ∂ṁ/∂p1, ∂ṁ/∂p2); negative when the flow goes from 2 to 1. Needs the
-    derived slots of ``prm`` (``derive_flow_constants``).
-    """
-    c = area * prm[I_FLOW_COEF]
+def orifice(p1, p2, coef, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover
+    """Mass flow [kg/s] per m² of effective area from side 1 to side 2, and its partials
+    (∂/∂p1, ∂/∂p2); negative when the flow goes from 2 to 1."""
     if p1 >= p2:
         if p1 <= 0.0:
             return 0.0, 0.0, 0.0
-        r = p2 / p1
-        phi, dphi = _phi_fast(r, prm)
-        return c * p1 * phi, c * (phi - r * dphi), c * dphi
+        q, d1, d2, _ = _forward(p1, p2, coef, gamma, r_lin, rc, phi_choked, lin_slope)
+        return q, d1, d2
     if p2 <= 0.0:
         return 0.0, 0.0, 0.0
-    r = p1 / p2
-    phi, dphi = _phi_fast(r, prm)
-    return -c * p2 * phi, -c * dphi, -c * (phi - r * dphi)
+    q, d2, d1, _ = _forward(p2, p1, coef, gamma, r_lin, rc, phi_choked, lin_slope)
+    return -q, -d1, -d2
 
 
 @njit(cache=True)
-def _orifice_many(p1, p2, area, prm, out):  # pragma: no cover - compiled
-    for i in range(p1.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2] = orifice(p1[i], p2[i], area, prm)
+def orifice_params(p1, p2, coef, gamma, r_lin, rc, phi_choked, lin_slope):  # pragma: no cover
+    """Partials of ``orifice`` with respect to the block entries it reads directly:
+    (∂/∂flow_coef, ∂/∂flow_phi_choked, ∂/∂flow_lin_slope, ∂/∂gamma at fixed constants)."""
+    sign = 1.0
+    if p1 < p2:
+        p1, p2 = p2, p1
+        sign = -1.0
+    if p1 <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    q, _, _, r = _forward(p1, p2, coef, gamma, r_lin, rc, phi_choked, lin_slope)
+    if r <= rc:
+        return sign * q / coef, sign * coef * p1, 0.0, 0.0
+    if r < r_lin:
+        return sign * q / coef, 0.0, 0.0, sign * coef * p1 * _phi_subsonic_dgamma(r, gamma)
+    return sign * q / coef, 0.0, sign * coef * p1 * (1.0 - r), 0.0
+
+
+@njit(cache=True, inline="always")
+def orifice_of(p1, p2, p, o):  # pragma: no cover - compiled
+    """``orifice`` with the gas and flow constants of the chamber block at ``o``."""
+    return orifice(p1, p2, p[o + PN_COEF], p[o + PN_GAMMA], p[o + PN_RLIN], p[o + PN_RC],
+                   p[o + PN_PHI_CHOKED], p[o + PN_LIN_SLOPE])
+
+
+@njit(cache=True, inline="always")
+def orifice_params_of(p1, p2, p, o):  # pragma: no cover - compiled
+    return orifice_params(p1, p2, p[o + PN_COEF], p[o + PN_GAMMA], p[o + PN_RLIN],
+                          p[o + PN_RC], p[o + PN_PHI_CHOKED], p[o + PN_LIN_SLOPE])
 
 
 @njit(cache=True)
 def _phi_many(r, gamma, r_lin, out):  # pragma: no cover - compiled
+    rc, phi_choked, lin_slope = flow_constants(gamma, r_lin)
     for i in range(r.shape[0]):
-        out[i, 0], out[i, 1] = flow_function(r[i], gamma, r_lin)
+        out[i] = phi_law(r[i], gamma, r_lin, rc, phi_choked, lin_slope)[0]
+
+
+@njit(cache=True)
+def _orifice_many(p1, p2, area, pv, out):  # pragma: no cover - compiled
+    derive_chamber(pv, 0)
+    for i in range(p1.shape[0]):
+        out[i] = area * orifice_of(p1[i], p2[i], pv, 0)[0]
 
 
 def flow_function_values(r, gamma: float = 1.4, r_lin: float = 0.999) -> np.ndarray:
     """Φ(r) evaluated at an array of pressure ratios (for tests and plots)."""
     r = np.atleast_1d(np.asarray(r, dtype=np.float64))
-    out = np.empty((r.size, 2))
-    _phi_many(r, gamma, r_lin, out)
-    return out[:, 0]
+    out = np.empty(r.size)
+    _phi_many(r, float(gamma), float(r_lin), out)
+    return out
 
 
 def orifice_mass_flow(p_upstream, p_downstream, area: float, params) -> np.ndarray:
-    """Mass flow [kg/s] through an orifice for arrays of pressures [Pa] (SI)."""
+    """Mass flow [kg/s] through an orifice of effective area ``area`` [m²] for arrays of
+    pressures [Pa]; gas properties (gamma, R, T, r_lin) from ``params``."""
     p1, p2 = np.broadcast_arrays(np.atleast_1d(np.asarray(p_upstream, dtype=np.float64)),
                                  np.asarray(p_downstream, dtype=np.float64))
     p1, p2 = p1.ravel().copy(), p2.ravel().copy()
-    out = np.empty((p1.size, 3))
-    prm = (params if isinstance(params, np.ndarray) else params.vector()).copy()
-    derive_flow_constants(prm)
-    _orifice_many(p1, p2, float(area), prm, out)
-    return out[:, 0]
+    pv = np.zeros(len(CHAMBER_BLOCK))
+    for name in ("gamma", "R", "T", "r_lin"):
+        pv[CHAMBER_BLOCK.index(name)] = params[name]
+    out = np.empty(p1.size)
+    _orifice_many(p1, p2, float(area), pv, out)
+    return out
 
 
-# --- chamber laws: strategy objects that set the polytropic index n ------------------
-
-
+# --------------------------------------------------------------------------- chamber laws
 class ChamberLaw:
-    """How the chamber gas exchanges heat: dp/dt = n/V·(R·T·ṁ + p·A_d·v)."""
+    """How the chamber gas exchanges heat: dp/dt = n/V·(R·T·ṁ + p·A_d·v), n = a + b·γ."""
 
-    def polytropic_index(self, params) -> float:
+    def settings(self) -> dict[str, float]:
+        """Values of the chamber block's settings (a, b)."""
         raise NotImplementedError
 
 
@@ -154,29 +242,27 @@ class ChamberLaw:
 class Isothermal(ChamberLaw):
     """n = 1: slow processes, the chamber stays at the wall temperature (default)."""
 
-    def polytropic_index(self, params) -> float:
-        return 1.0
+    def settings(self) -> dict[str, float]:
+        return {"chamber_n_offset": 1.0, "chamber_n_gamma": 0.0}
 
 
 @dataclass(frozen=True)
 class Adiabatic(ChamberLaw):
-    """n = γ: fast processes with no heat exchange."""
+    """n = γ: fast processes with no heat exchange (γ may vary from run to run)."""
 
-    def polytropic_index(self, params) -> float:
-        return float(params["gamma"])
+    def settings(self) -> dict[str, float]:
+        return {"chamber_n_offset": 0.0, "chamber_n_gamma": 1.0}
 
 
 @dataclass(frozen=True)
 class Polytropic(ChamberLaw):
-    """Any n between 1 (isothermal) and γ (adiabatic)."""
+    """Any fixed n between 1 (isothermal) and γ (adiabatic)."""
 
     n: float = 1.2
 
     def __post_init__(self):
-        from ..errors import ParameterError
-
         if not (np.isfinite(self.n) and self.n >= 1.0):
             raise ParameterError(f"Polytropic: n = {self.n}, must be >= 1")
 
-    def polytropic_index(self, params) -> float:
-        return float(self.n)
+    def settings(self) -> dict[str, float]:
+        return {"chamber_n_offset": float(self.n), "chamber_n_gamma": 0.0}

@@ -1,8 +1,10 @@
 """Friction test rig: a mass with friction, driven for the classic friction experiments.
 
-The drives are compiled functions ``drive(t, ts, y, prm, sig, ptr)`` returning
-``(kinematic, v, a, F, ∂F/∂x, ∂F/∂v, drive_value, 0)``: a kinematic drive prescribes the
-velocity (and acceleration) of the mass, a force drive applies a force to it.
+A drive is a compiled function ``drive(t, ts, x, v, p, o, sig, ptr)`` returning
+``(kinematic, v, a, F, ∂F/∂x, ∂F/∂v, drive_value)``: a kinematic drive prescribes the
+velocity (and acceleration) of the mass, a force drive applies a force to it. The rig's
+parameter block (the mass, and the spring stiffness of the spring drive) starts at
+offset ``o`` of the vector ``p``.
 """
 
 from __future__ import annotations
@@ -10,54 +12,101 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-import numpy as np
 from numba import njit
 
 from ..experiments.signals import channel_eval
+from ..parameters.catalogue import ParameterSpec, declare
+from .channels import CH_DRIVE
+from .component import Block, Part, StateSpec
 from .friction import FrictionModel, LuGre
-from .layout import CH_DRIVE, I_KDRIVE
+
+P = ParameterSpec
+declare(
+    P("m", "kg", "moving mass (diaphragm, rod, linkage)", None, 0.0, True, group="mechanics"),
+    P("k_drive", "N/m", "stiffness of the spring that pulls the rig mass (stick-slip)", 2.0,
+      0.0, True, group="rig"),
+    P("v_drive", "m/s", "pulling speed of the stick-slip rig", 0.1, group="rig"),
+)
+
+RIG_BLOCK = Block.of("m")
+SPRING_RIG_BLOCK = RIG_BLOCK + Block.of("k_drive")
+RG_M = RIG_BLOCK.index("m")
+RG_KDRIVE = SPRING_RIG_BLOCK.index("k_drive")
+RIG_SIZE = len(RIG_BLOCK)
+SPRING_RIG_SIZE = len(SPRING_RIG_BLOCK)
 
 
 @njit(cache=True, inline="always")
-def force_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def force_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
     """A force F(t) [N] applied to the mass."""
     f = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    return False, 0.0, 0.0, f, 0.0, 0.0, f, 0.0
+    return False, 0.0, 0.0, f, 0.0, 0.0, f
 
 
 @njit(cache=True, inline="always")
-def spring_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def spring_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
     """A spring k_drive whose free end follows x_d(t) [m] pulls the mass (stick-slip)."""
     xd = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    kd = prm[I_KDRIVE]
-    return False, 0.0, 0.0, kd * (xd - y[0]), -kd, 0.0, xd, 0.0
+    kd = p[o + RG_KDRIVE]
+    return False, 0.0, 0.0, kd * (xd - x), -kd, 0.0, xd
 
 
 @njit(cache=True, inline="always")
-def velocity_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def velocity_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
     """The velocity v(t) [m/s] of the mass is prescribed."""
-    v, a = channel_eval(sig, ptr, CH_DRIVE, t, ts)
-    return True, v, a, 0.0, 0.0, 0.0, v, 0.0
+    vel, acc = channel_eval(sig, ptr, CH_DRIVE, t, ts)
+    return True, vel, acc, 0.0, 0.0, 0.0, vel
 
 
 @njit(cache=True, inline="always")
-def position_drive(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def position_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
     """The position x(t) [m] of the mass is prescribed (velocity = its slope)."""
-    x, v = channel_eval(sig, ptr, CH_DRIVE, t, ts)
+    pos, vel = channel_eval(sig, ptr, CH_DRIVE, t, ts)
     dt = 1e-7 * max(1.0, abs(t))
-    v2 = channel_eval(sig, ptr, CH_DRIVE, t + dt, ts)[1]
-    return True, v, (v2 - v) / dt, 0.0, 0.0, 0.0, x, 0.0
+    vel2 = channel_eval(sig, ptr, CH_DRIVE, t + dt, ts)[1]
+    return True, vel, (vel2 - vel) / dt, 0.0, 0.0, 0.0, pos
 
 
+@njit(cache=True)
+def no_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover - compiled
+    """g[row, o + k] = ∂F_drive/∂p_k: zero for drives without parameters of their own."""
+    for k in range(RIG_SIZE):
+        g[row, o + k] = 0.0
+
+
+@njit(cache=True)
+def spring_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover
+    for k in range(SPRING_RIG_SIZE):
+        g[row, o + k] = 0.0
+    g[row, o + RG_KDRIVE] = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0] - x
+
+
+@njit(cache=True)
+def rest_start(t, ts, sig, ptr):  # pragma: no cover - compiled
+    """(x0, v0) of a force or spring drive: the mass at rest at the origin."""
+    return 0.0, 0.0
+
+
+@njit(cache=True)
+def velocity_start(t, ts, sig, ptr):  # pragma: no cover - compiled
+    return 0.0, channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+
+
+@njit(cache=True)
+def position_start(t, ts, sig, ptr):  # pragma: no cover - compiled
+    return channel_eval(sig, ptr, CH_DRIVE, t, ts)
+
+
+#: drive name -> (unit of the drive signal, meaning, start function)
 DRIVES = {
-    "force": ("N", "force applied to the mass"),
-    "spring": ("m", "position of the pulling spring's free end"),
-    "velocity": ("m/s", "prescribed velocity of the mass"),
-    "position": ("m", "prescribed position of the mass"),
+    "force": ("N", "force applied to the mass", "rest_start"),
+    "spring": ("m", "position of the pulling spring's free end", "rest_start"),
+    "velocity": ("m/s", "prescribed velocity of the mass", "velocity_start"),
+    "position": ("m", "prescribed position of the mass", "position_start"),
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FrictionRig:
     """A mass ``m`` with a friction law, driven by ``drive`` (force, spring, velocity or
     position) — the set-up of Canudas de Wit et al. (1995) for the classic experiments."""
@@ -65,58 +114,42 @@ class FrictionRig:
     params: object
     friction: FrictionModel = field(default_factory=LuGre)
     drive: str = "force"
-    model: ClassVar[str] = "rig"
-    initial_state_parameters: ClassVar[frozenset[str]] = frozenset()  # set by the drive
+    template: ClassVar[str] = "pneumact.simulation.templates.rig"
 
     def __post_init__(self):
         from ..errors import ExperimentError
 
         if self.drive not in DRIVES:
             raise ExperimentError(
-                f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}"
-            )
-        needed = ["m", *self.friction.required]
-        if self.drive == "spring":
-            needed.append("k_drive")
-        self.params.require(needed, "FrictionRig")
+                f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}")
+        self.params.require(self.required, "FrictionRig")
+
+    @property
+    def drive_quantity(self) -> str:
+        return self.drive
 
     @property
     def drive_unit(self) -> str:
         return DRIVES[self.drive][0]
 
-    def components(self) -> dict[str, str]:
-        """What the kernel generator substitutes into the rig template."""
-        return {
-            "friction_eval": f"pneumact.models.friction:{self.friction.kernel}",
-            "friction_dtheta": f"pneumact.models.friction:{self.friction.kernel}_dtheta",
-            "drive_eval": f"pneumact.models.rig:{self.drive}_drive",
-        }
+    @property
+    def required(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(p for part in self.parts() for p in part.block.parameters))
 
-    def kernel_key(self) -> str:
-        return f"rig_{self.friction.kernel}_{self.drive}"
-
-    def vector(self):
-        return self.params.vector()
-
-    def state_scales(self, prm) -> np.ndarray:
-        """Typical magnitude of x, v, z: the presliding range Fs/σ0 and its velocity
-        Fs/√(σ0·m) (static maps: the regularisation velocity), for default atol."""
-        p = self.params
-        if "sigma0" in self.friction.required:
-            x = p["Fs"] / p["sigma0"] if "Fs" in self.friction.required else p["Fc"] / p["sigma0"]
-            v = x * np.sqrt(p["sigma0"] / p["m"])
-        else:
-            v = p["v_reg"]
-            x = v * 1e-2
-        return np.array([x, v, x])
-
-    def initial_state(self, drive_signal, t0: float):
-        y0 = np.zeros(3)
-        if self.drive == "velocity":
-            y0[1] = float(drive_signal(t0))
-        elif self.drive == "position":
-            y0[0], y0[1] = drive_signal.evaluate(t0)
-        return y0
+    def parts(self) -> tuple[Part, ...]:
+        module = __name__
+        spring = self.drive == "spring"
+        params = "spring_drive_params" if spring else "no_drive_params"
+        rig = Part(role="rig", block=SPRING_RIG_BLOCK if spring else RIG_BLOCK,
+                   states=(StateSpec("position", "m"), StateSpec("velocity", "m/s")),
+                   functions={"drive_eval": f"{module}:{self.drive}_drive",
+                              "drive_params": f"{module}:{params}",
+                              "drive_start": f"{module}:{DRIVES[self.drive][2]}"},
+                   label=f"{self.drive} drive", key=self.drive)
+        return rig, self.friction.part()
 
     def channels(self, drive_signal):
         return [drive_signal, None, None, None, None]
+
+    def describe(self) -> str:
+        return f"FrictionRig(friction={self.friction!r}, drive={self.drive!r})"

@@ -1,10 +1,22 @@
 """What feeds the chamber: an ideal pressure source, a command valve, a pressure regulator.
 
-Each valve is a set of compiled functions with a common prefix (``source_``,
-``command_``, ``regulator_``) and a state count; the kernel generator imports them under
-the names ``valve_*``. States are laid out after the mechanics and friction:
-``[x, v, z | p | u, i]``: chamber pressure p, valve opening u and the regulator's
-integral state i.
+Every valve exposes the same compiled functions, with the prefix of its kind
+(``source_``, ``command_``, ``regulator_``); the kernel generator binds them under the
+names ``valve_*``. A valve owns its states (none, the chamber pressure, or pressure +
+valve opening + the regulator's integral), which start at offset ``s`` of the state
+vector ``y``, and reads its parameter block at offset ``o`` of the vector ``p``:
+
+- ``pressure(t, ts, y, s, p, o, sig, ptr)``: the chamber pressure;
+- ``rates(t, ts, x, v, y, s, p, o, sig, ptr, dydt)``: its states' derivatives;
+- ``partials(..., jac, cx, cv)``: their rows of the Jacobian (own states, and the
+  columns cx, cv of position and velocity);
+- ``params(..., g)``: their rows of ∂f/∂p over the block's columns;
+- ``flows(...)``: (opening u, ṁ_in, ṁ_out) for the outputs;
+- ``derive(p, o)``, ``equilibrium(t, ts, p, o, sig, ptr, y0, s)`` (the rest state of
+  the chamber under the initial input), ``scales(p, o, out, s)`` (typical magnitudes).
+
+The functions of the hot loop are thin wrappers inlined by numba around scalar-only
+functions (``chamber_rate``, ``orifice``): see ``models.friction`` on why.
 """
 
 from __future__ import annotations
@@ -16,137 +28,287 @@ from typing import ClassVar
 from numba import njit
 
 from ..experiments.signals import Signal, channel_eval
-from .layout import (
-    CH_DRIVE,
-    CH_MAP_ATM,
-    CH_MAP_RES,
-    I_AATM,
-    I_AD,
-    I_ARES,
-    I_NPOLY,
-    I_PATM,
-    I_PRES,
-    I_R,
-    I_REG_KP,
-    I_REG_TAU,
-    I_REG_TI,
-    I_T,
-    I_V0,
+from ..parameters.catalogue import ParameterSpec, declare
+from .channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
+from .component import Block, Part, StateSpec
+from .pneumatics import (
+    CHAMBER_BLOCK,
+    PN_AATM,
+    PN_AD,
+    PN_ARES,
+    PN_COEF,
+    PN_GAMMA,
+    PN_LIN_SLOPE,
+    PN_N,
+    PN_PATM,
+    PN_PHI_CHOKED,
+    PN_PRES,
+    PN_R,
+    PN_T,
+    PN_V0,
+    ChamberLaw,
+    Isothermal,
+    orifice_of,
+    orifice_params_of,
 )
-from .pneumatics import orifice
+
+P = ParameterSpec
+declare(
+    P("reg_kp", "", "regulator gain: valve opening per unit of (p - p_set)/p_atm", 20.0, 0.0,
+      group="valve"),
+    P("reg_ti", "s", "regulator integral time", 0.05, 0.0, True, group="valve"),
+    P("reg_tau", "s", "valve (spool) time constant", 0.01, 0.0, True, group="valve"),
+)
+
+SOURCE_BLOCK = Block()
+COMMAND_BLOCK = CHAMBER_BLOCK
+REGULATOR_BLOCK = CHAMBER_BLOCK + Block.of("reg_kp", "reg_ti", "reg_tau")
+RG_KP = REGULATOR_BLOCK.index("reg_kp")
+RG_TI = REGULATOR_BLOCK.index("reg_ti")
+RG_TAU = REGULATOR_BLOCK.index("reg_tau")
+CHAMBER_SIZE = len(CHAMBER_BLOCK)
+REGULATOR_SIZE = len(REGULATOR_BLOCK)
+
+# local state indices (the valve's slice of the state vector)
+ST_PRESSURE = 0
+ST_OPENING = 1
+ST_INTEGRAL = 2
+SOURCE_PRESSURE_STATE = -1
+COMMAND_PRESSURE_STATE = ST_PRESSURE
+REGULATOR_PRESSURE_STATE = ST_PRESSURE
+
+#: Bisection steps of the equilibrium searches (interval shrinks by 2^-60).
+EQUILIBRIUM_ITERATIONS = 60
+
 
 # ------------------------------------------------------------------ ideal pressure source
-SOURCE_NSTATE = 3
-
-
 @njit(cache=True, inline="always")
-def source_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def source_pressure(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
     """Chamber pressure prescribed by the drive signal."""
     return channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
 
 
 @njit(cache=True, inline="always")
-def source_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
+def source_rates(t, ts, x, v, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
     pass
 
 
 @njit(cache=True, inline="always")
-def source_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
+def source_partials(t, ts, x, v, y, s, p, o, sig, ptr, jac, cx, cv):  # pragma: no cover
+    pass
+
+
+@njit(cache=True)
+def source_params(t, ts, x, v, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
     pass
 
 
 @njit(cache=True, inline="always")
-def source_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def source_flows(t, ts, x, v, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
     """(opening u, ṁ_in, ṁ_out): not modelled for a prescribed pressure."""
     return 0.0, 0.0, 0.0
 
 
-# ------------------------------------------------------- chamber shared by the valves
+@njit(cache=True)
+def source_derive(p, o):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def source_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    return channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+
+
+@njit(cache=True)
+def source_scales(p, o, out, s):  # pragma: no cover - compiled
+    pass
+
+
+# ------------------------------------------------------------ the chamber behind a valve
 @njit(cache=True, inline="always")
-def _chamber_rate(y, prm, mdot):  # pragma: no cover - compiled
-    """dp/dt = n/V·(R·T·ṁ + p·A_d·v), with the chamber volume V = V0 − A_d·x."""
-    ad = prm[I_AD]
-    vol = prm[I_V0] - ad * y[0]
-    return prm[I_NPOLY] / vol * (prm[I_R] * prm[I_T] * mdot + y[3] * ad * y[1])
-
-
-@njit(cache=True, inline="always")
-def _chamber_jac(y, prm, mdot, dmdot_dp, jac):  # pragma: no cover - compiled
-    """Row of the pressure state in the Jacobian (∂/∂x, ∂/∂v, ∂/∂p)."""
-    ad = prm[I_AD]
-    vol = prm[I_V0] - ad * y[0]
-    n = prm[I_NPOLY]
-    rt = prm[I_R] * prm[I_T]
-    jac[3, 0] = n / vol * (rt * mdot + y[3] * ad * y[1]) * ad / vol
-    jac[3, 1] = n * y[3] * ad / vol
-    jac[3, 3] = n / vol * (rt * dmdot_dp + ad * y[1])
-
-
-@njit(cache=True, inline="always")
-def _valve_flows(p, u, prm, sig, ptr):  # pragma: no cover - compiled
-    """Flows in (atmosphere -> chamber) and out (chamber -> reservoir) at opening u.
+def _valve_flows(pressure, u, p, o, sig, ptr):  # pragma: no cover - compiled
+    """Flows at opening u: (ṁ_in, ṁ_out, ∂ṁ/∂p, ∂ṁ/∂u); ṁ = ṁ_in − ṁ_out.
 
     Orifice flow is linear in the area, so each orifice is evaluated once per unit area
-    and scaled by the mapped opening. Returns (ṁ_in, ṁ_out, ∂ṁ/∂p, ∂ṁ/∂u), ṁ = ṁ_in − ṁ_out.
+    and scaled by the mapped opening.
     """
     m_res, dm_res = channel_eval(sig, ptr, CH_MAP_RES, u, u)
     m_atm, dm_atm = channel_eval(sig, ptr, CH_MAP_ATM, u, u)
-    a_res = prm[I_ARES] * m_res
-    a_atm = prm[I_AATM] * m_atm
-    q_in_unit, _, dqin_dp_unit = orifice(prm[I_PATM], p, 1.0, prm)
-    q_out_unit, dqout_dp_unit, _ = orifice(p, prm[I_PRES], 1.0, prm)
-    dq_dp = a_atm * dqin_dp_unit - a_res * dqout_dp_unit
-    dq_du = prm[I_AATM] * dm_atm * q_in_unit - prm[I_ARES] * dm_res * q_out_unit
-    return a_atm * q_in_unit, a_res * q_out_unit, dq_dp, dq_du
+    a_res = p[o + PN_ARES] * m_res
+    a_atm = p[o + PN_AATM] * m_atm
+    q_in, _, dqin_dp = orifice_of(p[o + PN_PATM], pressure, p, o)
+    q_out, dqout_dp, _ = orifice_of(pressure, p[o + PN_PRES], p, o)
+    dq_dp = a_atm * dqin_dp - a_res * dqout_dp
+    dq_du = p[o + PN_AATM] * dm_atm * q_in - p[o + PN_ARES] * dm_res * q_out
+    return a_atm * q_in, a_res * q_out, dq_dp, dq_du
+
+
+@njit(cache=True, inline="always")
+def _chamber(p, o):  # pragma: no cover - compiled
+    """(A_d, V0, n, R·T) of the chamber block."""
+    return p[o + PN_AD], p[o + PN_V0], p[o + PN_N], p[o + PN_R] * p[o + PN_T]
+
+
+@njit(cache=True)
+def chamber_rate(x, v, pressure, mdot, ad, v0, n, rt):  # pragma: no cover - compiled
+    """dp/dt = n/V·(R·T·ṁ + p·A_d·v), with the chamber volume V = V0 − A_d·x."""
+    return n / (v0 - ad * x) * (rt * mdot + pressure * ad * v)
+
+
+@njit(cache=True)
+def chamber_jac(x, v, pressure, mdot, dmdot_dp, ad, v0, n, rt):  # pragma: no cover
+    """(∂ṗ/∂x, ∂ṗ/∂v, ∂ṗ/∂p, ∂ṗ/∂ṁ) of the chamber law."""
+    vol = v0 - ad * x
+    rate = n / vol * (rt * mdot + pressure * ad * v)
+    return (rate * ad / vol, n * pressure * ad / vol, n / vol * (rt * dmdot_dp + ad * v),
+            n / vol * rt)
+
+
+@njit(cache=True)
+def _chamber_params(x, v, pressure, u, p, o, sig, ptr, g, row):  # pragma: no cover
+    """g[row, o + k] = ∂ṗ/∂p_k for the chamber block entries k."""
+    m_res = channel_eval(sig, ptr, CH_MAP_RES, u, u)[0]
+    m_atm = channel_eval(sig, ptr, CH_MAP_ATM, u, u)[0]
+    p_atm, p_res = p[o + PN_PATM], p[o + PN_PRES]
+    q_in, dqin_dpatm, _ = orifice_of(p_atm, pressure, p, o)
+    q_out, _, dqout_dpres = orifice_of(pressure, p_res, p, o)
+    in_coef, in_phich, in_lin, in_gamma = orifice_params_of(p_atm, pressure, p, o)
+    out_coef, out_phich, out_lin, out_gamma = orifice_params_of(pressure, p_res, p, o)
+    a_res = p[o + PN_ARES] * m_res
+    a_atm = p[o + PN_AATM] * m_atm
+    mdot = a_atm * q_in - a_res * q_out
+    ad = p[o + PN_AD]
+    vol = p[o + PN_V0] - ad * x
+    n = p[o + PN_N]
+    inner = p[o + PN_R] * p[o + PN_T] * mdot + pressure * ad * v
+    k = n / vol * p[o + PN_R] * p[o + PN_T]  # ∂ṗ/∂ṁ
+    for i in range(CHAMBER_SIZE):
+        g[row, o + i] = 0.0
+    g[row, o + PN_AD] = n * x / (vol * vol) * inner + n / vol * pressure * v
+    g[row, o + PN_V0] = -n / (vol * vol) * inner
+    g[row, o + PN_PATM] = k * a_atm * dqin_dpatm
+    g[row, o + PN_PRES] = -k * a_res * dqout_dpres
+    g[row, o + PN_ARES] = -k * m_res * q_out
+    g[row, o + PN_AATM] = k * m_atm * q_in
+    g[row, o + PN_GAMMA] = k * (a_atm * in_gamma - a_res * out_gamma)
+    g[row, o + PN_R] = n / vol * p[o + PN_T] * mdot
+    g[row, o + PN_T] = n / vol * p[o + PN_R] * mdot
+    g[row, o + PN_N] = inner / vol
+    g[row, o + PN_PHI_CHOKED] = k * (a_atm * in_phich - a_res * out_phich)
+    g[row, o + PN_COEF] = k * (a_atm * in_coef - a_res * out_coef)
+    g[row, o + PN_LIN_SLOPE] = k * (a_atm * in_lin - a_res * out_lin)
+
+
+@njit(cache=True)
+def _net_flow(pressure, u, p, o, sig, ptr):  # pragma: no cover - compiled
+    q_in, q_out, _, _ = _valve_flows(pressure, u, p, o, sig, ptr)
+    return q_in - q_out
+
+
+@njit(cache=True)
+def _bisect_pressure(u, p, o, sig, ptr):  # pragma: no cover - compiled
+    """Chamber pressure in [p_res, p_atm] where the net flow vanishes at opening u (the net
+    flow falls as the pressure rises); an end of the interval if it has one sign there."""
+    lo, hi = p[o + PN_PRES], p[o + PN_PATM]
+    if _net_flow(lo, u, p, o, sig, ptr) <= 0.0:
+        return lo
+    if _net_flow(hi, u, p, o, sig, ptr) >= 0.0:
+        return hi
+    for _ in range(EQUILIBRIUM_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        if _net_flow(mid, u, p, o, sig, ptr) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _bisect_opening(pressure, p, o, sig, ptr):  # pragma: no cover - compiled
+    """Opening u in [0, 1] that holds ``pressure`` (the net flow falls as u rises)."""
+    lo, hi = 0.0, 1.0
+    if _net_flow(pressure, lo, p, o, sig, ptr) <= 0.0:
+        return lo
+    if _net_flow(pressure, hi, p, o, sig, ptr) >= 0.0:
+        return hi
+    for _ in range(EQUILIBRIUM_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        if _net_flow(pressure, mid, p, o, sig, ptr) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
 
 
 # ------------------------------------------------------------------------ command valve
-COMMAND_NSTATE = 4
+@njit(cache=True, inline="always")
+def command_pressure(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    return y[s + ST_PRESSURE]
 
 
 @njit(cache=True, inline="always")
-def command_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
-    return y[3]
-
-
-@njit(cache=True, inline="always")
-def command_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
+def command_rates(t, ts, x, v, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
-    dydt[3] = _chamber_rate(y, prm, q_in - q_out)
+    pressure = y[s + ST_PRESSURE]
+    q_in, q_out, _, _ = _valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    dydt[s + ST_PRESSURE] = chamber_rate(x, v, pressure, q_in - q_out, ad, v0, n, rt)
 
 
 @njit(cache=True, inline="always")
-def command_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
+def command_partials(t, ts, x, v, y, s, p, o, sig, ptr, jac, cx, cv):  # pragma: no cover
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    q_in, q_out, dq_dp, _ = _valve_flows(y[3], u, prm, sig, ptr)
-    _chamber_jac(y, prm, q_in - q_out, dq_dp, jac)
+    pressure = y[s + ST_PRESSURE]
+    q_in, q_out, dq_dp, _ = _valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    d_x, d_v, d_p, _ = chamber_jac(x, v, pressure, q_in - q_out, dq_dp, ad, v0, n, rt)
+    row = s + ST_PRESSURE
+    jac[row, cx] = d_x
+    jac[row, cv] = d_v
+    jac[row, row] = d_p
+
+
+@njit(cache=True)
+def command_params(t, ts, x, v, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    _chamber_params(x, v, y[s + ST_PRESSURE], u, p, o, sig, ptr, g, s + ST_PRESSURE)
 
 
 @njit(cache=True, inline="always")
-def command_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def command_flows(t, ts, x, v, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
     u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
+    q_in, q_out, _, _ = _valve_flows(y[s + ST_PRESSURE], u, p, o, sig, ptr)
     return u, q_in, q_out
 
 
+@njit(cache=True)
+def command_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """Rest pressure of the chamber at the initial command (net flow zero)."""
+    u = min(max(channel_eval(sig, ptr, CH_DRIVE, t, ts)[0], 0.0), 1.0)
+    p0 = _bisect_pressure(u, p, o, sig, ptr)
+    y0[s + ST_PRESSURE] = p0
+    return p0
+
+
+@njit(cache=True)
+def command_scales(p, o, out, s):  # pragma: no cover - compiled
+    out[s + ST_PRESSURE] = p[o + PN_PATM]
+
+
 # ------------------------------------------------------------------ pressure regulator
-REGULATOR_NSTATE = 6
-
-
 @njit(cache=True, inline="always")
-def _regulator_law(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
+def _regulator_law(t, ts, pressure, integral, p, o, sig, ptr):  # pragma: no cover
     """PI law on the normalised pressure error with back-calculation anti-windup.
 
     e = (p − p_set)/p_atm (more vacuum needed → open towards the reservoir), raw opening
     u_raw = kp·e + i, commanded opening u_cmd = clip(u_raw, 0, 1).
-    Returns (u_cmd, du_cmd/dp, du_cmd/di, e, saturated).
+    Returns (u_cmd, ∂u_cmd/∂p, ∂u_cmd/∂i, e, saturated).
     """
     p_set = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-    patm = prm[I_PATM]
-    kp = prm[I_REG_KP]
-    e = (y[3] - p_set) / patm
-    u_raw = kp * e + y[5]
+    patm = p[o + PN_PATM]
+    kp = p[o + RG_KP]
+    e = (pressure - p_set) / patm
+    u_raw = kp * e + integral
     if u_raw > 1.0:
         return 1.0, 0.0, 0.0, e, True
     if u_raw < 0.0:
@@ -155,57 +317,127 @@ def _regulator_law(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def regulator_pressure(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
-    return y[3]
+def regulator_pressure(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    return y[s + ST_PRESSURE]
 
 
 @njit(cache=True, inline="always")
-def regulator_rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
-    u = y[4]
-    q_in, q_out, _, _ = _valve_flows(y[3], u, prm, sig, ptr)
-    dydt[3] = _chamber_rate(y, prm, q_in - q_out)
-    u_cmd = _regulator_law(t, ts, y, prm, sig, ptr)[0]
-    dydt[4] = (u_cmd - u) / prm[I_REG_TAU]
-    # back-calculation anti-windup with tracking time Ti: di/dt = kp·e/Ti + (u_cmd − u_raw)/Ti
-    dydt[5] = (u_cmd - y[5]) / prm[I_REG_TI]
+def regulator_rates(t, ts, x, v, y, s, p, o, sig, ptr, dydt):  # pragma: no cover
+    pressure, u, integral = y[s + ST_PRESSURE], y[s + ST_OPENING], y[s + ST_INTEGRAL]
+    q_in, q_out, _, _ = _valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    dydt[s + ST_PRESSURE] = chamber_rate(x, v, pressure, q_in - q_out, ad, v0, n, rt)
+    u_cmd = _regulator_law(t, ts, pressure, integral, p, o, sig, ptr)[0]
+    dydt[s + ST_OPENING] = (u_cmd - u) / p[o + RG_TAU]
+    # back-calculation anti-windup with tracking time Ti: di/dt = (u_cmd − i)/Ti
+    dydt[s + ST_INTEGRAL] = (u_cmd - integral) / p[o + RG_TI]
 
 
 @njit(cache=True, inline="always")
-def regulator_jac(t, ts, y, prm, sig, ptr, jac):  # pragma: no cover - compiled
-    u = y[4]
-    q_in, q_out, dq_dp, dq_du = _valve_flows(y[3], u, prm, sig, ptr)
-    _chamber_jac(y, prm, q_in - q_out, dq_dp, jac)
-    n = prm[I_NPOLY]
-    vol = prm[I_V0] - prm[I_AD] * y[0]
-    jac[3, 4] = n / vol * prm[I_R] * prm[I_T] * dq_du
-    _, du_dp, du_di, _, _ = _regulator_law(t, ts, y, prm, sig, ptr)
-    tau = prm[I_REG_TAU]
-    jac[4, 3] = du_dp / tau
-    jac[4, 4] = -1.0 / tau
-    jac[4, 5] = du_di / tau
-    ti = prm[I_REG_TI]
-    jac[5, 3] = du_dp / ti
-    jac[5, 5] = (du_di - 1.0) / ti
+def regulator_partials(t, ts, x, v, y, s, p, o, sig, ptr, jac, cx, cv):  # pragma: no cover
+    pressure, u, integral = y[s + ST_PRESSURE], y[s + ST_OPENING], y[s + ST_INTEGRAL]
+    q_in, q_out, dq_dp, dq_du = _valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    d_x, d_v, d_p, d_mdot = chamber_jac(x, v, pressure, q_in - q_out, dq_dp, ad, v0, n, rt)
+    rp, ru, ri = s + ST_PRESSURE, s + ST_OPENING, s + ST_INTEGRAL
+    jac[rp, cx] = d_x
+    jac[rp, cv] = d_v
+    jac[rp, rp] = d_p
+    jac[rp, ru] = d_mdot * dq_du
+    _, du_dp, du_di, _, _ = _regulator_law(t, ts, pressure, integral, p, o, sig, ptr)
+    tau, ti = p[o + RG_TAU], p[o + RG_TI]
+    jac[ru, rp] = du_dp / tau
+    jac[ru, ru] = -1.0 / tau
+    jac[ru, ri] = du_di / tau
+    jac[ri, rp] = du_dp / ti
+    jac[ri, ri] = (du_di - 1.0) / ti
+
+
+@njit(cache=True)
+def regulator_params(t, ts, x, v, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    pressure, u, integral = y[s + ST_PRESSURE], y[s + ST_OPENING], y[s + ST_INTEGRAL]
+    rp, ru, ri = s + ST_PRESSURE, s + ST_OPENING, s + ST_INTEGRAL
+    _chamber_params(x, v, pressure, u, p, o, sig, ptr, g, rp)
+    for k in range(CHAMBER_SIZE, REGULATOR_SIZE):
+        g[rp, o + k] = 0.0
+    u_cmd, _, _, e, saturated = _regulator_law(t, ts, pressure, integral, p, o, sig, ptr)
+    tau, ti = p[o + RG_TAU], p[o + RG_TI]
+    for k in range(REGULATOR_SIZE):
+        g[ru, o + k] = 0.0
+        g[ri, o + k] = 0.0
+    du_dkp = 0.0 if saturated else e
+    du_dpatm = 0.0 if saturated else -p[o + RG_KP] * e / p[o + PN_PATM]
+    g[ru, o + RG_KP] = du_dkp / tau
+    g[ru, o + PN_PATM] = du_dpatm / tau
+    g[ru, o + RG_TAU] = -(u_cmd - u) / (tau * tau)
+    g[ri, o + RG_KP] = du_dkp / ti
+    g[ri, o + PN_PATM] = du_dpatm / ti
+    g[ri, o + RG_TI] = -(u_cmd - integral) / (ti * ti)
 
 
 @njit(cache=True, inline="always")
-def regulator_flows(t, ts, y, prm, sig, ptr):  # pragma: no cover - compiled
-    q_in, q_out, _, _ = _valve_flows(y[3], y[4], prm, sig, ptr)
-    return y[4], q_in, q_out
+def regulator_flows(t, ts, x, v, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    u = y[s + ST_OPENING]
+    q_in, q_out, _, _ = _valve_flows(y[s + ST_PRESSURE], u, p, o, sig, ptr)
+    return u, q_in, q_out
+
+
+@njit(cache=True)
+def regulator_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """Set-point pressure (within [p_res, p_atm]) held by the opening that balances the
+    flows; the integral state equals that opening (zero error)."""
+    p_set = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    p0 = min(max(p_set, p[o + PN_PRES]), p[o + PN_PATM])
+    u0 = _bisect_opening(p0, p, o, sig, ptr)
+    y0[s + ST_PRESSURE] = p0
+    y0[s + ST_OPENING] = u0
+    y0[s + ST_INTEGRAL] = u0
+    return p0
+
+
+@njit(cache=True)
+def regulator_scales(p, o, out, s):  # pragma: no cover - compiled
+    out[s + ST_PRESSURE] = p[o + PN_PATM]
+    out[s + ST_OPENING] = 1.0
+    out[s + ST_INTEGRAL] = 1.0
 
 
 # -------------------------------------------------------------------- strategy objects
+_FUNCTIONS = ("pressure", "rates", "partials", "params", "flows", "derive", "equilibrium",
+              "scales")
+
+
 class Valve:
-    """Strategy object: which compiled valve functions feed the chamber."""
+    """Strategy object: which compiled valve functions feed the chamber.
+
+    ``drive`` is what the experiment's signal means for this valve (a pressure, or the
+    command u); ``cli_name`` its ``--valve`` choice on the command line.
+    """
 
     prefix: ClassVar[str]
-    nstate: ClassVar[int]
-    drive: ClassVar[str]  # what the experiment's signal means for this valve
-    required: ClassVar[tuple[str, ...]]
-    module: ClassVar[str] = "pneumact.models.valves"
+    block: ClassVar[Block]
+    states: ClassVar[tuple[StateSpec, ...]]
+    drive: ClassVar[str]
+    cli_name: ClassVar[str]
 
     def maps(self) -> tuple[Signal | None, Signal | None]:
+        """Area maps against the command (reservoir, atmosphere); None when unused."""
         return None, None
+
+    @property
+    def required(self) -> tuple[str, ...]:
+        return self.block.parameters
+
+    def part(self, chamber: ChamberLaw | None = None) -> Part:
+        module = __name__
+        functions = {f"valve_{name}": f"{module}:{self.prefix}_{name}" for name in _FUNCTIONS}
+        if len(self.block):
+            functions["valve_derive"] = "pneumact.models.pneumatics:derive_chamber"
+        settings = (chamber or Isothermal()).settings() if len(self.block) else {}
+        return Part(role="valve", block=self.block, states=self.states, functions=functions,
+                    constants={"VALVE_PRESSURE_STATE":
+                               f"{module}:{self.prefix.upper()}_PRESSURE_STATE"},
+                    settings=settings, label=self.name, key=self.prefix)
 
     @property
     def name(self) -> str:
@@ -218,9 +450,10 @@ class PressureSource(Valve):
     Figs. 5-6, where the measured pressure is applied)."""
 
     prefix: ClassVar[str] = "source"
-    nstate: ClassVar[int] = SOURCE_NSTATE
+    block: ClassVar[Block] = SOURCE_BLOCK
+    states: ClassVar[tuple[StateSpec, ...]] = ()
     drive: ClassVar[str] = "pressure"
-    required: ClassVar[tuple[str, ...]] = ()
+    cli_name: ClassVar[str] = "source"
 
 
 @functools.cache
@@ -244,10 +477,10 @@ class CommandValve(Valve):
     reservoir_map: Signal | None = None
     atmosphere_map: Signal | None = None
     prefix: ClassVar[str] = "command"
-    nstate: ClassVar[int] = COMMAND_NSTATE
+    block: ClassVar[Block] = COMMAND_BLOCK
+    states: ClassVar[tuple[StateSpec, ...]] = (StateSpec("pressure", "Pa"),)
     drive: ClassVar[str] = "command"
-    required: ClassVar[tuple[str, ...]] = ("A_res", "A_atm", "p_res", "V0", "R", "T", "gamma",
-                                           "r_lin")
+    cli_name: ClassVar[str] = "command"
 
     def maps(self) -> tuple[Signal, Signal]:
         return (self.reservoir_map or _linear_map(True),
@@ -261,7 +494,14 @@ class PressureRegulator(CommandValve):
     signal is the pressure set-point."""
 
     prefix: ClassVar[str] = "regulator"
-    nstate: ClassVar[int] = REGULATOR_NSTATE
+    block: ClassVar[Block] = REGULATOR_BLOCK
+    states: ClassVar[tuple[StateSpec, ...]] = (
+        StateSpec("pressure", "Pa"), StateSpec("opening", "1", monotone=True),
+        StateSpec("integral", "1"))
     drive: ClassVar[str] = "pressure"
-    required: ClassVar[tuple[str, ...]] = (*CommandValve.required, "reg_kp", "reg_ti",
-                                           "reg_tau")
+    cli_name: ClassVar[str] = "regulator"
+
+
+#: ``--valve`` choices of the command line.
+VALVES: dict[str, type[Valve]] = {cls.cli_name: cls for cls in (PressureSource, CommandValve,
+                                                                PressureRegulator)}

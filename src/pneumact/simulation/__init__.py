@@ -1,7 +1,15 @@
-"""Simulation: the compiled kernels, the solvers and the one ``simulate`` entry point."""
+"""Simulation: the model assembly, its compiled kernel, the solvers and the entry points.
 
-from .result import Result
+``simulate`` runs one model under one experiment; ``simulate_sensitivities`` carries
+forward parameter sensitivities along; ``simulate_batch`` (``simulation.batch``) runs
+many parameter sets on all cores or a Dask cluster.
+"""
+
+from .assembly import Assembly, assemble
+from .forward_sensitivity import SensitivityResult, simulate_sensitivities
+from .result import Result, SolverStats
 from .simulate import simulate
 from .solvers import DormandPrince, Rodas4, Solver
 
-__all__ = ["DormandPrince", "Result", "Rodas4", "Solver", "simulate"]
+__all__ = ["Assembly", "DormandPrince", "Result", "Rodas4", "SensitivityResult", "Solver",
+           "SolverStats", "assemble", "simulate", "simulate_sensitivities"]

@@ -2,36 +2,86 @@
 
 Numba caches compiled code on disk per source file, but not for closures or for
 functions passed as arguments, so components cannot be composed at run time without
-recompiling in every process. Instead the model template and the integrator template
-are joined into a source file with the chosen components imported under fixed names,
-written once to the kernel cache directory and imported; its ``@njit(cache=True)``
-functions are then compiled once per machine and loaded from disk afterwards. A change
-of parameter values never recompiles: parameters are a runtime array.
+recompiling in every process. Instead, for each combination a small module is generated
+that holds only imports (the chosen component functions under the names a template
+calls: ``friction_eval``, ``valve_rates``, …) and constants (the layout of the state and
+parameter vectors). The functions of the templates (``templates/*.py``, marked with
+``@kernel``) are then bound to that module's namespace and compiled with
+``cache=True``: numba keys their disk cache on the generated file, so each combination
+compiles once per machine and loads from disk afterwards. Parameter values are a
+runtime array: changing them never recompiles.
+
+The generated file's name carries a key over its own text, every pneumact source file
+the kernel depends on (found by following the imports of the templates and of the
+component modules, not from a list kept by hand), and the numba and Python versions.
+Files are created atomically and only if absent, so several processes may generate the
+same kernel at once.
 """
 
 from __future__ import annotations
 
+import ast
+import contextlib
+import functools
 import hashlib
+import importlib
 import importlib.util
 import os
 import sys
 import tempfile
 import threading
-from importlib import resources
+import types
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 
-import numba
+__all__ = ["KernelSpec", "cache_dir", "dependency_files", "kernel", "kernel_key", "load"]
 
-BEGIN = "# --- components ---"
-END = "# --- end components ---"
-_SOURCES = (
-    "models/friction.py", "models/valves.py", "models/pneumatics.py", "models/rig.py",
-    "models/layout.py", "parameters/spec.py", "experiments/signals.py",
-    "simulation/linalg.py",
-)
-_LOCK = threading.Lock()
-_LOADED: dict[str, ModuleType] = {}
+_LOCK = threading.RLock()
+_LOADED: dict[str, types.ModuleType] = {}
+_PACKAGE = "pneumact"
+
+
+def kernel(**options) -> Callable:
+    """Mark a template function: bound into each generated kernel and compiled there with
+    ``njit(cache=True, **options)`` (e.g. ``nogil=True`` for the integrators)."""
+
+    def mark(fn):
+        fn.__kernel_options__ = options
+        return fn
+
+    return mark
+
+
+@dataclass(frozen=True)
+class KernelSpec:
+    """What a generated kernel module holds.
+
+    ``templates``: modules whose ``@kernel`` functions are bound into it; ``imports``:
+    (alias, "module:attribute") pairs; ``constants``: (name, value) pairs of ints,
+    floats, bools or tuples of them. ``label`` names the combination in the file name.
+    """
+
+    label: str
+    templates: tuple[str, ...]
+    imports: tuple[tuple[str, str], ...]
+    constants: tuple[tuple[str, object], ...]
+
+    def source(self) -> str:
+        """Text of the generated module: a docstring, imports and constants."""
+        lines = [f'"""pneumact kernel {self.label}: generated, do not edit.',
+                 "", f"Templates bound to it: {', '.join(self.templates)}.", '"""']
+        for alias, target in self.imports:
+            module, attribute = target.split(":")
+            lines.append(f"from {module} import {attribute} as {alias}")
+        for name, value in self.constants:
+            lines.append(f"{name} = {value!r}")
+        return "\n".join(lines) + "\n"
+
+    def modules(self) -> tuple[str, ...]:
+        """The modules the kernel's code comes from (templates and component modules)."""
+        imported = (target.split(":")[0] for _, target in self.imports)
+        return tuple(dict.fromkeys((*self.templates, *imported)))
 
 
 def cache_dir() -> Path:
@@ -44,79 +94,126 @@ def cache_dir() -> Path:
     return Path(user_cache_dir("pneumact")) / "kernels"
 
 
-def _package_text(rel: str) -> str:
-    return resources.files("pneumact").joinpath(rel).read_text(encoding="utf-8")
+# --------------------------------------------------------------------------- dependencies
+def _module_file(name: str) -> Path | None:
+    """Source file of module ``name``, or None when ``name`` is not a module."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ModuleNotFoundError, ValueError):  # "package.module.attribute"
+        return None
+    if spec is None or not spec.origin or not spec.origin.endswith(".py"):
+        return None
+    return Path(spec.origin)
 
 
-def _split(text: str) -> tuple[str, str]:
-    """(text before the components block, text after it)."""
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    return head, tail
+def _imported_modules(name: str, path: Path) -> set[str]:
+    """pneumact modules imported by the module ``name`` (absolute and relative imports)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                parts = parts[: len(parts) - node.level + 1]
+                base = ".".join(p for p in (*parts, base) if p)
+            found.add(base)
+            found.update(f"{base}.{alias.name}" for alias in node.names)
+    return {m for m in found if m == _PACKAGE or m.startswith(_PACKAGE + ".")}
 
 
-def _import_lines(components: dict[str, str]) -> str:
-    lines = []
-    for alias, target in components.items():
-        module, name = target.split(":")
-        lines.append(f"from {module} import {name} as {alias}")
-    return "\n".join(lines)
+def dependency_files(modules: Iterable[str]) -> list[Path]:
+    """Every pneumact source file reachable by imports from ``modules`` (sorted)."""
+    return list(_dependency_closure(tuple(sorted(modules))))
 
 
-def generate_source(model: str, components: dict[str, str]) -> str:
-    """Source text of the kernel module for ``model`` with ``components`` substituted."""
-    model_head, model_tail = _split(_package_text(f"simulation/templates/{model}.py"))
-    integ_head, integ_tail = _split(_package_text("simulation/templates/integrators.py"))
-    return "\n".join([
-        f'"""Generated by pneumact: {model} kernel with {components}. Do not edit."""',
-        model_head.split('"""', 2)[-1],
-        _import_lines(components),
-        model_tail,
-        integ_head.split('"""', 2)[-1],
-        integ_tail,
-    ])
+@functools.cache
+def _dependency_closure(modules: tuple[str, ...]) -> tuple[Path, ...]:
+    seen: dict[str, Path] = {}
+    todo = list(modules)
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        path = _module_file(name)
+        if path is None:
+            continue  # an attribute imported with "from x import y", not a module
+        seen[name] = path
+        todo.extend(_imported_modules(name, path) - set(seen))
+    return tuple(sorted(set(seen.values())))
 
 
-_BY_COMBINATION: dict[tuple, ModuleType] = {}
+@functools.cache
+def kernel_key(spec: KernelSpec) -> str:
+    """Hex digest over the generated text, the dependency sources and the versions
+    (computed once per process and spec)."""
+    import numba
+
+    digest = hashlib.sha256(spec.source().encode())
+    for path in dependency_files(spec.modules()):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    digest.update(f"numba {numba.__version__}; python {sys.version_info[:3]}".encode())
+    return digest.hexdigest()
 
 
-def load_kernel(model: str, components: dict[str, str], key: str) -> ModuleType:
-    """The compiled kernel module for this combination (generated on first use).
+# --------------------------------------------------------------------------- loading
+def _write_once(path: Path, text: str) -> None:
+    """Create ``path`` with ``text`` unless it exists; atomic, and safe when several
+    processes try at once (the first link wins, the others find the file)."""
+    if path.exists():
+        return
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        with contextlib.suppress(FileExistsError):
+            os.link(tmp, path)
+    finally:
+        os.unlink(tmp)
 
-    Looked up in-process first: generating and hashing the source costs about a
-    millisecond, as much as a whole simulation.
-    """
-    combination = (model, key, tuple(sorted(components.items())))
-    module = _BY_COMBINATION.get(combination)
-    if module is not None:
-        return module
-    module = _load_kernel(model, components, key)
-    _BY_COMBINATION[combination] = module
-    return module
+
+def _bind(namespace: dict, template: types.ModuleType, filename: str) -> None:
+    """Copy the template's other globals where the generated module has none, then bind
+    its ``@kernel`` functions to the generated namespace, compiled with disk caching."""
+    import numba
+
+    marked = {name: obj for name, obj in vars(template).items()
+              if getattr(obj, "__kernel_options__", None) is not None
+              and getattr(obj, "__module__", None) == template.__name__}
+    for name, obj in vars(template).items():
+        if name not in namespace and name not in marked and not name.startswith("__"):
+            namespace[name] = obj
+    for name, fn in marked.items():
+        code = fn.__code__.replace(co_filename=filename)
+        bound = types.FunctionType(code, namespace, name, fn.__defaults__, fn.__closure__)
+        bound.__qualname__ = f"{template.__name__.rpartition('.')[2]}.{fn.__qualname__}"
+        bound.__module__ = namespace["__name__"]
+        bound.__doc__ = fn.__doc__
+        namespace[name] = numba.njit(cache=True, **fn.__kernel_options__)(bound)
 
 
-def _load_kernel(model: str, components: dict[str, str], key: str) -> ModuleType:
-    source = generate_source(model, components)
-    digest = hashlib.sha256()
-    digest.update(source.encode())
-    for rel in _SOURCES:
-        digest.update(_package_text(rel).encode())
-    digest.update(numba.__version__.encode())
-    name = f"pneumact_kernel_{key}_{digest.hexdigest()[:16]}"
+def load(spec: KernelSpec) -> types.ModuleType:
+    """The kernel module of ``spec``: generated on first use, then cached on disk and in
+    this process."""
+    key = kernel_key(spec)
+    name = f"pneumact_kernel_{spec.label}_{key[:16]}"
     with _LOCK:
-        if name in _LOADED:
-            return _LOADED[name]
+        module = _LOADED.get(name)
+        if module is not None:
+            return module
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{name}.py"
-        if not path.exists():
-            fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{name}.", suffix=".tmp")
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(source)
-            os.replace(tmp, path)
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
+        _write_once(path, spec.source())
+        module_spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(module_spec)
+        module_spec.loader.exec_module(module)
+        for template in spec.templates:
+            _bind(module.__dict__, importlib.import_module(template), str(path))
         sys.modules[name] = module
-        spec.loader.exec_module(module)
         _LOADED[name] = module
         return module

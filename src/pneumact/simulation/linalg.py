@@ -36,6 +36,18 @@ def lu_factor(a, piv, n):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def lu_det_sign(a, piv, n):  # pragma: no cover - compiled
+    """Sign of the determinant of the matrix factored by ``lu_factor`` (+1 or −1)."""
+    sign = 1.0
+    for k in range(n):
+        if piv[k] != k:
+            sign = -sign
+        if a[k, k] < 0.0:
+            sign = -sign
+    return sign
+
+
+@njit(cache=True, inline="always")
 def lu_solve(a, piv, b, n):  # pragma: no cover - compiled
     """Solve in place with the factors of ``lu_factor``."""
     for k in range(n):

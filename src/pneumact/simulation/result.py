@@ -1,12 +1,41 @@
-"""Simulation results: one object with named, unit-tagged signals."""
+"""Simulation results: one object with named, unit-tagged signals and what made them."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
-import pandas as pd
+
+
+@dataclass(frozen=True)
+class SolverStats:
+    """The integrator's report of one run, read from its info array by name."""
+
+    status: int
+    reason: str
+    t: float
+    steps: int
+    rejected: int
+    rhs_evaluations: int
+    jacobian_evaluations: int
+    last_step: float
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+    @classmethod
+    def from_info(cls, kernel: ModuleType, info: np.ndarray) -> SolverStats:
+        status = int(info[kernel.INFO_STATUS])
+        return cls(status=status,
+                   reason="ok" if status == 0 else kernel.STATUS_TEXT.get(status, "unknown"),
+                   t=float(info[kernel.INFO_T]), steps=int(info[kernel.INFO_STEPS]),
+                   rejected=int(info[kernel.INFO_REJECTED]),
+                   rhs_evaluations=int(info[kernel.INFO_RHS]),
+                   jacobian_evaluations=int(info[kernel.INFO_JAC]),
+                   last_step=float(info[kernel.INFO_H]))
 
 
 @dataclass(eq=False)
@@ -15,42 +44,50 @@ class Result:
 
     ``result["position"]`` gives an array; ``result.units["position"]`` its unit.
     ``to_pandas()`` gives a DataFrame indexed by time (units in ``attrs["units"]``).
+    ``parameters`` holds every parameter value the run used (SI), ``components`` the
+    model's components (friction law, valve, ...), ``meta`` the solver's report.
     """
 
     time: np.ndarray
     signals: dict[str, np.ndarray]
     units: dict[str, str]
     meta: dict = field(default_factory=dict)
+    parameters: dict[str, float] = field(default_factory=dict)
+    components: dict[str, str] = field(default_factory=dict)
 
     @classmethod
-    def from_kernel(cls, kernel, model, experiment, solver, t_out, y_out, out, info, wall):
+    def from_run(cls, prep, experiment, solver, y_out, out, stats: SolverStats,
+                 wall: float) -> Result:
+        assembly = prep.assembly
         signals: dict[str, np.ndarray] = {}
         units: dict[str, str] = {}
-        for i, (name, unit) in enumerate(zip(kernel.STATE_NAMES, kernel.STATE_UNITS,
+        for i, (name, unit) in enumerate(zip(assembly.state_names, assembly.state_units,
                                              strict=True)):
-            signals[name] = y_out[:, i].copy()
+            signals[name] = np.ascontiguousarray(y_out[:, i])
             units[name] = unit
-        for i, (name, unit) in enumerate(zip(kernel.OUTPUT_NAMES, kernel.OUTPUT_UNITS,
+        for i, (name, unit) in enumerate(zip(assembly.output_names, assembly.output_units,
                                              strict=True)):
             if name == "drive":
                 name, unit = f"drive_{experiment.quantity}", experiment.unit
             if name in signals:
                 continue
-            signals[name] = out[:, i].copy()
+            signals[name] = np.ascontiguousarray(out[:, i])
             units[name] = unit
-        params = model.params
+        params = assembly.model.params
         meta = {
-            "model": model.describe() if hasattr(model, "describe") else repr(model),
+            "model": assembly.describe(),
             "params": getattr(params, "name", "custom"),
             "experiment": experiment.name,
             "solver": f"{type(solver).__name__}(rtol={solver.rtol})",
-            "steps": int(info[2]),
-            "rejected": int(info[3]),
-            "rhs_evaluations": int(info[4]),
-            "jacobian_evaluations": int(info[5]),
+            "steps": stats.steps,
+            "rejected": stats.rejected,
+            "rhs_evaluations": stats.rhs_evaluations,
+            "jacobian_evaluations": stats.jacobian_evaluations,
             "wall_time_s": wall,
         }
-        return cls(np.asarray(t_out, dtype=float).copy(), signals, units, meta)
+        components = {part.role: part.label for part in assembly.parts if part.label}
+        return cls(np.asarray(prep.t_out, dtype=float).copy(), signals, units, meta,
+                   assembly.values(prep.vector), components)
 
     # -- access ------------------------------------------------------------------------
     def __getitem__(self, name: str) -> np.ndarray:
@@ -61,25 +98,36 @@ class Result:
         except KeyError:
             raise KeyError(f"no signal {name!r}; signals: {', '.join(self.signals)}") from None
 
+    def __contains__(self, name: object) -> bool:
+        return name == "time" or name in self.signals
+
     @property
     def names(self) -> list[str]:
         return list(self.signals)
 
-    def to_pandas(self) -> pd.DataFrame:
+    def to_pandas(self):
+        """A DataFrame indexed by time; units, parameters and components in ``attrs``."""
+        import pandas as pd
+
         frame = pd.DataFrame(self.signals, index=pd.Index(self.time, name="time"))
         frame.attrs["units"] = {"time": "s", **self.units}
+        frame.attrs["parameters"] = dict(self.parameters)
+        frame.attrs["components"] = dict(self.components)
         return frame
 
     def save(self, path: str | Path) -> Path:
         """Write all signals to CSV (header ``name [unit]``) or Parquet, atomically."""
-        from ..io import write_table
+        import pandas as pd
 
-        return write_table(self.to_pandas(), path, {"time": "s", **self.units})
+        from ..io.tables import write_table
+
+        frame = pd.DataFrame(self.signals, index=pd.Index(self.time, name="time"))
+        return write_table(frame, path, {"time": "s", **self.units})
 
     # -- analysis and plots --------------------------------------------------------------
     def summary(self) -> dict[str, float]:
-        """Stroke, loop widths and break-away pressure (see ``pneumact.features``)."""
-        from ..features import hysteresis_summary
+        """Stroke, loop widths and break-away pressure (see ``pneumact.analysis``)."""
+        from ..analysis.features import hysteresis_summary
 
         return hysteresis_summary(self.time, self["pressure"], self["position"])
 

@@ -25,6 +25,7 @@ class Solver:
     h_max: float = math.inf
     max_steps: int = 5_000_000
     kernel_function = "integrate_rodas4"
+    explicit = False
 
     def __post_init__(self):
         if not (np.isfinite(self.rtol) and 1e-14 <= self.rtol < 1):
@@ -51,6 +52,13 @@ class Solver:
             raise ParameterError(f"solver atol = {self.atol}: must be > 0")
         return np.full(len(state_names), float(self.atol))
 
+    def atol_overrides(self, state_names: tuple[str, ...]) -> np.ndarray:
+        """Per state: the absolute tolerance the user fixed, or 0 where the default
+        rule (rtol × the state's typical magnitude) applies (the batch loop's input)."""
+        if self.atol is None:
+            return np.zeros(len(state_names))
+        return self.atol_vector(state_names, np.zeros(len(state_names)))
+
 
 @dataclass(frozen=True)
 class Rodas4(Solver):
@@ -64,3 +72,4 @@ class DormandPrince(Solver):
     """Explicit Dormand-Prince 5(4); fine for non-stiff set-ups (no bristle stiffness)."""
 
     kernel_function = "integrate_dopri5"
+    explicit = True

@@ -1,143 +1,191 @@
-"""Kernel template: the diaphragm actuator (paper eq. 1 with the chamber of eqs. 2-5).
+"""Model template: the diaphragm actuator (paper eq. 1) with a friction law and a valve.
 
-The generator replaces the block between the ``components`` markers with the chosen
-friction law and valve and compiles the result as one module, cached on disk. As shipped,
-the block names LuGre + an ideal pressure source, so this file is itself a valid kernel.
-
-State: [x, v, z | p | u, i] (see ``pneumact.models.valves``).
+The generator (``simulation.codegen``) binds these functions into one module per
+friction × valve combination, where the names below marked "bound by the generator"
+are the chosen component functions and the layout constants of the assembly
+(``simulation.assembly``): states are [position, velocity, bristle | valve states], the
+parameter vector is [mechanics block | friction block | valve block].
 """
 
-from numba import njit
-
-from pneumact.experiments.signals import channel_eval
-from pneumact.models.layout import (
-    CH_LOAD_T,
-    CH_LOAD_X,
-    I_AD,
-    I_CSTOP,
-    I_F0,
-    I_K,
-    I_KSTOP,
-    I_M,
-    I_PATM,
-    I_XMAX,
+from pneumact.models.mechanics import (
+    MC_AD,
+    MC_F0,
+    MC_K,
+    MC_KSTOP,
+    MC_M,
+    MC_PATM,
+    MC_XMAX,
+    acceleration_params,
+    load_against_position,
+    load_against_time,
+    mechanics_scales,
+    net_force,
+    rest_position,
+    stop_force_of,
 )
+from pneumact.simulation.codegen import kernel
 
-# isort: off
-# --- components ---
-from pneumact.models.friction import lugre as friction_eval
-from pneumact.models.friction import lugre_dtheta as friction_dtheta
-from pneumact.models.valves import SOURCE_NSTATE as NSTATE
-from pneumact.models.valves import source_flows as valve_flows
-from pneumact.models.valves import source_jac as valve_jac
-from pneumact.models.valves import source_pressure as valve_pressure
-from pneumact.models.valves import source_rhs as valve_rhs
+# --- bound by the generator --------------------------------------------------------------
+friction_eval = friction_params = friction_scales = None
+valve_pressure = valve_rates = valve_partials = valve_params = valve_flows = None
+valve_derive = valve_equilibrium = valve_scales = None
+VALVE_PRESSURE_STATE = -1
+HAS_LOAD_T = HAS_LOAD_X = True
+NSTATE = 3
+NPARAM = 0
+MECHANICS_LO = MECHANICS_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
+S_POSITION = 0
+S_VELOCITY = 1
+S_BRISTLE = 2
+S_VALVE = 3
+# ------------------------------------------------------------------------------------------
 
-# --- end components ---
-# isort: on
-
-OUTPUT_NAMES = (
-    "pressure", "friction", "spring_force", "pressure_force", "stop_force", "load",
-    "opening", "mass_flow_in", "mass_flow_out", "bristle_rate",
-)
+OUTPUT_NAMES = ("pressure", "friction", "spring_force", "pressure_force", "stop_force",
+                "load", "opening", "mass_flow_in", "mass_flow_out", "bristle_rate")
 OUTPUT_UNITS = ("Pa", "N", "N", "N", "N", "N", "1", "kg/s", "kg/s", "m/s")
-NOUT = len(OUTPUT_NAMES)
-STATE_NAMES = ("position", "velocity", "bristle", "pressure", "opening", "integral")[:NSTATE]
-STATE_UNITS = ("m", "m/s", "m", "Pa", "1", "1")[:NSTATE]
+NOUT = 10
+O_PRESSURE = 0
+O_FRICTION = 1
+O_SPRING = 2
+O_PRESSURE_FORCE = 3
+O_STOP = 4
+O_LOAD = 5
+O_OPENING = 6
+O_FLOW_IN = 7
+O_FLOW_OUT = 8
+O_BRISTLE_RATE = 9
+#: Fixed-point steps of the rest position under a load that depends on position.
+LOAD_ITERATIONS = 20
 
 
-@njit(cache=True, inline="always")
-def stop_force(x, v, prm):  # pragma: no cover - compiled
-    """End stops as compression-only spring-dampers: they push, never pull (no sticking),
-    and their damping only dissipates (no energy injected).
-
-    Returns (F, ∂F/∂x, ∂F/∂v), positive pushing towards larger x.
-    """
-    ks = prm[I_KSTOP]
-    cs = prm[I_CSTOP]
-    if x < 0.0:
-        f = -ks * x - cs * v
-        if f > 0.0:
-            return f, -ks, -cs
-    else:
-        pen = x - prm[I_XMAX]
-        if pen > 0.0:
-            f = ks * pen + cs * v
-            if f > 0.0:
-                return -f, -ks, -cs
-    return 0.0, 0.0, 0.0
+@kernel()
+def external_load(t, ts, x, sig, ptr):
+    """F_ext(t, x) = load(t) + load_map(x) and its slope; no code for an absent load."""
+    f_ext = 0.0
+    slope = 0.0
+    if HAS_LOAD_T:
+        f_ext += load_against_time(t, ts, sig, ptr)
+    if HAS_LOAD_X:
+        f_x, slope = load_against_position(x, sig, ptr)
+        f_ext += f_x
+    return f_ext, slope
 
 
-@njit(cache=True, inline="always")
-def external_load(t, ts, x, sig, ptr):  # pragma: no cover - compiled
-    """F_ext(t, x) = load(t) + load_map(x), opposing motion towards larger x."""
-    f_t = channel_eval(sig, ptr, CH_LOAD_T, t, ts)[0]
-    f_x, df_dx = channel_eval(sig, ptr, CH_LOAD_X, x, x)
-    return f_t + f_x, df_dx
+@kernel()
+def derive(prm):
+    """Recompute the derived entries of every block (after any change of a value)."""
+    valve_derive(prm, VALVE_LO)
 
 
-@njit(cache=True)
-def rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
-    x = y[0]
-    v = y[1]
-    p = valve_pressure(t, ts, y, prm, sig, ptr)
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[2], prm)
-    f_stop, _, _ = stop_force(x, v, prm)
-    f_ext, _ = external_load(t, ts, x, sig, ptr)
-    net = (prm[I_PATM] - p) * prm[I_AD] - (prm[I_F0] + prm[I_K] * x) - f_fric - f_ext + f_stop
-    dydt[0] = v
-    dydt[1] = net / prm[I_M]
-    dydt[2] = zdot
-    valve_rhs(t, ts, y, prm, sig, ptr, dydt)
+@kernel()
+def rhs(t, ts, y, prm, sig, ptr, dydt):
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    f_ext = external_load(t, ts, x, sig, ptr)[0]
+    net = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)[0]
+    dydt[S_POSITION] = v
+    dydt[S_VELOCITY] = net / prm[MECHANICS_LO + MC_M]
+    dydt[S_BRISTLE] = zdot
+    valve_rates(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
 
 
-@njit(cache=True)
-def jac(t, ts, y, prm, sig, ptr, out):  # pragma: no cover - compiled
+@kernel()
+def jac(t, ts, y, prm, sig, ptr, out):
     """Analytic Jacobian ∂f/∂y (``out`` is zeroed by the caller)."""
-    x = y[0]
-    v = y[1]
-    _, _, dzd_dv, dzd_dz, df_dv, df_dz = friction_eval(v, y[2], prm)
-    _, dstop_dx, dstop_dv = stop_force(x, v, prm)
-    _, dext_dx = external_load(t, ts, x, sig, ptr)
-    m = prm[I_M]
-    out[0, 1] = 1.0
-    out[1, 0] = (-prm[I_K] - dext_dx + dstop_dx) / m
-    out[1, 1] = (-df_dv + dstop_dv) / m
-    out[1, 2] = -df_dz / m
-    out[2, 1] = dzd_dv
-    out[2, 2] = dzd_dz
-    if NSTATE > 3:
-        out[1, 3] = -prm[I_AD] / m
-    valve_jac(t, ts, y, prm, sig, ptr, out)
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+    _, f_fric, dzd_dv, dzd_dz, df_dv, df_dz = friction_eval(v, y[S_BRISTLE], prm,
+                                                            FRICTION_LO)
+    f_ext, dext_dx = external_load(t, ts, x, sig, ptr)
+    _, dnet_dx, dnet_dv, dnet_dp = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)
+    m = prm[MECHANICS_LO + MC_M]
+    out[S_POSITION, S_VELOCITY] = 1.0
+    out[S_VELOCITY, S_POSITION] = (dnet_dx - dext_dx) / m
+    out[S_VELOCITY, S_VELOCITY] = (dnet_dv - df_dv) / m
+    out[S_VELOCITY, S_BRISTLE] = -df_dz / m
+    out[S_BRISTLE, S_VELOCITY] = dzd_dv
+    out[S_BRISTLE, S_BRISTLE] = dzd_dz
+    if VALVE_PRESSURE_STATE >= 0:
+        out[S_VELOCITY, S_VALVE + VALVE_PRESSURE_STATE] = dnet_dp / m
+    valve_partials(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr, out, S_POSITION,
+                   S_VELOCITY)
 
 
-@njit(cache=True)
-def friction_param_rhs(t, ts, y, prm, sig, ptr, d, g):  # pragma: no cover - compiled
-    """g[k] = ∂f/∂θ_k for the friction parameters θ = FRICTION_SENS (d: work array)."""
-    friction_dtheta(y[1], y[2], prm, d)
-    m = prm[I_M]
-    for k in range(d.shape[0]):
-        for a in range(NSTATE):
-            g[k, a] = 0.0
-        g[k, 1] = -d[k, 1] / m
-        g[k, 2] = d[k, 0]
+@kernel()
+def param_jac(t, ts, y, prm, sig, ptr, g, needed):
+    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × NPARAM); blocks with no ``needed`` slot skipped."""
+    for a in range(NSTATE):
+        for k in range(NPARAM):
+            g[a, k] = 0.0
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+    if _any(needed, FRICTION_LO, FRICTION_HI) or _any(needed, MECHANICS_LO, MECHANICS_HI):
+        m = prm[MECHANICS_LO + MC_M]
+        f_fric = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)[1]
+        f_ext = external_load(t, ts, x, sig, ptr)[0]
+        net = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)[0]
+        acceleration_params(x, v, p, net, prm, MECHANICS_LO, g, S_VELOCITY)
+        friction_params(v, y[S_BRISTLE], prm, FRICTION_LO, g, S_BRISTLE, S_VELOCITY)
+        for k in range(FRICTION_LO, FRICTION_HI):
+            g[S_VELOCITY, k] = -g[S_VELOCITY, k] / m
+    if _any(needed, VALVE_LO, VALVE_HI):
+        valve_params(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
 
 
-@njit(cache=True)
-def outputs(t, ts, y, prm, sig, ptr, out):  # pragma: no cover - compiled
+@kernel()
+def _any(flags, lo, hi):
+    for k in range(lo, hi):
+        if flags[k]:
+            return True
+    return False
+
+
+@kernel()
+def outputs(t, ts, y, prm, sig, ptr, out):
     """Derived signals at one instant, in the order of OUTPUT_NAMES."""
-    x = y[0]
-    v = y[1]
-    p = valve_pressure(t, ts, y, prm, sig, ptr)
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[2], prm)
-    u, q_in, q_out = valve_flows(t, ts, y, prm, sig, ptr)
-    out[0] = p
-    out[1] = f_fric
-    out[2] = prm[I_F0] + prm[I_K] * x
-    out[3] = (prm[I_PATM] - p) * prm[I_AD]
-    out[4] = stop_force(x, v, prm)[0]
-    out[5] = external_load(t, ts, x, sig, ptr)[0]
-    out[6] = u
-    out[7] = q_in
-    out[8] = q_out
-    out[9] = zdot
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    u, q_in, q_out = valve_flows(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+    out[O_PRESSURE] = p
+    out[O_FRICTION] = f_fric
+    out[O_SPRING] = prm[MECHANICS_LO + MC_F0] + prm[MECHANICS_LO + MC_K] * x
+    out[O_PRESSURE_FORCE] = (prm[MECHANICS_LO + MC_PATM] - p) * prm[MECHANICS_LO + MC_AD]
+    out[O_STOP] = stop_force_of(x, v, prm, MECHANICS_LO)[0]
+    out[O_LOAD] = external_load(t, ts, x, sig, ptr)[0]
+    out[O_OPENING] = u
+    out[O_FLOW_IN] = q_in
+    out[O_FLOW_OUT] = q_out
+    out[O_BRISTLE_RATE] = zdot
+
+
+@kernel()
+def initial_state(t, ts, prm, sig, ptr, y0):
+    """Rest at the static equilibrium of the initial input (friction unloaded): the
+    valve's rest pressure, then the position where spring, stops and loads balance it."""
+    for i in range(NSTATE):
+        y0[i] = 0.0
+    p0 = valve_equilibrium(t, ts, prm, VALVE_LO, sig, ptr, y0, S_VALVE)
+    net0 = ((prm[MECHANICS_LO + MC_PATM] - p0) * prm[MECHANICS_LO + MC_AD]
+            - prm[MECHANICS_LO + MC_F0])
+    k = prm[MECHANICS_LO + MC_K]
+    ks = prm[MECHANICS_LO + MC_KSTOP]
+    x_max = prm[MECHANICS_LO + MC_XMAX]
+    x0 = rest_position(net0 - external_load(t, ts, 0.0, sig, ptr)[0], k, ks, x_max)
+    if HAS_LOAD_X:
+        for _ in range(LOAD_ITERATIONS):  # a load against position: fixed-point steps
+            x0 = rest_position(net0 - external_load(t, ts, x0, sig, ptr)[0], k, ks, x_max)
+    y0[S_POSITION] = x0
+
+
+@kernel()
+def state_scales(prm, out):
+    """Typical magnitude of each state (for the default absolute tolerances)."""
+    out[S_POSITION], out[S_VELOCITY] = mechanics_scales(prm, MECHANICS_LO)
+    out[S_BRISTLE] = friction_scales(prm, FRICTION_LO)[0]
+    valve_scales(prm, VALVE_LO, out, S_VALVE)

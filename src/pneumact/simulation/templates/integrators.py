@@ -1,42 +1,51 @@
-"""Kernel template: the compiled integrators, joined to one model by the generator.
+"""Template: the compiled integrators, bound to one model by the generator.
 
 ``integrate_rodas4``: Hairer & Wanner's RODAS (order 4, embedded 3), a 6-stage,
 L-stable, stiffly accurate Rosenbrock method with the model's analytic Jacobian; the
-default. ``integrate_dopri5``: Dormand-Prince 5(4), explicit, for non-stiff variants.
+default. ``integrate_rodas4_sens`` is the same loop carrying forward sensitivities
+ds/dt = J·s + ∂f/∂θ (compiled only when first used: the plain run passes ``None`` and
+numba prunes the sensitivity code from it). ``integrate_dopri5``: Dormand-Prince 5(4),
+explicit, for non-stiff variants.
 
-Both integrate interval by interval between breakpoints (corners and jumps of the
-inputs), control the step on a per-state rtol/atol, and write the states and the model's
-derived outputs at the requested times by cubic Hermite interpolation of each step
-(dense output). They never raise: ``info`` reports the status, where and how it failed.
+All integrate interval by interval between breakpoints (corners and jumps of the
+inputs) and control the step on a per-state rtol/atol. At the requested output times
+they write
+
+- the states, by cubic Hermite interpolation of each step (shape-preserving for the
+  states a component declares bounded, such as the bristle deflection);
+- the model's derived outputs, by shape-preserving cubic interpolation between their
+  exact values at the ends of the step, so an output never leaves the range the model
+  gives it at the solver's steps (friction force, flows), whatever the tolerance.
+
+They never raise: ``info`` reports the status, where and how the run failed.
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from pneumact.models.layout import I_GAMMA, I_R, I_RLIN, I_T
-from pneumact.models.pneumatics import derive_flow_constants
-from pneumact.simulation.linalg import lu_factor, lu_solve
+from pneumact.simulation.codegen import kernel
+from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
 
-# isort: off
-# --- components ---
-from pneumact.simulation.templates.actuator import (
-    NOUT,
-    NSTATE,
-    friction_param_rhs,
-    jac,
-    outputs,
-    rhs,
-)
-
-# --- end components ---
-# isort: on
+# --- bound by the generator and the model template ---------------------------------------
+rhs = jac = outputs = param_jac = derive = None
+NSTATE = 3
+NOUT = 1
+NPARAM = 0
+MONOTONE = (False, False, False)
+# ------------------------------------------------------------------------------------------
 
 STATUS_OK = 0
 STATUS_STEP_UNDERFLOW = 1
 STATUS_NON_FINITE = 2
 STATUS_MAX_STEPS = 3
+STATUS_TEXT = {
+    STATUS_STEP_UNDERFLOW: "step size underflow (the solution changes faster than the "
+                           "tolerances allow)",
+    STATUS_NON_FINITE: "the state became non-finite (NaN or inf)",
+    STATUS_MAX_STEPS: "maximum number of steps reached",
+}
 # info layout
 INFO_STATUS = 0
 INFO_T = 1
@@ -46,6 +55,11 @@ INFO_RHS = 4
 INFO_JAC = 5
 INFO_H = 6
 INFO_LENGTH = 8
+#: h·J_ii allowed for a state that feeds itself (J_ii > 0): a growing mode is followed
+UNSTABLE_STEP = 0.5
+#: relative step of the finite differences in time (∂f/∂t) and along the trajectory
+TIME_FD = 1.4901161193847656e-08
+OUTPUT_FD = 1e-7
 
 # RODAS (Hairer & Wanner 1996, rodas.f METH=1)
 GAM = 0.25
@@ -63,10 +77,21 @@ G51, G52 = 0.7496443313967647e01, -0.1024680431464352e02
 G53, G54 = -0.3399990352819905e02, 0.1170890893206160e02
 G61, G62, G63 = 0.8083246795921522e01, -0.7981132988064893e01, -0.3152159432874371e02
 G64, G65 = 0.1631930543123136e02, -0.6058818238834054e01
+#: A[i, j]: stage i reads k_j (stage 6 adds k_5 to stage 5's state: stiffly accurate).
+#: Global arrays are frozen into the compiled code as constants.
+STAGE_A = np.array([[0.0, 0.0, 0.0, 0.0, 0.0], [A21, 0.0, 0.0, 0.0, 0.0],
+                    [A31, A32, 0.0, 0.0, 0.0], [A41, A42, A43, 0.0, 0.0],
+                    [A51, A52, A53, A54, 0.0], [A51, A52, A53, A54, 1.0]])
+STAGE_G = np.array([[0.0, 0.0, 0.0, 0.0, 0.0], [G21, 0.0, 0.0, 0.0, 0.0],
+                    [G31, G32, 0.0, 0.0, 0.0], [G41, G42, G43, 0.0, 0.0],
+                    [G51, G52, G53, G54, 0.0], [G61, G62, G63, G64, G65]])
+STAGE_C = np.array([0.0, C2, C3, C4, 1.0, 1.0])
+STAGE_D = np.array([D1, D2, D3, D4, 0.0, 0.0])
 
 
-@njit(cache=True, inline="always")
-def _error_norm(err, y, ynew, rtol, atol, n):  # pragma: no cover - compiled
+# --------------------------------------------------------------------------- dense output
+@kernel()
+def _error_norm(err, y, ynew, rtol, atol, n):
     s = 0.0
     for i in range(n):
         sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
@@ -75,10 +100,58 @@ def _error_norm(err, y, ynew, rtol, atol, n):  # pragma: no cover - compiled
     return math.sqrt(s / n)
 
 
-@njit(cache=True)
-def _dense(t0, h, y0, f0, y1, f1, t_out, j, ts, prm, sig, ptr, y_out, out, ybuf, obuf,
-           t_stop):  # pragma: no cover - compiled
-    """Write every requested time in (t0, t0 + h] (and ≤ t_stop) by Hermite cubics."""
+@kernel()
+def _limited(y0, m0, y1, m1):
+    """Fritsch–Carlson limited slopes (× step): the cubic then stays between y0 and y1."""
+    delta = y1 - y0
+    if delta == 0.0:
+        return 0.0, 0.0
+    alpha = max(m0 / delta, 0.0)
+    beta = max(m1 / delta, 0.0)
+    r2 = alpha * alpha + beta * beta
+    if r2 > 9.0:
+        tau = 3.0 / math.sqrt(r2)
+        alpha *= tau
+        beta *= tau
+    return alpha * delta, beta * delta
+
+
+@kernel()
+def _cubic(th, y0, m0, y1, m1):
+    """Cubic Hermite at th ∈ [0, 1] from values y0, y1 and slopes m0, m1 (× step)."""
+    h00 = (1.0 + 2.0 * th) * (1.0 - th) ** 2
+    h10 = th * (1.0 - th) ** 2
+    h01 = th * th * (3.0 - 2.0 * th)
+    h11 = th * th * (th - 1.0)
+    return h00 * y0 + h10 * m0 + h01 * y1 + h11 * m1
+
+
+@kernel()
+def _outputs_and_rate(t, ts, y, f, h, prm, sig, ptr, o, do, ybuf, obuf):
+    """Outputs at (t, y) and their rate along the trajectory (f = dy/dt there)."""
+    outputs(t, ts, y, prm, sig, ptr, o)
+    eps = OUTPUT_FD * h
+    for i in range(NSTATE):
+        ybuf[i] = y[i] + eps * f[i]
+    outputs(t + eps, ts, ybuf, prm, sig, ptr, obuf)
+    for k in range(NOUT):
+        do[k] = (obuf[k] - o[k]) / eps
+
+
+@kernel()
+def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out, slopes):
+    """Write every requested time in (t0, t0 + h] (and ≤ t_stop); returns the next j.
+
+    ``slopes`` (2 × (NSTATE + NOUT)) receives the step's slopes, limited where needed."""
+    for i in range(NSTATE):
+        m0, m1 = h * f0[i], h * f1[i]
+        if MONOTONE[i]:
+            m0, m1 = _limited(y0[i], m0, y1[i], m1)
+        slopes[0, i] = m0
+        slopes[1, i] = m1
+    for k in range(NOUT):
+        slopes[0, NSTATE + k], slopes[1, NSTATE + k] = _limited(o0[k], h * do0[k], o1[k],
+                                                                h * do1[k])
     n_out = t_out.shape[0]
     while j < n_out and t_out[j] <= t_stop and t_out[j] <= t0 + h:
         th = (t_out[j] - t0) / h
@@ -87,119 +160,130 @@ def _dense(t0, h, y0, f0, y1, f1, t_out, j, ts, prm, sig, ptr, y_out, out, ybuf,
         h01 = th * th * (3.0 - 2.0 * th)
         h11 = th * th * (th - 1.0)
         for i in range(NSTATE):
-            ybuf[i] = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i]
-            y_out[j, i] = ybuf[i]
-        outputs(t_out[j], ts, ybuf, prm, sig, ptr, obuf)
-        for i in range(NOUT):
-            out[j, i] = obuf[i]
+            y_out[j, i] = h00 * y0[i] + h10 * slopes[0, i] + h01 * y1[i] + h11 * slopes[1, i]
+        for k in range(NOUT):
+            out[j, k] = (h00 * o0[k] + h10 * slopes[0, NSTATE + k] + h01 * o1[k]
+                         + h11 * slopes[1, NSTATE + k])
         j += 1
     return j
 
 
-@njit(cache=True)
-def _write_point(t, ts, y, prm, sig, ptr, j, y_out, out, obuf):  # pragma: no cover
+@kernel()
+def _write_point(t, ts, y, prm, sig, ptr, j, y_out, out, obuf):
     for i in range(NSTATE):
         y_out[j, i] = y[i]
     outputs(t, ts, y, prm, sig, ptr, obuf)
-    for i in range(NOUT):
-        out[j, i] = obuf[i]
+    for k in range(NOUT):
+        out[j, k] = obuf[k]
 
 
-@njit(cache=True)
-def _enters_flow_constants(i):  # pragma: no cover - compiled
-    """Whether parameter slot ``i`` changes the derived orifice-flow constants."""
-    return i == I_GAMMA or i == I_R or i == I_T or i == I_RLIN
+@kernel()
+def _finish(info, status, t, steps, rejected, n_rhs, n_jac, h):
+    info[INFO_STATUS] = status
+    info[INFO_T] = t
+    info[INFO_STEPS] = steps
+    info[INFO_REJECTED] = rejected
+    info[INFO_RHS] = n_rhs
+    info[INFO_JAC] = n_jac
+    info[INFO_H] = h
 
 
-@njit(cache=True, inline="always")
-def _directional(t, ts, y, dy, prm, prm_p, eps, f_base, sig, ptr, ybuf, fbuf, q, n,
-                 flow_parameter):
-    """(f(t, y + eps·dy, θ + eps·e_j) − f_base)/eps: J·dy + ∂f/∂θ_j in one evaluation."""
+# --------------------------------------------------------------------------- RODAS4
+@kernel()
+def _unstable_step_limit(jm, n):
+    """Longest step that follows a self-amplifying state: UNSTABLE_STEP / max(J_ii)."""
+    rate = 0.0
     for a in range(n):
-        ybuf[a] = y[a] + eps * dy[a]
-    if flow_parameter:
-        derive_flow_constants(prm_p)
-    rhs(t, ts, ybuf, prm_p, sig, ptr, fbuf)
+        rate = max(rate, jm[a, a])
+    return UNSTABLE_STEP / rate if rate > 0.0 else math.inf
+
+
+@kernel()
+def e_of(jm, h, e, n):
+    """E = I/(h·γ) − J, the matrix every RODAS stage solves with."""
+    fac = 1.0 / (h * GAM)
     for a in range(n):
-        q[a] = (fbuf[a] - f_base[a]) / eps
+        for b in range(n):
+            e[a, b] = -jm[a, b]
+        e[a, a] += fac
+    return e
 
 
-@njit(cache=True, nogil=True)
-def integrate_rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
-                     y_out, out, info):  # pragma: no cover - compiled
-    """Integrate from tb[0] to tb[-1]; return the final state (the failing one on error)."""
-    no_index = np.zeros(0, dtype=np.int64)
-    return integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
-                                 max_steps, y_out, out, info, no_index, no_index,
-                                 np.zeros((NSTATE, 0)), np.zeros((0, NSTATE, 0)))
-
-
-@njit(cache=True, nogil=True)
-def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
-                          max_steps, y_out, out, info, pidx, pfast, s0,
-                          s_out):  # pragma: no cover - compiled
-    """RODAS4 with forward sensitivities dy/dθ for the parameters ``prm[pidx]``.
-
-    The sensitivities obey ṡ = J·s + ∂f/∂θ. They are advanced with the same stages and
-    the same LU factors as the state (the staggered direct method); each stage needs one
-    directional difference of the model, J(Y_i)·dY_i + ∂f/∂θ_j, in one evaluation.
-    Error control is on the states only. ``s0`` (n × P) is the initial sensitivity,
-    ``s_out`` (n_out × n × P) receives them at ``t_out``. Parameters with
-    ``pfast[j] = k >= 0`` are the friction parameter FRICTION_SENS[k]: for them the stage
-    right-hand side is J(Y_i)·dY_i + ∂f/∂θ_k from the analytic Jacobian and the analytic
-    friction derivatives, shared by all of them (one Jacobian per stage).
-    """
+@kernel()
+def _rodas_stages(t, h, ts, y, f0, ft, e, piv, prm, sig, ptr, ks, yst, fst, fb):
+    """The six stages of one RODAS step from (t, y); ks[i]: the stage increments,
+    yst[i]/fst[i]: the stage states and their right-hand sides."""
     n = NSTATE
-    npar = pidx.shape[0]
-    derive_flow_constants(prm)
+    for st in range(6):
+        for a in range(n):
+            acc = y[a]
+            for jj in range(st):
+                acc += STAGE_A[st, jj] * ks[jj, a]
+            yst[st, a] = acc
+        if st == 0:
+            for a in range(n):
+                fb[a] = f0[a]
+        else:
+            rhs(t + STAGE_C[st] * h, ts, yst[st], prm, sig, ptr, fb)
+        for a in range(n):
+            fst[st, a] = fb[a]
+            acc = fb[a] + h * STAGE_D[st] * ft[a]
+            for jj in range(st):
+                acc += STAGE_G[st, jj] / h * ks[jj, a]
+            ks[st, a] = acc
+        lu_solve(e, piv, ks[st], n)
+
+
+@kernel(nogil=True)
+def integrate_rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                     y_out, out, info):
+    """Integrate from tb[0] to tb[-1]; return the final state (the failing one on error)."""
+    return _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                   y_out, out, info, None)
+
+
+@kernel(nogil=True)
+def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
+                          max_steps, y_out, out, info, w_ptr, w_idx, w_val, needed, s0,
+                          s_out):
+    """RODAS4 with forward sensitivities s = dy/dθ for P parameters.
+
+    ∂f/∂θ_p = Σ_k G[:, w_idx[k]]·w_val[k] over k in [w_ptr[p], w_ptr[p+1]): the model's
+    ∂f/∂prm (``param_jac``) times how each parameter moves the vector, derived slots
+    included. ``needed`` flags the vector slots that occur. ``s0`` (n × P): the initial
+    sensitivity; ``s_out`` (n_out × n × P) receives them at ``t_out``.
+    """
+    return _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                   y_out, out, info, SensInput(w_ptr, w_idx, w_val, needed, s0, s_out))
+
+
+@kernel()
+def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, y_out, out,
+            info, sens):
+    n = NSTATE
+    derive(prm)
     y = y0.copy()
     ynew = np.empty(n)
     f0 = np.empty(n)
     f1 = np.empty(n)
     fb = np.empty(n)
-    fbt = np.empty(n)
     ft = np.empty(n)
-    cont = np.empty(n)
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    k5 = np.empty(n)
-    k6 = np.empty(n)
-    fst = np.empty((6, n))
+    ks = np.empty((6, n))
     yst = np.empty((6, n))
+    fst = np.empty((6, n))
     jm = np.zeros((n, n))
     e = np.empty((n, n))
     piv = np.zeros(n, dtype=np.int64)
     ybuf = np.empty(n)
     obuf = np.empty(NOUT)
-    # sensitivity work arrays
-    sens = s0.copy()
-    snew = np.empty((n, npar))
-    sdot0 = np.empty((n, npar))
-    sdot1 = np.empty((n, npar))
-    dk = np.empty((6, n))
-    dy = np.empty(n)
-    q = np.empty(n)
-    qt = np.empty(n)
-    sft = np.empty(n)
-    fbuf = np.empty(n)
-    ybuf2 = np.empty(n)
-    prm_p = prm.copy()
-    nfast = 0
-    for p_ in range(npar):
-        if pfast[p_] >= 0:
-            nfast += 1
-    jst = np.zeros((6, n, n))
-    gst = np.zeros((6, 6, n))
-    jt = np.zeros((n, n))
-    jend = np.zeros((n, n))
-    gend = np.zeros((6, n))
-    dwork = np.zeros((6, 2))
-    eps_p = np.empty(npar)
-    for p_ in range(npar):
-        scale = abs(prm[pidx[p_]])
-        eps_p[p_] = 1e-7 * (scale if scale > 0.0 else 1.0)
+    o0 = np.empty(NOUT)
+    do0 = np.empty(NOUT)
+    o1 = np.empty(NOUT)
+    do1 = np.empty(NOUT)
+    slopes = np.empty((2, NSTATE + NOUT))
+    if sens is not None:
+        work = _sens_work(sens.s0.shape[1])
+        s = sens.s0.copy()
     for i in range(INFO_LENGTH):
         info[i] = 0.0
     n_out = t_out.shape[0]
@@ -210,15 +294,12 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
     n_jac = 0
     j = 0
     t = tb[0]
-    ts0 = 0.5 * (tb[0] + tb[1])
     while j < n_out and t_out[j] <= t:
-        _write_point(t, ts0, y, prm, sig, ptr, j, y_out, out, obuf)
-        for a in range(n):
-            for p_ in range(npar):
-                s_out[j, a, p_] = sens[a, p_]
+        _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, j, y_out, out, obuf)
+        if sens is not None:
+            _sens_point(s, sens.s_out, j)
         j += 1
     status = STATUS_OK
-    last_nonfinite = False
     just_rejected = False
     h_acc = 0.0
     err_acc = 1.0
@@ -228,265 +309,90 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
-        dts = max(1e-9, 1e-6 * (t_end - t))
-        jm_valid = False
-        ft_valid = False
         rhs(t, ts, y, prm, sig, ptr, f0)
         n_rhs += 1
-        for p_ in range(npar):
-            flowp = _enters_flow_constants(pidx[p_])
-            prm_p[pidx[p_]] = prm[pidx[p_]] + eps_p[p_]
-            _directional(t, ts, y, sens[:, p_], prm, prm_p, eps_p[p_], f0, sig, ptr, ybuf2,
-                         fbuf, q, n, flowp)
-            prm_p[pidx[p_]] = prm[pidx[p_]]
-            if flowp:
-                derive_flow_constants(prm_p)
-            for a in range(n):
-                sdot0[a, p_] = q[a]
+        jm_valid = False
+        ft_valid = False
+        o0_valid = False
+        if sens is not None:
+            n_jac += _sens_segment(t, ts, y, prm, sig, ptr, sens, work, s)
         while t < t_end:
             if steps >= max_steps:
                 status = STATUS_MAX_STEPS
                 break
-            h = min(h, h_max)
-            last = False
-            if t + h >= t_end - 1e-3 * h:
-                h = t_end - t
-                last = True
             # Jacobian and time derivative (forward difference inside the segment); both
-            # are kept after a rejected step (same t, y), and the Jacobian at the end of
-            # an accepted step is reused when the sensitivity pass computed it
+            # are kept after a rejected step (same t, y)
             if not jm_valid:
                 for a in range(n):
                     for b in range(n):
                         jm[a, b] = 0.0
                 jac(t, ts, y, prm, sig, ptr, jm)
                 n_jac += 1
+                jm_valid = True
             if not ft_valid:
-                dt = 1.4901161193847656e-08 * max(abs(t), 1e-3)
+                dt = TIME_FD * max(abs(t), 1e-3)
                 rhs(t + dt, ts, y, prm, sig, ptr, fb)
                 n_rhs += 1
                 for a in range(n):
                     ft[a] = (fb[a] - f0[a]) / dt
-            jm_valid = True
-            ft_valid = True
-            fac = 1.0 / (h * GAM)
-            for a in range(n):
-                for b in range(n):
-                    e[a, b] = -jm[a, b]
-                e[a, a] += fac
-            if not lu_factor(e, piv, n):
+                ft_valid = True
+            # an unstable mode (negative damping as a slip starts) must be followed, not
+            # damped away by a long L-stable step: a state that feeds itself (J_ii > 0)
+            # limits h·J_ii, and det(E) < 0 (a real eigenvalue above 1/(h·γ)) rejects
+            h = min(h, h_max, _unstable_step_limit(jm, n))
+            last = False
+            if t + h >= t_end - 1e-3 * h:
+                h = t_end - t
+                last = True
+            if not lu_factor(e_of(jm, h, e, n), piv, n) or lu_det_sign(e, piv, n) < 0.0:
                 h *= 0.5
                 rejected += 1
                 if h < 1e-14 * max(1.0, abs(t)):
                     status = STATUS_STEP_UNDERFLOW
                     break
                 continue
-            # stage 1
-            for a in range(n):
-                k1[a] = f0[a] + h * D1 * ft[a]
-                yst[0, a] = y[a]
-                fst[0, a] = f0[a]
-            lu_solve(e, piv, k1, n)
-            # stage 2
-            for a in range(n):
-                cont[a] = y[a] + A21 * k1[a]
-            rhs(t + C2 * h, ts, cont, prm, sig, ptr, fb)
-            for a in range(n):
-                yst[1, a] = cont[a]
-                fst[1, a] = fb[a]
-                k2[a] = fb[a] + G21 / h * k1[a] + h * D2 * ft[a]
-            lu_solve(e, piv, k2, n)
-            # stage 3
-            for a in range(n):
-                cont[a] = y[a] + A31 * k1[a] + A32 * k2[a]
-            rhs(t + C3 * h, ts, cont, prm, sig, ptr, fb)
-            for a in range(n):
-                yst[2, a] = cont[a]
-                fst[2, a] = fb[a]
-                k3[a] = fb[a] + (G31 * k1[a] + G32 * k2[a]) / h + h * D3 * ft[a]
-            lu_solve(e, piv, k3, n)
-            # stage 4
-            for a in range(n):
-                cont[a] = y[a] + A41 * k1[a] + A42 * k2[a] + A43 * k3[a]
-            rhs(t + C4 * h, ts, cont, prm, sig, ptr, fb)
-            for a in range(n):
-                yst[3, a] = cont[a]
-                fst[3, a] = fb[a]
-                k4[a] = fb[a] + (G41 * k1[a] + G42 * k2[a] + G43 * k3[a]) / h + h * D4 * ft[a]
-            lu_solve(e, piv, k4, n)
-            # stage 5
-            for a in range(n):
-                cont[a] = y[a] + A51 * k1[a] + A52 * k2[a] + A53 * k3[a] + A54 * k4[a]
-            rhs(t + h, ts, cont, prm, sig, ptr, fb)
-            for a in range(n):
-                yst[4, a] = cont[a]
-                fst[4, a] = fb[a]
-                k5[a] = fb[a] + (G51 * k1[a] + G52 * k2[a] + G53 * k3[a] + G54 * k4[a]) / h
-            lu_solve(e, piv, k5, n)
-            # stage 6 (stiffly accurate: the solution is the last stage value)
-            for a in range(n):
-                cont[a] += k5[a]
-            rhs(t + h, ts, cont, prm, sig, ptr, fb)
-            for a in range(n):
-                yst[5, a] = cont[a]
-                fst[5, a] = fb[a]
-                k6[a] = fb[a] + (G61 * k1[a] + G62 * k2[a] + G63 * k3[a] + G64 * k4[a]
-                                 + G65 * k5[a]) / h
-            lu_solve(e, piv, k6, n)
+            _rodas_stages(t, h, ts, y, f0, ft, e, piv, prm, sig, ptr, ks, yst, fst, fb)
             n_rhs += 5
             finite = True
             for a in range(n):
-                ynew[a] = cont[a] + k6[a]
+                ynew[a] = yst[5, a] + ks[5, a]
                 if not math.isfinite(ynew[a]):
                     finite = False
-            err = _error_norm(k6, y, ynew, rtol, atol, n) if finite else math.inf
+            err = _error_norm(ks[5], y, ynew, rtol, atol, n) if finite else math.inf
             if err <= 1.0:
                 t_new = t_end if last else t + h
                 rhs(t_new, ts, ynew, prm, sig, ptr, f1)
                 n_rhs += 1
-                if npar > nfast:
-                    rhs(t + dts, ts, y, prm, sig, ptr, fbt)
-                    n_rhs += 1
-                if nfast > 0:
-                    # shared by the fast parameters: Jacobians and ∂f/∂θ at the stages
-                    for st in range(6):
-                        tc = t + (0.0 if st == 0 else C2 * h if st == 1 else C3 * h if st == 2
-                                  else C4 * h if st == 3 else h)
-                        for a in range(n):
-                            for b in range(n):
-                                jst[st, a, b] = jm[a, b] if st == 0 else 0.0
-                        if st > 0:
-                            jac(tc, ts, yst[st], prm, sig, ptr, jst[st])
-                        friction_param_rhs(tc, ts, yst[st], prm, sig, ptr, dwork, gst[st])
-                    for a in range(n):
-                        for b in range(n):
-                            jt[a, b] = 0.0
-                            jend[a, b] = 0.0
-                    jac(t + dts, ts, y, prm, sig, ptr, jt)
-                    jac(t_new, ts, ynew, prm, sig, ptr, jend)
-                    friction_param_rhs(t_new, ts, ynew, prm, sig, ptr, dwork, gend)
-                    n_jac += 7
-                for p_ in range(npar):
-                    pi = pidx[p_]
-                    kf = pfast[p_]
-                    flowp = _enters_flow_constants(pi)
-                    prm_p[pi] = prm[pi] + eps_p[p_]
-                    ep = eps_p[p_]
-                    # time derivative of the sensitivity right-hand side (mixed difference)
-                    if kf >= 0:
-                        # (J(t + dts) − J(t))·s/dts; friction terms have no explicit t
-                        for a in range(n):
-                            acc = 0.0
-                            for b in range(n):
-                                acc += (jt[a, b] - jm[a, b]) * sens[b, p_]
-                            sft[a] = acc / dts
-                    else:
-                        for a in range(n):
-                            dy[a] = sens[a, p_]
-                        _directional(t + dts, ts, y, dy, prm, prm_p, ep, fbt, sig, ptr, ybuf2,
-                                     fbuf, qt, n, flowp)
-                        for a in range(n):
-                            sft[a] = (qt[a] - sdot0[a, p_]) / dts
-                    for st in range(6):
-                        # stage sensitivity dY_st
-                        for a in range(n):
-                            if st == 0:
-                                dy[a] = sens[a, p_]
-                            elif st == 1:
-                                dy[a] = sens[a, p_] + A21 * dk[0, a]
-                            elif st == 2:
-                                dy[a] = sens[a, p_] + A31 * dk[0, a] + A32 * dk[1, a]
-                            elif st == 3:
-                                dy[a] = (sens[a, p_] + A41 * dk[0, a] + A42 * dk[1, a]
-                                         + A43 * dk[2, a])
-                            elif st == 4:
-                                dy[a] = (sens[a, p_] + A51 * dk[0, a] + A52 * dk[1, a]
-                                         + A53 * dk[2, a] + A54 * dk[3, a])
-                            else:
-                                dy[a] = (sens[a, p_] + A51 * dk[0, a] + A52 * dk[1, a]
-                                         + A53 * dk[2, a] + A54 * dk[3, a] + dk[4, a])
-                        if st == 0:
-                            for a in range(n):
-                                q[a] = sdot0[a, p_]
-                        elif kf >= 0:
-                            for a in range(n):
-                                acc = gst[st, kf, a]
-                                for b in range(n):
-                                    acc += jst[st, a, b] * dy[b]
-                                q[a] = acc
-                        else:
-                            tc = t + (C2 * h if st == 1 else C3 * h if st == 2 else
-                                      C4 * h if st == 3 else h)
-                            _directional(tc, ts, yst[st], dy, prm, prm_p, ep, fst[st], sig,
-                                         ptr, ybuf2, fbuf, q, n, flowp)
-                        for a in range(n):
-                            if st == 0:
-                                r = q[a] + h * D1 * sft[a]
-                            elif st == 1:
-                                r = q[a] + G21 / h * dk[0, a] + h * D2 * sft[a]
-                            elif st == 2:
-                                r = q[a] + (G31 * dk[0, a] + G32 * dk[1, a]) / h + h * D3 * sft[a]
-                            elif st == 3:
-                                r = (q[a] + (G41 * dk[0, a] + G42 * dk[1, a] + G43 * dk[2, a]) / h
-                                     + h * D4 * sft[a])
-                            elif st == 4:
-                                r = q[a] + (G51 * dk[0, a] + G52 * dk[1, a] + G53 * dk[2, a]
-                                            + G54 * dk[3, a]) / h
-                            else:
-                                r = q[a] + (G61 * dk[0, a] + G62 * dk[1, a] + G63 * dk[2, a]
-                                            + G64 * dk[3, a] + G65 * dk[4, a]) / h
-                            dk[st, a] = r
-                        lu_solve(e, piv, dk[st], n)
-                    for a in range(n):
-                        snew[a, p_] = dy[a] + dk[5, a]
-                    # derivative at the step end, for the dense output of the sensitivities
-                    if kf >= 0:
-                        for a in range(n):
-                            acc = gend[kf, a]
-                            for b in range(n):
-                                acc += jend[a, b] * snew[b, p_]
-                            sdot1[a, p_] = acc
-                    else:
-                        for a in range(n):
-                            dy[a] = snew[a, p_]
-                        _directional(t_new, ts, ynew, dy, prm, prm_p, ep, f1, sig, ptr, ybuf2,
-                                     fbuf, q, n, flowp)
-                        for a in range(n):
-                            sdot1[a, p_] = q[a]
-                        n_rhs += 7
-                    prm_p[pi] = prm[pi]
-                    if flowp:
-                        derive_flow_constants(prm_p)
-                j0 = j
-                j = _dense(t, t_new - t, y, f0, ynew, f1, t_out, j, ts, prm, sig, ptr, y_out,
-                           out, ybuf, obuf, t_end)
-                if npar > 0:
+                if sens is not None:
+                    n_jac += _sens_step(t, t_new, ts, y, ynew, jm, e, piv, yst, prm, sig,
+                                        ptr, sens, work, s)
+                if j < n_out and t_out[j] <= t_new:
                     hh = t_new - t
-                    for jj in range(j0, j):
-                        th = (t_out[jj] - t) / hh
-                        h00 = (1.0 + 2.0 * th) * (1.0 - th) ** 2
-                        h10 = th * (1.0 - th) ** 2
-                        h01 = th * th * (3.0 - 2.0 * th)
-                        h11 = th * th * (th - 1.0)
-                        for a in range(n):
-                            for p_ in range(npar):
-                                s_out[jj, a, p_] = (h00 * sens[a, p_] + h10 * hh * sdot0[a, p_]
-                                                    + h01 * snew[a, p_]
-                                                    + h11 * hh * sdot1[a, p_])
+                    if not o0_valid:
+                        _outputs_and_rate(t, ts, y, f0, hh, prm, sig, ptr, o0, do0, ybuf,
+                                          obuf)
+                    _outputs_and_rate(t_new, ts, ynew, f1, hh, prm, sig, ptr, o1, do1, ybuf,
+                                      obuf)
+                    j0 = j
+                    j = _dense(t, hh, y, f0, ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
+                               y_out, out, slopes)
+                    if sens is not None:
+                        _sens_dense(t, hh, t_out, j0, j, work, s, sens.s_out)
+                    for k in range(NOUT):
+                        o0[k] = o1[k]
+                        do0[k] = do1[k]
+                    o0_valid = True
+                else:
+                    o0_valid = False
                 for a in range(n):
                     y[a] = ynew[a]
                     f0[a] = f1[a]
-                    for p_ in range(npar):
-                        sens[a, p_] = snew[a, p_]
-                        sdot0[a, p_] = sdot1[a, p_]
-                    if nfast > 0:
-                        for b in range(n):
-                            jm[a, b] = jend[a, b]
-                jm_valid = nfast > 0
+                if sens is not None:
+                    _sens_accept(work, s, jm)
+                jm_valid = sens is not None
                 ft_valid = False
                 t = t_new
                 steps += 1
-                last_nonfinite = False
                 # predictive (Gustafsson) controller, as in Hairer & Wanner's RODAS
                 quot = min(5.0, max(1.0 / 6.0, err ** 0.25 / 0.9))
                 if h_acc > 0.0:
@@ -502,31 +408,191 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
             else:
                 rejected += 1
                 just_rejected = True
-                last_nonfinite = not finite
                 h *= 0.25 if not finite else max(0.2, 0.9 * err ** -0.25)
                 if h < 1e-14 * max(1.0, abs(t)):
-                    status = STATUS_NON_FINITE if last_nonfinite else STATUS_STEP_UNDERFLOW
+                    status = STATUS_NON_FINITE if not finite else STATUS_STEP_UNDERFLOW
                     break
         if status != STATUS_OK:
             break
     # points beyond the last breakpoint (if any) get the final state
     while status == STATUS_OK and j < n_out:
-        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, j, y_out, out, obuf)
-        for a in range(n):
-            for p_ in range(npar):
-                s_out[j, a, p_] = sens[a, p_]
+        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, j, y_out, out,
+                     obuf)
+        if sens is not None:
+            _sens_point(s, sens.s_out, j)
         j += 1
-    info[INFO_STATUS] = status
-    info[INFO_T] = t
-    info[INFO_STEPS] = steps
-    info[INFO_REJECTED] = rejected
-    info[INFO_RHS] = n_rhs
-    info[INFO_JAC] = n_jac
-    info[INFO_H] = h
+    _finish(info, status, t, steps, rejected, n_rhs, n_jac, h)
     return y
 
 
-# Dormand-Prince 5(4)
+# --------------------------------------------------------------------------- sensitivities
+#: What the caller gives: the parameters' directions in the vector (CSR: pointer, slot,
+#: value), the slots that occur, the initial sensitivity and the output array.
+SensInput = namedtuple("SensInput", ["w_ptr", "w_idx", "w_val", "needed", "s0", "s_out"])
+#: Work arrays: Jacobians and ∂f/∂prm at the stages (jst, gst), at t + dt (jt, gt) and
+#: at the step end (jend, gend), at the step start (g0); stage increments dk; the
+#: sensitivity at the step end (snew) and its derivative at both ends (sdot0, sdot1).
+SensWork = namedtuple("SensWork", ["jst", "gst", "jt", "gt", "jend", "gend", "g0", "dk", "q",
+                                   "sft", "snew", "sdot0", "sdot1"])
+
+
+@kernel()
+def _sens_work(npar):
+    n = NSTATE
+    return SensWork(np.zeros((6, n, n)), np.zeros((6, n, NPARAM)), np.zeros((n, n)),
+                    np.zeros((n, NPARAM)), np.zeros((n, n)), np.zeros((n, NPARAM)),
+                    np.zeros((n, NPARAM)), np.zeros((6, n)), np.empty(n), np.empty(n),
+                    np.empty((n, npar)), np.empty((n, npar)), np.empty((n, npar)))
+
+
+@kernel()
+def _gw(g, p, sens, a):
+    """Row a of ∂f/∂prm times parameter p's direction in the vector (sparse)."""
+    acc = 0.0
+    for k in range(sens.w_ptr[p], sens.w_ptr[p + 1]):
+        acc += g[a, sens.w_idx[k]] * sens.w_val[k]
+    return acc
+
+
+@kernel()
+def _sens_rate(jmat, g, s, p, sens, out):
+    """out = J·s[:, p] + ∂f/∂prm·w_p: the right-hand side of the sensitivity of p."""
+    for a in range(NSTATE):
+        acc = _gw(g, p, sens, a)
+        for b in range(NSTATE):
+            acc += jmat[a, b] * s[b, p]
+        out[a] = acc
+
+
+@kernel()
+def _sens_segment(t, ts, y, prm, sig, ptr, sens, work, s):
+    """At a segment start: J and ∂f/∂prm at (t, y), and the sensitivities' derivative."""
+    for a in range(NSTATE):
+        for b in range(NSTATE):
+            work.jend[a, b] = 0.0
+    jac(t, ts, y, prm, sig, ptr, work.jend)
+    param_jac(t, ts, y, prm, sig, ptr, work.g0, sens.needed)
+    for p in range(s.shape[1]):
+        _sens_rate(work.jend, work.g0, s, p, sens, work.q)
+        for a in range(NSTATE):
+            work.sdot0[a, p] = work.q[a]
+    return 1
+
+
+@kernel()
+def _sens_step(t, t_new, ts, y, ynew, jm, e, piv, yst, prm, sig, ptr, sens, work, s):
+    """Advance the sensitivities over the accepted step [t, t_new] with the stages and LU
+    factors of the state: the Rosenbrock method applied to ds/dt = J(y)·s + ∂f/∂θ with
+    the exact stage right-hand sides J(Y_i)·S_i + ∂f/∂θ(Y_i). Returns the Jacobian count."""
+    n = NSTATE
+    h = t_new - t
+    dts = max(1e-9, 1e-6 * h)
+    for st in range(6):
+        for a in range(n):
+            for b in range(n):
+                work.jst[st, a, b] = jm[a, b] if st == 0 else 0.0
+            for k in range(NPARAM):
+                work.gst[st, a, k] = work.g0[a, k]
+        if st > 0:
+            tc = t + STAGE_C[st] * h
+            jac(tc, ts, yst[st], prm, sig, ptr, work.jst[st])
+            param_jac(tc, ts, yst[st], prm, sig, ptr, work.gst[st], sens.needed)
+    for a in range(n):
+        for b in range(n):
+            work.jt[a, b] = 0.0
+            work.jend[a, b] = 0.0
+    jac(t + dts, ts, y, prm, sig, ptr, work.jt)
+    param_jac(t + dts, ts, y, prm, sig, ptr, work.gt, sens.needed)
+    jac(t_new, ts, ynew, prm, sig, ptr, work.jend)
+    param_jac(t_new, ts, ynew, prm, sig, ptr, work.gend, sens.needed)
+    dk = work.dk
+    for p in range(s.shape[1]):
+        # time derivative of the sensitivity right-hand side at fixed (y, s)
+        for a in range(n):
+            acc = _gw(work.gt, p, sens, a) - _gw(work.g0, p, sens, a)
+            for b in range(n):
+                acc += (work.jt[a, b] - jm[a, b]) * s[b, p]
+            work.sft[a] = acc / dts
+        for st in range(6):
+            for a in range(n):
+                acc = s[a, p]
+                for jj in range(st):
+                    acc += STAGE_A[st, jj] * dk[jj, a]
+                work.snew[a, p] = acc  # the stage sensitivity S_st (S_6 kept below)
+            for a in range(n):
+                acc = _gw(work.gst[st], p, sens, a) + h * STAGE_D[st] * work.sft[a]
+                for b in range(n):
+                    acc += work.jst[st, a, b] * work.snew[b, p]
+                for jj in range(st):
+                    acc += STAGE_G[st, jj] / h * dk[jj, a]
+                dk[st, a] = acc
+            lu_solve(e, piv, dk[st], n)
+        for a in range(n):
+            work.snew[a, p] += dk[5, a]
+        _sens_rate(work.jend, work.gend, work.snew, p, sens, work.q)
+        for a in range(n):
+            work.sdot1[a, p] = work.q[a]
+    return 7
+
+
+@kernel()
+def _sens_dense(t, h, t_out, j0, j1, work, s, s_out):
+    for jj in range(j0, j1):
+        th = (t_out[jj] - t) / h
+        for a in range(NSTATE):
+            for p in range(s.shape[1]):
+                s_out[jj, a, p] = _cubic(th, s[a, p], h * work.sdot0[a, p], work.snew[a, p],
+                                         h * work.sdot1[a, p])
+
+
+@kernel()
+def _sens_accept(work, s, jm):
+    """The step is taken: its end becomes the next step's start (s, ṡ, J, ∂f/∂prm)."""
+    for a in range(NSTATE):
+        for p in range(s.shape[1]):
+            s[a, p] = work.snew[a, p]
+            work.sdot0[a, p] = work.sdot1[a, p]
+        for b in range(NSTATE):
+            jm[a, b] = work.jend[a, b]
+        for k in range(NPARAM):
+            work.g0[a, k] = work.gend[a, k]
+
+
+@kernel()
+def _sens_point(s, s_out, j):
+    for a in range(NSTATE):
+        for p in range(s.shape[1]):
+            s_out[j, a, p] = s[a, p]
+
+
+@kernel()
+def output_sensitivities(t_out, ts_out, y_out, s_out, prm, sig, ptr, w_ptr, w_idx, w_val,
+                         res):
+    """d(output)/dθ = ∂out/∂y·s + ∂out/∂θ at each output time, by directional
+    differences (a parameter moves the vector along its column of W)."""
+    n_out = t_out.shape[0]
+    derive(prm)
+    base = np.empty(NOUT)
+    pert = np.empty(NOUT)
+    ybuf = np.empty(NSTATE)
+    for p in range(w_ptr.shape[0] - 1):
+        prm_p = prm.copy()
+        scale = 0.0
+        for k in range(w_ptr[p], w_ptr[p + 1]):
+            scale = max(scale, abs(prm[w_idx[k]]))
+        eps = 1e-7 * (scale if scale > 0.0 else 1.0)
+        for k in range(w_ptr[p], w_ptr[p + 1]):
+            prm_p[w_idx[k]] += eps * w_val[k]
+        for jj in range(n_out):
+            outputs(t_out[jj], ts_out[jj], y_out[jj], prm, sig, ptr, base)
+            for a in range(NSTATE):
+                ybuf[a] = y_out[jj, a] + eps * s_out[jj, a, p]
+            outputs(t_out[jj], ts_out[jj], ybuf, prm_p, sig, ptr, pert)
+            for k in range(NOUT):
+                res[jj, k, p] = (pert[k] - base[k]) / eps
+
+
+# --------------------------------------------------------------------------- Dormand-Prince
 B21 = 1.0 / 5.0
 B31, B32 = 3.0 / 40.0, 9.0 / 40.0
 B41, B42, B43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
@@ -536,27 +602,46 @@ B64, B65 = 49.0 / 176.0, -5103.0 / 18656.0
 W1, W3, W4, W5, W6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
 E1, E3, E4 = 71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0
 E5, E6, E7 = -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0
+DP_A = np.array([[0.0, 0.0, 0.0, 0.0, 0.0], [B21, 0.0, 0.0, 0.0, 0.0],
+                 [B31, B32, 0.0, 0.0, 0.0], [B41, B42, B43, 0.0, 0.0],
+                 [B51, B52, B53, B54, 0.0], [B61, B62, B63, B64, B65]])
+DP_C = np.array([0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0])
+DP_W = np.array([W1, 0.0, W3, W4, W5, W6])
+DP_E = np.array([E1, 0.0, E3, E4, E5, E6])
 
 
-@njit(cache=True, nogil=True)
+@kernel()
+def _dopri_stages(t, h, ts, y, prm, sig, ptr, ks, cont):
+    """Stages 2..6 of one Dormand-Prince step (ks[0] holds f(t, y))."""
+    n = NSTATE
+    for st in range(1, 6):
+        for a in range(n):
+            acc = 0.0
+            for jj in range(st):
+                acc += DP_A[st, jj] * ks[jj, a]
+            cont[a] = y[a] + h * acc
+        rhs(t + DP_C[st] * h, ts, cont, prm, sig, ptr, ks[st])
+
+
+@kernel(nogil=True)
 def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
-                     y_out, out, info):  # pragma: no cover - compiled
+                     y_out, out, info):
     """Explicit adaptive Dormand-Prince 5(4); same interface as ``integrate_rodas4``."""
     n = NSTATE
-    derive_flow_constants(prm)
+    derive(prm)
     y = y0.copy()
     ynew = np.empty(n)
     cont = np.empty(n)
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    k5 = np.empty(n)
-    k6 = np.empty(n)
-    k7 = np.empty(n)
+    ks = np.empty((6, n))
+    f1 = np.empty(n)
     err = np.empty(n)
     ybuf = np.empty(n)
     obuf = np.empty(NOUT)
+    o0 = np.empty(NOUT)
+    do0 = np.empty(NOUT)
+    o1 = np.empty(NOUT)
+    do1 = np.empty(NOUT)
+    slopes = np.empty((2, NSTATE + NOUT))
     for i in range(INFO_LENGTH):
         info[i] = 0.0
     n_out = t_out.shape[0]
@@ -566,9 +651,8 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
     n_rhs = 0
     j = 0
     t = tb[0]
-    ts0 = 0.5 * (tb[0] + tb[1])
     while j < n_out and t_out[j] <= t:
-        _write_point(t, ts0, y, prm, sig, ptr, j, y_out, out, obuf)
+        _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, j, y_out, out, obuf)
         j += 1
     status = STATUS_OK
     for seg in range(tb.shape[0] - 1):
@@ -577,8 +661,9 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
-        rhs(t, ts, y, prm, sig, ptr, k1)
+        rhs(t, ts, y, prm, sig, ptr, ks[0])
         n_rhs += 1
+        o0_valid = False
         while t < t_end:
             if steps >= max_steps:
                 status = STATUS_MAX_STEPS
@@ -588,45 +673,46 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
             if t + h >= t_end - 1e-3 * h:
                 h = t_end - t
                 last = True
-            for a in range(n):
-                cont[a] = y[a] + h * B21 * k1[a]
-            rhs(t + 0.2 * h, ts, cont, prm, sig, ptr, k2)
-            for a in range(n):
-                cont[a] = y[a] + h * (B31 * k1[a] + B32 * k2[a])
-            rhs(t + 0.3 * h, ts, cont, prm, sig, ptr, k3)
-            for a in range(n):
-                cont[a] = y[a] + h * (B41 * k1[a] + B42 * k2[a] + B43 * k3[a])
-            rhs(t + 0.8 * h, ts, cont, prm, sig, ptr, k4)
-            for a in range(n):
-                cont[a] = y[a] + h * (B51 * k1[a] + B52 * k2[a] + B53 * k3[a] + B54 * k4[a])
-            rhs(t + 8.0 / 9.0 * h, ts, cont, prm, sig, ptr, k5)
-            for a in range(n):
-                cont[a] = y[a] + h * (B61 * k1[a] + B62 * k2[a] + B63 * k3[a] + B64 * k4[a]
-                                      + B65 * k5[a])
-            rhs(t + h, ts, cont, prm, sig, ptr, k6)
+            _dopri_stages(t, h, ts, y, prm, sig, ptr, ks, cont)
             finite = True
             for a in range(n):
-                ynew[a] = y[a] + h * (W1 * k1[a] + W3 * k3[a] + W4 * k4[a] + W5 * k5[a]
-                                      + W6 * k6[a])
+                acc = 0.0
+                for st in range(6):
+                    acc += DP_W[st] * ks[st, a]
+                ynew[a] = y[a] + h * acc
                 if not math.isfinite(ynew[a]):
                     finite = False
             t_new = t_end if last else t + h
             if finite:
-                rhs(t_new, ts, ynew, prm, sig, ptr, k7)
+                rhs(t_new, ts, ynew, prm, sig, ptr, f1)
             n_rhs += 6
+            en = math.inf
             if finite:
                 for a in range(n):
-                    err[a] = h * (E1 * k1[a] + E3 * k3[a] + E4 * k4[a] + E5 * k5[a]
-                                  + E6 * k6[a] + E7 * k7[a])
+                    acc = E7 * f1[a]
+                    for st in range(6):
+                        acc += DP_E[st] * ks[st, a]
+                    err[a] = h * acc
                 en = _error_norm(err, y, ynew, rtol, atol, n)
-            else:
-                en = math.inf
             if en <= 1.0:
-                j = _dense(t, t_new - t, y, k1, ynew, k7, t_out, j, ts, prm, sig, ptr, y_out,
-                           out, ybuf, obuf, t_end)
+                if j < n_out and t_out[j] <= t_new:
+                    hh = t_new - t
+                    if not o0_valid:
+                        _outputs_and_rate(t, ts, y, ks[0], hh, prm, sig, ptr, o0, do0, ybuf,
+                                          obuf)
+                    _outputs_and_rate(t_new, ts, ynew, f1, hh, prm, sig, ptr, o1, do1, ybuf,
+                                      obuf)
+                    j = _dense(t, hh, y, ks[0], ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
+                               y_out, out, slopes)
+                    for k in range(NOUT):
+                        o0[k] = o1[k]
+                        do0[k] = do1[k]
+                    o0_valid = True
+                else:
+                    o0_valid = False
                 for a in range(n):
                     y[a] = ynew[a]
-                    k1[a] = k7[a]
+                    ks[0, a] = f1[a]
                 t = t_new
                 steps += 1
                 scale = 0.9 * en ** -0.2 if en > 0.0 else 5.0
@@ -640,43 +726,8 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
         if status != STATUS_OK:
             break
     while status == STATUS_OK and j < n_out:
-        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, j, y_out, out, obuf)
+        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, j, y_out, out,
+                     obuf)
         j += 1
-    info[INFO_STATUS] = status
-    info[INFO_T] = t
-    info[INFO_STEPS] = steps
-    info[INFO_REJECTED] = rejected
-    info[INFO_RHS] = n_rhs
-    info[INFO_JAC] = 0
-    info[INFO_H] = h
+    _finish(info, status, t, steps, rejected, n_rhs, 0, h)
     return y
-
-
-@njit(cache=True)
-def output_sensitivities(t_out, ts_out, y_out, s_out, prm, pidx, sig, ptr,
-                         res):  # pragma: no cover - compiled
-    """d(output)/dθ = ∂out/∂y·s + ∂out/∂θ at each output time, by directional differences."""
-    n_out = t_out.shape[0]
-    npar = pidx.shape[0]
-    derive_flow_constants(prm)
-    base = np.empty(NOUT)
-    pert = np.empty(NOUT)
-    ybuf = np.empty(NSTATE)
-    prm_p = prm.copy()
-    for jj in range(n_out):
-        outputs(t_out[jj], ts_out[jj], y_out[jj], prm, sig, ptr, base)
-        for p_ in range(npar):
-            pi = pidx[p_]
-            scale = abs(prm[pi])
-            ep = 1e-7 * (scale if scale > 0.0 else 1.0)
-            prm_p[pi] = prm[pi] + ep
-            if _enters_flow_constants(pi):
-                derive_flow_constants(prm_p)
-            for a in range(NSTATE):
-                ybuf[a] = y_out[jj, a] + ep * s_out[jj, a, p_]
-            outputs(t_out[jj], ts_out[jj], ybuf, prm_p, sig, ptr, pert)
-            for k in range(NOUT):
-                res[jj, k, p_] = (pert[k] - base[k]) / ep
-            prm_p[pi] = prm[pi]
-            if _enters_flow_constants(pi):
-                derive_flow_constants(prm_p)

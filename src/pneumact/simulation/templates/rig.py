@@ -1,83 +1,123 @@
-"""Kernel template: the friction test rig of Canudas de Wit et al. (1995).
+"""Model template: the friction test rig of Canudas de Wit et al. (1995).
 
 A mass on a surface with friction, driven by a prescribed force, velocity or position,
 or pulled through a spring whose free end follows the drive signal (stick-slip). The
-generator substitutes the friction law and the drive in the ``components`` block.
-
-State: [x, v, z].
+generator binds the friction law and the drive; states are [position, velocity,
+bristle], the parameter vector is [rig block | friction block].
 """
 
-from numba import njit
+from pneumact.models.rig import RG_M
+from pneumact.simulation.codegen import kernel
 
-from pneumact.models.layout import I_M
-
-# isort: off
-# --- components ---
-from pneumact.models.friction import lugre as friction_eval
-from pneumact.models.friction import lugre_dtheta as friction_dtheta
-from pneumact.models.rig import force_drive as drive_eval
-
-# --- end components ---
-# isort: on
-
+# --- bound by the generator --------------------------------------------------------------
+friction_eval = friction_params = friction_scales = None
+drive_eval = drive_params = drive_start = None
 NSTATE = 3
+NPARAM = 0
+RIG_LO = RIG_HI = FRICTION_LO = FRICTION_HI = 0
+S_POSITION = 0
+S_VELOCITY = 1
+S_BRISTLE = 2
+# ------------------------------------------------------------------------------------------
+
 OUTPUT_NAMES = ("friction", "drive", "drive_force", "bristle_rate")
 OUTPUT_UNITS = ("N", "1", "N", "m/s")
-NOUT = len(OUTPUT_NAMES)
-STATE_NAMES = ("position", "velocity", "bristle")
-STATE_UNITS = ("m", "m/s", "m")
+NOUT = 4
+O_FRICTION = 0
+O_DRIVE = 1
+O_DRIVE_FORCE = 2
+O_BRISTLE_RATE = 3
 
 
-@njit(cache=True)
-def rhs(t, ts, y, prm, sig, ptr, dydt):  # pragma: no cover - compiled
-    kin, v_kin, a_kin, f_drive, _, _, _, _ = drive_eval(t, ts, y, prm, sig, ptr)
-    v = v_kin if kin else y[1]
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[2], prm)
-    dydt[0] = v
-    dydt[1] = a_kin if kin else (f_drive - f_fric) / drive_mass(prm)
-    dydt[2] = zdot
+@kernel()
+def derive(prm):
+    """No derived quantities on the rig."""
 
 
-@njit(cache=True)
-def jac(t, ts, y, prm, sig, ptr, out):  # pragma: no cover - compiled
-    kin, v_kin, _, _, dfd_dx, dfd_dv, _, _ = drive_eval(t, ts, y, prm, sig, ptr)
-    v = v_kin if kin else y[1]
-    _, _, dzd_dv, dzd_dz, df_dv, df_dz = friction_eval(v, y[2], prm)
-    out[2, 2] = dzd_dz
+@kernel()
+def _drive(t, ts, y, prm, sig, ptr):
+    return drive_eval(t, ts, y[S_POSITION], y[S_VELOCITY], prm, RIG_LO, sig, ptr)
+
+
+@kernel()
+def rhs(t, ts, y, prm, sig, ptr, dydt):
+    kin, v_kin, a_kin, f_drive, _, _, _ = _drive(t, ts, y, prm, sig, ptr)
+    v = v_kin if kin else y[S_VELOCITY]
+    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    dydt[S_POSITION] = v
+    dydt[S_VELOCITY] = a_kin if kin else (f_drive - f_fric) / prm[RIG_LO + RG_M]
+    dydt[S_BRISTLE] = zdot
+
+
+@kernel()
+def jac(t, ts, y, prm, sig, ptr, out):
+    """Analytic Jacobian ∂f/∂y (``out`` is zeroed by the caller)."""
+    kin, v_kin, _, _, dfd_dx, dfd_dv, _ = _drive(t, ts, y, prm, sig, ptr)
+    v = v_kin if kin else y[S_VELOCITY]
+    _, _, dzd_dv, dzd_dz, df_dv, df_dz = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    out[S_BRISTLE, S_BRISTLE] = dzd_dz
     if kin:
         return
-    m = drive_mass(prm)
-    out[0, 1] = 1.0
-    out[1, 0] = dfd_dx / m
-    out[1, 1] = (dfd_dv - df_dv) / m
-    out[1, 2] = -df_dz / m
-    out[2, 1] = dzd_dv
+    m = prm[RIG_LO + RG_M]
+    out[S_POSITION, S_VELOCITY] = 1.0
+    out[S_VELOCITY, S_POSITION] = dfd_dx / m
+    out[S_VELOCITY, S_VELOCITY] = (dfd_dv - df_dv) / m
+    out[S_VELOCITY, S_BRISTLE] = -df_dz / m
+    out[S_BRISTLE, S_VELOCITY] = dzd_dv
 
 
-@njit(cache=True)
-def friction_param_rhs(t, ts, y, prm, sig, ptr, d, g):  # pragma: no cover - compiled
-    """g[k] = ∂f/∂θ_k for the friction parameters θ = FRICTION_SENS (d: work array)."""
-    kin, v_kin, _, _, _, _, _, _ = drive_eval(t, ts, y, prm, sig, ptr)
-    v = v_kin if kin else y[1]
-    friction_dtheta(v, y[2], prm, d)
-    m = drive_mass(prm)
-    for k in range(d.shape[0]):
-        g[k, 0] = 0.0
-        g[k, 1] = 0.0 if kin else -d[k, 1] / m
-        g[k, 2] = d[k, 0]
+@kernel()
+def param_jac(t, ts, y, prm, sig, ptr, g, needed):
+    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × NPARAM)."""
+    for a in range(NSTATE):
+        for k in range(NPARAM):
+            g[a, k] = 0.0
+    kin, v_kin, _, f_drive, _, _, _ = _drive(t, ts, y, prm, sig, ptr)
+    v = v_kin if kin else y[S_VELOCITY]
+    friction_params(v, y[S_BRISTLE], prm, FRICTION_LO, g, S_BRISTLE, S_VELOCITY)
+    if kin:  # the velocity is prescribed: nothing acts on its row
+        for k in range(NPARAM):
+            g[S_VELOCITY, k] = 0.0
+        return
+    m = prm[RIG_LO + RG_M]
+    for k in range(FRICTION_LO, FRICTION_HI):
+        g[S_VELOCITY, k] = -g[S_VELOCITY, k] / m
+    drive_params(t, ts, y[S_POSITION], y[S_VELOCITY], prm, RIG_LO, sig, ptr, g, S_VELOCITY)
+    for k in range(RIG_LO, RIG_HI):
+        g[S_VELOCITY, k] = g[S_VELOCITY, k] / m
+    f_fric = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)[1]
+    g[S_VELOCITY, RIG_LO + RG_M] = -(f_drive - f_fric) / (m * m)
 
 
-@njit(cache=True)
-def outputs(t, ts, y, prm, sig, ptr, out):  # pragma: no cover - compiled
-    kin, v_kin, _, f_drive, _, _, drive, _ = drive_eval(t, ts, y, prm, sig, ptr)
-    v = v_kin if kin else y[1]
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[2], prm)
-    out[0] = f_fric
-    out[1] = drive
-    out[2] = f_fric if kin else f_drive
-    out[3] = zdot
+@kernel()
+def outputs(t, ts, y, prm, sig, ptr, out):
+    """Derived signals at one instant, in the order of OUTPUT_NAMES."""
+    kin, v_kin, _, f_drive, _, _, drive = _drive(t, ts, y, prm, sig, ptr)
+    v = v_kin if kin else y[S_VELOCITY]
+    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    out[O_FRICTION] = f_fric
+    out[O_DRIVE] = drive
+    out[O_DRIVE_FORCE] = f_fric if kin else f_drive
+    out[O_BRISTLE_RATE] = zdot
 
 
-@njit(cache=True, inline="always")
-def drive_mass(prm):  # pragma: no cover - compiled
-    return prm[I_M]
+@kernel()
+def initial_state(t, ts, prm, sig, ptr, y0):
+    """At rest at the origin, or moving with a kinematic drive's initial value."""
+    for i in range(NSTATE):
+        y0[i] = 0.0
+    y0[S_POSITION], y0[S_VELOCITY] = drive_start(t, ts, sig, ptr)
+
+
+@kernel()
+def state_scales(prm, out):
+    """Typical magnitude of x, v, z: the presliding range Fs/σ0 and its velocity
+    Fs/√(σ0·m) (static maps: the regularisation velocity), for default atol."""
+    z_scale, stiffness, v_reg = friction_scales(prm, FRICTION_LO)
+    if stiffness > 0.0:
+        out[S_POSITION] = z_scale
+        out[S_VELOCITY] = z_scale * (stiffness / prm[RIG_LO + RG_M]) ** 0.5
+    else:
+        out[S_VELOCITY] = v_reg
+        out[S_POSITION] = 1e-2 * v_reg
+    out[S_BRISTLE] = z_scale

@@ -1,0 +1,436 @@
+"""Scalar features of a pressure–position hysteresis record (SI in, SI out).
+
+These numbers summarise one simulated or measured run: the stroke, the width of the
+hysteresis loop in pressure and in position, the loop area and the pressure at which
+motion starts, and the position error against a reference. They are compiled (numba),
+so the batch engine computes them inside its compiled loop, with no Python lock per
+run, and ``Result.summary()`` runs the very same code.
+
+Branches: the record is cut at its pressure turning points (a reversal counts once the
+pressure has come back by more than 10 % of its range, so regulator overshoot or noise
+is ignored). A branch is *complete* when it spans at least half the pressure range; the
+loop features use the last pair of adjacent complete branches (one falling, one rising).
+A record without such a pair (a step response, say) gives NaN loop features.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from pneumact.errors import DataError
+
+__all__ = [
+    "FEATURES",
+    "FEATURE_UNITS",
+    "breakaway_pressure",
+    "hysteresis_summary",
+    "loop_area",
+    "loop_width_position",
+    "loop_width_pressure",
+    "max_error",
+    "rms_error",
+    "stroke",
+]
+
+#: Every feature, in the order of the compiled ``all_features`` vector, with its SI unit.
+FEATURE_UNITS: dict[str, str] = {
+    "final_position": "m",
+    "max_velocity": "m/s",
+    "stroke": "m",
+    "loop_width_pressure": "Pa",
+    "loop_width_position": "m",
+    "loop_area": "Pa*m",
+    "breakaway_pressure": "Pa",
+    "rms_error": "m",
+    "max_error": "m",
+}
+FEATURES = tuple(FEATURE_UNITS)
+F_FINAL_POSITION = 0
+F_MAX_VELOCITY = 1
+F_STROKE = 2
+F_LOOP_WIDTH_PRESSURE = 3
+F_LOOP_WIDTH_POSITION = 4
+F_LOOP_AREA = 5
+F_BREAKAWAY_PRESSURE = 6
+F_RMS_ERROR = 7
+F_MAX_ERROR = 8
+N_FEATURES = 9
+#: Features that need a pressure record, and those that need a reference record.
+PRESSURE_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
+                     "breakaway_pressure")
+REFERENCE_FEATURES = ("rms_error", "max_error")
+
+#: Default motion threshold of ``breakaway_pressure``: this fraction of the stroke ...
+BREAKAWAY_STROKE_FRACTION = 0.003  # 0.3 % of the stroke
+#: ... but at least this much [m], so presliding (tens of µm) is not counted as motion.
+BREAKAWAY_MIN_THRESHOLD = 50e-6  # [m] above LuGre presliding (Fs/σ0 ≈ 32 µm for vgt-paper)
+#: A pressure reversal smaller than this fraction of the range is not a turning point.
+TURN_TOLERANCE = 0.10
+#: A branch spanning at least this fraction of the pressure range is complete.
+COMPLETE_BRANCH_FRACTION = 0.5
+#: Grids of the loop widths: fractions of the stroke / pressure range, and grid size.
+POSITION_GRID = (0.2, 0.8)
+PRESSURE_GRID = (0.2, 0.8)
+GRID_POINTS = 41
+
+
+# --------------------------------------------------------------------------- compiled
+@njit(cache=True)
+def _span(x):  # pragma: no cover - compiled
+    """(min, max) of x."""
+    lo = x[0]
+    hi = x[0]
+    for value in x:
+        lo = min(lo, value)
+        hi = max(hi, value)
+    return lo, hi
+
+
+@njit(cache=True)
+def _stroke(x):  # pragma: no cover - compiled
+    lo, hi = _span(x)
+    return hi - lo
+
+
+@njit(cache=True)
+def _breakaway(p, x, threshold):  # pragma: no cover - compiled
+    """Pressure at the first sample where |x − x[0]| exceeds ``threshold`` (linear
+    interpolation with the sample before); NaN if it never does."""
+    if threshold <= 0.0:
+        threshold = max(BREAKAWAY_STROKE_FRACTION * _stroke(x), BREAKAWAY_MIN_THRESHOLD)
+    for i in range(1, x.shape[0]):
+        after = abs(x[i] - x[0])
+        if after > threshold:
+            before = abs(x[i - 1] - x[0])
+            fraction = (threshold - before) / (after - before)
+            return p[i - 1] + fraction * (p[i] - p[i - 1])
+    return math.nan
+
+
+@njit(cache=True)
+def _turning_points(p):  # pragma: no cover - compiled
+    """Indices [0, turns..., n-1] cutting ``p`` into monotone-trend branches."""
+    n = p.shape[0]
+    turns = np.empty(n, dtype=np.int64)
+    turns[0] = 0
+    count = 1
+    lo, hi = _span(p)
+    tolerance = TURN_TOLERANCE * (hi - lo)
+    trend = 0
+    extreme = 0
+    last_dir = 0.0
+    last_step = -1
+    for k in range(n):
+        # the candidates are the local extrema (the sample after the last step of each
+        # monotone run, flat steps skipped) and finally n-1
+        if k < n - 1:
+            step = p[k + 1] - p[k]
+            if step == 0.0:
+                continue
+            direction = 1.0 if step > 0.0 else -1.0
+            is_candidate = last_dir != 0.0 and direction != last_dir
+            i = last_step + 1
+            last_dir = direction
+            last_step = k
+            if not is_candidate:
+                continue
+        else:
+            i = n - 1
+        value = p[i]
+        if trend == 0:
+            if abs(value - p[0]) > tolerance:
+                trend = 1 if value > p[0] else -1
+                extreme = i
+        elif trend * (value - p[extreme]) >= 0.0:
+            extreme = i
+        elif abs(value - p[extreme]) > tolerance:
+            turns[count] = extreme
+            count += 1
+            trend = -trend
+            extreme = i
+    if turns[count - 1] != n - 1:
+        turns[count] = n - 1
+        count += 1
+    return turns[:count]
+
+
+@njit(cache=True)
+def _last_loop(p):  # pragma: no cover - compiled
+    """(falling start, falling stop, rising start, rising stop) of the last complete pair
+    of branches, stops exclusive; all -1 if there is none."""
+    lo, hi = _span(p)
+    span = hi - lo
+    turns = _turning_points(p)
+    if span == 0.0 or turns.shape[0] < 3:
+        return -1, -1, -1, -1
+    found = -1
+    for j in range(turns.shape[0] - 2):
+        c0 = p[turns[j + 1]] - p[turns[j]]
+        c1 = p[turns[j + 2]] - p[turns[j + 1]]
+        limit = COMPLETE_BRANCH_FRACTION * span
+        if abs(c0) >= limit and abs(c1) >= limit and c0 * c1 < 0.0:
+            found = j
+    if found < 0:
+        return -1, -1, -1, -1
+    a0, a1 = turns[found], turns[found + 1] + 1
+    b0, b1 = turns[found + 1], turns[found + 2] + 1
+    if p[turns[found + 1]] - p[turns[found]] < 0.0:
+        return a0, a1, b0, b1
+    return b0, b1, a0, a1
+
+
+@njit(cache=True)
+def _first_at_least(sorted_values, level):  # pragma: no cover - compiled
+    """First index i with sorted_values[i] >= level (len if none): a bisection."""
+    lo, hi = 0, sorted_values.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if sorted_values[mid] < level:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def _first_crossing(level, along, read, running):  # pragma: no cover - compiled
+    """Value of ``read`` where ``along`` first reaches ``level`` (linear interpolation),
+    NaN if never. ``running``: running max (level above the start) or −running min."""
+    n = along.shape[0]
+    if level >= along[0]:
+        index = _first_at_least(running[0], level)
+    else:
+        index = _first_at_least(running[1], -level)
+    if index >= n:
+        return math.nan
+    previous = max(index - 1, 0)
+    a0, a1 = along[previous], along[index]
+    gap = a1 - a0
+    fraction = (level - a0) / gap if gap != 0.0 else 1.0
+    return read[previous] + fraction * (read[index] - read[previous])
+
+
+@njit(cache=True)
+def _running(along):  # pragma: no cover - compiled
+    """(running maximum, −running minimum) of ``along``, both non-decreasing."""
+    n = along.shape[0]
+    out = np.empty((2, n))
+    hi = along[0]
+    lo = along[0]
+    for i in range(n):
+        hi = max(hi, along[i])
+        lo = min(lo, along[i])
+        out[0, i] = hi
+        out[1, i] = -lo
+    return out
+
+
+@njit(cache=True)
+def _mean_gap(levels, along_a, read_a, along_b, read_b):  # pragma: no cover - compiled
+    """Mean |read_a − read_b| where each branch first reaches each of GRID_POINTS levels
+    evenly spaced over ``levels`` = (first, last) (NaNs skipped)."""
+    run_a = _running(along_a)
+    run_b = _running(along_b)
+    total = 0.0
+    count = 0
+    for i in range(GRID_POINTS):
+        level = levels[0] + (levels[1] - levels[0]) * i / (GRID_POINTS - 1)
+        gap = (_first_crossing(level, along_a, read_a, run_a)
+               - _first_crossing(level, along_b, read_b, run_b))
+        if math.isfinite(gap):
+            total += abs(gap)
+            count += 1
+    return total / count if count else math.nan
+
+
+@njit(cache=True)
+def _loop_width_pressure(p, x):  # pragma: no cover - compiled
+    f0, f1, r0, r1 = _last_loop(p)
+    if f0 < 0:
+        return math.nan
+    fa, fb = _span(x[f0:f1])
+    ra, rb = _span(x[r0:r1])
+    lo, hi = min(fa, ra), max(fb, rb)
+    if hi <= lo:
+        return 0.0
+    levels = (lo + (hi - lo) * POSITION_GRID[0], lo + (hi - lo) * POSITION_GRID[1])
+    return _mean_gap(levels, x[f0:f1], p[f0:f1], x[r0:r1], p[r0:r1])
+
+
+@njit(cache=True)
+def _loop_width_position(p, x):  # pragma: no cover - compiled
+    f0, f1, r0, r1 = _last_loop(p)
+    if f0 < 0:
+        return math.nan
+    fa, fb = _span(p[f0:f1])
+    ra, rb = _span(p[r0:r1])
+    lo, hi = max(fa, ra), min(fb, rb)
+    if hi <= lo:
+        return math.nan
+    levels = (lo + (hi - lo) * PRESSURE_GRID[0], lo + (hi - lo) * PRESSURE_GRID[1])
+    return _mean_gap(levels, p[f0:f1], x[f0:f1], p[r0:r1], x[r0:r1])
+
+
+@njit(cache=True)
+def _loop_area(p, x):  # pragma: no cover - compiled
+    """|∮ p dx| of the last complete loop, closed by a straight segment (shoelace)."""
+    f0, f1, r0, r1 = _last_loop(p)
+    if f0 < 0:
+        return math.nan
+    start = min(f0, r0)
+    stop = max(f1, r1)
+    total = 0.0
+    for i in range(start, stop):
+        k = i + 1 if i + 1 < stop else start
+        total += p[i] * x[k] - p[k] * x[i]
+    return 0.5 * abs(total)
+
+
+@njit(cache=True)
+def _position_errors(t, x, ref_t, ref_x):  # pragma: no cover - compiled
+    """(rms, max) of x − reference over the overlap of the two time spans; NaN if none.
+
+    Both time axes increase, so the reference is interpolated by one merge walk."""
+    total = 0.0
+    worst = 0.0
+    count = 0
+    k = 0
+    last = ref_t.shape[0] - 1
+    for i in range(t.shape[0]):
+        if not ref_t[0] <= t[i] <= ref_t[last]:
+            continue
+        while k < last - 1 and ref_t[k + 1] < t[i]:
+            k += 1
+        fraction = (t[i] - ref_t[k]) / (ref_t[k + 1] - ref_t[k]) if last > 0 else 0.0
+        err = x[i] - (ref_x[k] + fraction * (ref_x[min(k + 1, last)] - ref_x[k]))
+        total += err * err
+        worst = max(worst, abs(err))
+        count += 1
+    if count == 0:
+        return math.nan, math.nan
+    return math.sqrt(total / count), worst
+
+
+@njit(cache=True)
+def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
+    """Every feature of FEATURES into ``out`` (NaN where one does not apply)."""
+    for k in range(N_FEATURES):
+        out[k] = math.nan
+    out[F_FINAL_POSITION] = x[-1]
+    v_lo, v_hi = _span(v)
+    out[F_MAX_VELOCITY] = max(-v_lo, v_hi)
+    out[F_STROKE] = _stroke(x)
+    if has_pressure:
+        out[F_LOOP_WIDTH_PRESSURE] = _loop_width_pressure(p, x)
+        out[F_LOOP_WIDTH_POSITION] = _loop_width_position(p, x)
+        out[F_LOOP_AREA] = _loop_area(p, x)
+        out[F_BREAKAWAY_PRESSURE] = _breakaway(p, x, 0.0)
+    if has_reference:
+        out[F_RMS_ERROR], out[F_MAX_ERROR] = _position_errors(t, x, ref_t, ref_x)
+
+
+# --------------------------------------------------------------------------- checks
+def _as_signal(values, name: str) -> np.ndarray:
+    array = np.ascontiguousarray(values, dtype=float)
+    if array.ndim != 1:
+        raise DataError(f"{name}: must be a 1-D array, got shape {array.shape}")
+    if array.size < 3:
+        raise DataError(f"{name}: has {array.size} samples; a feature needs at least 3")
+    if not np.all(np.isfinite(array)):
+        first = int(np.flatnonzero(~np.isfinite(array))[0])
+        raise DataError(f"{name}: sample {first} is {array[first]}; every sample must be a "
+                        "finite number")
+    return array
+
+
+def _signals(**named) -> list[np.ndarray]:
+    """Check several same-length signals; the error names both lengths."""
+    arrays = [_as_signal(values, name) for name, values in named.items()]
+    names = list(named)
+    for name, array in zip(names[1:], arrays[1:], strict=True):
+        if array.size != arrays[0].size:
+            raise DataError(f"{name} has {array.size} samples but {names[0]} has "
+                            f"{arrays[0].size}; the signals of one record must have the "
+                            "same length")
+    return arrays
+
+
+def _reference(ref_time, ref_position) -> tuple[np.ndarray, np.ndarray]:
+    rt, rx = _signals(ref_time=ref_time, ref_position=ref_position)
+    if np.any(np.diff(rt) <= 0):
+        raise DataError("ref_time: must be strictly increasing to interpolate the reference")
+    return rt, rx
+
+
+# --------------------------------------------------------------------------- public API
+def stroke(position) -> float:
+    """Travel of the record: max − min of the position [m]."""
+    (x,) = _signals(position=position)
+    return float(_stroke(x))
+
+
+def breakaway_pressure(time, pressure, position, threshold: float | None = None) -> float:
+    """Pressure [Pa] at the first instant the position leaves its initial value by more
+    than ``threshold`` [m] (default: 0.3 % of the stroke, at least 50 µm, so presliding is
+    not motion), interpolated linearly between samples; NaN if it never moves."""
+    _, p, x = _signals(time=time, pressure=pressure, position=position)
+    if threshold is not None and not (np.isfinite(threshold) and threshold > 0):
+        raise DataError(f"threshold = {threshold} m; must be a finite length > 0")
+    return float(_breakaway(p, x, 0.0 if threshold is None else float(threshold)))
+
+
+def loop_width_pressure(pressure, position) -> float:
+    """Mean pressure gap [Pa] between the falling and rising branch at equal positions
+    (grid over 20–80 % of the stroke; each branch read where it first reaches the
+    position). For Coulomb friction Fc on area A this is 2·Fc/A."""
+    p, x = _signals(pressure=pressure, position=position)
+    return float(_loop_width_pressure(p, x))
+
+
+def loop_width_position(pressure, position) -> float:
+    """Mean position gap [m] between the falling and rising branch at equal pressures
+    (grid over the middle 60 % of the pressure range). For Coulomb friction Fc and
+    spring stiffness k this is 2·Fc/k."""
+    p, x = _signals(pressure=pressure, position=position)
+    return float(_loop_width_position(p, x))
+
+
+def loop_area(pressure, position) -> float:
+    """|∮ p dx| [Pa·m] of the last complete loop (shoelace formula, closed by a straight
+    segment from its end back to its start): the friction work per cycle divided by A."""
+    p, x = _signals(pressure=pressure, position=position)
+    return float(_loop_area(p, x))
+
+
+def _errors(time, position, ref_time, ref_position) -> tuple[float, float]:
+    t, x = _signals(time=time, position=position)
+    rt, rx = _reference(ref_time, ref_position)
+    if t[-1] < rt[0] or t[0] > rt[-1]:
+        raise DataError(f"time spans {t[0]:g}..{t[-1]:g} s but the reference spans "
+                        f"{rt[0]:g}..{rt[-1]:g} s; they must overlap")
+    rms, worst = _position_errors(t, x, rt, rx)
+    return float(rms), float(worst)
+
+
+def rms_error(time, position, ref_time, ref_position) -> float:
+    """Root-mean-square position error [m] against a reference interpolated on ``time``
+    (only where the two records overlap in time)."""
+    return _errors(time, position, ref_time, ref_position)[0]
+
+
+def max_error(time, position, ref_time, ref_position) -> float:
+    """Largest absolute position error [m] against a reference interpolated on ``time``."""
+    return _errors(time, position, ref_time, ref_position)[1]
+
+
+def hysteresis_summary(time, pressure, position) -> dict[str, float]:
+    """The hysteresis features of one record, SI (units in ``FEATURE_UNITS``)."""
+    t, p, x = _signals(time=time, pressure=pressure, position=position)
+    out = np.empty(N_FEATURES)
+    empty = np.zeros(1)
+    all_features(t, x, np.zeros_like(x), p, True, empty, empty, False, out)
+    names = ("stroke", *PRESSURE_FEATURES)
+    return {name: float(out[FEATURES.index(name)]) for name in names}

@@ -1,0 +1,98 @@
+"""What a component declares: its parameter block, its states and its compiled functions.
+
+A component (a friction law, a valve, the actuator mechanics, a rig drive) reads its
+parameters from its own *block* of the kernel's parameter vector, through named local
+indices defined next to its equations (``SIGMA0 = LUGRE_BLOCK.index("sigma0")``). A
+block lists, in order:
+
+- parameters, read from the parameter set by name;
+- settings, fixed by the strategy object itself (e.g. the chamber law's polytropic
+  index rule), not by the parameter set;
+- derived quantities, computed from the block by the component's compiled ``derive``
+  whenever a value changes (orifice-flow constants, the polytropic index).
+
+A model assembly (``pneumact.simulation.assembly``) places the blocks of a model's
+components one after another and binds their compiled functions into one kernel.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+PARAMETER = "parameter"
+SETTING = "setting"
+DERIVED = "derived"
+
+
+@dataclass(frozen=True)
+class Block:
+    """An ordered list of (name, kind) entries: a component's slice of the vector."""
+
+    entries: tuple[tuple[str, str], ...] = ()
+
+    @classmethod
+    def of(cls, *parameters: str, settings: tuple[str, ...] = (),
+           derived: tuple[str, ...] = ()) -> Block:
+        return cls(tuple((n, PARAMETER) for n in parameters)
+                   + tuple((n, SETTING) for n in settings)
+                   + tuple((n, DERIVED) for n in derived))
+
+    def __add__(self, other: Block) -> Block:
+        names = [n for n, _ in self.entries]
+        clash = [n for n, _ in other.entries if n in names]
+        if clash:
+            raise ValueError(f"block entries {clash} appear twice")
+        return Block(self.entries + other.entries)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(n for n, _ in self.entries)
+
+    def of_kind(self, kind: str) -> tuple[str, ...]:
+        return tuple(n for n, k in self.entries if k == kind)
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        return self.of_kind(PARAMETER)
+
+    def index(self, name: str) -> int:
+        """Local index of ``name`` in the block (the constant its functions use)."""
+        return self.names.index(name)
+
+
+@dataclass(frozen=True)
+class StateSpec:
+    """A state of a component: name, SI unit, and how output times interpolate it.
+
+    ``monotone``: between two steps the value stays between its values at the step
+    ends (shape-preserving cubic), for states with a bound the model guarantees, such as
+    the bristle deflection |sigma0*z| <= Fs; other states use the plain cubic Hermite.
+    """
+
+    name: str
+    unit: str
+    monotone: bool = False
+
+
+@dataclass(frozen=True)
+class Part:
+    """One component as the assembly sees it.
+
+    ``functions`` maps the name the model template calls (``friction_eval``) to
+    ``"module:function"``; ``constants`` likewise for compile-time constants.
+    ``settings`` gives the values of the block's setting entries; ``label`` describes the
+    component for people, ``key`` names its compiled variant in the kernel's file name.
+    """
+
+    role: str
+    block: Block
+    states: tuple[StateSpec, ...] = ()
+    functions: Mapping[str, str] = field(default_factory=dict)
+    constants: Mapping[str, str] = field(default_factory=dict)
+    settings: Mapping[str, float] = field(default_factory=dict)
+    label: str = ""
+    key: str = ""

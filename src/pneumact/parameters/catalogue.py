@@ -1,0 +1,148 @@
+"""The parameter catalogue: every parameter a component declares, with unit and range.
+
+Components declare the parameters they read, next to the equations that read them
+(``models/friction.py`` declares sigma0 … vs, ``models/valves.py`` the orifice areas,
+and so on), with ``declare(...)``; relations between parameters (Fs >= Fc, p_res <
+p_atm) are declared the same way with ``declare_relation(...)``. The catalogue is only a
+lookup of those declarations (name -> unit, meaning, default, range): it fixes no vector
+layout. A model assembly lays out the parameters its components declare
+(``pneumact.simulation.assembly``).
+
+``catalogue()`` imports the model modules on first use so that every declaration is
+made before a name is looked up.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+__all__ = [
+    "ParameterSpec",
+    "Relation",
+    "catalogue",
+    "declare",
+    "declare_relation",
+    "relations",
+]
+
+#: Modules whose import declares parameters, in the order the catalogue lists them.
+DECLARING_MODULES = (
+    "pneumact.models.mechanics",
+    "pneumact.models.friction",
+    "pneumact.models.pneumatics",
+    "pneumact.models.valves",
+    "pneumact.models.rig",
+)
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One parameter: SI unit (a pint expression), meaning, default and allowed range."""
+
+    name: str
+    unit: str
+    description: str
+    default: float | None = None
+    minimum: float | None = None  # inclusive lower bound, exclusive if strict_minimum
+    strict_minimum: bool = False
+    maximum: float | None = None  # inclusive upper bound
+    group: str = "misc"
+
+    def allowed(self) -> str:
+        """'must be > 0', 'must be in (0.53, 1]', or '' when any finite value will do."""
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and hi is not None:
+            return f"must be in {'(' if self.strict_minimum else '['}{lo:g}, {hi:g}]"
+        if lo is not None:
+            return f"must be {'>' if self.strict_minimum else '>='} {lo:g}"
+        if hi is not None:
+            return f"must be <= {hi:g}"
+        return ""
+
+    def in_range(self, values):
+        """Elementwise: whether each value is finite and inside the allowed range."""
+        values = np.asarray(values, dtype=float)
+        ok = np.isfinite(values)
+        if self.minimum is not None:
+            ok &= values > self.minimum if self.strict_minimum else values >= self.minimum
+        if self.maximum is not None:
+            ok &= values <= self.maximum
+        return ok
+
+
+@dataclass(frozen=True)
+class Relation:
+    """A condition between parameters that every parameter set must meet.
+
+    ``holds(*values)`` works elementwise on arrays (the batch engine checks whole tables
+    at once); ``explain(*values)`` says what is wrong for one set of scalar values.
+    """
+
+    names: tuple[str, ...]
+    holds: Callable[..., object]
+    explain: Callable[..., str]
+
+
+_SPECS: dict[str, ParameterSpec] = {}
+_RELATIONS: list[Relation] = []
+_LOCK = threading.Lock()
+_LOADED = False
+
+
+def declare(*specs: ParameterSpec) -> tuple[str, ...]:
+    """Register parameters (a component module calls this at import); returns the names.
+
+    Declaring a name twice is allowed only with the identical spec (two components
+    sharing one physical parameter, such as the diaphragm area).
+    """
+    for spec in specs:
+        old = _SPECS.get(spec.name)
+        if old is not None and old != spec:
+            raise RuntimeError(f"parameter {spec.name!r} declared twice with different specs:"
+                               f" {old} and {spec}")
+        _SPECS[spec.name] = spec
+    return tuple(s.name for s in specs)
+
+
+def declare_relation(names: tuple[str, ...], holds: Callable[..., object],
+                     explain: Callable[..., str]) -> None:
+    """Register a relation between parameters (checked when all of them have a value)."""
+    relation = Relation(tuple(names), holds, explain)
+    if relation not in _RELATIONS:
+        _RELATIONS.append(relation)
+
+
+def _load() -> None:
+    global _LOADED
+    if _LOADED:
+        return
+    with _LOCK:
+        if not _LOADED:
+            for module in DECLARING_MODULES:
+                importlib.import_module(module)
+            _LOADED = True
+
+
+def catalogue() -> Mapping[str, ParameterSpec]:
+    """Every declared parameter, name -> spec, in declaration order (read-only)."""
+    _load()
+    return MappingProxyType(_SPECS)
+
+
+def relations() -> tuple[Relation, ...]:
+    """Every declared relation between parameters."""
+    _load()
+    return tuple(_RELATIONS)
+
+
+def is_finite_number(value: object) -> bool:
+    """A real number (not a bool) that is finite."""
+    return (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, (bool, np.bool_)) and math.isfinite(float(value)))

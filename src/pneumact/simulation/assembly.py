@@ -1,0 +1,276 @@
+"""The model assembly: one model and its components joined into a compiled kernel.
+
+An ``Assembly`` is built from a model (``Actuator``, ``FrictionRig``) and owns its
+layout, so no other module indexes states, parameters or outputs by position:
+
+- the parameter vector: the blocks the components declare, one after another, each
+  holding the component's parameters, its settings and its derived quantities; a
+  parameter shared by two components (the diaphragm area) has a slot in each block;
+- ``pack`` (values by name -> vector, settings filled, derived quantities computed) and
+  ``update`` (change values by name, re-derive), ``values`` (vector -> names);
+- the state and output names with units, and their columns;
+- the kernel: generated from the model template, the integrators and the batch loop
+  with the components' compiled functions (``simulation.codegen``).
+
+Derived quantities (orifice-flow constants, the polytropic index) are computed by the
+kernel's compiled ``derive``, which the integrators also call at the start of every run:
+a vector changed by name, by a batch row or by a sensitivity perturbation is always
+consistent.
+"""
+
+from __future__ import annotations
+
+import importlib
+import threading
+import weakref
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from types import ModuleType
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..models.component import DERIVED, PARAMETER, SETTING, Part, StateSpec
+from . import codegen
+
+__all__ = ["Assembly", "assemble", "friction_law_parameter_derivatives",
+           "friction_law_values"]
+
+INTEGRATORS = "pneumact.simulation.templates.integrators"
+BATCH = "pneumact.simulation.templates.batch"
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One entry of the parameter vector: its index, name, kind and component role."""
+
+    index: int
+    name: str
+    kind: str
+    role: str
+
+
+class Assembly:
+    """A model's layout and kernel (see the module docstring)."""
+
+    def __init__(self, model):
+        self.model = model
+        self.parts: tuple[Part, ...] = tuple(model.parts())
+        self.template: str = model.template
+        entries: list[Slot] = []
+        self.block_ranges: dict[str, tuple[int, int]] = {}
+        for part in self.parts:
+            lo = len(entries)
+            for name, kind in part.block.entries:
+                entries.append(Slot(len(entries), name, kind, part.role))
+            self.block_ranges[part.role] = (lo, len(entries))
+        self.entries: tuple[Slot, ...] = tuple(entries)
+        slots: dict[str, list[int]] = {}
+        for slot in entries:
+            if slot.kind == PARAMETER:
+                slots.setdefault(slot.name, []).append(slot.index)
+        self.slots: dict[str, tuple[int, ...]] = {k: tuple(v) for k, v in slots.items()}
+        self.states: tuple[StateSpec, ...] = tuple(s for part in self.parts for s in part.states)
+        module = importlib.import_module(self.template)
+        self.output_names: tuple[str, ...] = tuple(module.OUTPUT_NAMES)
+        self.output_units: tuple[str, ...] = tuple(module.OUTPUT_UNITS)
+
+    # -- names -------------------------------------------------------------------------
+    @property
+    def size(self) -> int:
+        """Length of the parameter vector."""
+        return len(self.entries)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Every parameter the components read, in vector order."""
+        return tuple(self.slots)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.states)
+
+    @property
+    def state_units(self) -> tuple[str, ...]:
+        return tuple(s.unit for s in self.states)
+
+    def state_index(self, name: str) -> int:
+        return self.state_names.index(name)
+
+    def signal_source(self, name: str) -> tuple[int, int] | None:
+        """(0, state column) or (1, output column) of a signal name; states win."""
+        if name in self.state_names:
+            return 0, self.state_index(name)
+        if name in self.output_names:
+            return 1, self.output_names.index(name)
+        return None
+
+    def check_parameters(self, names: Sequence[str], what: str) -> list[str]:
+        """``names`` as a list, or one ParameterError naming an unknown or unused one."""
+        import difflib
+
+        from ..parameters import catalogue
+
+        known = catalogue()
+        for name in names:
+            if name in self.slots:
+                continue
+            if name in known:
+                raise ParameterError(
+                    f"{what}: '{name}' is not a parameter of {self.describe()}; its "
+                    f"parameters are {', '.join(self.parameter_names)}")
+            close = difflib.get_close_matches(name, list(self.slots), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise ParameterError(f"{what}: unknown parameter '{name}'{hint}")
+        return list(names)
+
+    def describe(self) -> str:
+        model = self.model
+        return model.describe() if hasattr(model, "describe") else type(model).__name__
+
+    # -- the vector --------------------------------------------------------------------
+    def pack(self, params: Mapping[str, float] | None = None) -> np.ndarray:
+        """The kernel vector: parameters from ``params`` (default: the model's set;
+        given values, else catalogue defaults), settings from the components, derived
+        quantities computed."""
+        params = self.model.params if params is None else params
+        settings = {name: value for part in self.parts for name, value in part.settings.items()}
+        vec = np.zeros(self.size)
+        for slot in self.entries:
+            if slot.kind == PARAMETER:
+                vec[slot.index] = params[slot.name]
+            elif slot.kind == SETTING:
+                vec[slot.index] = settings[slot.name]
+        self.kernel.derive(vec)
+        return vec
+
+    def update(self, vec: np.ndarray, changes: Mapping[str, float]) -> np.ndarray:
+        """Set parameter values by name (every slot of each) and re-derive, in place."""
+        for name, value in changes.items():
+            for index in self.slots[name]:
+                vec[index] = float(value)
+        self.kernel.derive(vec)
+        return vec
+
+    def values(self, vec: np.ndarray) -> dict[str, float]:
+        """Parameter name -> value in ``vec``."""
+        return {name: float(vec[idx[0]]) for name, idx in self.slots.items()}
+
+    def column_slots(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """(pointer, indices): the slots of each name, in CSR form, for the batch loop."""
+        ptr = np.zeros(len(names) + 1, dtype=np.int64)
+        idx: list[int] = []
+        for c, name in enumerate(names):
+            idx.extend(self.slots[name])
+            ptr[c + 1] = len(idx)
+        return ptr, np.asarray(idx, dtype=np.int64)
+
+    def directions(self, vec: np.ndarray, names: Sequence[str]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """How each parameter moves the vector, derived slots included: dvec/dθ in CSR
+        form (pointer, slot, value); the derived part by central differences of the
+        compiled ``derive`` (derived quantities depend on parameters only)."""
+        derived = np.array([s.kind == DERIVED for s in self.entries])
+        ptr = np.zeros(len(names) + 1, dtype=np.int64)
+        idx: list[int] = []
+        val: list[float] = []
+        for p, name in enumerate(names):
+            column = np.zeros(self.size)
+            column[list(self.slots[name])] = 1.0
+            if derived.any():
+                value = vec[self.slots[name][0]]
+                step = 1e-6 * (abs(value) if value != 0.0 else 1.0)
+                up, down = vec.copy(), vec.copy()
+                self.update(up, {name: value + step})
+                self.update(down, {name: value - step})
+                column[derived] = (up[derived] - down[derived]) / (2.0 * step)
+            nonzero = np.flatnonzero(column)
+            idx.extend(nonzero.tolist())
+            val.extend(column[nonzero].tolist())
+            ptr[p + 1] = len(idx)
+        return ptr, np.asarray(idx, dtype=np.int64), np.asarray(val, dtype=float)
+
+    # -- the kernel ----------------------------------------------------------------------
+    def kernel_spec(self) -> codegen.KernelSpec:
+        imports: list[tuple[str, str]] = []
+        for part in self.parts:
+            imports.extend(part.functions.items())
+            imports.extend(part.constants.items())
+        constants: list[tuple[str, object]] = [("NSTATE", len(self.states)),
+                                               ("NPARAM", self.size)]
+        for role, (lo, hi) in self.block_ranges.items():
+            constants += [(f"{role.upper()}_LO", lo), (f"{role.upper()}_HI", hi)]
+        first = 0
+        for part in self.parts:
+            if part.states:
+                constants.append((f"S_{part.role.upper()}", first))
+            first += len(part.states)
+        constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
+        constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))
+        switches = getattr(self.model, "kernel_constants", dict)()
+        constants += sorted(switches.items())
+        keys = [part.key for part in self.parts if part.key]
+        label = "_".join([self.template.rpartition(".")[2], *keys])
+        templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS, BATCH))
+        return codegen.KernelSpec(label, tuple(templates), tuple(imports),
+                                  tuple(dict.fromkeys(constants)))
+
+    @cached_property
+    def kernel(self) -> ModuleType:
+        """The compiled kernel module (generated on first use, cached on disk)."""
+        return codegen.load(self.kernel_spec())
+
+
+_ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_LOCK = threading.Lock()
+
+
+def assemble(model) -> Assembly:
+    """The assembly of ``model`` (one per model object, reused)."""
+    with _LOCK:
+        assembly = _ASSEMBLIES.get(model)
+        if assembly is None:
+            assembly = _ASSEMBLIES[model] = Assembly(model)
+        return assembly
+
+
+# --------------------------------------------------------------------------- a law alone
+@dataclass(frozen=True, eq=False)
+class _Law:
+    """A friction law with nothing around it (the ``law`` template)."""
+
+    friction: object
+    params: Mapping[str, float]
+    template = "pneumact.simulation.templates.law"
+    kernel_templates = ("pneumact.simulation.templates.law",)
+
+    def parts(self):
+        return (self.friction.part(),)
+
+
+def _law_inputs(friction, v, z, params):
+    assembly = Assembly(_Law(friction, params))
+    v = np.atleast_1d(np.asarray(v, dtype=np.float64))
+    z = np.ascontiguousarray(np.broadcast_to(np.asarray(z, dtype=np.float64), v.shape))
+    return assembly, np.ascontiguousarray(v), z, assembly.pack()
+
+
+def friction_law_values(friction, v, z, params) -> dict[str, np.ndarray]:
+    """The law at arrays ``v``, ``z``: dz/dt, force and the partial derivatives."""
+    assembly, v, z, vec = _law_inputs(friction, v, z, params)
+    out = np.empty((v.size, 6))
+    assembly.kernel.law_values(v, z, vec, out)
+    keys = ("zdot", "force", "dzdot_dv", "dzdot_dz", "dforce_dv", "dforce_dz")
+    return {k: out[:, i] for i, k in enumerate(keys)}
+
+
+def friction_law_parameter_derivatives(friction, v, z, params) -> dict[str, np.ndarray]:
+    """name -> (n, 2) array of (∂(dz/dt)/∂θ, ∂F/∂θ) for every parameter of the law."""
+    assembly, v, z, vec = _law_inputs(friction, v, z, params)
+    n = len(friction.block)
+    dzdot = np.zeros((v.size, n))
+    dforce = np.zeros((v.size, n))
+    assembly.kernel.law_parameter_derivatives(v, z, vec, dzdot, dforce)
+    return {name: np.column_stack([dzdot[:, k], dforce[:, k]])
+            for k, name in enumerate(friction.block.names)}
