@@ -57,7 +57,44 @@ _EXPORTS: dict[str, str] = {
     "SolverError": "pneumact.errors",
 }
 
-__all__ = sorted(_EXPORTS)
+__all__ = [
+    "Actuator",
+    "Adiabatic",
+    "Assembly",
+    "BatchResult",
+    "BoucWen",
+    "CommandCycle",
+    "CommandValve",
+    "CoulombViscous",
+    "Dahl",
+    "DataError",
+    "DormandPrince",
+    "Experiment",
+    "ExperimentError",
+    "FrictionRig",
+    "Isothermal",
+    "LuGre",
+    "ParameterError",
+    "ParameterSet",
+    "PassivityWarning",
+    "PneumactError",
+    "Polytropic",
+    "PressureCycle",
+    "PressureRegulator",
+    "PressureSource",
+    "Result",
+    "Rodas4",
+    "SensitivityResult",
+    "SolverError",
+    "StribeckMap",
+    "available_params",
+    "experiments",
+    "load_params",
+    "simulate",
+    "simulate_batch",
+    "simulate_sensitivities",
+    "write_params",
+]
 
 
 def __getattr__(name: str):

@@ -95,10 +95,11 @@ def from_samples(time, values, quantity: str, name: str = "measured input",
     return Experiment(sig, quantity, float(time[-1]), float(time[0]), n, name)
 
 
-def from_csv(path: str | Path) -> Experiment:
-    """An input signal read from a CSV (``time [s]`` and one of pressure / command / ...)."""
-    from ..io import read_signal_csv
+def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:
+    """An input signal read from a CSV (``time [s]`` and one of pressure / command / ...);
+    ``p_atm`` [Pa] turns a ``pressure_gauge`` column into absolute pressure."""
+    from ..io.records import read_signal_csv
 
-    name, time, values = read_signal_csv(path)
+    name, time, values = read_signal_csv(path, p_atm=p_atm)
     quantity = "pressure" if name == "setpoint" else name
     return from_samples(time, values, quantity, name=f"{Path(path).name}")

@@ -109,7 +109,31 @@ def _parse_string(name: str, text: str, unit: str) -> float:
         return magnitude
     if unit_text.replace(" ", "") == unit:  # already the SI unit: no conversion needed
         return magnitude
+    factor = si_prefix_factor(unit_text, unit)
+    if factor is not None:  # "60 cm^3" for m^3, "10 kPa" for Pa: no need to load pint
+        return float(f"{magnitude * factor:.15g}")
     return _convert(name, text, magnitude, unit_text, unit, example)
+
+
+#: SI prefixes and their factors (a unit like "cm^3" is (1e-2 m)^3).
+SI_PREFIXES = {"Y": 1e24, "Z": 1e21, "E": 1e18, "P": 1e15, "T": 1e12, "G": 1e9, "M": 1e6,
+               "k": 1e3, "h": 1e2, "da": 1e1, "d": 1e-1, "c": 1e-2, "m": 1e-3, "u": 1e-6,
+               "µ": 1e-6, "μ": 1e-6, "n": 1e-9, "p": 1e-12, "f": 1e-15}
+_SIMPLE_UNIT = re.compile(r"([A-Za-z]+)(?:\^(\d+))?")
+_PREFIXED = re.compile(r"(da|[YZEPTGMkhdcmuµμnpf])([A-Za-z]+)(?:(?:\^|\*\*)(\d+))?")
+
+
+def si_prefix_factor(unit_text: str, unit: str) -> float | None:
+    """Factor to SI when ``unit_text`` is an SI prefix on the parameter's own simple unit
+    (a symbol with an optional power: m, m^3, Pa, N, s), else None (pint decides)."""
+    simple = _SIMPLE_UNIT.fullmatch(unit)
+    given = _PREFIXED.fullmatch(unit_text.strip())
+    if simple is None or given is None or simple.group(1) == "kg":
+        return None
+    prefix, symbol, power = given.groups()
+    if symbol != simple.group(1) or (power or "1") != (simple.group(2) or "1"):
+        return None
+    return SI_PREFIXES[prefix] ** int(power or "1")
 
 
 def _convert(name: str, text: str, magnitude: float, unit_text: str, unit: str,

@@ -26,6 +26,7 @@ import functools
 import hashlib
 import importlib
 import importlib.util
+import json
 import os
 import sys
 import tempfile
@@ -96,14 +97,14 @@ def cache_dir() -> Path:
 
 # --------------------------------------------------------------------------- dependencies
 def _module_file(name: str) -> Path | None:
-    """Source file of module ``name``, or None when ``name`` is not a module."""
-    try:
-        spec = importlib.util.find_spec(name)
-    except (ModuleNotFoundError, ValueError):  # "package.module.attribute"
-        return None
-    if spec is None or not spec.origin or not spec.origin.endswith(".py"):
-        return None
-    return Path(spec.origin)
+    """Source file of pneumact module ``name`` (None when ``name`` is not a module), found
+    in the package directory without importing anything."""
+    root = Path(__file__).resolve().parents[1]  # the pneumact package directory
+    parts = name.split(".")[1:]
+    candidates = [root.joinpath(*parts).with_suffix(".py"), root.joinpath(*parts, "__init__.py")]
+    if not parts:
+        candidates = [root / "__init__.py"]
+    return next((path for path in candidates if path.is_file()), None)
 
 
 def _imported_modules(name: str, path: Path) -> set[str]:
@@ -146,18 +147,47 @@ def _dependency_closure(modules: tuple[str, ...]) -> tuple[Path, ...]:
     return tuple(sorted(set(seen.values())))
 
 
-@functools.cache
-def kernel_key(spec: KernelSpec) -> str:
-    """Hex digest over the generated text, the dependency sources and the versions
-    (computed once per process and spec)."""
+def _versions() -> str:
     import numba
 
-    digest = hashlib.sha256(spec.source().encode())
-    for path in dependency_files(spec.modules()):
+    return f"numba {numba.__version__}; python {sys.version_info[:3]}"
+
+
+def _stamps(paths: Iterable[Path]) -> list[list]:
+    return [[str(p), p.stat().st_mtime_ns, p.stat().st_size] for p in paths]
+
+
+@functools.cache
+def kernel_key(spec: KernelSpec) -> str:
+    """Hex digest over the generated text, the dependency sources and the versions.
+
+    The digest is remembered in the cache directory with the files' modification times
+    and sizes, so a later process only checks those (no reading, no parsing) unless a
+    source has changed.
+    """
+    text = spec.source()
+    memo = cache_dir() / f".{spec.label}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.key"
+    try:
+        saved = json.loads(memo.read_text(encoding="utf-8"))
+        if saved["versions"] == _versions() and saved["stamps"] == _stamps(
+                Path(p) for p, _, _ in saved["stamps"]):
+            return saved["key"]
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    files = dependency_files(spec.modules())
+    digest = hashlib.sha256(text.encode())
+    for path in files:
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
-    digest.update(f"numba {numba.__version__}; python {sys.version_info[:3]}".encode())
-    return digest.hexdigest()
+    digest.update(_versions().encode())
+    key = digest.hexdigest()
+    with contextlib.suppress(OSError):
+        memo.parent.mkdir(parents=True, exist_ok=True)
+        tmp = memo.with_name(f"{memo.name}.{os.getpid()}.tmp")
+        tmp.write_text(json.dumps({"key": key, "versions": _versions(),
+                                   "stamps": _stamps(files)}), encoding="utf-8")
+        os.replace(tmp, memo)
+    return key
 
 
 # --------------------------------------------------------------------------- loading

@@ -1,0 +1,56 @@
+"""The ``pneumact`` command line: a thin layer over the public API.
+
+    pneumact simulate                         # vgt-paper, slow pressure cycle -> pneumact-out/
+    pneumact simulate --valve command --t-end 10 --out run1
+    pneumact friction-test stick-slip --duration 5
+    pneumact batch table.csv --out batch1
+    pneumact params list | show NAME|FILE | check FILE
+
+Options map onto exactly the objects of the library (parameter set, friction model,
+valve, experiment, solver); no physics lives here. Output files are written only after
+a successful run, atomically, and together. A user's mistake prints one red line
+``error: ...`` on stderr and exits with code 2.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from pneumact import __version__
+from pneumact.cli.batch import batch
+from pneumact.cli.common import out_console
+from pneumact.cli.friction_test import friction_test_app
+from pneumact.cli.params import params_app
+from pneumact.cli.simulate import simulate
+
+app = typer.Typer(
+    name="pneumact",
+    help="Pneumatic diaphragm actuators with LuGre friction: simulate, test, inspect.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        out_console.print(f"pneumact {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def main(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Pneumatic diaphragm actuators with LuGre friction."""
+
+
+app.command()(simulate)
+app.command("batch")(batch)
+app.add_typer(friction_test_app, name="friction-test")
+app.add_typer(params_app, name="params")
+
+__all__ = ["app"]

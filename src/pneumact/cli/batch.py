@@ -1,0 +1,138 @@
+"""``pneumact batch PARAMS.csv --out DIR``: the batch engine from the command line.
+
+Reads the parameter table (CSV or Parquet; header cells ``name`` or ``name [unit]``,
+values converted to SI), builds the model and experiment from the same options as
+``simulate``, runs the batch with a progress bar and writes ``DIR/results.parquet``,
+``DIR/summary.csv`` (and ``DIR/signals.parquet`` with ``--signals``).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from pneumact.cli.common import (
+    Chamber,
+    ChamberOption,
+    Friction,
+    FrictionOption,
+    InputOption,
+    LowOption,
+    ModelOptions,
+    ParamsOption,
+    RtolOption,
+    TEndOption,
+    Valve,
+    ValveOption,
+    build_experiment,
+    build_model,
+    err_console,
+    names,
+    user_errors,
+)
+from pneumact.errors import DataError
+
+
+def read_parameter_table(path: Path):
+    """The parameter table of ``path`` in SI (columns with a unit are converted)."""
+    import numpy as np
+    import pandas as pd
+
+    from pneumact.io.tables import read_table
+    from pneumact.parameters import catalogue, parse_value
+
+    specs = catalogue()
+    frame, units = read_table(path)
+    table = pd.DataFrame(index=frame.index)
+    for name in frame.columns:
+        values = pd.to_numeric(frame[name], errors="coerce")
+        bad = values.isna() & frame[name].astype(str).str.strip().ne("")
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            raise DataError(f"{path}: column '{name}' row {row + 1} = {frame[name].iloc[row]!r}"
+                            ": must be a number")
+        unit = units.get(name)
+        if unit and name in specs and unit != specs[name].unit:
+            si_unit = specs[name].unit
+            zero = parse_value(name, f"0 {unit}", si_unit)
+            one = parse_value(name, f"1 {unit}", si_unit)
+            if zero == 0.0:
+                values = values * one
+            else:  # an offset unit (degC): convert value by value
+                values = values.map(lambda v, u=unit, n=name, si=si_unit:
+                                    parse_value(n, f"{v!r} {u}", si))
+        table[name] = values.astype(float)
+    return table
+
+
+def batch(
+    params_csv: Annotated[Path, typer.Argument(help="table of parameter sets: one column "
+                                                     "per parameter, one row per set")],
+    out: Annotated[Path, typer.Option("--out", help="output directory (resumable)")],
+    params: ParamsOption = "vgt-paper",
+    valve: ValveOption = Valve.source,
+    friction: FrictionOption = Friction.lugre,
+    chamber: ChamberOption = Chamber.isothermal,
+    t_end: TEndOption = None,
+    low: LowOption = 20.0,
+    input_csv: InputOption = None,
+    rtol: RtolOption = 1e-6,
+    features: Annotated[str | None, typer.Option(help="comma-separated feature names")]
+    = None,
+    signals: Annotated[str | None, typer.Option(help="comma-separated signal names")] = None,
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address")] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="continue the batch in --out")]
+    = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="start the batch in --out "
+                                                                "again")] = False,
+    workers: Annotated[int | None, typer.Option(help="local threads (default all cores)")]
+    = None,
+) -> None:
+    """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    with user_errors():
+        import pneumact as pa
+
+        table = read_parameter_table(params_csv)
+        options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
+        parameter_set, model = build_model(options)
+        experiment = build_experiment(options, parameter_set)
+        started = time.perf_counter()
+        with Progress(TextColumn("[bold]batch"), BarColumn(), MofNCompleteColumn(),
+                      TextColumn("failed {task.fields[failed]}"),
+                      TextColumn("{task.fields[rate]} sims/s"),
+                      TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
+                      console=err_console) as bar:
+            task = bar.add_task("batch", total=len(table), failed=0, rate="-")
+            first: list[int] = []
+
+            def progress(done: int, failed: int, total: int) -> None:
+                if not first:
+                    first.append(done)  # chunks reused from disk do not count in the rate
+                elapsed = time.perf_counter() - started
+                rate = (done - first[0]) / elapsed if elapsed > 0 else 0.0
+                bar.update(task, completed=done, total=total, failed=failed,
+                           rate=f"{rate:.0f}")
+
+            result = pa.simulate_batch(model, experiment, table, features=names(features),
+                                       signals=names(signals), solver=pa.Rodas4(rtol=rtol),
+                                       scheduler=scheduler, out_dir=out, resume=resume,
+                                       overwrite=overwrite, workers=workers,
+                                       progress=progress)
+    stats = result.stats
+    err_console.print(
+        f"{stats['n_sets']} sets, {stats['failed']} failed, {stats['computed']} computed "
+        f"({stats['reused_chunks']} chunks reused) in {stats['wall_time_s']:.1f} s "
+        f"({stats['sims_per_s']:.0f} sims/s); results in {out}/results.parquet and "
+        f"{out}/summary.csv")

@@ -1,0 +1,248 @@
+"""What every command shares: consoles, one-line errors, atomic multi-file output,
+progress display, and the options that build a model and its experiment.
+
+``simulate``, ``batch`` (and the commands that come after them) take the same
+``--params --valve --friction --chamber --t-end --low --high --input --rtol`` options,
+defined once here (``ModelOptions``) and turned into library objects by one function
+(``build_model``, ``build_experiment``). Nothing here imports numpy, pandas or numba at
+module level: a command pays for what it uses.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import shutil
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.text import Text
+
+from pneumact.errors import ExperimentError, PneumactError
+
+#: Exit code of a user's mistake (bad option, bad file, invalid parameters).
+EXIT_USER_ERROR = 2
+#: Exit code of ``params check`` when the file is not valid.
+EXIT_CHECK_FAILED = 1
+#: Default experiment: the slow triangular cycle of the paper's Figs. 5-6, from the set's
+#: p_atm down to this pressure [Pa abs] and back in this period [s] (or 0 → 1 → 0 for a
+#: command valve).
+DEFAULT_LOW_PRESSURE = 20e3
+DEFAULT_PERIOD = 20.0
+COMPILING = "compiling kernel (first use; cached afterwards)"
+
+out_console = Console(highlight=False)
+err_console = Console(stderr=True, highlight=False)
+
+
+class Valve(StrEnum):
+    source = "source"
+    command = "command"
+    regulator = "regulator"
+
+
+class Chamber(StrEnum):
+    isothermal = "isothermal"
+    adiabatic = "adiabatic"
+
+
+def _friction_choices() -> type[StrEnum]:
+    """The ``--friction`` choices: every law the friction module registers."""
+    from pneumact.models.friction import friction_models
+
+    return StrEnum("Friction", {name.replace("-", "_"): name for name in friction_models()})
+
+
+Friction = _friction_choices()
+
+ParamsOption = Annotated[str, typer.Option(
+    "--params", help="Parameter set: a shipped name or a .toml file.")]
+ValveOption = Annotated[Valve, typer.Option(
+    help="source: prescribed pressure; command: valve command u in [0, 1]; regulator: "
+         "pressure set-point.")]
+FrictionOption = Annotated[Friction, typer.Option(help="Friction model.")]
+ChamberOption = Annotated[Chamber, typer.Option(help="Chamber gas law (behind a valve).")]
+TEndOption = Annotated[float | None, typer.Option(
+    "--t-end", help="Duration [s]: the period of the default cycle, or where to stop the "
+                    "input.")]
+LowOption = Annotated[float, typer.Option(
+    "--low", help="Lowest pressure of the default cycle [kPa abs].")]
+InputOption = Annotated[Path | None, typer.Option(
+    "--input", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
+RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """The model and experiment options of a command, as given."""
+
+    params: str = "vgt-paper"
+    valve: Valve = Valve.source
+    friction: str = "lugre"
+    chamber: Chamber = Chamber.isothermal
+    t_end: float | None = None
+    low_kpa: float = DEFAULT_LOW_PRESSURE * 1e-3
+    input_csv: Path | None = None
+    rtol: float = 1e-6
+
+
+def load_quietly(name: str):
+    """A parameter set; a passivity warning is shown once by ``user_errors``."""
+    import pneumact as pa
+
+    return pa.load_params(name)
+
+
+def build_model(options: ModelOptions, params=None):
+    """(parameter set, Actuator) the options describe."""
+    from pneumact.models import (
+        VALVES,
+        Actuator,
+        Adiabatic,
+        Isothermal,
+        friction_models,
+    )
+
+    params = load_quietly(options.params) if params is None else params
+    friction = friction_models()[str(options.friction)]()
+    chamber = Adiabatic() if options.chamber is Chamber.adiabatic else Isothermal()
+    return params, Actuator(params, friction=friction, valve=VALVES[options.valve.value](),
+                            chamber=chamber)
+
+
+def build_experiment(options: ModelOptions, params):
+    """The experiment the options describe: the input CSV, or the default slow cycle
+    (pressure p_atm → low → p_atm, or command 0 → 1 → 0 for a command valve)."""
+    import pneumact as pa
+
+    if options.input_csv is not None:
+        experiment = pa.experiments.from_csv(options.input_csv, p_atm=params["p_atm"])
+        if options.t_end is not None:
+            if options.t_end > experiment.t_end:
+                raise ExperimentError(
+                    f"--t-end = {options.t_end:g} s is beyond the input data, which ends at "
+                    f"{experiment.t_end:g} s; give --t-end <= {experiment.t_end:g}")
+            experiment = experiment.with_duration(options.t_end)
+        return experiment
+    period = DEFAULT_PERIOD if options.t_end is None else options.t_end
+    if not (math.isfinite(period) and period > 0):
+        raise ExperimentError(f"--t-end = {period:g} s; must be a duration > 0")
+    if options.valve is Valve.command:
+        return pa.CommandCycle(0.0, 1.0, period=period)
+    return pa.PressureCycle(high=params["p_atm"], low=options.low_kpa * 1e3, period=period)
+
+
+# --------------------------------------------------------------------------- plumbing
+def print_error(message: str) -> None:
+    err_console.print(Text(f"error: {message}", style="red"), soft_wrap=True)
+
+
+def _print_warning(message: warnings.WarningMessage) -> None:
+    text = f"warning: {message.category.__name__}: {message.message}"
+    err_console.print(Text(text, style="yellow"), soft_wrap=True)
+
+
+def _flush_warnings(caught: list[warnings.WarningMessage]) -> None:
+    seen = set()
+    for message in caught:
+        key = (message.category, str(message.message))
+        if key not in seen and not issubclass(message.category, DeprecationWarning):
+            seen.add(key)
+            _print_warning(message)
+    caught.clear()
+
+
+@contextlib.contextmanager
+def user_errors(code: int = EXIT_USER_ERROR) -> Iterator[None]:
+    """Warnings -> yellow lines; a pneumact error or a bad path -> one red line, exit."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        except PneumactError as exc:
+            _flush_warnings(caught)
+            print_error(str(exc))
+            raise typer.Exit(code) from None
+        except OSError as exc:  # missing input file, output directory not writable, ...
+            _flush_warnings(caught)
+            print_error(str(exc))
+            raise typer.Exit(code) from None
+    _flush_warnings(caught)
+
+
+def use_agg() -> None:
+    """Render off-screen: the CLI only writes PNG files."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+def write_outputs(out_dir: Path, writers: dict[str, Callable[[Path], Any]]) -> list[Path]:
+    """Write every file into a private staging directory first, then move each into
+    ``out_dir`` atomically; on any failure, remove what was already moved (and the
+    directory if this call created it), so no partial set of outputs is left."""
+    from pneumact.io.tables import atomic_write
+
+    created_dir = not out_dir.exists()
+    staging = Path(tempfile.mkdtemp(prefix="pneumact-"))
+    written: list[Path] = []
+    try:
+        for name, write in writers.items():
+            write(staging / name)
+        for name in writers:
+            target = out_dir / name
+            with atomic_write(target) as tmp:
+                shutil.copyfile(staging / name, tmp)
+            written.append(target)
+    except BaseException:
+        for path in written:
+            path.unlink(missing_ok=True)
+        if created_dir:
+            with contextlib.suppress(OSError):
+                out_dir.rmdir()
+        raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return written
+
+
+def run_with_progress(run: Callable[[Callable[[float], None] | None], Any],
+                      what: str = "simulating") -> Any:
+    """Call ``run(progress)`` under a rich progress bar; a spinner says the kernel is
+    compiling until the first progress report arrives."""
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        SpinnerColumn,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
+    columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
+               TaskProgressColumn(), TimeElapsedColumn())
+    with Progress(*columns, console=err_console, transient=True) as bar:
+        task = bar.add_task(COMPILING, total=None)
+
+        def report(fraction: float) -> None:
+            bar.update(task, description=what, total=1.0, completed=fraction)
+
+        return run(report)
+
+
+def fmt(value: float | None, digits: int = 4) -> str:
+    return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
+
+
+def names(text: str | None) -> list[str] | None:
+    """A comma-separated list option as names (None if not given)."""
+    if text is None:
+        return None
+    return [n.strip() for n in text.split(",") if n.strip()]

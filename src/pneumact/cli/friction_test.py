@@ -1,0 +1,163 @@
+"""``pneumact friction-test KIND``: the classic friction experiments on the friction rig.
+
+One subcommand per experiment of ``pneumact.experiments.friction``, with one option per
+setting of its settings object, generated from the object's fields: whatever the Python
+API can set, the command line can too.
+"""
+
+from __future__ import annotations
+
+import inspect
+import typing
+from dataclasses import MISSING, fields
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.table import Table
+
+from pneumact.cli.common import (
+    Friction,
+    FrictionOption,
+    ParamsOption,
+    fmt,
+    out_console,
+    use_agg,
+    user_errors,
+    write_outputs,
+)
+from pneumact.errors import ExperimentError
+from pneumact.experiments.friction import FRICTION_TESTS, FrictionTest
+
+friction_test_app = typer.Typer(help="Run a classic friction experiment (Canudas de Wit et "
+                                     "al. 1995) on the friction rig; write CSV and PNG.",
+                                no_args_is_help=True)
+
+
+def option_name(field_name: str) -> str:
+    return "--" + field_name.replace("_", "-")
+
+
+def _is_sequence(annotation) -> bool:
+    return typing.get_origin(annotation) is tuple or "tuple" in str(annotation)
+
+
+def _parameter(field, annotation) -> inspect.Parameter:
+    """The typer option of one setting: numbers as they are, sequences comma-separated."""
+    help_text = field.metadata.get("help", "")
+    if _is_sequence(annotation):
+        shown = ",".join(f"{v:g}" for v in field.default)
+        kind: Any = Annotated[str | None, typer.Option(
+            option_name(field.name), help=f"{help_text}; comma-separated [default: {shown}]",
+            show_default=False)]
+        return inspect.Parameter(field.name, inspect.Parameter.KEYWORD_ONLY, default=None,
+                                 annotation=kind)
+    optional = type(None) in typing.get_args(annotation)
+    base = float if "float" in str(annotation) else int
+    kind = Annotated[base | None if optional else base,
+                     typer.Option(option_name(field.name), help=help_text)]
+    default = None if field.default is MISSING else field.default
+    return inspect.Parameter(field.name, inspect.Parameter.KEYWORD_ONLY, default=default,
+                             annotation=kind)
+
+
+def _settings(cls: type[FrictionTest], given: dict[str, Any]) -> dict[str, Any]:
+    hints = typing.get_type_hints(cls)
+    settings = {}
+    for f in fields(cls):
+        value = given[f.name]
+        if _is_sequence(hints[f.name]):
+            if value is None:
+                continue
+            try:
+                value = tuple(float(v) for v in value.split(",") if v.strip())
+            except ValueError:
+                raise ExperimentError(f"{option_name(f.name)} = {value!r}: give numbers "
+                                      "separated by commas, e.g. 0.1,1,10") from None
+        settings[f.name] = value
+    return settings
+
+
+def _command(cls: type[FrictionTest]):
+    hints = typing.get_type_hints(cls)
+    common = [
+        inspect.Parameter("params", inspect.Parameter.KEYWORD_ONLY, default="canudas1995",
+                          annotation=ParamsOption),
+        inspect.Parameter("friction", inspect.Parameter.KEYWORD_ONLY, default=Friction.lugre,
+                          annotation=FrictionOption),
+        inspect.Parameter("out", inspect.Parameter.KEYWORD_ONLY, default=Path("pneumact-out"),
+                          annotation=Annotated[Path, typer.Option(
+                              help="Output directory (friction_test.csv, "
+                                   "friction_test_curve.csv, friction_test.png).")]),
+    ]
+    settings = [_parameter(f, hints[f.name]) for f in fields(cls)]
+
+    def command(**given) -> None:
+        params, friction, out = given.pop("params"), given.pop("friction"), given.pop("out")
+        with user_errors():
+            test = cls(**_settings(cls, given))
+            _run(test, params, friction, out)
+
+    command.__signature__ = inspect.Signature([*common, *settings])
+    command.__annotations__ = {p.name: p.annotation for p in (*common, *settings)}
+    command.__doc__ = f"{cls.help[0].upper()}{cls.help[1:]}."
+    command.__name__ = cls.kind.replace("-", "_")
+    return command
+
+
+def _run(test: FrictionTest, params_name: str, friction_name: str, out: Path) -> None:
+    from pneumact.analysis.friction_tests import run_friction_test
+    from pneumact.cli.common import COMPILING, err_console, load_quietly
+    from pneumact.models import friction_models
+
+    use_agg()
+    import matplotlib.pyplot as plt
+
+    from pneumact.plotting import plot_friction_test, save_figure
+
+    params = load_quietly(params_name)
+    model = friction_models()[str(friction_name)]()
+    with err_console.status(f"running the {test.kind} test ({COMPILING})"):
+        result = run_friction_test(test, params, friction=model)
+    fig = plot_friction_test(result, test.kind)
+    writers = {"friction_test.csv": result.result.save}
+    if result.table is not None:
+        writers["friction_test_curve.csv"] = lambda path: save_derived_table(result.table, path)
+    writers["friction_test.png"] = lambda path: save_figure(fig, path)
+    try:
+        written = write_outputs(out, writers)
+    finally:
+        plt.close(fig)
+    run = result.result
+    table = Table(title=f"pneumact friction-test {test.kind}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("friction model", model.name)
+    table.add_row("drive", result.drive_quantity)
+    table.add_row("runs", str(max(1, len(result.runs))))
+    table.add_row("duration [s]", fmt(float(run.time[-1] - run.time[0])))
+    table.add_row("samples", str(len(run.time)))
+    table.add_row("solver steps", str(run.meta.get("steps", "n/a")))
+    table.add_row("wall time [s]", fmt(run.meta.get("wall_time_s", float("nan")), 3))
+    out_console.print(table)
+    for path in written:
+        out_console.print(f"wrote {path}")
+
+
+def save_derived_table(frame, path: Path) -> None:
+    """Write a derived table whose columns are named ``name [unit]`` (SI)."""
+    from pneumact.io.tables import parse_cell, write_table
+
+    names, units = [], {}
+    for column in map(str, frame.columns):
+        name, unit = parse_cell(column)
+        names.append(name)
+        if unit:
+            units[name] = unit
+    renamed = frame.set_axis(names, axis=1)
+    renamed.attrs = {}
+    write_table(renamed, path, units)
+
+
+for _kind, _cls in FRICTION_TESTS.items():
+    friction_test_app.command(_kind)(_command(_cls))

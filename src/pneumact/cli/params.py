@@ -1,0 +1,59 @@
+"""``pneumact params list | show | check``: the parameter sets and their values."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+from rich.table import Table
+from rich.text import Text
+
+from pneumact.cli.common import EXIT_CHECK_FAILED, out_console, user_errors
+
+params_app = typer.Typer(help="List, show and check parameter sets.", no_args_is_help=True)
+
+
+@params_app.command("list")
+def params_list() -> None:
+    """List the parameter sets shipped with pneumact."""
+    with user_errors():
+        from pneumact.parameters import available_params
+
+        table = Table(title="shipped parameter sets")
+        table.add_column("name", style="bold")
+        table.add_column("description")
+        for name, description in available_params():
+            table.add_row(name, description)
+        out_console.print(table)
+
+
+@params_app.command("show")
+def params_show(
+    name: Annotated[str, typer.Argument(help="A shipped set name or a .toml file.")],
+) -> None:
+    """Show every parameter: value as given, in SI, source and meaning."""
+    with user_errors():
+        from pneumact.parameters import load_params
+
+        parameter_set = load_params(name)
+        frame = parameter_set.to_frame()
+        table = Table(title=f"{parameter_set.name}: {parameter_set.description}")
+        for column in ("name", "given", "SI value", "source", "description"):
+            table.add_column(column, overflow="fold")
+        for row in frame.itertuples(index=False):
+            si = f"{row.value:.6g} {row.unit}".rstrip()
+            table.add_row(row.name, row.given or "", si, row.source, row.description)
+        out_console.print(table)
+
+
+@params_app.command("check")
+def params_check(
+    file: Annotated[str, typer.Argument(help="A .toml parameter file (or a shipped name).")],
+) -> None:
+    """Load and validate a parameter file: prints OK or the error (exit code 1)."""
+    with user_errors(code=EXIT_CHECK_FAILED):
+        from pneumact.parameters import load_params
+
+        parameter_set = load_params(file)
+        out_console.print(Text(f"OK: {parameter_set.name} ({len(parameter_set)} parameters "
+                               "given)", style="green"))

@@ -1,0 +1,95 @@
+"""``pneumact simulate``: one run of the actuator; CSV, hysteresis plot and a summary."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from pneumact.cli.common import (
+    Chamber,
+    ChamberOption,
+    Friction,
+    FrictionOption,
+    InputOption,
+    LowOption,
+    ModelOptions,
+    ParamsOption,
+    RtolOption,
+    TEndOption,
+    Valve,
+    ValveOption,
+    build_experiment,
+    build_model,
+    fmt,
+    out_console,
+    run_with_progress,
+    use_agg,
+    user_errors,
+    write_outputs,
+)
+
+
+def simulate(
+    params: ParamsOption = "vgt-paper",
+    out: Annotated[Path, typer.Option(help="Output directory (simulation.csv, "
+                                           "hysteresis.png).")] = Path("pneumact-out"),
+    input_csv: InputOption = None,
+    valve: ValveOption = Valve.source,
+    friction: FrictionOption = Friction.lugre,
+    chamber: ChamberOption = Chamber.isothermal,
+    t_end: TEndOption = None,
+    low: LowOption = 20.0,
+    rtol: RtolOption = 1e-6,
+) -> None:
+    """Simulate the actuator; write simulation.csv (SI) and hysteresis.png."""
+    with user_errors():
+        import pneumact as pa
+        from pneumact.simulation.simulate import check_drive
+
+        options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
+        parameter_set, actuator = build_model(options)
+        experiment = build_experiment(options, parameter_set)
+        solver = pa.Rodas4(rtol=rtol)
+        check_drive(actuator, experiment)  # a clear error before any progress display
+        result = run_with_progress(
+            lambda report: pa.simulate(actuator, experiment, solver, progress=report))
+        summary = result.summary()
+        use_agg()
+        import matplotlib.pyplot as plt
+
+        from pneumact.plotting import plot_hysteresis, save_figure
+
+        ax = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
+        try:
+            written = write_outputs(out, {
+                "simulation.csv": result.save,
+                "hysteresis.png": lambda path: save_figure(ax.figure, path),
+            })
+        finally:
+            plt.close(ax.figure)
+        _print_summary(summary, result, parameter_set["p_atm"], written)
+
+
+def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> None:
+    table = Table(title="pneumact simulate", show_header=True)
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    start = summary["breakaway_pressure"]
+    rows = [
+        ("stroke", fmt(summary["stroke"] * 1e3), "mm"),
+        ("loop width (pressure)", fmt(summary["loop_width_pressure"] * 1e-3), "kPa"),
+        ("loop width (position)", fmt(summary["loop_width_position"] * 1e3), "mm"),
+        ("motion starts at", fmt(start * 1e-3), "kPa abs"),
+        ("motion starts at", fmt((p_atm - start) * 1e-3), "kPa of vacuum"),
+        ("solver steps", str(result.meta.get("steps", "n/a")), ""),
+        ("wall time", fmt(result.meta.get("wall_time_s", float("nan")), 3), "s"),
+    ]
+    for row in rows:
+        table.add_row(*row)
+    out_console.print(table)
+    for path in written:
+        out_console.print(f"wrote {path}")

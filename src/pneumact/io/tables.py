@@ -1,0 +1,280 @@
+"""Tables on disk: CSV with ``name [unit]`` headers or Parquet with units in its
+metadata, read and written; every write is atomic.
+
+Inside pneumact everything is SI. ``write_table`` writes a frame with the unit of each
+column; ``read_table`` reads it back with the units, unconverted (``records`` converts
+measured records to SI). ``atomic_write`` is how every output file of pneumact is
+written: to a temporary file beside the target, moved over it only on success.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import json
+import os
+import re
+import secrets
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from pneumact.errors import DataError
+
+__all__ = ["UNITS_METADATA_KEY", "atomic_write", "parse_cell", "read_table", "write_table"]
+
+PathLike = str | os.PathLike[str]
+
+#: Parquet schema-metadata key holding ``{column: unit}`` as JSON.
+UNITS_METADATA_KEY = b"pneumact.units"
+
+_SUFFIXES = (".csv", ".parquet")
+_CELL_RE = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[(?P<u1>[^\[\]]*)\]|\((?P<u2>[^()]*)\))\s*$")
+_WS_TOKEN_RE = re.compile(r"\s*([^\s\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))?)")
+
+# pandas >= 3 parses floats round-trip exactly by default and deprecates the option.
+_FLOAT_KW: dict[str, Any] = (
+    {"float_precision": "round_trip"} if int(pd.__version__.split(".")[0]) < 3 else {}
+)
+
+
+# --------------------------------------------------------------------------- writing
+
+
+@contextlib.contextmanager
+def atomic_write(path: PathLike) -> Iterator[Path]:
+    """Yield a temporary path next to ``path``; move it onto ``path`` only on success.
+
+    The temporary file (``.<name>.tmp-<random>`` in the same directory, so the final
+    ``os.replace`` is atomic) is deleted if the block raises, so a failed or interrupted
+    write never leaves a half-written file at ``path`` (an existing file stays intact).
+    Parent directories are created first.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(f".{target.name}.tmp-{secrets.token_hex(6)}")
+    try:
+        yield tmp
+        if not tmp.exists():
+            raise FileNotFoundError(f"atomic_write: nothing was written to {tmp} for {target}")
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        raise
+
+
+def _check_suffix(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in _SUFFIXES:
+        raise DataError(
+            f"{path}: unsupported file suffix {path.suffix or '(none)'!r}; "
+            f"allowed: {', '.join(_SUFFIXES)}"
+        )
+    return suffix
+
+
+def write_table(frame: pd.DataFrame, path: PathLike, units: Mapping[str, str]) -> Path:
+    """Write ``frame`` as CSV or Parquet (by suffix), with units, atomically.
+
+    CSV header cells are ``name [unit]`` (e.g. ``time [s]``, ``command [1]``); a column
+    without a unit in ``units`` (or with ``""``) gets its plain name. Parquet keeps plain
+    column names and stores ``units`` as JSON under the schema-metadata key
+    ``pneumact.units``. A named index (e.g. ``time`` from ``Record.to_pandas()``) is
+    written as the first column. Floats round-trip exactly through :func:`read_table`.
+    """
+    target = Path(path)
+    suffix = _check_suffix(target)
+    if frame.index.name is not None or any(n is not None for n in frame.index.names[1:]):
+        frame = frame.reset_index()
+    names = list(frame.columns)
+    for name in names:
+        if not isinstance(name, str) or not name.strip():
+            raise DataError(f"{target}: column name {name!r} is not a non-empty string")
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise DataError(f"{target}: duplicate column names {duplicates}; names must be unique")
+    unknown = [k for k in units if k not in names]
+    if unknown:
+        raise DataError(
+            f"{target}: units given for {unknown} but the table has no such column; "
+            f"columns are {names}"
+        )
+    unit_of = {n: str(units[n]).strip() for n in names if n in units and str(units[n]).strip()}
+
+    if suffix == ".csv":
+        cells = []
+        for name in names:
+            unit = unit_of.get(name)
+            bad = [c for c in "[]()" if c in name] + [c for c in "[]" if unit and c in unit]
+            if bad:
+                raise DataError(
+                    f"{target}: column {name!r} (unit {unit!r}) contains {bad[0]!r}, which "
+                    "would make the CSV header 'name [unit]' ambiguous; rename it"
+                )
+            cells.append(f"{name} [{unit}]" if unit else name)
+        with atomic_write(target) as tmp:
+            frame.to_csv(tmp, index=False, header=cells, lineterminator="\n", encoding="utf-8")
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        metadata = dict(table.schema.metadata or {})
+        metadata[UNITS_METADATA_KEY] = json.dumps(unit_of).encode("utf-8")
+        table = table.replace_schema_metadata(metadata)
+        with atomic_write(target) as tmp:
+            pq.write_table(table, tmp)
+    return target
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def require_file(path: Path) -> None:
+    if not path.exists():
+        raise DataError(f"{path}: file not found")
+    if not path.is_file():
+        raise DataError(f"{path}: is not a file")
+
+
+def parse_cell(cell: str) -> tuple[str, str | None]:
+    """Split a header cell ``name [unit]`` or ``name (unit)`` into (name, unit or None)."""
+    match = _CELL_RE.match(cell)
+    if match is None:
+        return cell.strip(), None
+    unit = match["u1"] if match["u1"] is not None else match["u2"]
+    unit = unit.strip()
+    return match["name"], unit or None
+
+
+def _first_line(path: Path) -> tuple[int, str]:
+    """(0-based index, text) of the first non-blank line: the header, or the first row."""
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as fh:
+            for index, line in enumerate(fh):
+                if line.strip():
+                    return index, line.rstrip("\r\n")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+    raise DataError(f"{path}: file is empty")
+
+
+def _split_header(path: Path, line: str, sep: str) -> list[str]:
+    """Header cells of ``line``; in whitespace mode ``time [s]`` stays one cell."""
+    if sep == ",":
+        return [c.strip() for c in next(csv.reader([line]))]
+    cells, pos = [], 0
+    while pos < len(line.rstrip()):
+        match = _WS_TOKEN_RE.match(line, pos)
+        if match is None:
+            raise DataError(
+                f"{path}: cannot parse header {line.strip()!r} near {line[pos:].strip()!r}; "
+                "write cells as 'name', 'name [unit]' or 'name (unit)'"
+            )
+        cells.append(match[1])
+        pos = match.end()
+    return cells
+
+
+def read_text(
+    path: Path, names: Sequence[str] | None, *, numeric: bool
+) -> tuple[pd.DataFrame, list[str]]:
+    """Read a CSV/whitespace text file; return the cells (by position) and header cells.
+
+    With ``numeric`` the fast path parses floats; if a cell is not a number it rereads
+    everything as text so the caller can report exactly which cell is wrong.
+    """
+    first, line = _first_line(path)
+    sep = "," if "," in line else r"\s+"
+    if names is None:
+        cells = _split_header(path, line, sep)
+        skip = first + 1
+    else:
+        cells = [str(n) for n in names]
+        found = len(next(csv.reader([line]))) if sep == "," else len(line.split())
+        if found != len(cells):
+            raise DataError(
+                f"{path}: names= gives {len(cells)} column names but the file has "
+                f"{found} columns in its first line"
+            )
+        skip = first
+    kwargs: dict[str, Any] = dict(
+        sep=sep,
+        header=None,
+        skiprows=skip,
+        names=list(range(len(cells))),
+        index_col=False,
+        encoding="utf-8-sig",
+        skipinitialspace=True,
+        **_FLOAT_KW,
+    )
+    try:
+        if numeric:
+            try:
+                frame = pd.read_csv(path, dtype="float64", **kwargs)
+            except pd.errors.ParserError:
+                raise
+            except ValueError:
+                frame = pd.read_csv(path, dtype=str, keep_default_na=False, **kwargs)
+        else:
+            frame = pd.read_csv(path, **kwargs)
+    except pd.errors.ParserError as exc:
+        raise DataError(
+            f"{path}: malformed table ({str(exc).strip()}); every row needs "
+            f"{len(cells)} fields like the header"
+        ) from exc
+    except pd.errors.EmptyDataError:
+        frame = pd.DataFrame({i: pd.Series(dtype="float64") for i in range(len(cells))})
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+    return frame, cells
+
+
+def read_parquet(path: Path) -> tuple[pd.DataFrame, dict[str, str]]:
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:  # pyarrow raises several unrelated types for a bad file
+        raise DataError(f"{path}: cannot read as Parquet ({exc})") from exc
+    units: dict[str, str] = {}
+    raw = (table.schema.metadata or {}).get(UNITS_METADATA_KEY)
+    if raw is not None:
+        try:
+            units = {str(k): str(v) for k, v in json.loads(raw).items()}
+        except (ValueError, AttributeError) as exc:
+            raise DataError(
+                f"{path}: schema metadata 'pneumact.units' is not a JSON object of "
+                f"column -> unit ({exc})"
+            ) from exc
+    frame = table.to_pandas()
+    return frame, {k: v for k, v in units.items() if k in frame.columns}
+
+
+def read_table(path: PathLike) -> tuple[pd.DataFrame, dict[str, str]]:
+    """Read a table written by :func:`write_table`: (frame with plain names, units).
+
+    CSV header cells ``name [unit]`` are split into name and unit; Parquet units come
+    from the ``pneumact.units`` schema metadata. Values are not converted.
+    """
+    source = Path(path)
+    require_file(source)
+    if source.suffix.lower() == ".parquet":
+        return read_parquet(source)
+    frame, cells = read_text(source, None, numeric=False)
+    parsed = [parse_cell(c) for c in cells]
+    names = [n for n, _ in parsed]
+    check_unique(source, names)
+    frame.columns = names
+    return frame, {n: u for n, u in parsed if u is not None}
+
+
+def check_unique(path: Path, names: Sequence[str]) -> None:
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise DataError(f"{path}: duplicate column names {duplicates}; names must be unique")

@@ -1,0 +1,266 @@
+"""Batch simulation: one model and experiment, N parameter sets, all cores or a Dask cluster.
+
+    table = pd.DataFrame({"Fc": [2.0, 2.6, 3.0], "Fs": [3.0, 3.2, 3.5]})      # SI values
+    batch = simulate_batch(actuator, experiment, table, features=["stroke", "loop_area"])
+    batch.table                    # the parameters + one column per feature + status/error
+
+Each row of ``table`` replaces those parameters of the model's set. Rows are processed in
+chunks; each chunk is one call of the compiled batch loop (no ``Result`` objects, no
+Python work per row), so memory grows with N × what was asked for and threads scale like
+the bare kernels. A set that fails (an invalid value, a solver failure) gets ``status``
+!= "ok" and an ``error`` message; the others finish. Chunks run on local threads, or as
+tasks on a Dask cluster (``scheduler=``), with identical results.
+
+With ``out_dir`` the batch is resumable (see ``pneumact.io.chunks``): every finished
+chunk is written atomically, and ``resume=True`` on the same directory computes only
+the missing chunks.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time as _time
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...analysis.features import FEATURE_UNITS
+from ...errors import ParameterError, PneumactError
+from ...experiments.actuator import Experiment
+from ...io.chunks import ChunkOutput, ChunkStore
+from ..assembly import assemble
+from ..solvers import Rodas4, Solver
+from .runner import STATUS_OK, ChunkRunner, run_chunk
+from .spec import (
+    BatchSpec,
+    check_features,
+    check_names,
+    check_reference,
+    check_table,
+    default_features,
+    table_hash,
+)
+
+__all__ = ["BatchResult", "simulate_batch"]
+
+MANIFEST_FORMAT = "pneumact-batch/2"
+MAX_DEFAULT_CHUNK = 250  # rows; keeps progress and checkpoints frequent on big batches
+
+
+@dataclass
+class BatchResult:
+    """Results of a batch: ``table`` (parameters + features + status/error, one row per
+    set, in input order), ``signals`` (name -> N × len(time) array, NaN for failed sets),
+    ``time`` (the output grid), ``stats`` (wall time, sims/s, computed/reused counts)."""
+
+    table: pd.DataFrame
+    signals: dict[str, np.ndarray] = field(default_factory=dict)
+    time: np.ndarray | None = None
+    stats: dict[str, Any] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def failed(self) -> pd.DataFrame:
+        """The rows whose status is not 'ok' (with their error message)."""
+        return self.table[self.table["status"] != STATUS_OK]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """A copy of ``table`` (units in ``attrs['units']``)."""
+        frame = self.table.copy()
+        frame.attrs["units"] = dict(self.units)
+        return frame
+
+    def __repr__(self) -> str:
+        return (f"BatchResult({len(self.table)} sets, {len(self.failed)} failed, "
+                f"features={[c for c in self.table.columns if c in FEATURE_UNITS]}, "
+                f"signals={list(self.signals)})")
+
+
+# --------------------------------------------------------------------------- planning
+def _plan(model, experiment, table, features, signals, t_eval, solver, reference, y0):
+    """(spec, values, runner): the checked batch and its prepared kernel."""
+    assembly = assemble(model)
+    columns, values = check_table(table, assembly)
+    reference = check_reference(reference)
+    has_pressure = assembly.signal_source("pressure") is not None
+    if features is None:
+        features = default_features(has_pressure, reference is not None, signals)
+    features = check_features(features, has_pressure, reference is not None,
+                              type(model).__name__)
+    t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
+    y0 = None if y0 is None else np.asarray(y0, dtype=float)
+    spec = BatchSpec(model, experiment, solver, columns, features, (), t_eval, reference, y0)
+    runner = ChunkRunner(spec)  # prepares the kernel (and checks the experiment) up front
+    names = [*assembly.state_names,
+             *(f"drive_{experiment.quantity}" if n == "drive" else n
+               for n in assembly.output_names if n not in assembly.state_names)]
+    spec = replace(spec, signals=check_names("signal", signals or (), names))
+    runner.spec = spec
+    runner.signal_sources = np.array([runner.source_of(n) for n in spec.signals],
+                                     dtype=np.int64).reshape(len(spec.signals), 2)
+    return spec, values, runner
+
+
+def _client_for(scheduler):
+    """(client, whether we own it) for an address string or a distributed.Client."""
+    try:
+        from distributed import Client
+    except ImportError as exc:  # pragma: no cover - dask is a declared extra
+        raise PneumactError("scheduler= needs dask.distributed (pip install "
+                            "'pneumact[dask]')") from exc
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if isinstance(scheduler, str):
+        try:
+            return Client(scheduler, timeout="20s"), True
+        except OSError as exc:
+            raise PneumactError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}"
+                                ) from exc
+    raise ParameterError(f"scheduler = {scheduler!r}: must be an address string "
+                         "('tcp://host:8786') or a distributed.Client")
+
+
+# --------------------------------------------------------------------------- execution
+def _run_threads(runner: ChunkRunner, starts, rows_of, todo, n_workers: int, finished) -> None:
+    """Chunks on a thread pool; results handed to ``finished`` in completion order."""
+    pool = ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="pneumact-batch")
+    try:
+        pending = {pool.submit(runner.run, starts[c], rows_of[c]): c for c in todo}
+        while pending:
+            ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in ready:
+                finished(pending.pop(future), future.result())
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _run_dask(client, spec: BatchSpec, starts, rows_of, todo, finished) -> None:
+    """One Dask task per chunk, running ``run_chunk`` in the worker processes."""
+    from distributed import as_completed
+
+    remote_spec = client.scatter(spec, broadcast=True)
+    token = spec.token()[:12]
+    futures = {client.submit(run_chunk, remote_spec, starts[c], rows_of[c], pure=False,
+                             key=f"pneumact-batch-{token}-{c}-{os.urandom(4).hex()}"): c
+               for c in todo}
+    try:
+        for future in as_completed(futures):
+            finished(futures[future], future.result())
+    finally:
+        for future in futures:
+            future.cancel()
+
+
+def _assemble(table: pd.DataFrame, spec: BatchSpec, values: np.ndarray,
+              chunks: list[ChunkOutput], t_out: np.ndarray) -> BatchResult:
+    frame = pd.DataFrame(values, columns=list(spec.columns), index=table.index)
+    feats = np.concatenate([ch.features for ch in chunks], axis=0)
+    for j, name in enumerate(spec.features):
+        frame[name] = feats[:, j]
+    frame["status"] = [s for ch in chunks for s in ch.status]
+    frame["error"] = [e for ch in chunks for e in ch.error]
+    signals = {name: np.concatenate([ch.signals[name] for ch in chunks], axis=0)
+               for name in spec.signals}
+    return BatchResult(frame, signals, np.asarray(t_out).copy(), {}, spec.units)
+
+
+# --------------------------------------------------------------------------- entry point
+def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
+                   features: Sequence[str] | None = None, signals: Sequence[str] | None = None,
+                   t_eval=None, solver: Solver | None = None, scheduler=None,
+                   out_dir: str | os.PathLike | None = None, resume: bool = False,
+                   overwrite: bool = False, chunk_size: int | None = None,
+                   workers: int | None = None,
+                   progress: Callable[[int, int, int], None] | None = None,
+                   reference=None, y0=None) -> BatchResult:
+    """Simulate ``model`` under ``experiment`` once per row of ``table``.
+
+    ``table``: one column per parameter name (SI values), one row per set. ``features``:
+    names from ``pneumact.analysis.FEATURES`` (default: all that apply, none if
+    ``signals`` are asked; ``rms_error``/``max_error`` need ``reference=(time,
+    position)``); ``signals``: signal names kept on the output grid ``t_eval`` (default
+    the experiment's grid, on which features are computed too). ``workers`` threads
+    locally (default all cores), or a Dask ``scheduler`` (address or
+    ``distributed.Client``). ``out_dir`` makes the batch resumable: ``resume=True``
+    continues it, ``overwrite=True`` starts it again. ``progress(done, failed, total)``
+    is called after each chunk. ``y0`` fixes the initial state of every run.
+    """
+    started = _time.perf_counter()
+    solver = Rodas4() if solver is None else solver
+    if resume and out_dir is None:
+        raise ParameterError("resume=True needs out_dir (the directory of the batch to resume)")
+    spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
+                                 reference, y0)
+    n, n_t = values.shape[0], runner.t_out.size
+    client, own_client = (None, False) if scheduler is None else _client_for(scheduler)
+    try:
+        n_workers = (max(1, len(client.scheduler_info().get("workers", {}))) if client
+                     else max(1, int(workers) if workers else (os.cpu_count() or 1)))
+        store = None if out_dir is None else ChunkStore(out_dir)
+        if chunk_size is None and store is not None and resume:
+            chunk_size = store.saved_chunk_size()
+        if chunk_size is None:
+            chunk_size = max(1, min(math.ceil(n / (4 * n_workers)), MAX_DEFAULT_CHUNK))
+        if int(chunk_size) < 1:
+            raise ParameterError(f"chunk_size = {chunk_size}: must be >= 1")
+        chunk_size = int(chunk_size)
+        starts = list(range(0, n, chunk_size))
+        chunks: list[ChunkOutput | None] = [None] * len(starts)
+        if store is not None:
+            manifest = {"format": MANIFEST_FORMAT, "n_rows": n, "chunk_size": chunk_size,
+                        "table": table_hash(spec.columns, values), **spec.describe()}
+            if store.open(manifest, resume, overwrite):
+                for c, s in enumerate(starts):
+                    chunks[c] = store.read_chunk(c, s, min(chunk_size, n - s), spec.features,
+                                                 spec.signals, n_t)
+        reused = sum(ch is not None for ch in chunks)
+        todo = [c for c, ch in enumerate(chunks) if ch is None]
+        done = sum(len(ch) for ch in chunks if ch is not None)
+        failed = sum(sum(st != STATUS_OK for st in ch.status) for ch in chunks if ch is not None)
+        if progress is not None:
+            progress(done, failed, n)
+
+        def finished(c: int, chunk: ChunkOutput) -> None:
+            nonlocal done, failed
+            chunks[c] = chunk
+            if store is not None:
+                store.write_chunk(c, chunk, spec.features, spec.signals, runner.t_out)
+            done += len(chunk)
+            failed += sum(st != STATUS_OK for st in chunk.status)
+            if progress is not None:
+                progress(done, failed, n)
+
+        compute_start, cpu_start = _time.perf_counter(), _time.process_time()
+        rows_of = {c: values[starts[c]:starts[c] + chunk_size] for c in todo}
+        if client is not None:
+            _run_dask(client, spec, starts, rows_of, todo, finished)
+        elif n_workers == 1 or len(todo) <= 1:
+            for c in todo:
+                finished(c, runner.run(starts[c], rows_of[c]))
+        else:
+            _run_threads(runner, starts, rows_of, todo, n_workers, finished)
+        compute_wall = _time.perf_counter() - compute_start
+        compute_cpu = _time.process_time() - cpu_start
+    finally:
+        if own_client:
+            client.close()
+    result = _assemble(table, spec, values, chunks, runner.t_out)
+    computed = sum(len(chunks[c]) for c in todo)
+    result.stats = {
+        "n_sets": n, "failed": int((result.table["status"] != STATUS_OK).sum()),
+        "computed": computed, "computed_chunks": len(todo), "reused_chunks": reused,
+        "chunks": len(starts), "chunk_size": chunk_size, "workers": n_workers,
+        "scheduler": None if client is None else getattr(client.scheduler, "address", None),
+        "steps": int(sum(int(np.sum(chunks[c].steps)) for c in todo)),
+        "wall_time_s": _time.perf_counter() - started, "compute_time_s": compute_wall,
+        "compute_cpu_s": compute_cpu,
+        "sims_per_s": computed / compute_wall if compute_wall > 0 and computed else 0.0,
+    }
+    if store is not None:
+        store.write_final(result.table, result.units, result.signals, result.time)
+    return result

@@ -1,0 +1,111 @@
+"""One chunk of a batch: its rows checked with numpy, then simulated in one compiled call.
+
+The compiled loop (``templates/batch.py``) sets each row's values, finds the initial
+state, integrates and computes the features inside the kernel, so a thread running a
+chunk holds no Python lock while it works. A runner is prepared once per batch (and per
+Dask worker process) and reused for every chunk.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from ...analysis.features import FEATURES, N_FEATURES
+from ...io.chunks import ChunkOutput
+from ...parameters.validation import row_problems
+from ..result import SolverStats
+from ..simulate import prepare
+from .spec import BatchSpec
+
+__all__ = ["STATUS_INVALID", "STATUS_OK", "STATUS_SOLVER", "ChunkRunner", "run_chunk"]
+
+STATUS_OK = "ok"
+STATUS_INVALID = "invalid"  # a parameter value out of its range, or a broken relation
+STATUS_SOLVER = "solver"  # the integrator failed (step underflow, NaN, max_steps)
+
+
+class ChunkRunner:
+    """The prepared kernel of one batch and the compiled per-chunk loop."""
+
+    def __init__(self, spec: BatchSpec):
+        self.spec = spec
+        prep = prepare(spec.model, spec.experiment, spec.solver, spec.t_eval, spec.y0)
+        self.prep = prep
+        assembly = prep.assembly
+        self.slot_ptr, self.slot_idx = assembly.column_slots(spec.columns)
+        self.base = dict(spec.model.params.values)
+        pressure = assembly.signal_source("pressure")
+        self.sources = np.array([assembly.signal_source("position"),
+                                 assembly.signal_source("velocity"),
+                                 pressure if pressure is not None else (-1, -1)],
+                                dtype=np.int64)
+        self.signal_sources = np.array([self.source_of(name) for name in spec.signals],
+                                       dtype=np.int64).reshape(len(spec.signals), 2)
+        self.feature_index = np.array([FEATURES.index(f) for f in spec.features],
+                                      dtype=np.int64)
+        self.atol_given = spec.solver.atol_overrides(assembly.state_names)
+        self.y0_given = (np.asarray(spec.y0, dtype=float) if spec.y0 is not None
+                         else np.empty(0))
+        empty = np.empty(0)
+        self.ref_t, self.ref_x = spec.reference if spec.reference is not None else (empty, empty)
+
+    @property
+    def t_out(self) -> np.ndarray:
+        return self.prep.t_out
+
+    def source_of(self, name: str) -> tuple[int, int]:
+        """Where a signal of the batch comes from (the experiment's drive renamed)."""
+        quantity = self.spec.experiment.quantity
+        if name == f"drive_{quantity}":
+            name = "drive"
+        return self.prep.assembly.signal_source(name)
+
+    def run(self, start: int, values: np.ndarray) -> ChunkOutput:
+        """Simulate the rows ``values`` (n × columns); row k is set ``start + k``."""
+        spec, prep, kernel = self.spec, self.prep, self.prep.kernel
+        values = np.ascontiguousarray(values, dtype=float).reshape(-1, len(spec.columns))
+        n, n_t = values.shape[0], prep.t_out.size
+        problems = row_problems(self.base, spec.columns, values)
+        valid = np.array([p is None for p in problems])
+        features = np.full((n, N_FEATURES), np.nan)
+        signals = np.full((n, len(spec.signals), n_t), np.nan)
+        info = np.zeros((n, kernel.INFO_LENGTH))
+        solver = spec.solver
+        kernel.run_rows(prep.vector, self.slot_ptr, self.slot_idx, values, valid,
+                        self.y0_given, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
+                        True if solver.explicit else None, solver.rtol, self.atol_given,
+                        solver.h_init, solver.h_max, solver.max_steps, self.sources,
+                        self.ref_t, self.ref_x, features, self.signal_sources, signals, info)
+        status, error = [], []
+        for i in range(n):
+            stats = SolverStats.from_info(kernel, info[i])
+            if problems[i] is not None:
+                status.append(STATUS_INVALID)
+                error.append(problems[i])
+            elif not stats.ok:
+                status.append(STATUS_SOLVER)
+                error.append(f"{type(solver).__name__} failed at t = {stats.t:.9g} s after "
+                             f"{stats.steps} steps: {stats.reason}")
+            else:
+                status.append(STATUS_OK)
+                error.append("")
+        return ChunkOutput(start, np.ascontiguousarray(features[:, self.feature_index]),
+                           status, error, {name: signals[:, k, :] for k, name in
+                                           enumerate(spec.signals)},
+                           info[:, kernel.INFO_STEPS].astype(np.int64))
+
+
+_RUNNERS: dict[str, ChunkRunner] = {}
+_RUNNERS_LOCK = threading.Lock()
+
+
+def run_chunk(spec: BatchSpec, start: int, values: np.ndarray) -> ChunkOutput:
+    """Simulate one chunk of rows (the Dask task; the runner is cached per process)."""
+    token = spec.token()
+    with _RUNNERS_LOCK:
+        runner = _RUNNERS.get(token)
+        if runner is None:
+            runner = _RUNNERS[token] = ChunkRunner(spec)
+    return runner.run(start, values)
