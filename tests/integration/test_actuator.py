@@ -36,7 +36,6 @@ from reference import (
     TIGHT_RTOL,
 )
 
-pytestmark = pytest.mark.integration
 
 SOLVER = Rodas4(rtol=TIGHT_RTOL)
 

@@ -15,14 +15,13 @@ import pandas as pd
 import pytest
 
 import pneumact as pa
-from pneumact import features as ft
-from pneumact.batch import BatchResult, simulate_batch
+from pneumact.analysis import features as ft
 from pneumact.errors import DataError, ParameterError, PassivityWarning
+from pneumact.simulation.batch import BatchResult, simulate_batch
+from reference import BATCH_FEATURE_RTOL as FEATURE_RTOL
 
-pytestmark = pytest.mark.integration
 
 # --- tolerances and sizes (one block) --------------------------------------------------
-FEATURE_RTOL = 1e-12  # batch features vs simulate() one by one (same code: in fact bitwise)
 N_SETS = 50  # sets compared with one-by-one simulation
 N_DASK = 20  # sets run on the LocalCluster
 N_RESUME = 24  # sets of the interrupted batch
@@ -178,7 +177,7 @@ def test_killed_batch_resumes_and_matches(tmp_path):
     out = tmp_path / "run"
     script = SETUP + f"""
 import time
-from pneumact.batch import simulate_batch
+from pneumact.simulation.batch import simulate_batch
 simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), out_dir={str(out)!r},
                chunk_size={RESUME_CHUNK}, workers=1, progress=lambda *a: time.sleep(0.5))
 """
@@ -215,9 +214,34 @@ simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), out_dir={str
     summary = pd.read_csv(out / "summary.csv")
     assert len(summary) == N_RESUME and "status" in summary.columns
 
-    again = simulate_batch(MODEL, EXPERIMENT, table, out_dir=out)  # manifest matches
+    again = simulate_batch(MODEL, EXPERIMENT, table, out_dir=out, resume=True)  # all reused
     assert again.stats["computed"] == 0
     pd.testing.assert_frame_equal(again.table, fresh.table, check_exact=True)
+
+
+def test_existing_batch_is_not_reused_without_resume(tmp_path):
+    table = random_table(4, seed=7)
+    first = simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, workers=1)
+    with pytest.raises(DataError, match=r"already holds this batch.*resume.*overwrite"):
+        simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, workers=1)
+    again = simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, overwrite=True,
+                           workers=1)
+    assert again.stats["computed"] == 4 and again.stats["reused_chunks"] == 0
+    pd.testing.assert_frame_equal(again.table, first.table, check_exact=True)
+
+
+def test_gamma_column_with_adiabatic_chamber_equals_one_by_one(vgt):
+    """The polytropic index is derived from γ in the kernel for every row (it used to be
+    fixed in Python when the vector was built)."""
+    model = pa.Actuator(vgt, valve=pa.CommandValve(), chamber=pa.Adiabatic())
+    experiment = pa.CommandCycle(period=2.0, n_points=501)
+    table = pd.DataFrame({"gamma": [1.2, 1.4, 1.6]})
+    batch = simulate_batch(model, experiment, table, signals=["pressure"], workers=1)
+    for i, gamma in enumerate(table["gamma"]):
+        one = pa.simulate(pa.Actuator(vgt.replace(gamma=gamma), valve=pa.CommandValve(),
+                                      chamber=pa.Adiabatic()), experiment)
+        np.testing.assert_array_equal(batch.signals["pressure"][i], one["pressure"])
+    assert np.ptp(batch.signals["pressure"][0] - batch.signals["pressure"][2]) > 100.0
 
 
 def test_manifest_mismatch_is_refused(tmp_path):
@@ -232,14 +256,10 @@ def test_manifest_mismatch_is_refused(tmp_path):
 
 
 def test_cli_end_to_end(tmp_path):
-    typer = pytest.importorskip("typer")
     from typer.testing import CliRunner
 
-    from pneumact.batch_cli import batch_command
+    from pneumact.cli import app
 
-    app = typer.Typer()
-    app.command("batch")(batch_command)
-    app.command("other")(lambda: None)  # a second command keeps "batch" a sub-command
     csv = tmp_path / "sets.csv"
     csv.write_text("Fc [N],Fs [N],sigma1\n2.6,3.2,214\n2.0,3.0,100\n3.0,2.0,214\n")
     out = tmp_path / "out"

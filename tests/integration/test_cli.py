@@ -13,7 +13,6 @@ from typer.testing import CliRunner
 
 from pneumact.cli import app
 
-pytestmark = pytest.mark.integration
 
 # --- reference values (one block) ----------------------------------------------------
 EXIT_USER_ERROR = 2
@@ -74,7 +73,7 @@ def test_pressure_input_csv(tmp_path):
 
 
 def test_friction_test_stick_slip(tmp_path):
-    result = invoke("friction-test", "stick-slip", "--t-end", SHORT_T_END,
+    result = invoke("friction-test", "stick-slip", "--duration", SHORT_T_END,
                     "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     assert set(RIG_COLUMNS) <= set(header(tmp_path / "friction_test.csv"))
@@ -197,3 +196,68 @@ def test_version_and_simulate_through_python_module(tmp_path):
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "sub" / "simulation.csv").exists()
     assert (tmp_path / "sub" / "hysteresis.png").exists()
+
+
+# ------------------------------------------------------------------ CLI and API in parity
+def _command(path: list[str]):
+    import typer.main
+
+    group = typer.main.get_command(app)
+    for name in path:
+        group = group.commands[name]
+    return group
+
+
+def _options(command) -> dict[str, object]:
+    return {opt: param.default for param in command.params for opt in param.opts
+            if opt.startswith("--")}
+
+
+def test_every_friction_test_setting_is_an_option():
+    from dataclasses import fields
+
+    from pneumact.cli.friction_test import option_name
+    from pneumact.experiments.friction import FRICTION_TESTS
+
+    for kind, cls in FRICTION_TESTS.items():
+        options = _options(_command(["friction-test", kind]))
+        for field in fields(cls):
+            assert option_name(field.name) in options, f"{kind}: {field.name} has no option"
+        assert {"--params", "--friction", "--out"} <= set(options)
+
+
+def test_simulate_and_batch_share_model_options_and_defaults():
+    simulate, batch = _options(_command(["simulate"])), _options(_command(["batch"]))
+    shared = ("--params", "--valve", "--friction", "--chamber", "--t-end", "--low", "--input",
+              "--rtol")
+    for option in shared:
+        assert option in simulate and option in batch, option
+        assert simulate[option] == batch[option], option
+
+
+def test_friction_test_options_reach_the_api(tmp_path):
+    """The CSV of a CLI run equals the API run with the same settings."""
+    import numpy as np
+    import pandas as pd
+
+    from conftest import load_quietly
+    from pneumact.analysis.friction_tests import run_friction_test
+    from pneumact.experiments.friction import Presliding
+
+    result = invoke("friction-test", "presliding", "--amplitude", "0.5", "--duration", "1",
+                    "--n-points", "101", "--rtol", "1e-6", "--out", str(tmp_path))
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(tmp_path / "friction_test.csv")
+    api = run_friction_test(Presliding(amplitude=0.5, duration=1.0, n_points=101, rtol=1e-6),
+                            load_quietly("canudas1995"))
+    np.testing.assert_array_equal(frame["position [m]"].to_numpy(), api.result["position"])
+
+
+def test_bad_friction_test_setting_is_one_clear_line(tmp_path):
+    result = invoke("friction-test", "presliding", "--amplitude", "1.5", "--out",
+                    str(tmp_path))
+    assert result.exit_code == EXIT_USER_ERROR
+    assert "amplitude = 1.5" in result.output and "(0, 1)" in result.output
+    result = invoke("friction-test", "break-away", "--rates", "1,x", "--out", str(tmp_path))
+    assert result.exit_code == EXIT_USER_ERROR and "--rates" in result.output
+    assert not any(tmp_path.iterdir())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact import features
+from pneumact.analysis import features
 from pneumact.errors import DataError
 
 # --- reference values and tolerances (one block) -------------------------------------

@@ -315,10 +315,25 @@ def test_reads_tudelft_headerless_file():
     names = ["time", "laser", "pressure_v", "force_v", "position", "pressure_gauge", "force"]
     units = {"time": "ms", "laser": "V", "pressure_v": "V", "force_v": "V", "position": "mm",
              "pressure_gauge": "bar", "force": "N"}  # fmt: skip
-    record = read_record(TUDELFT / "O-ring_1bar.csv", names=names, units=units)
+    record = read_record(TUDELFT / "O-ring_1bar.csv", names=names, units=units,
+                         p_atm=101325.0)
     assert len(record.time) > 5000
     assert np.all(np.diff(record.time) > 0)
     assert 50.0 < record.time[-1] < 120.0  # about one to two minutes, in s
     assert -0.01 < record["position"].min() and record["position"].max() < 0.05  # m
-    assert 0.5e5 < np.median(record["pressure_gauge"]) < 1.5e5  # ~1 bar gauge, in Pa
+    assert 1.5e5 < np.median(record["pressure"]) < 2.5e5  # ~1 bar gauge = ~2 bar absolute
     assert record.units["force"] == "N" and record.units["laser"] == "V"
+
+
+def test_gauge_column_becomes_absolute_pressure_with_p_atm(tmp_path):
+    path = _write(tmp_path / "g.csv", "time [s],pressure_gauge [kPa]\n0,-10\n1,-80\n")
+    with pytest.raises(DataError, match="p_atm"):
+        read_record(path)
+    record = read_record(path, p_atm=101325.0, required=("pressure",))
+    np.testing.assert_allclose(record["pressure"], [91325.0, 21325.0])
+    assert record.units["pressure"] == "Pa" and "pressure_gauge" not in record
+
+
+def test_repeated_time_is_named_as_a_duplicate_sample(tmp_path):
+    path = _write(tmp_path / "d.csv", "time [s],position [mm]\n0,1\n1,2\n1,2\n")
+    assert "repeats" in _error(path)

@@ -12,15 +12,18 @@ import pytest
 
 from pneumact.errors import ParameterError, PassivityWarning
 from pneumact.parameters import (
-    I_POLYTROPIC,
-    INDEX,
-    PARAMETERS,
-    SPECS,
-    VECTOR_LENGTH,
     ParameterSet,
     available_params,
+    catalogue,
     load_params,
+    params_to_toml,
+    parse_value,
+    row_problems,
+    unit_registry,
+    write_params,
 )
+from pneumact.parameters.units import SI_PREFIXES, si_prefix_factor
+from reference import SHIPPED_VALUE_RTOL, UNIT_CONVERSION_RTOL
 
 # Paper Table I (+ eq. 8) in SI, and the assumed values documented in vgt-paper.toml.
 VGT_PAPER = {
@@ -100,7 +103,7 @@ def test_shipped_set_loads_in_si(name: str, expected: dict[str, float]) -> None:
     assert ps.name == name
     assert set(ps) == set(expected)
     for key, value in expected.items():
-        assert ps[key] == pytest.approx(value, rel=1e-9), key
+        assert ps[key] == pytest.approx(value, rel=SHIPPED_VALUE_RTOL), key
     assert ps.source_path is not None and ps.source_path.name == f"{name}.toml"
     assert ps.provenance["source"]
 
@@ -137,7 +140,7 @@ def test_same_value_in_other_units_loads_equal(tmp_path: Path) -> None:
     a = _load_quietly(_write(tmp_path, _toml(V0='"60 cm^3"', T='"20 degC"'), "a.toml"))
     b = _load_quietly(_write(tmp_path, _toml(V0='"6e-5 m^3"', T='"293.15 K"'), "b.toml"))
     assert a["V0"] == b["V0"] == 6e-5
-    assert a["T"] == pytest.approx(b["T"], rel=1e-12)
+    assert a["T"] == pytest.approx(b["T"], rel=UNIT_CONVERSION_RTOL)
     assert a.info["V0"].given == "60 cm^3"
 
 
@@ -235,7 +238,7 @@ def test_unknown_entry_key_and_missing_table(tmp_path: Path) -> None:
 def test_mapping_over_given_values_with_default_fallback() -> None:
     ps = _load_quietly("canudas1995")
     assert "k_stop" not in ps and len(ps) == len(CANUDAS_1995)
-    assert ps["k_stop"] == SPECS["k_stop"].default  # default when read
+    assert ps["k_stop"] == catalogue()["k_stop"].default  # default when read
     assert dict(ps.values) == dict(ps.items())
     with pytest.raises(ParameterError) as err:
         ps["A_d"]
@@ -249,7 +252,7 @@ def test_require_lists_every_missing_name() -> None:
     ps.require(["m", "sigma0", "k_stop"], "LuGre rig")  # given or defaulted: fine
     with pytest.raises(ParameterError) as err:
         ps.require(["p_atm", "m", "V0", "A_d", "gamma"], "Actuator")
-    assert "parameter set 'canudas1995' lacks A_d, V0, p_atm needed by Actuator" in str(err.value)
+    assert "parameter set 'canudas1995' lacks A_d, p_atm, V0 needed by Actuator" in str(err.value)
 
 
 def test_replace_validates_and_copies() -> None:
@@ -284,20 +287,58 @@ def test_from_dict_numbers_are_si_strings_have_units() -> None:
         ParameterSet.from_dict({"m": -1.0})
 
 
-def test_vector_layout_matches_index() -> None:
-    ps = _load_quietly("vgt-paper")
-    vec = ps.vector(polytropic_index=1.4)
-    assert vec.shape == (VECTOR_LENGTH,) and I_POLYTROPIC == len(PARAMETERS)
-    assert vec[I_POLYTROPIC] == 1.4
-    for name, i in INDEX.items():
-        if name in ps:
-            assert vec[i] == ps[name]
-        elif SPECS[name].default is not None:
-            assert vec[i] == SPECS[name].default
-        else:
-            assert np.isnan(vec[i])
-    rig = _load_quietly("canudas1995").vector()
-    assert np.isnan(rig[INDEX["A_d"]]) and rig[I_POLYTROPIC] == 1.0
+def test_toml_round_trip_keeps_values_sources_and_adds_provenance(tmp_path: Path) -> None:
+    ps = _load_quietly("vgt-paper").replace(Fc=2.5123456789012345)
+    path = write_params(ps, tmp_path / "identified.toml", {"identified": "stage (b), test"})
+    back = _load_quietly(path)
+    assert dict(back.values) == dict(ps.values)  # bit for bit
+    assert back.info["m"].source == "paper Table I"
+    assert back.provenance["identified"] == "stage (b), test"
+    assert "identified" in params_to_toml(ps, {"identified": "x"})
+
+
+def test_shipped_sets_name_their_source_not_a_machine_path() -> None:
+    for name, _ in available_params():
+        text = (Path(load_params.__code__.co_filename).parent / "sets" / f"{name}.toml"
+                ).read_text(encoding="utf-8")
+        assert "/work/" not in text and "shared/" not in text, name
+
+
+def test_every_parameter_is_declared_by_a_component_module() -> None:
+    specs = catalogue()
+    for name in ("sigma0", "Fc", "A_d", "V0", "reg_kp", "k_drive", "c_stop", "bw_n"):
+        assert name in specs
+    assert specs["c_stop"].unit == "N*s/m^2"  # Hunt-Crossley damping on the penetration
+
+
+@pytest.mark.parametrize("unit", ["m", "m^2", "m^3", "Pa", "N", "s"])
+@pytest.mark.parametrize("prefix", sorted(SI_PREFIXES))
+def test_si_prefix_fast_path_equals_pint(unit: str, prefix: str) -> None:
+    ureg = unit_registry()
+    base, _, power = unit.partition("^")
+    text = f"{prefix}{base}" + (f"^{power}" if power else "")
+    pint_text = text.replace("µ", "u").replace("μ", "u")
+    expected = float(ureg.Quantity(3.7, ureg.parse_units(pint_text)).to(unit).magnitude)
+    assert si_prefix_factor(text, unit) is not None
+    assert parse_value("x", f"3.7 {text}", unit) == pytest.approx(expected,
+                                                                   rel=UNIT_CONVERSION_RTOL)
+
+
+def test_units_pint_must_convert_are_not_taken_by_the_fast_path() -> None:
+    assert si_prefix_factor("bar", "Pa") is None
+    assert si_prefix_factor("kN*s/m", "N*s/m") is None
+    assert si_prefix_factor("g", "kg") is None
+    assert parse_value("p_atm", "1 bar", "Pa") == pytest.approx(1e5, rel=UNIT_CONVERSION_RTOL)
+
+
+def test_row_problems_check_ranges_and_relations_by_column() -> None:
+    base = dict(_load_quietly("vgt-paper").values)
+    values = np.array([[2.0, 3.0], [2.0, 1.0], [-1.0, 3.0], [np.nan, 3.0]])
+    found = row_problems(base, ("Fc", "Fs"), values)
+    assert found[0] is None
+    assert "Fs = 1 N: must be >= Fc = 2 N" in found[1]
+    assert "Fc = -1 N: must be >= 0" in found[2]
+    assert "Fc = nan N: must be a finite number" in found[3]
 
 
 def test_to_frame() -> None:

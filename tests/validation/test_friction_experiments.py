@@ -12,51 +12,33 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from pneumact.errors import ExperimentError
-from pneumact.experiments import Experiment, PiecewiseLinear
-from pneumact.experiments.friction import (
-    KINDS,
-    break_away_experiment,
-    default_solver,
+from pneumact.analysis.friction_tests import (
     lag_loop_width,
     run_friction_test,
     slip_onsets,
-    stick_slip_experiment,
+    solver_for,
 )
+from pneumact.errors import ExperimentError
+from pneumact.experiments import Experiment, PiecewiseLinear
+from pneumact.experiments.friction import FRICTION_TESTS, BreakAway, StickSlip
 from pneumact.models.friction import BoucWen, Dahl, LuGre
 from pneumact.models.rig import FrictionRig
 from pneumact.parameters import load_params
 from pneumact.simulation.simulate import prepare, simulate
-
-pytestmark = pytest.mark.validation
-
-# --- tolerances and reference values -----------------------------------------------------
-# Steady-state plateaus are held 15 bristle time constants (residual e^-15 ≈ 3e-7) and
-# integrated at rtol 1e-7; 1e-4 leaves a wide margin (measured: 6e-7).
-STEADY_STATE_RTOL = 1e-4
-# Presliding stiffness from a 0 → 0.01·Fs ramp: dF/dx = sigma0·(1 − F/g) drops by < 1 %
-# over the fit range, the ramp-following transient (ζ = 0.5, 316 rad/s) is gone after 50 ms.
-STIFFNESS_RTOL = 0.03
-# The bristle bound |z| <= Fs/sigma0 holds exactly in the model; allow rounding of rtol 1e-7.
-BRISTLE_BOUND_RTOL = 1e-6
-# Dahl closed form in space vs simulation (rtol 1e-7): force error in units of Fc.
-DAHL_FORCE_ATOL = 1e-4
-# Bouc-Wen (beta = 1, gamma = 0, n = 1) vs Dahl: the same ODE, only round-off apart.
-BOUC_WEN_DAHL_ATOL = 1e-6
-# Break-away at the slowest rate (0.01 N/s) within 1 % of Fs; at the fastest (30 N/s) the
-# peak friction has dropped to within 25 % of (Fs − Fc) above Fc (measured 1.024 N).
-BREAK_AWAY_FS_RTOL = 0.01
-BREAK_AWAY_FAST_FRACTION = 0.25
-# Stick-slip: slip onsets (velocity > 10·vs) repeat with a constant period (measured
-# spread 1e-8 relative) and start when the spring force is about Fs (measured 1.491 N).
-STICK_SLIP_DURATION = 40.0
-PERIOD_RTOL = 1e-3
-ONSET_FORCE_RTOL = 0.02
-# Rodas4 (default solver, rtol 1e-7) vs scipy Radau (rtol 1e-10, atol 1e-12) over the
-# first stick phase and the first slip (0-10 s): the slip covers about 0.5 m at up to
-# 0.37 m/s, so 1e-7 relative accuracy on the slip distance is ~5e-8 m; allow 1e-6 m.
-RADAU_SPAN = 10.0
-RADAU_POSITION_ATOL = 1e-6
+from reference import (
+    BOUC_WEN_DAHL_ATOL,
+    BREAK_AWAY_FAST_FRACTION,
+    BREAK_AWAY_FS_RTOL,
+    BRISTLE_BOUND_RTOL,
+    DAHL_FORCE_ATOL,
+    ONSET_FORCE_RTOL,
+    PERIOD_RTOL,
+    RADAU_POSITION_ATOL,
+    RADAU_SPAN,
+    STEADY_STATE_RTOL,
+    STICK_SLIP_DURATION,
+    STIFFNESS_RTOL,
+)
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +50,7 @@ def params():
 
 @pytest.fixture(scope="module")
 def all_runs(params):
-    return {kind: run_friction_test(kind, params) for kind in KINDS}
+    return {kind: run_friction_test(kind, params) for kind in FRICTION_TESTS}
 
 
 @pytest.mark.parametrize("delta", [1.0, 2.0])
@@ -84,10 +66,10 @@ def test_lugre_steady_state_matches_stribeck_curve(params, delta):
 
 
 def test_presliding_initial_stiffness_is_sigma0(params):
-    setup = break_away_experiment(params, rate=0.03, final_force=0.01 * params["Fs"],
-                                  n_points=2001)
+    test = BreakAway(rates=(0.03,), final_force=0.01 * params["Fs"], n_points=2001)
+    (setup,) = test.setups(params, LuGre())
     r = simulate(FrictionRig(params, LuGre(), "force"), setup.experiment,
-                 default_solver(params))
+                 solver_for(test, params))
     fit = r.time >= 0.05
     slope = np.polyfit(r["drive_force"][fit], r["position"][fit], 1)[0]
     assert 1.0 / slope == pytest.approx(params["sigma0"], rel=STIFFNESS_RTOL)
@@ -148,7 +130,7 @@ def test_dahl_follows_closed_form_through_reversals(params):
     p = params.replace(sigma2=0.0)
     amplitude = 5 * p["Fc"] / p["sigma0"]
     r = simulate(FrictionRig(p, Dahl(), "position"), _reversal_experiment(amplitude),
-                 default_solver(p))
+                 solver_for(StickSlip(), p))
     expected = _dahl_closed_form(r["position"], p["Fc"], p["sigma0"])
     np.testing.assert_allclose(r["friction"], expected, atol=DAHL_FORCE_ATOL * p["Fc"])
     assert np.max(np.abs(r["friction"])) > 0.99 * p["Fc"]  # saturated on each leg
@@ -157,8 +139,8 @@ def test_dahl_follows_closed_form_through_reversals(params):
 def test_bouc_wen_reduces_to_dahl(params):
     p = params.replace(sigma2=0.0, bw_beta=1.0, bw_gamma=0.0, bw_n=1.0)
     exp = _reversal_experiment(5 * p["Fc"] / p["sigma0"])
-    dahl = simulate(FrictionRig(p, Dahl(), "position"), exp, default_solver(p))
-    bouc_wen = simulate(FrictionRig(p, BoucWen(), "position"), exp, default_solver(p))
+    dahl = simulate(FrictionRig(p, Dahl(), "position"), exp, solver_for(StickSlip(), p))
+    bouc_wen = simulate(FrictionRig(p, BoucWen(), "position"), exp, solver_for(StickSlip(), p))
     np.testing.assert_allclose(bouc_wen["friction"], dahl["friction"],
                                atol=BOUC_WEN_DAHL_ATOL * p["Fc"])
 
@@ -204,7 +186,7 @@ def test_break_away_force_falls_with_force_rate(params, all_runs):
 
 
 def test_stick_slip_is_periodic_with_slip_at_static_friction(params):
-    outcome = run_friction_test("stick-slip", params, t_end=STICK_SLIP_DURATION)
+    outcome = run_friction_test("stick-slip", params, duration=STICK_SLIP_DURATION)
     r = outcome.result
     assert outcome.table is None and outcome.drive_quantity == "spring"
     onsets = slip_onsets(r, 10 * params["vs"])
@@ -222,11 +204,14 @@ def test_stick_slip_is_periodic_with_slip_at_static_friction(params):
 
 
 def test_stick_slip_rodas4_agrees_with_scipy_radau(params):
-    setup = stick_slip_experiment(params, duration=RADAU_SPAN)
+    test = StickSlip(duration=RADAU_SPAN)
+    (setup,) = test.setups(params, LuGre())
     rig = FrictionRig(params, LuGre(), "spring")
-    solver = default_solver(params)
+    solver = solver_for(test, params)
     r = simulate(rig, setup.experiment, solver)
-    kernel, prm, sig, ptr, bp, _, y0, _ = prepare(rig, setup.experiment, solver)
+    prep = prepare(rig, setup.experiment, solver)
+    kernel, prm, sig, ptr, bp, y0 = (prep.kernel, prep.vector, prep.sig, prep.ptr,
+                                     prep.breakpoints, prep.y0)
     assert list(bp) == [0.0, RADAU_SPAN]
     ts = 0.5 * (bp[0] + bp[1])
 
@@ -250,5 +235,7 @@ def test_stick_slip_rodas4_agrees_with_scipy_radau(params):
 def test_unknown_kind_and_misplaced_duration_are_rejected(params):
     with pytest.raises(ExperimentError, match="stick-slip"):
         run_friction_test("stiction", params)
-    with pytest.raises(ExperimentError, match="t_end"):
+    with pytest.raises(ExperimentError, match=r"unknown setting.*t_end"):
         run_friction_test("break-away", params, t_end=1.0)
+    with pytest.raises(ExperimentError, match=r"rates = \[1.0, -2.0\]"):
+        BreakAway(rates=(1.0, -2.0))

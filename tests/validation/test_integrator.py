@@ -32,15 +32,15 @@ from reference import (
     RODAS_VS_RADAU,
 )
 
-pytestmark = pytest.mark.validation
 
 
 # ------------------------------------------------------------------ Radau reference
 def radau_reference(model, experiment) -> tuple[np.ndarray, np.ndarray]:
     """(times, states) from scipy Radau on the kernel's own rhs/jac, restarted at every
     breakpoint with the segment time ts = midpoint of the interval (as the kernel does)."""
-    kernel, prm, sig, ptr, bp, t_out, y0, atol = prepare(model, experiment,
-                                                          Rodas4(rtol=RADAU_RTOL))
+    prep = prepare(model, experiment, Rodas4(rtol=RADAU_RTOL))
+    kernel, prm, sig, ptr = prep.kernel, prep.vector, prep.sig, prep.ptr
+    bp, t_out, y0, atol = prep.breakpoints, prep.t_out, prep.y0, prep.atol
     n = y0.size
     states = np.empty((t_out.size, n))
     y = y0.copy()

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from pneumact.experiments.actuator import CommandCycle, PressureCycle
-from pneumact.features import breakaway_pressure, loop_width_position, loop_width_pressure
+from pneumact.analysis.features import breakaway_pressure, loop_width_position, loop_width_pressure
 from pneumact.models import Actuator, CommandValve, CoulombViscous, PressureRegulator
 from pneumact.simulation import Rodas4, simulate
 from reference import (
@@ -29,7 +29,6 @@ from reference import (
     VALVE_LOOP_WIDTH_RTOL,
 )
 
-pytestmark = pytest.mark.validation
 
 HIGH, LOW, PERIOD = QUASI_STATIC_CYCLE
 

@@ -302,10 +302,11 @@ def _position_errors(t, x, ref_t, ref_x):  # pragma: no cover - compiled
     for i in range(t.shape[0]):
         if not ref_t[0] <= t[i] <= ref_t[last]:
             continue
-        while k < last - 1 and ref_t[k + 1] < t[i]:
+        while k < last - 1 and ref_t[k + 1] <= t[i]:
             k += 1
         fraction = (t[i] - ref_t[k]) / (ref_t[k + 1] - ref_t[k]) if last > 0 else 0.0
-        err = x[i] - (ref_x[k] + fraction * (ref_x[min(k + 1, last)] - ref_x[k]))
+        # (1 − f)·a + f·b is exact at both nodes, like np.interp
+        err = x[i] - ((1.0 - fraction) * ref_x[k] + fraction * ref_x[min(k + 1, last)])
         total += err * err
         worst = max(worst, abs(err))
         count += 1

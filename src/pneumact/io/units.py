@@ -83,9 +83,9 @@ def _gauge_base(unit: str) -> str | None:
 
 def _gauge_error(path: Path, label: str, unit: str, base: str) -> DataError:
     return DataError(
-        f"{path}: {label} has gauge pressure unit {unit!r}; name the column "
-        f"'pressure_gauge [{base}]' (and give p_atm), or add atmospheric pressure to the "
-        f"values and give the unit as {base!r}"
+        f"{path}: {label} has gauge pressure unit {unit!r}; pneumact reads 'pressure' as "
+        f"absolute: name the column 'pressure_gauge [{base}]' (and give p_atm), or add "
+        f"atmospheric pressure to the values and give the unit as {base!r}"
     )
 
 

@@ -213,6 +213,12 @@ def lugre_scales(p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def lugre_bound(p, o):  # pragma: no cover - compiled
+    """Largest |z| the law allows: the set |σ0·z| <= max(Fs, Fc) is invariant."""
+    return max(p[o + LG_FS], p[o + LG_FC]) / p[o + LG_SIGMA0]
+
+
+@njit(cache=True)
 def _clear(g, rz, rf, o, size):  # pragma: no cover - compiled
     for k in range(size):
         g[rz, o + k] = 0.0
@@ -256,6 +262,12 @@ def dahl_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
 @njit(cache=True)
 def dahl_scales(p, o):  # pragma: no cover - compiled
     return p[o + DH_FC] / p[o + DH_SIGMA0], p[o + DH_SIGMA0], 0.0
+
+
+@njit(cache=True)
+def dahl_bound(p, o):  # pragma: no cover - compiled
+    """|σ0·z| <= Fc is invariant (dz/dt = 0 on its edge when sliding outwards)."""
+    return p[o + DH_FC] / p[o + DH_SIGMA0]
 
 
 # --------------------------------------------------------------------------- Bouc-Wen
@@ -309,6 +321,18 @@ def bouc_wen_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
 @njit(cache=True)
 def bouc_wen_scales(p, o):  # pragma: no cover - compiled
     return p[o + BW_FC] / p[o + BW_SIGMA0], p[o + BW_SIGMA0], 0.0
+
+
+@njit(cache=True)
+def bouc_wen_bound(p, o):  # pragma: no cover - compiled
+    """|s| = |σ0·z/Fc| <= 1 is invariant (normalised Bouc-Wen with β > 0, β + γ > 0)."""
+    return p[o + BW_FC] / p[o + BW_SIGMA0]
+
+
+@njit(cache=True)
+def unbounded(p, o):  # pragma: no cover - compiled
+    """A static map has no internal state to bound."""
+    return math.inf
 
 
 # --------------------------------------------------------------------------- static maps
@@ -410,12 +434,14 @@ class FrictionModel:
     def part(self) -> Part:
         module = __name__
         scales = getattr(self, "scales", f"{self.law}_scales")
+        bound = getattr(self, "bound", f"{self.law}_bound")
         return Part(
             role="friction", block=self.block,
             states=(StateSpec("bristle", "m", monotone=self.has_state),),
             functions={"friction_eval": f"{module}:{self.law}",
                        "friction_params": f"{module}:{self.law}_params",
-                       "friction_scales": f"{module}:{scales}"},
+                       "friction_scales": f"{module}:{scales}",
+                       "friction_bound": f"{module}:{bound}"},
             label=repr(self), key=self.law,
         )
 
@@ -469,6 +495,7 @@ class LuGre(FrictionModel):
     block: ClassVar[Block] = LUGRE_BLOCK
     cli_name: ClassVar[str] = "lugre"
     scales: ClassVar[str] = "lugre_scales"
+    bound: ClassVar[str] = "lugre_bound"
 
     @property
     def law(self) -> str:  # type: ignore[override]
@@ -508,6 +535,7 @@ class CoulombViscous(FrictionModel):
     cli_name = "coulomb"
     has_state = False
     scales = "static_scales_coulomb"
+    bound = "unbounded"
 
 
 class StribeckMap(FrictionModel):
@@ -518,6 +546,7 @@ class StribeckMap(FrictionModel):
     cli_name = "stribeck"
     has_state = False
     scales = "static_scales_stribeck"
+    bound = "unbounded"
 
 
 def friction_models() -> dict[str, type[FrictionModel]]:

@@ -237,6 +237,11 @@ class ChamberLaw:
         """Values of the chamber block's settings (a, b)."""
         raise NotImplementedError
 
+    def polytropic_index(self, params) -> float:
+        """n for a parameter set (the kernel derives the same from the block)."""
+        settings = self.settings()
+        return settings["chamber_n_offset"] + settings["chamber_n_gamma"] * params["gamma"]
+
 
 @dataclass(frozen=True)
 class Isothermal(ChamberLaw):

@@ -13,7 +13,8 @@ vector ``y``, and reads its parameter block at offset ``o`` of the vector ``p``:
 - ``params(..., g)``: their rows of ∂f/∂p over the block's columns;
 - ``flows(...)``: (opening u, ṁ_in, ṁ_out) for the outputs;
 - ``derive(p, o)``, ``equilibrium(t, ts, p, o, sig, ptr, y0, s)`` (the rest state of
-  the chamber under the initial input), ``scales(p, o, out, s)`` (typical magnitudes).
+  the chamber under the initial input), ``scales(p, o, out, s)`` (typical magnitudes),
+  ``project(y, s)`` (back onto the bounds the exact dynamics keep, after each step).
 
 The functions of the hot loop are thin wrappers inlined by numba around scalar-only
 functions (``chamber_rate``, ``orifice``): see ``models.friction`` on why.
@@ -122,6 +123,11 @@ def source_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - comp
 @njit(cache=True)
 def source_scales(p, o, out, s):  # pragma: no cover - compiled
     pass
+
+
+@njit(cache=True)
+def no_projection(y, s):  # pragma: no cover - compiled
+    """A valve whose states have no invariant bounds."""
 
 
 # ------------------------------------------------------------ the chamber behind a valve
@@ -396,6 +402,12 @@ def regulator_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - c
 
 
 @njit(cache=True)
+def regulator_project(y, s):  # pragma: no cover - compiled
+    """The opening follows a command clipped to [0, 1]: [0, 1] is invariant."""
+    y[s + ST_OPENING] = min(max(y[s + ST_OPENING], 0.0), 1.0)
+
+
+@njit(cache=True)
 def regulator_scales(p, o, out, s):  # pragma: no cover - compiled
     out[s + ST_PRESSURE] = p[o + PN_PATM]
     out[s + ST_OPENING] = 1.0
@@ -433,6 +445,8 @@ class Valve:
         functions = {f"valve_{name}": f"{module}:{self.prefix}_{name}" for name in _FUNCTIONS}
         if len(self.block):
             functions["valve_derive"] = "pneumact.models.pneumatics:derive_chamber"
+        projection = "regulator_project" if self.prefix == "regulator" else "no_projection"
+        functions["valve_project"] = f"{module}:{projection}"
         settings = (chamber or Isothermal()).settings() if len(self.block) else {}
         return Part(role="valve", block=self.block, states=self.states, functions=functions,
                     constants={"VALVE_PRESSURE_STATE":

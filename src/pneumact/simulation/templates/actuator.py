@@ -26,9 +26,9 @@ from pneumact.models.mechanics import (
 from pneumact.simulation.codegen import kernel
 
 # --- bound by the generator --------------------------------------------------------------
-friction_eval = friction_params = friction_scales = None
+friction_eval = friction_params = friction_scales = friction_bound = None
 valve_pressure = valve_rates = valve_partials = valve_params = valve_flows = None
-valve_derive = valve_equilibrium = valve_scales = None
+valve_derive = valve_equilibrium = valve_scales = valve_project = None
 VALVE_PRESSURE_STATE = -1
 HAS_LOAD_T = HAS_LOAD_X = True
 NSTATE = 3
@@ -181,6 +181,16 @@ def initial_state(t, ts, prm, sig, ptr, y0):
         for _ in range(LOAD_ITERATIONS):  # a load against position: fixed-point steps
             x0 = rest_position(net0 - external_load(t, ts, x0, sig, ptr)[0], k, ks, x_max)
     y0[S_POSITION] = x0
+
+
+@kernel()
+def project(prm, y):
+    """Back onto the bounds the exact dynamics never leave (the bristle deflection, the
+    regulator's opening) after a step: a loose tolerance may overshoot them slightly,
+    and the projection onto such a convex set can only bring y closer to the solution."""
+    bound = friction_bound(prm, FRICTION_LO)
+    y[S_BRISTLE] = min(max(y[S_BRISTLE], -bound), bound)
+    valve_project(y, S_VALVE)
 
 
 @kernel()

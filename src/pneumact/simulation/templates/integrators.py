@@ -29,7 +29,7 @@ from pneumact.simulation.codegen import kernel
 from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------
-rhs = jac = outputs = param_jac = derive = None
+rhs = jac = outputs = param_jac = derive = project = None
 NSTATE = 3
 NOUT = 1
 NPARAM = 0
@@ -55,6 +55,8 @@ INFO_RHS = 4
 INFO_JAC = 5
 INFO_H = 6
 INFO_LENGTH = 8
+#: |cubic term| / (|m0| + |m1| + |Δ|) up to which an interpolating cubic is trusted
+CUBIC_TRUST = 0.5
 #: h·J_ii allowed for a state that feeds itself (J_ii > 0): a growing mode is followed
 UNSTABLE_STEP = 0.5
 #: relative step of the finite differences in time (∂f/∂t) and along the trajectory
@@ -102,8 +104,17 @@ def _error_norm(err, y, ynew, rtol, atol, n):
 
 @kernel()
 def _limited(y0, m0, y1, m1):
-    """Fritsch–Carlson limited slopes (× step): the cubic then stays between y0 and y1."""
+    """Slopes (× step) for a cubic Hermite that never leaves what the step's ends say.
+
+    Where the cubic term is small against the slopes (a smooth solution, an extremum
+    inside the step) the slopes are kept: full accuracy. Where it dominates (end slopes
+    that do not represent the step, as when an output is read off a stiff transient at a
+    loose tolerance) they are limited as Fritsch and Carlson do, so the cubic stays
+    between y0 and y1.
+    """
     delta = y1 - y0
+    if abs(m0 + m1 - 2.0 * delta) <= CUBIC_TRUST * (abs(m0) + abs(m1) + abs(delta)):
+        return m0, m1
     if delta == 0.0:
         return 0.0, 0.0
     alpha = max(m0 / delta, 0.0)
@@ -127,10 +138,13 @@ def _cubic(th, y0, m0, y1, m1):
 
 
 @kernel()
-def _outputs_and_rate(t, ts, y, f, h, prm, sig, ptr, o, do, ybuf, obuf):
-    """Outputs at (t, y) and their rate along the trajectory (f = dy/dt there)."""
-    outputs(t, ts, y, prm, sig, ptr, o)
-    eps = OUTPUT_FD * h
+def _outputs_and_rate(t, ts, y, f, eps, prm, sig, ptr, o, do, ybuf, obuf, value):
+    """Outputs at (t, y) (unless ``value`` is False: kept) and their rate along the
+    trajectory (f = dy/dt there), by a difference of step ``eps`` that points into the
+    step: forward at its start, backward at its end, so a kink or a jump of an input at
+    the step's edge is not seen from the wrong side."""
+    if value:
+        outputs(t, ts, y, prm, sig, ptr, o)
     for i in range(NSTATE):
         ybuf[i] = y[i] + eps * f[i]
     outputs(t + eps, ts, ybuf, prm, sig, ptr, obuf)
@@ -139,10 +153,12 @@ def _outputs_and_rate(t, ts, y, f, h, prm, sig, ptr, o, do, ybuf, obuf):
 
 
 @kernel()
-def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out, slopes):
+def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out, slopes,
+           prm):
     """Write every requested time in (t0, t0 + h] (and ≤ t_stop); returns the next j.
 
-    ``slopes`` (2 × (NSTATE + NOUT)) receives the step's slopes, limited where needed."""
+    ``slopes`` (2 × (NSTATE + NOUT)) receives the step's slopes, limited where needed;
+    interpolated states are projected onto the model's invariant bounds like the steps."""
     for i in range(NSTATE):
         m0, m1 = h * f0[i], h * f1[i]
         if MONOTONE[i]:
@@ -161,6 +177,7 @@ def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out
         h11 = th * th * (th - 1.0)
         for i in range(NSTATE):
             y_out[j, i] = h00 * y0[i] + h10 * slopes[0, i] + h01 * y1[i] + h11 * slopes[1, i]
+        project(prm, y_out[j])
         for k in range(NOUT):
             out[j, k] = (h00 * o0[k] + h10 * slopes[0, NSTATE + k] + h01 * o1[k]
                          + h11 * slopes[1, NSTATE + k])
@@ -361,6 +378,7 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
             err = _error_norm(ks[5], y, ynew, rtol, atol, n) if finite else math.inf
             if err <= 1.0:
                 t_new = t_end if last else t + h
+                project(prm, ynew)
                 rhs(t_new, ts, ynew, prm, sig, ptr, f1)
                 n_rhs += 1
                 if sens is not None:
@@ -368,19 +386,17 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
                                         ptr, sens, work, s)
                 if j < n_out and t_out[j] <= t_new:
                     hh = t_new - t
-                    if not o0_valid:
-                        _outputs_and_rate(t, ts, y, f0, hh, prm, sig, ptr, o0, do0, ybuf,
-                                          obuf)
-                    _outputs_and_rate(t_new, ts, ynew, f1, hh, prm, sig, ptr, o1, do1, ybuf,
-                                      obuf)
+                    _outputs_and_rate(t, ts, y, f0, OUTPUT_FD * hh, prm, sig, ptr, o0, do0,
+                                      ybuf, obuf, not o0_valid)
+                    _outputs_and_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1,
+                                      do1, ybuf, obuf, True)
                     j0 = j
                     j = _dense(t, hh, y, f0, ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
-                               y_out, out, slopes)
+                               y_out, out, slopes, prm)
                     if sens is not None:
                         _sens_dense(t, hh, t_out, j0, j, work, s, sens.s_out)
                     for k in range(NOUT):
                         o0[k] = o1[k]
-                        do0[k] = do1[k]
                     o0_valid = True
                 else:
                     o0_valid = False
@@ -684,6 +700,7 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
                     finite = False
             t_new = t_end if last else t + h
             if finite:
+                project(prm, ynew)
                 rhs(t_new, ts, ynew, prm, sig, ptr, f1)
             n_rhs += 6
             en = math.inf
@@ -697,16 +714,14 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
             if en <= 1.0:
                 if j < n_out and t_out[j] <= t_new:
                     hh = t_new - t
-                    if not o0_valid:
-                        _outputs_and_rate(t, ts, y, ks[0], hh, prm, sig, ptr, o0, do0, ybuf,
-                                          obuf)
-                    _outputs_and_rate(t_new, ts, ynew, f1, hh, prm, sig, ptr, o1, do1, ybuf,
-                                      obuf)
+                    _outputs_and_rate(t, ts, y, ks[0], OUTPUT_FD * hh, prm, sig, ptr, o0, do0,
+                                      ybuf, obuf, not o0_valid)
+                    _outputs_and_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1,
+                                      do1, ybuf, obuf, True)
                     j = _dense(t, hh, y, ks[0], ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
-                               y_out, out, slopes)
+                               y_out, out, slopes, prm)
                     for k in range(NOUT):
                         o0[k] = o1[k]
-                        do0[k] = do1[k]
                     o0_valid = True
                 else:
                     o0_valid = False

@@ -12,6 +12,14 @@ friction_eval = friction_params = None
 FRICTION_LO = FRICTION_HI = 0
 # ------------------------------------------------------------------------------------------
 
+OUTPUT_NAMES = ()
+OUTPUT_UNITS = ()
+
+
+@kernel()
+def derive(prm):
+    """A friction law derives nothing."""
+
 
 @kernel()
 def law_values(v, z, prm, out):

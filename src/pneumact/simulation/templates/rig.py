@@ -10,7 +10,7 @@ from pneumact.models.rig import RG_M
 from pneumact.simulation.codegen import kernel
 
 # --- bound by the generator --------------------------------------------------------------
-friction_eval = friction_params = friction_scales = None
+friction_eval = friction_params = friction_scales = friction_bound = None
 drive_eval = drive_params = drive_start = None
 NSTATE = 3
 NPARAM = 0
@@ -107,6 +107,13 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     for i in range(NSTATE):
         y0[i] = 0.0
     y0[S_POSITION], y0[S_VELOCITY] = drive_start(t, ts, sig, ptr)
+
+
+@kernel()
+def project(prm, y):
+    """Back onto the bristle bound the exact dynamics never leave (see the actuator)."""
+    bound = friction_bound(prm, FRICTION_LO)
+    y[S_BRISTLE] = min(max(y[S_BRISTLE], -bound), bound)
 
 
 @kernel()

@@ -1,8 +1,9 @@
-"""The generated kernels' analytic Jacobian ``jac`` equals a central finite difference of
-their ``rhs``, for every friction law and every valve, at states away from the
-non-smooth points (v ≠ 0, inside the stroke or well inside an end stop, u_raw in (0, 1)).
+"""The generated kernels' analytic Jacobian ``jac`` (∂f/∂y) and parameter Jacobian
+``param_jac`` (∂f/∂ every slot of the parameter vector) equal central finite differences of
+their ``rhs``, for every friction law and every valve, at states away from the non-smooth
+points (v ≠ 0, inside the stroke or well inside an end stop, u_raw in (0, 1)).
 
-Each component combination is compiled once (~5-10 s) and cached on disk afterwards.
+Each component combination is compiled once and cached on disk afterwards.
 """
 
 from __future__ import annotations
@@ -26,9 +27,8 @@ from pneumact.models import (
 )
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
-from reference import JAC_FD_REL_STEP, JAC_RTOL
+from reference import JAC_FD_REL_STEP, JAC_RTOL, PARAM_JAC_RTOL
 
-pytestmark = pytest.mark.integration  # compiles kernels the first time
 
 # typical size of each state [x m, v m/s, z m, p Pa, u, i]: sets the FD step and the
 # scaling of the comparison (a change of y_j by its scale, seen in f_i)
@@ -45,7 +45,8 @@ MECHANICAL_STATES = [
 ]
 
 
-def _fd_check(kernel, prm, sig, ptr, t, ts, y, label):
+def _fd_check(prep, t, ts, y, label):
+    kernel, prm, sig, ptr = prep.kernel, prep.vector, prep.sig, prep.ptr
     n = y.size
     analytic = np.zeros((n, n))
     kernel.jac(t, ts, y, prm, sig, ptr, analytic)
@@ -69,6 +70,33 @@ def _fd_check(kernel, prm, sig, ptr, t, ts, y, label):
     )
 
 
+def _param_fd_check(prep, t, ts, y, label):
+    """∂f/∂prm[k] of ``param_jac`` against central differences of ``rhs`` in each slot
+    (derived slots included: the kernel reads them as they are, without re-deriving)."""
+    kernel, prm, sig, ptr = prep.kernel, prep.vector, prep.sig, prep.ptr
+    n, n_par = y.size, prm.size
+    analytic = np.zeros((n, n_par))
+    kernel.param_jac(t, ts, y, prm, sig, ptr, analytic, np.ones(n_par, dtype=np.bool_))
+    f0, f_plus, f_minus = np.empty(n), np.empty(n), np.empty(n)
+    kernel.rhs(t, ts, y, prm, sig, ptr, f0)
+    slots = prep.assembly.entries
+    for k in range(n_par):
+        h = JAC_FD_REL_STEP * max(abs(prm[k]), 1e-300)
+        plus, minus = prm.copy(), prm.copy()
+        plus[k] += h
+        minus[k] -= h
+        kernel.rhs(t, ts, y, plus, sig, ptr, f_plus)
+        kernel.rhs(t, ts, y, minus, sig, ptr, f_minus)
+        numeric = (f_plus - f_minus) / (2.0 * h)
+        # compare the change of each rate per relative change of the slot with the rate's
+        # size (its magnitude, or the largest such change)
+        size = np.maximum(np.abs(f0), np.abs(numeric * prm[k])) + 1e-300
+        error = np.abs(analytic[:, k] - numeric) * abs(prm[k]) / size
+        assert error.max() <= PARAM_JAC_RTOL, (
+            f"{label}: d f / d {slots[k].name} ({slots[k].role}) analytic "
+            f"{analytic[:, k].tolist()}, finite difference {numeric.tolist()}")
+
+
 FRICTIONS = [LuGre(), LuGre(decaying_damping=True), Dahl(), BoucWen(), CoulombViscous(),
              StribeckMap()]
 
@@ -80,12 +108,13 @@ def test_actuator_pressure_source_jacobian(friction, vgt):
     model = Actuator(vgt, friction=friction, valve=PressureSource(), load_map=load_map,
                      load=Constant(3.0))
     experiment = Experiment(Ramp(90e3, 30e3, duration=2.0), "pressure", t_end=2.0)
-    kernel, prm, sig, ptr, bp, *_ = prepare(model, experiment, Rodas4())
-    ts = 0.5 * (bp[0] + bp[1])
+    prep = prepare(model, experiment, Rodas4())
     for x, v, z in MECHANICAL_STATES:
         if not friction.has_state:
             z = 0.0
-        _fd_check(kernel, prm, sig, ptr, 0.7, ts, np.array([x, v, z]), friction.kernel)
+        y = np.array([x, v, z])
+        _fd_check(prep, 0.7, prep.segment_time, y, friction.kernel)
+        _param_fd_check(prep, 0.7, prep.segment_time, y, friction.kernel)
 
 
 PRESSURES = (20e3, 55e3, 85e3, 99.99e3)  # choked, subsonic, near-laminar, laminar inflow
@@ -95,33 +124,36 @@ def test_actuator_command_valve_jacobian(vgt):
     model = Actuator(vgt, friction=LuGre(), valve=CommandValve())
     for command in (0.2, 0.5, 0.9):
         experiment = Experiment(Constant(command), "command", t_end=1.0)
-        kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
+        prep = prepare(model, experiment, Rodas4())
         for x, v, z in MECHANICAL_STATES:
             for p in PRESSURES:
                 y = np.array([x, v, z, p])
-                _fd_check(kernel, prm, sig, ptr, 0.3, 0.5, y, f"command u={command}")
+                _fd_check(prep, 0.3, 0.5, y, f"command u={command}")
+                _param_fd_check(prep, 0.3, 0.5, y, f"command u={command}")
 
 
 def test_actuator_pressure_regulator_jacobian(vgt):
     model = Actuator(vgt, friction=LuGre(), valve=PressureRegulator())
     p_set = 55e3
     experiment = Experiment(Constant(p_set), "pressure", t_end=1.0)
-    kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
-    kp = vgt["reg_kp"] if "reg_kp" in vgt else 20.0
+    prep = prepare(model, experiment, Rodas4())
+    kp = vgt["reg_kp"]
     for x, v, z in MECHANICAL_STATES:
         for p in PRESSURES:
             for opening in (0.1, 0.6):
                 # integral state chosen so that u_raw = kp·(p − p_set)/p_atm + i = 0.5
                 integral = 0.5 - kp * (p - p_set) / vgt["p_atm"]
                 y = np.array([x, v, z, p, opening, integral])
-                _fd_check(kernel, prm, sig, ptr, 0.3, 0.5, y, "regulator")
+                _fd_check(prep, 0.3, 0.5, y, "regulator")
+                _param_fd_check(prep, 0.3, 0.5, y, "regulator")
 
 
 @pytest.mark.parametrize("friction", [LuGre(), CoulombViscous()], ids=lambda f: f.kernel)
 def test_friction_rig_spring_drive_jacobian(friction, canudas):
     model = FrictionRig(canudas, friction=friction, drive="spring")
     experiment = Experiment(Ramp(0.0, 1.0, duration=10.0), "spring", t_end=10.0)
-    kernel, prm, sig, ptr, *_ = prepare(model, experiment, Rodas4())
+    prep = prepare(model, experiment, Rodas4())
     for x, v, z in [(0.1, 0.05, 1e-5), (0.3, -0.02, -1.2e-5), (0.2, 2e-4, 3e-6)]:
         y = np.array([x, v, z if friction.has_state else 0.0])
-        _fd_check(kernel, prm, sig, ptr, 3.0, 5.0, y, friction.kernel)
+        _fd_check(prep, 3.0, 5.0, y, friction.kernel)
+        _param_fd_check(prep, 3.0, 5.0, y, friction.kernel)

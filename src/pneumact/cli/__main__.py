@@ -1,0 +1,5 @@
+"""``python -m pneumact.cli``: the command line."""
+
+from pneumact.cli import app
+
+app()

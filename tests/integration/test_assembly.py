@@ -1,0 +1,136 @@
+"""The model assembly and the kernel generator: layout by name, generated modules that
+hold only imports and constants, a cache key that follows every source the kernel uses,
+and generation that several processes can do at once."""
+
+from __future__ import annotations
+
+import ast
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pneumact as pa
+from pneumact.simulation import assemble, codegen
+
+SRC = str(Path(pa.__file__).resolve().parents[1])
+
+
+@pytest.fixture
+def valve_actuator(vgt):
+    return pa.Actuator(vgt, valve=pa.PressureRegulator(), chamber=pa.Adiabatic())
+
+
+def test_layout_is_the_components_blocks(valve_actuator):
+    assembly = assemble(valve_actuator)
+    roles = [part.role for part in assembly.parts]
+    assert roles == ["mechanics", "friction", "valve"]
+    assert assembly.state_names == ("position", "velocity", "bristle", "pressure", "opening",
+                                    "integral")
+    assert len(assembly.slots["A_d"]) == 2  # read by the mechanics and by the chamber
+    assert len(assembly.slots["sigma0"]) == 1
+    assert "k_drive" not in assembly.slots  # only what the components declare
+    assert assembly.signal_source("pressure") == (0, 3)  # a state behind a valve
+    assert assembly.signal_source("friction")[0] == 1  # a derived output
+
+
+def test_pack_update_and_values_by_name(valve_actuator, vgt):
+    assembly = assemble(valve_actuator)
+    vec = assembly.pack()
+    assert assembly.values(vec) == {name: vgt[name] for name in assembly.slots}
+    derived = {s.name: s.index for s in assembly.entries if s.kind == "derived"}
+    assert vec[derived["n_poly"]] == vgt["gamma"]  # adiabatic: n = γ
+    assembly.update(vec, {"A_d": 3e-3, "gamma": 1.3})
+    assert all(vec[i] == 3e-3 for i in assembly.slots["A_d"])
+    assert vec[derived["n_poly"]] == 1.3  # re-derived on every change
+
+
+def test_result_records_values_and_components(vgt):
+    model = pa.Actuator(vgt.replace(Fc=2.5), valve=pa.CommandValve())
+    r = pa.simulate(model, pa.CommandCycle(period=1.0, n_points=11))
+    assert r.parameters["Fc"] == 2.5 and r.parameters["V0"] == vgt["V0"]
+    assert r.components == {"mechanics": "diaphragm mechanics",
+                            "friction": "LuGre(decaying_damping=False)",
+                            "valve": "CommandValve"}
+    assert r.to_pandas().attrs["parameters"]["Fc"] == 2.5
+
+
+def test_generated_module_holds_only_imports_and_constants(valve_actuator):
+    spec = assemble(valve_actuator).kernel_spec()
+    tree = ast.parse(spec.source())
+    for node in tree.body[1:]:  # after the docstring
+        assert isinstance(node, ast.ImportFrom | ast.Assign), ast.dump(node)
+        if isinstance(node, ast.Assign):
+            ast.literal_eval(node.value)  # a constant, nothing computed
+
+
+def test_key_covers_every_source_the_kernel_imports(valve_actuator):
+    spec = assemble(valve_actuator).kernel_spec()
+    names = {p.relative_to(Path(pa.__file__).parent).as_posix()
+             for p in codegen.dependency_files(spec.modules())}
+    for needed in ("models/friction.py", "models/valves.py", "models/pneumatics.py",
+                   "models/mechanics.py", "experiments/signals.py", "simulation/linalg.py",
+                   "simulation/templates/integrators.py", "simulation/templates/batch.py",
+                   "analysis/features.py", "simulation/codegen.py"):
+        assert needed in names, needed
+    assert "cli/simulate.py" not in names  # nothing the kernel does not use
+
+
+def test_key_changes_when_a_source_or_numba_changes(valve_actuator, tmp_path, monkeypatch):
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))
+    spec = assemble(valve_actuator).kernel_spec()
+    extra = tmp_path / "dependency.py"
+    extra.write_text("X = 1\n")
+    real = codegen.dependency_files
+    monkeypatch.setattr(codegen, "dependency_files", lambda modules: [*real(modules), extra])
+
+    def key():
+        codegen.kernel_key.cache_clear()
+        return codegen.kernel_key(spec)
+
+    first = key()
+    assert key() == first  # remembered, and the same
+    extra.write_text("X = 2\n")
+    os.utime(extra, ns=(extra.stat().st_atime_ns, extra.stat().st_mtime_ns + 10**9))
+    second = key()
+    assert second != first
+    monkeypatch.setattr(codegen, "_versions", lambda: "numba 0.0.0; python (3, 0, 0)")
+    assert key() not in (first, second)
+    codegen.kernel_key.cache_clear()
+
+
+def test_two_processes_generate_the_same_kernel_at_once(tmp_path):
+    script = textwrap.dedent("""
+        import warnings, numpy as np
+        import pneumact as pa
+        warnings.simplefilter("ignore")
+        params = pa.load_params("canudas1995")
+        out = pa.CoulombViscous().evaluate(np.array([0.01, -0.02]), 0.0, params)
+        assert abs(out["force"][0] - (params["Fc"] + params["sigma2"] * 0.01)) < 1e-9
+        print("ok")
+    """)
+    env = {**os.environ, "PNEUMACT_CACHE_DIR": str(tmp_path),
+           "PYTHONPATH": os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")]))}
+    procs = [subprocess.Popen([sys.executable, "-c", script], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    outputs = [p.communicate(timeout=600) for p in procs]
+    for proc, (out, err) in zip(procs, outputs, strict=True):
+        assert proc.returncode == 0, err
+        assert out.strip() == "ok"
+    generated = list(tmp_path.glob("pneumact_kernel_law_coulomb_viscous_*.py"))
+    assert len(generated) == 1  # one file, written once
+    assert not list(tmp_path.glob(".*.tmp"))  # no temporary file left behind
+
+
+def test_parameters_not_used_by_the_model_are_refused(canudas):
+    rig = pa.FrictionRig(canudas, drive="force")
+    assembly = assemble(rig)
+    assert "A_d" not in assembly.slots
+    with pytest.raises(pa.ParameterError, match="not a parameter of FrictionRig"):
+        assembly.check_parameters(["A_d"], "table column")
+    vec = assembly.pack()
+    assert np.all(np.isfinite(vec))
