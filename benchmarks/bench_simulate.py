@@ -51,7 +51,6 @@ except ImportError:  # not installed: use the source tree next to this script
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
     import pneumact as pa
 
-from pneumact.parameters.spec import INDEX
 from pneumact.simulation.simulate import prepare
 
 RTOL = 1e-6
@@ -147,21 +146,27 @@ def compiled_wrappers(kernel, prm, sig, ptr):
     return fun_for, jac_for
 
 
+def _prepared(case: Case):
+    """(kernel, vector, sig, ptr, breakpoints, output times, y0, atol) of a case."""
+    prep = prepare(case.actuator, case.experiment, pa.Rodas4(rtol=RTOL))
+    return (prep.kernel, prep.vector, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
+            prep.y0, prep.atol, prep.assembly)
+
+
 def run_scipy(case: Case, method: str, rtol: float = RTOL, atol_factor: float = 1.0):
-    kernel, prm, sig, ptr, bp, t_out, y0, atol = prepare(case.actuator, case.experiment,
-                                                         pa.Rodas4(rtol=RTOL))
+    kernel, prm, sig, ptr, bp, t_out, y0, atol, _ = _prepared(case)
     fun_for, jac_for = compiled_wrappers(kernel, prm, sig, ptr)
     y_out, nfev, njev = integrate_by_intervals(fun_for, jac_for, bp, t_out, y0, method, rtol,
                                                atol * atol_factor)
     return y_out[:, 0], (y_out[:, 3] if case.has_pressure_state else None), None, nfev, njev
 
 
-def python_lugre_model(prm, drive, bp):
+def python_lugre_model(values, drive, bp):
     """Plain-Python rhs and Jacobian of the pressure-driven LuGre actuator (case a)."""
     m, f0, k, ad, patm, xmax, ks, cs, s0, s1, s2, fc, fs, vs, delta = (
-        prm[INDEX[name]] for name in ("m", "F0", "k", "A_d", "p_atm", "x_max", "k_stop",
-                                      "c_stop", "sigma0", "sigma1", "sigma2", "Fc", "Fs",
-                                      "vs", "delta"))
+        values[name] for name in ("m", "F0", "k", "A_d", "p_atm", "x_max", "k_stop",
+                                  "c_stop", "sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs",
+                                  "delta"))
     p_at = dict(zip(bp, np.asarray(drive(bp), dtype=float), strict=True))
     half = {0.5 * (a + b): (a, b) for a, b in itertools.pairwise(bp)}
 
@@ -174,11 +179,12 @@ def python_lugre_model(prm, drive, bp):
         g = fc + (fs - fc) * e
         dg = -(fs - fc) * e * delta * r ** (delta - 1) * math.copysign(1, v) / vs if r else 0.0
         zdot = v - s0 * abs(v) * z / g
-        fstop, dsx, dsv = 0.0, 0.0, 0.0
-        if x < 0 and -ks * x - cs * v > 0:
-            fstop, dsx, dsv = -ks * x - cs * v, -ks, -cs
-        elif x > xmax and ks * (x - xmax) + cs * v > 0:
-            fstop, dsx, dsv = -(ks * (x - xmax) + cs * v), -ks, -cs
+        fstop, dsx, dsv = 0.0, 0.0, 0.0  # Hunt-Crossley stops: pen·(ks + cs·pen_rate) >= 0
+        if x < 0 and -x * (ks - cs * v) > 0:
+            fstop, dsx, dsv = -x * (ks - cs * v), -(ks - cs * v), x * cs
+        elif x > xmax and (x - xmax) * (ks + cs * v) > 0:
+            pen = x - xmax
+            fstop, dsx, dsv = -pen * (ks + cs * v), -(ks + cs * v), -cs * pen
         net = (patm - p) * ad - (f0 + k * x) - (s0 * z + s1 * zdot + s2 * v) + fstop
         return v, z, g, dg, zdot, net, dsx, dsv
 
@@ -202,9 +208,8 @@ def python_lugre_model(prm, drive, bp):
 
 
 def run_python_lsoda(case: Case):
-    _, prm, _, _, bp, t_out, y0, atol = prepare(case.actuator, case.experiment,
-                                                         pa.Rodas4(rtol=RTOL))
-    fun_for, jac_for = python_lugre_model(prm, case.experiment.drive, bp)
+    _, prm, _, _, bp, t_out, y0, atol, assembly = _prepared(case)
+    fun_for, jac_for = python_lugre_model(assembly.values(prm), case.experiment.drive, bp)
     y_out, nfev, njev = integrate_by_intervals(fun_for, jac_for, bp, t_out, y0, "LSODA", RTOL,
                                                atol)
     return y_out[:, 0], None, None, nfev, njev
@@ -212,9 +217,8 @@ def run_python_lsoda(case: Case):
 
 def check_python_model(case: Case) -> float:
     """Max relative difference of the Python rhs/jac from the compiled ones at sample states."""
-    kernel, prm, sig, ptr, bp, _, _, _ = prepare(case.actuator, case.experiment,
-                                                 pa.Rodas4(rtol=RTOL))
-    fun_for, jac_for = python_lugre_model(prm, case.experiment.drive, bp)
+    kernel, prm, sig, ptr, bp, _, _, _, assembly = _prepared(case)
+    fun_for, jac_for = python_lugre_model(assembly.values(prm), case.experiment.drive, bp)
     rng = np.random.default_rng(1)
     worst = 0.0
     for _ in range(200):
@@ -328,7 +332,7 @@ def main(argv: list[str] | None = None) -> None:
     rows = []
     for case in make_cases():
         t_case = time.perf_counter()
-        kernel = prepare(case.actuator, case.experiment, pa.Rodas4(rtol=RTOL))[0]
+        kernel = _prepared(case)[0]
         run_pneumact(case)  # warm-up (loads/compiles the kernel, numba dispatch)
         ref_x, ref_p, ref_steps, _, _ = run_pneumact(case, REF_RTOL)
         rad_x, rad_p, _, _, _ = run_scipy(case, "Radau", REF_RTOL, REF_ATOL_FACTOR)

@@ -36,7 +36,6 @@ from reference import (
     TIGHT_RTOL,
 )
 
-
 SOLVER = Rodas4(rtol=TIGHT_RTOL)
 
 

@@ -20,7 +20,6 @@ from pneumact.errors import DataError, ParameterError, PassivityWarning
 from pneumact.simulation.batch import BatchResult, simulate_batch
 from reference import BATCH_FEATURE_RTOL as FEATURE_RTOL
 
-
 # --- tolerances and sizes (one block) --------------------------------------------------
 N_SETS = 50  # sets compared with one-by-one simulation
 N_DASK = 20  # sets run on the LocalCluster

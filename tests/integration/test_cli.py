@@ -13,7 +13,6 @@ from typer.testing import CliRunner
 
 from pneumact.cli import app
 
-
 # --- reference values (one block) ----------------------------------------------------
 EXIT_USER_ERROR = 2
 EXIT_CHECK_FAILED = 1

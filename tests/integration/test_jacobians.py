@@ -29,7 +29,6 @@ from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
 from reference import JAC_FD_REL_STEP, JAC_RTOL, PARAM_JAC_RTOL
 
-
 # typical size of each state [x m, v m/s, z m, p Pa, u, i]: sets the FD step and the
 # scaling of the comparison (a change of y_j by its scale, seen in f_i)
 STATE_SCALES = np.array([1e-3, 1e-2, 1e-5, 1e4, 1.0, 1.0])

@@ -33,7 +33,6 @@ from reference import (
 )
 
 
-
 # ------------------------------------------------------------------ Radau reference
 def radau_reference(model, experiment) -> tuple[np.ndarray, np.ndarray]:
     """(times, states) from scipy Radau on the kernel's own rhs/jac, restarted at every

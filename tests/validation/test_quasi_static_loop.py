@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.experiments.actuator import CommandCycle, PressureCycle
 from pneumact.analysis.features import breakaway_pressure, loop_width_position, loop_width_pressure
+from pneumact.experiments.actuator import CommandCycle, PressureCycle
 from pneumact.models import Actuator, CommandValve, CoulombViscous, PressureRegulator
 from pneumact.simulation import Rodas4, simulate
 from reference import (
@@ -28,7 +28,6 @@ from reference import (
     QUASI_STATIC_CYCLE,
     VALVE_LOOP_WIDTH_RTOL,
 )
-
 
 HIGH, LOW, PERIOD = QUASI_STATIC_CYCLE
 

@@ -53,7 +53,7 @@ def valve_cycle(vgt):
 
 
 def test_every_actuator_parameter_matches_central_differences(valve_cycle, vgt):
-    model, names, sens = valve_cycle
+    _, names, sens = valve_cycle
     assert len(names) > 20  # mechanics, friction, chamber and valve: all of them
 
     def make(params):

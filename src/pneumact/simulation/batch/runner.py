@@ -77,7 +77,8 @@ class ChunkRunner:
                         self.y0_given, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
                         True if solver.explicit else None, solver.rtol, self.atol_given,
                         solver.h_init, solver.h_max, solver.max_steps, self.sources,
-                        self.ref_t, self.ref_x, features, self.signal_sources, signals, info)
+                        self.ref_t, self.ref_x, len(spec.features) > 0, features,
+                        self.signal_sources, signals, info)
         status, error = [], []
         for i in range(n):
             stats = SolverStats.from_info(kernel, info[i])

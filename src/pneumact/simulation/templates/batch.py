@@ -29,7 +29,7 @@ FROM_OUTPUT = 1
 @kernel(nogil=True)
 def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_out,
              explicit, rtol, atol_given, h_init, h_max, max_steps, sources, ref_t, ref_x,
-             features, signal_sources, signals, info_rows):
+             want_features, features, signal_sources, signals, info_rows):
     """Simulate every ``valid`` row of ``values`` (n × columns, SI).
 
     Column c writes the vector slots slot_idx[slot_ptr[c]:slot_ptr[c+1]]. ``y0_given``
@@ -38,8 +38,9 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
     ``atol_given[i] > 0``
     replaces rtol × scale of state i. ``sources`` (3 × 2: kind, column) says where
     position, velocity and pressure are (pressure kind −1: none); ``features`` (n ×
-    N_FEATURES) and ``signals`` (n × k × n_t, from ``signal_sources``) are written for the
-    rows that succeed; ``info_rows`` (n × INFO_LENGTH) gets each row's solver info.
+    N_FEATURES, when ``want_features``) and ``signals`` (n × k × n_t, from
+    ``signal_sources``) are written for the rows that succeed; ``info_rows`` (n ×
+    INFO_LENGTH) gets each row's solver info.
     """
     n_t = t_out.shape[0]
     y_out = np.empty((n_t, NSTATE))
@@ -77,17 +78,24 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
             info_rows[r, i] = info[i]
         if info[INFO_STATUS] != 0:
             continue
-        x = _column(y_out, out, sources[0, 0], sources[0, 1])
-        v = _column(y_out, out, sources[1, 0], sources[1, 1])
-        has_pressure = sources[2, 0] >= 0
-        p = _column(y_out, out, sources[2, 0], sources[2, 1]) if has_pressure else x
-        all_features(t_out, x, v, p, has_pressure, ref_t, ref_x, has_reference, feats)
-        for k in range(N_FEATURES):
-            features[r, k] = feats[k]
+        if want_features:
+            _features(t_out, y_out, out, sources, ref_t, ref_x, has_reference, feats)
+            for k in range(N_FEATURES):
+                features[r, k] = feats[k]
         for s in range(signal_sources.shape[0]):
             column = _column(y_out, out, signal_sources[s, 0], signal_sources[s, 1])
             for j in range(n_t):
                 signals[r, s, j] = column[j]
+
+
+@kernel()
+def _features(t_out, y_out, out, sources, ref_t, ref_x, has_reference, feats):
+    """Every feature of one run, from the columns ``sources`` points at."""
+    x = _column(y_out, out, sources[0, 0], sources[0, 1])
+    v = _column(y_out, out, sources[1, 0], sources[1, 1])
+    has_pressure = sources[2, 0] >= 0
+    p = _column(y_out, out, sources[2, 0], sources[2, 1]) if has_pressure else x
+    all_features(t_out, x, v, p, has_pressure, ref_t, ref_x, has_reference, feats)
 
 
 @kernel()
