@@ -138,3 +138,18 @@ LOOSE_FRICTION_MARGIN = 0.05
 LONG_CYCLE_PERIODS = (20.0, 200.0, 2000.0)  # s: the paper's slow loop, 10x and 100x slower
 LONG_CYCLE_H_MAX = 1e-3  # s: the converged reference (200 s: 1e-3 and 2e-4 agree to 0.03 %)
 LONG_CYCLE_WIDTH_RTOL = 5e-3  # issue #7: within 0.5 % (measured ≤ 0.06 %)
+
+# ------------------------------------------------------------------- round-off and such
+ROUND_OFF_ATOL = 1e-15  # absolute floor for values that are exactly zero in exact arithmetic
+FLOW_ROUND_OFF_RTOL = 1e-14  # Φ and choked flow: the same formula evaluated twice
+TEXTBOOK_CRITICAL_RATIO = 0.528  # r_c of air, as textbooks print it ...
+TEXTBOOK_DIGITS = 1e-3  # ... to three digits
+LAMINAR_CONDUCTANCE_RTOL = 1e-6  # ṁ/Δp constant on the laminar branch (linear in Δp)
+ZERO_WIDTH_PA = 1e-9  # Pa: a loop of zero width, up to round-off on ~1e5 Pa values
+BREAKAWAY_INTERPOLATION_RTOL = 1e-9  # linear interpolation between samples, exact in theory
+IO_ROUND_TRIP_RTOL = 1e-15  # ms -> s conversion on reading: one multiplication
+LOOSE_ORACLE_ERROR = 1e-2  # m: rtol 1e-4 on the oscillator is far better than this
+STUCK_VELOCITY_FRACTION = 1e-3  # "stuck": |v| below 0.1 % of the pulling speed
+REL_TOL = 1e-9  # features: exact answers on piecewise-linear data, up to rounding
+CONVERGED_RTOL = 1e-10  # a run converged well past the tolerance of the run it checks
+STICK_SLIP_RADAU_ATOL = 1e-12  # scipy Radau reference of the stick-slip rig (m, m/s, m)

@@ -7,6 +7,12 @@ import pytest
 
 from pneumact.analysis import features
 from pneumact.errors import DataError
+from reference import (
+    BREAKAWAY_INTERPOLATION_RTOL,
+    REL_TOL,
+    ROUND_OFF_ATOL,
+    ZERO_WIDTH_PA,
+)
 
 # --- reference values and tolerances (one block) -------------------------------------
 P_ATM = 1e5  # Pa
@@ -17,7 +23,6 @@ COULOMB = 2.6  # N
 X_MAX = 0.02  # m
 P_HIGH, P_LOW = 100e3, 20e3  # Pa
 SAMPLES_PER_BRANCH = 2001
-REL_TOL = 1e-9  # exact answers on piecewise-linear data, up to rounding
 
 
 def coulomb_play(cycles: int = 1, friction: float = COULOMB):
@@ -45,9 +50,9 @@ def test_coulomb_play_widths_are_2Fc_over_A_and_2Fc_over_k(cycles):
 
 def test_pure_line_has_zero_width_and_zero_area():
     _, p, x = coulomb_play(friction=0.0)
-    assert features.loop_width_pressure(p, x) == pytest.approx(0.0, abs=1e-9)
-    assert features.loop_width_position(p, x) == pytest.approx(0.0, abs=1e-15)
-    assert features.loop_area(p, x) == pytest.approx(0.0, abs=1e-9)
+    assert features.loop_width_pressure(p, x) == pytest.approx(0.0, abs=ZERO_WIDTH_PA)
+    assert features.loop_width_position(p, x) == pytest.approx(0.0, abs=ROUND_OFF_ATOL)
+    assert features.loop_area(p, x) == pytest.approx(0.0, abs=ZERO_WIDTH_PA)
 
 
 def test_coulomb_play_area_is_width_times_travel():
@@ -88,7 +93,7 @@ def test_breakaway_ignores_presliding_and_finds_motion():
     t_move = 5.0 + (threshold - 30e-6) / 1e-3
     expected = P_HIGH - 8e3 * t_move
     assert features.breakaway_pressure(time, pressure, position) == pytest.approx(
-        expected, rel=1e-9)
+        expected, rel=BREAKAWAY_INTERPOLATION_RTOL)
 
 
 def test_breakaway_is_nan_without_motion():

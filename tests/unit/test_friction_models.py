@@ -13,6 +13,7 @@ from reference import (
     FD_SAMPLES,
     FD_SPEED_RANGE,
     FRICTION_RTOL,
+    ROUND_OFF_ATOL,
     SLIDING_VELOCITIES,
     STATIC_MAP_MIN_SPEED_FACTOR,
     STEADY_ZDOT_RTOL,
@@ -81,7 +82,7 @@ def test_bouc_wen_with_beta1_gamma0_n1_is_dahl(vgt):
     bw = BoucWen().evaluate(v, z, params)
     dahl = Dahl().evaluate(v, z, params)
     for key in ("zdot", "force", "dzdot_dv", "dzdot_dz", "dforce_dv", "dforce_dz"):
-        np.testing.assert_allclose(bw[key], dahl[key], rtol=FRICTION_RTOL, atol=1e-15,
+        np.testing.assert_allclose(bw[key], dahl[key], rtol=FRICTION_RTOL, atol=ROUND_OFF_ATOL,
                                    err_msg=key)
 
 

@@ -19,6 +19,7 @@ from pneumact.io import (
     read_table,
     write_table,
 )
+from reference import IO_ROUND_TRIP_RTOL
 
 SHARED = Path(__file__).parents[2].parent / "shared"
 TUDELFT = SHARED / "data" / "pneumatic_cylinder_friction_tudelft"
@@ -183,7 +184,7 @@ def test_parquet_record_round_trip(tmp_path, frame):
     in_ms = frame.assign(time=frame["time"] * 1e3)
     path = write_table(in_ms, tmp_path / "r.parquet", {**UNITS, "time": "ms"})
     record = read_record(path)
-    np.testing.assert_allclose(record.time, frame["time"].to_numpy(), rtol=1e-15)
+    np.testing.assert_allclose(record.time, frame["time"].to_numpy(), rtol=IO_ROUND_TRIP_RTOL)
     np.testing.assert_array_equal(record["pressure"], frame["pressure"].to_numpy())
 
 

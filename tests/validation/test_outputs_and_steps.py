@@ -10,6 +10,7 @@ from pneumact.analysis.features import loop_width_position, loop_width_pressure
 from pneumact.experiments.friction import StickSlip
 from reference import (
     BOUND_RTOL,
+    CONVERGED_RTOL,
     LONG_CYCLE_H_MAX,
     LONG_CYCLE_PERIODS,
     LONG_CYCLE_WIDTH_RTOL,
@@ -22,7 +23,7 @@ from reference import (
 def stick_slip(canudas):
     (setup,) = StickSlip(duration=20.0).setups(canudas, pa.LuGre())
     rig = pa.FrictionRig(canudas, drive="spring")
-    reference = pa.simulate(rig, setup.experiment, pa.Rodas4(rtol=1e-10))
+    reference = pa.simulate(rig, setup.experiment, pa.Rodas4(rtol=CONVERGED_RTOL))
     return rig, setup.experiment, reference
 
 

@@ -35,7 +35,7 @@ HIGH, LOW, PERIOD = QUASI_STATIC_CYCLE
 @pytest.fixture(scope="module")
 def paper_loop(vgt):
     """The paper's set-up: ideal pressure source, LuGre with delta = 1 (stick-slip)."""
-    return simulate(Actuator(vgt), PressureCycle(HIGH, LOW, PERIOD), Rodas4(rtol=1e-6))
+    return simulate(Actuator(vgt), PressureCycle(HIGH, LOW, PERIOD), Rodas4())
 
 
 def test_loop_width_in_pressure_is_twice_coulomb_over_area(paper_loop, vgt):
