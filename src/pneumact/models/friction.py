@@ -104,6 +104,17 @@ def _sign(v):  # pragma: no cover - compiled
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
+@njit(cache=True, inline="always")
+def _power(a, exponent):  # pragma: no cover - compiled
+    """a**exponent, without a pow() call for the exponents 1 and 2 (the paper's δ, and
+    Canudas de Wit's): the Stribeck curve is evaluated at every stage of every step."""
+    if exponent == 1.0:
+        return a
+    if exponent == 2.0:
+        return a * a
+    return a**exponent
+
+
 @njit(cache=True)
 def stribeck_curve(v, fc, fs, vs, delta):  # pragma: no cover - compiled
     """g(v) = Fc + (Fs − Fc)·exp(−(|v|/vs)^δ) and its derivative dg/dv."""
@@ -111,21 +122,21 @@ def stribeck_curve(v, fc, fs, vs, delta):  # pragma: no cover - compiled
     a = abs(v) / vs
     if a == 0.0:
         return fc + ds, 0.0
-    ad = a**delta
+    ad = _power(a, delta)
     e = math.exp(-ad)
     return fc + ds * e, -ds * e * delta * ad / a * _sign(v) / vs
 
 
 @njit(cache=True)
 def stribeck_curve_params(v, fc, fs, vs, delta):  # pragma: no cover - compiled
-    """(∂g/∂Fc, ∂g/∂Fs, ∂g/∂vs, ∂g/∂δ) of the Stribeck curve."""
+    """g(v) and its derivatives (∂g/∂Fc, ∂g/∂Fs, ∂g/∂vs, ∂g/∂δ)."""
     a = abs(v) / vs
     if a == 0.0:
-        return 0.0, 1.0, 0.0, 0.0
-    ad = a**delta
+        return fs, 0.0, 1.0, 0.0, 0.0
+    ad = _power(a, delta)
     e = math.exp(-ad)
     ds = fs - fc
-    return 1.0 - e, e, ds * e * delta * ad / vs, -ds * e * ad * math.log(a)
+    return fc + ds * e, 1.0 - e, e, ds * e * delta * ad / vs, -ds * e * ad * math.log(a)
 
 
 # --------------------------------------------------------------------------- LuGre
@@ -145,8 +156,7 @@ def lugre_law(v, z, s0, s1, ds1_dv, s2, fc, fs, vs, delta):  # pragma: no cover 
 @njit(cache=True)
 def _lugre_rate_params(v, z, s0, fc, fs, vs, delta):  # pragma: no cover - compiled
     """dz/dt and its derivatives in σ0, Fc, Fs, vs, δ (σ1, σ2 do not enter it)."""
-    g = stribeck_curve(v, fc, fs, vs, delta)[0]
-    dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
+    g, dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
     av = abs(v)
     dz_dg = s0 * av * z / (g * g)
     return (v - s0 * av * z / g, -av * z / g, dz_dg * dg_dfc, dz_dg * dg_dfs,
@@ -383,8 +393,7 @@ def stribeck_map_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
     vr = p[o + SM_VREG]
     th = math.tanh(v / vr)
     fc, fs, vs, delta = p[o + SM_FC], p[o + SM_FS], p[o + SM_VS], p[o + SM_DELTA]
-    gv = stribeck_curve(v, fc, fs, vs, delta)[0]
-    dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
+    gv, dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
     _clear(g, rz, rf, o, STRIBECK_SIZE)
     g[rf, o + SM_FC] = dg_dfc * th
     g[rf, o + SM_FS] = dg_dfs * th

@@ -174,7 +174,8 @@ def kernel_key(spec: KernelSpec) -> str:
             return saved["key"]
     except (OSError, ValueError, KeyError, TypeError):
         pass
-    files = dependency_files(spec.modules())
+    # the generator itself decides how the kernel is compiled (options, binding)
+    files = [*dependency_files(spec.modules()), Path(__file__).resolve()]
     digest = hashlib.sha256(text.encode())
     for path in files:
         digest.update(path.name.encode())
@@ -223,7 +224,10 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str) -> None:
         bound.__qualname__ = f"{template.__name__.rpartition('.')[2]}.{fn.__qualname__}"
         bound.__module__ = namespace["__name__"]
         bound.__doc__ = fn.__doc__
-        namespace[name] = numba.njit(cache=True, **fn.__kernel_options__)(bound)
+        options = dict(fn.__kernel_options__)
+        if name.startswith("_"):  # called from compiled code only: no Python wrapper
+            options.setdefault("no_cpython_wrapper", True)
+        namespace[name] = numba.njit(cache=True, **options)(bound)
 
 
 def load(spec: KernelSpec) -> types.ModuleType:

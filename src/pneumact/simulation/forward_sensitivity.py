@@ -123,7 +123,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     s0 = np.zeros((n, len(names))) if y0 is not None else initial_sensitivity(prep, names)
     y_out = np.empty((n_t, n))
     out = np.empty((n_t, kernel.NOUT))
-    s_out = np.empty((n_t, n, len(names)))
+    s_out = np.empty((n, n_t, len(names)))  # one contiguous n_t × P block per state
     info = np.zeros(kernel.INFO_LENGTH)
     start = _time.perf_counter()
     y_end = kernel.integrate_rodas4_sens(
@@ -135,7 +135,9 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     if not stats.ok:
         raise failure(prep, solver, stats, y_end)
     result = Result.from_run(prep, experiment, solver, y_out, out, stats, wall)
-    sens = {name: s_out[:, i, :].copy() for i, name in enumerate(assembly.state_names)}
+    handed_out = s_out.view()  # read-only views; the kernel keeps the writeable array
+    handed_out.flags.writeable = False
+    sens = {name: handed_out[i] for i, name in enumerate(assembly.state_names)}
     derived = _output_sensitivities(prep, experiment, result, sens, y_out, s_out,
                                     (w_ptr, w_idx, w_val), len(names))
     specs = catalogue()
@@ -155,11 +157,12 @@ def _output_sensitivities(prep, experiment, result, sens, y_out, s_out, directio
             bp, t_out = prep.breakpoints, prep.t_out
             k = np.clip(np.searchsorted(bp, t_out, side="right") - 1, 0, bp.size - 2)
             ts_out = 0.5 * (bp[k] + bp[k + 1])
-            d_out = np.empty((t_out.size, kernel.NOUT, n_par))
+            d_out = np.empty((kernel.NOUT, t_out.size, n_par))
             kernel.output_sensitivities(t_out, ts_out, y_out, s_out, prep.vector.copy(),
                                         prep.sig, prep.ptr, *directions, d_out)
-            computed.append(d_out)
-        return computed[0][:, i, :].copy()
+            d_out.flags.writeable = False
+            computed.append(d_out)  # not passed to a kernel again
+        return computed[0][i]
 
     derived: dict[str, Callable[[], np.ndarray]] = {}
     for i, name in enumerate(assembly.output_names):

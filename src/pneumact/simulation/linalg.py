@@ -9,7 +9,8 @@ from numba import njit
 
 @njit(cache=True, inline="always")
 def lu_factor(a, piv, n):  # pragma: no cover - compiled
-    """In-place LU of a[:n, :n]; returns False if the matrix is singular."""
+    """In-place LU of a[:n, :n]; returns False if the matrix is singular. The diagonal
+    of U is stored as its reciprocals, so that solving multiplies instead of divides."""
     for k in range(n):
         p = k
         big = abs(a[k, k])
@@ -26,6 +27,7 @@ def lu_factor(a, piv, n):  # pragma: no cover - compiled
                 a[k, j] = a[p, j]
                 a[p, j] = tmp
         inv = 1.0 / a[k, k]
+        a[k, k] = inv
         for i in range(k + 1, n):
             a[i, k] *= inv
             f = a[i, k]
@@ -42,7 +44,7 @@ def lu_det_sign(a, piv, n):  # pragma: no cover - compiled
     for k in range(n):
         if piv[k] != k:
             sign = -sign
-        if a[k, k] < 0.0:
+        if a[k, k] < 0.0:  # the reciprocal has the sign of U's diagonal entry
             sign = -sign
     return sign
 
@@ -65,4 +67,4 @@ def lu_solve(a, piv, b, n):  # pragma: no cover - compiled
         s = b[i]
         for j in range(i + 1, n):
             s -= a[i, j] * b[j]
-        b[i] = s / a[i, i]
+        b[i] = s * a[i, i]

@@ -122,14 +122,16 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
             g[a, k] = 0.0
     x = y[S_POSITION]
     v = y[S_VELOCITY]
-    p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-    if _any(needed, FRICTION_LO, FRICTION_HI) or _any(needed, MECHANICS_LO, MECHANICS_HI):
-        m = prm[MECHANICS_LO + MC_M]
+    if _any(needed, MECHANICS_LO, MECHANICS_HI):
+        p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
         f_fric = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)[1]
         f_ext = external_load(t, ts, x, sig, ptr)[0]
         net = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)[0]
         acceleration_params(x, v, p, net, prm, MECHANICS_LO, g, S_VELOCITY)
+    if _any(needed, FRICTION_LO, FRICTION_HI):
+        # the friction force enters the acceleration as −F/m
         friction_params(v, y[S_BRISTLE], prm, FRICTION_LO, g, S_BRISTLE, S_VELOCITY)
+        m = prm[MECHANICS_LO + MC_M]
         for k in range(FRICTION_LO, FRICTION_HI):
             g[S_VELOCITY, k] = -g[S_VELOCITY, k] / m
     if _any(needed, VALVE_LO, VALVE_HI):
