@@ -7,7 +7,7 @@
 - ``chunks``: the batch engine's resumable chunk store.
 """
 
-from pneumact.io.records import Record, read_record, read_signal_csv
+from pneumact.io.records import Record, read_record, read_records, read_signal_csv
 from pneumact.io.tables import UNITS_METADATA_KEY, atomic_write, read_table, write_table
 from pneumact.io.units import KNOWN_SIGNALS
 
@@ -17,6 +17,7 @@ __all__ = [
     "Record",
     "atomic_write",
     "read_record",
+    "read_records",
     "read_signal_csv",
     "read_table",
     "write_table",

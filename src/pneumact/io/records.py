@@ -11,7 +11,7 @@ column, the data row (1-based) and what is allowed.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +28,7 @@ from pneumact.io.tables import (
 )
 from pneumact.io.units import KNOWN, convert_column, same_unit
 
-__all__ = ["Record", "read_record", "read_signal_csv"]
+__all__ = ["Record", "read_record", "read_records", "read_signal_csv"]
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
 INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
@@ -49,6 +49,113 @@ class Record:
     signals: dict[str, np.ndarray]
     units: dict[str, str]
     source: str = ""
+    meta: dict[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def from_arrays(cls, time, signals: Mapping[str, object],
+                    units: Mapping[str, str] | None = None, source: str = "record",
+                    meta: Mapping[str, str] | None = None) -> Record:
+        """A record from SI arrays (e.g. a simulation or a generated campaign), checked
+        like a file: same length, finite, time strictly increasing, at least 2 samples."""
+        from pneumact.io.units import KNOWN_SIGNALS
+
+        time = np.array(time, dtype=float)
+        if time.ndim != 1 or time.size < 2:
+            raise DataError(f"{source}: time must be 1-D with at least 2 samples, got shape "
+                            f"{time.shape}")
+        arrays = {"time": time, **{k: np.array(v, dtype=float) for k, v in signals.items()}}
+        for name, values in arrays.items():
+            if values.shape != time.shape:
+                raise DataError(f"{source}: signal {name!r} has shape {values.shape}; time has "
+                                f"{time.shape}")
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:
+                raise DataError(f"{source}: signal {name!r} has {bad.size} NaN or infinite "
+                                f"value(s), the first at sample {bad[0] + 1}")
+        _check_time(Path(source), "time", time, " s")
+        units = {n: (units or {}).get(n, KNOWN_SIGNALS.get(n, "")) for n in signals}
+        for values in arrays.values():
+            values.setflags(write=False)
+        return cls(time, {n: arrays[n] for n in signals}, units, source, dict(meta or {}))
+
+    def _derived(self, time: np.ndarray, signals: dict[str, np.ndarray], what: str) -> Record:
+        return Record.from_arrays(time, signals, self.units, f"{self.source} ({what})",
+                                  self.meta)
+
+    def crop(self, start: float | None = None, stop: float | None = None) -> Record:
+        """The samples with ``start <= time <= stop`` [s]."""
+        lo = self.time[0] if start is None else float(start)
+        hi = self.time[-1] if stop is None else float(stop)
+        keep = (self.time >= lo) & (self.time <= hi)
+        if np.count_nonzero(keep) < 2:
+            raise DataError(f"{self.source}: crop({start}, {stop}) keeps "
+                            f"{np.count_nonzero(keep)} samples; the record spans "
+                            f"{self.time[0]:.6g}..{self.time[-1]:.6g} s")
+        return self._derived(self.time[keep], {n: v[keep] for n, v in self.signals.items()},
+                             f"{lo:.6g}..{hi:.6g} s")
+
+    def resample(self, dt: float | None = None, times=None) -> Record:
+        """Linear interpolation onto a uniform grid of step ``dt`` [s] or onto ``times``."""
+        if (dt is None) == (times is None):
+            raise DataError(f"{self.source}: resample needs exactly one of dt or times")
+        if dt is not None:
+            if not (np.isfinite(dt) and dt > 0):
+                raise DataError(f"{self.source}: resample dt = {dt} s; must be > 0")
+            grid = np.arange(self.time[0], self.time[-1] + 0.5 * dt, dt)
+            grid = grid[grid <= self.time[-1]]
+        else:
+            grid = np.asarray(times, dtype=float)
+            if grid.size and (grid[0] < self.time[0] or grid[-1] > self.time[-1]):
+                raise DataError(f"{self.source}: resample times span {grid[0]:.6g}.."
+                                f"{grid[-1]:.6g} s, outside the record "
+                                f"{self.time[0]:.6g}..{self.time[-1]:.6g} s")
+        return self._derived(grid, {n: np.interp(grid, self.time, v)
+                                    for n, v in self.signals.items()}, "resampled")
+
+    def require(self, names: Sequence[str], use: str) -> None:
+        """One DataError naming every signal ``use`` needs that the record lacks."""
+        missing = [n for n in names if n not in self]
+        if missing:
+            raise DataError(f"{self.source}: {use} needs signal(s) {', '.join(missing)}; the "
+                            f"record has: time, {', '.join(self.signals) or '(nothing)'}")
+
+    def to_experiment(self, quantity: str, n_points: int | None = None):
+        """The record's ``quantity`` (pressure, command, ...) as a simulation input,
+        linear between samples."""
+        from pneumact.experiments import from_samples
+
+        self.require([quantity], f"driving a simulation with its {quantity}")
+        return from_samples(self.time, self.signals[quantity], quantity,
+                            name=Path(self.source).name or "record",
+                            n_points=n_points or self.time.size)
+
+    def save(self, path: PathLike, units: Mapping[str, str] | None = None) -> Path:
+        """Write CSV or Parquet (by suffix) atomically, each column in ``units`` (e.g.
+        ``{"pressure": "kPa", "position": "mm"}``; SI otherwise)."""
+        from pneumact.io.tables import write_table
+        from pneumact.parameters.units import unit_registry
+
+        ureg = unit_registry()
+        frame, file_units = {}, {}
+        for name, values in {"time": self.time, **self.signals}.items():
+            si = "s" if name == "time" else self.units.get(name, "")
+            unit = (units or {}).get(name, si)
+            if unit != si and si:
+                try:
+                    values = ureg.Quantity(np.asarray(values), si if si != "1" else "").to(
+                        unit).magnitude
+                except Exception as exc:
+                    raise DataError(f"save: cannot express {name} [{si}] in {unit!r} ({exc})"
+                                    ) from exc
+            frame[name] = np.asarray(values)
+            file_units[name] = unit
+        return write_table(pd.DataFrame(frame), path, file_units)
+
+    def plot(self, signals: Sequence[str] | None = None):
+        """One panel per signal against time, in display units (kPa, mm, N)."""
+        from pneumact.plotting import plot_time_series
+
+        return plot_time_series(self, signals)
 
     def __getitem__(self, name: str) -> np.ndarray:
         """``record["pressure"]``; ``record["time"]`` gives the time axis."""
@@ -279,3 +386,23 @@ def read_signal_csv(path: PathLike, *, columns: Mapping[str, str] | None = None,
                         f"input file needs time and exactly one of: {allowed}")
     name = found[0]
     return name, record.time, record.signals[name]
+
+
+def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]:
+    """Several records at once: a list of files, or a folder (its ``*.csv`` and
+    ``*.parquet`` files in name order); ``kwargs`` go to :func:`read_record`."""
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    files: list[Path] = []
+    for entry in map(Path, paths):
+        if entry.is_dir():
+            found = sorted(p for p in entry.iterdir()
+                           if p.suffix.lower() in (".csv", ".parquet") and p.is_file())
+            if not found:
+                raise DataError(f"{entry}: folder holds no .csv or .parquet record")
+            files.extend(found)
+        else:
+            files.append(entry)
+    if not files:
+        raise DataError("read_records: no record given")
+    return [read_record(f, **kwargs) for f in files]

@@ -98,11 +98,12 @@ def initial_sensitivity(prep: Prepared, names: Sequence[str]) -> np.ndarray:
 
 
 def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=None, *,
-                           t_eval=None, y0=None) -> SensitivityResult:
+                           t_eval=None, y0=None, values=None) -> SensitivityResult:
     """Simulate and integrate ∂y/∂θ for ``parameters`` (any parameters of the model).
 
     Only the RODAS4 solver carries sensitivities. With ``y0`` given, the start does not
-    depend on the parameters (∂y0/∂θ = 0).
+    depend on the parameters (∂y0/∂θ = 0). ``values`` overrides parameter values for
+    this run, as in ``simulate``.
     """
     from ..parameters import catalogue
 
@@ -113,7 +114,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     names = list(parameters)
     if not names:
         raise ParameterError("sensitivities: give at least one parameter name")
-    prep = prepare(model, experiment, solver, t_eval, y0)
+    prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     assembly, kernel = prep.assembly, prep.kernel
     names = assembly.check_parameters(names, "sensitivities")
     w_ptr, w_idx, w_val = assembly.directions(prep.vector, names)

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import time as _time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 
-from ..errors import ExperimentError, SolverError
+from ..errors import ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
 from ..experiments.signals import pack_channels
 from .assembly import Assembly, assemble
@@ -69,16 +69,25 @@ def _output_times(experiment: Experiment, t_eval) -> np.ndarray:
 
 
 def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
-            vector: np.ndarray | None = None) -> Prepared:
+            vector: np.ndarray | None = None, values: Mapping[str, float] | None = None
+            ) -> Prepared:
     """The arrays of one run of ``model`` under ``experiment`` (shared with the batch
     engine, sensitivities and identification): the packed parameter vector (or
     ``vector``), the input channels, breakpoints, output times, initial state (the
-    model's equilibrium unless ``y0``) and absolute tolerances."""
+    model's equilibrium unless ``y0``) and absolute tolerances. ``values`` overrides
+    parameter values by name (SI) for this run only."""
     check_drive(model, experiment)
     assembly = assemble(model)
     kernel = assembly.kernel
     vec = assembly.pack() if vector is None else np.array(vector, dtype=float)
-    kernel.derive(vec)
+    if values:
+        assembly.check_parameters(list(values), "values")
+        bad = {n: v for n, v in values.items() if not np.isfinite(v)}
+        if bad:
+            raise ParameterError(f"values: {bad} must be finite numbers")
+        assembly.update(vec, values)
+    else:
+        kernel.derive(vec)
     channels = model.channels(experiment.drive)
     sig, ptr = pack_channels(channels)
     bp = _breakpoints(experiment, channels)
@@ -160,16 +169,19 @@ def failure(prep: Prepared, solver: Solver, stats: SolverStats, y_end) -> Solver
 
 
 def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_eval=None,
-             y0=None, progress: Callable[[float], None] | None = None) -> Result:
+             y0=None, progress: Callable[[float], None] | None = None,
+             values: Mapping[str, float] | None = None) -> Result:
     """Simulate ``model`` (an ``Actuator`` or a ``FrictionRig``) under ``experiment``.
 
     Returns a ``Result`` with named, unit-tagged signals at ``t_eval`` (default: the
     experiment's uniform output grid). ``progress`` is called with the completed fraction
     (the run is then split into chunks). Raises ``SolverError`` saying when and in which
-    state the integrator failed.
+    state the integrator failed. ``values`` changes parameter values (SI, by name) for
+    this run without building a new parameter set (fitting loops use it; ranges and
+    relations are not re-checked).
     """
     solver = Rodas4() if solver is None else solver
-    prep = prepare(model, experiment, solver, t_eval, y0)
+    prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     n_t = prep.t_out.size
     compiled(getattr(prep.kernel, solver.kernel_function), prep.y0, prep.vector, prep.sig,
              prep.ptr, prep.breakpoints, prep.t_out, solver.rtol, prep.atol, solver.h_init,

@@ -1,0 +1,544 @@
+"""Fitting any parameters of a model to one or several measured records.
+
+``fit(model, records, free=[...])`` simulates each record under its own measured input
+(pressure, command or set-point) and minimises the weighted output error of the
+measured signals (position by default) with scipy ``least_squares``. The Jacobian comes
+from forward sensitivities (one simulation per record and iteration, whatever the
+number of parameters) unless ``jacobian="2-point"`` asks for finite differences.
+
+Parameters are shared by all records unless listed in ``per_record`` (then each record
+has its own value, labelled ``name[i]``); positive parameters are fitted in log scale by
+default; bounds default to the catalogue's range, or a factor of 100 either side.
+Standard errors and correlations come from the Gauss-Newton covariance at the optimum;
+``multistart`` runs space-filling starts in parallel and ``profile`` computes profile
+likelihoods with a verdict on identifiability.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import time as _time
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from ..errors import DataError, ParameterError, SolverError
+from ..io.records import Record
+from .estimates import Estimates, covariance_from_jacobian
+
+__all__ = ["FitResult", "Profile", "fit"]
+
+CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood threshold
+
+
+@dataclass(frozen=True)
+class _Column:
+    label: str  # "sigma0" or "F0[1]"
+    name: str
+    record: int | None  # None: shared by all records
+
+
+class _Problem:
+    """The residual vector and its Jacobian as functions of the free parameters."""
+
+    def __init__(self, model, records, columns, log, signals, weights, solver, jacobian,
+                 base_values):
+        from ..simulation.assembly import assemble
+
+        self.model, self.records, self.columns = model, list(records), list(columns)
+        self.log = np.asarray(log, dtype=bool)
+        self.signals, self.weights, self.solver = tuple(signals), dict(weights), solver
+        self.jacobian = jacobian
+        self.base = dict(base_values)
+        self.assembly = assemble(model)
+        quantity = _input_name(model)
+        self.experiments = [r.to_experiment(quantity) for r in self.records]
+        self.targets = [np.concatenate([r[s] for s in self.signals]) for r in self.records]
+        self.simulations = 0
+        self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
+
+    # -- parameter spaces
+    def theta(self, phi: np.ndarray) -> np.ndarray:
+        return np.where(self.log, np.exp(phi), phi)
+
+    def phi(self, theta: np.ndarray) -> np.ndarray:
+        return np.where(self.log, np.log(np.where(self.log, theta, 1.0)), theta)
+
+    def values_for(self, theta: np.ndarray, i: int) -> dict[str, float]:
+        values = dict(self.base)
+        for col, value in zip(self.columns, theta, strict=True):
+            if col.record is None or col.record == i:
+                values[col.name] = float(value)
+        return values
+
+    # -- evaluation
+    def evaluate(self, theta: np.ndarray, with_jacobian: bool):
+        """(weighted residuals, Jacobian in θ-space or None, simulated Results)."""
+        from ..simulation import simulate, simulate_sensitivities
+
+        key = theta.tobytes()
+        cached = self._cache.get(key)
+        if cached is not None and (cached[1] is not None or not with_jacobian):
+            return cached
+        rows, blocks, results = [], [], []
+        for i, (record, experiment) in enumerate(zip(self.records, self.experiments,
+                                                     strict=True)):
+            values = self.values_for(theta, i)
+            names = [c.name for c in self.columns if c.record in (None, i)]
+            try:
+                if with_jacobian:
+                    sens = simulate_sensitivities(self.model, experiment, names, self.solver,
+                                                  t_eval=record.time, values=values)
+                    result = sens.result
+                else:
+                    result = simulate(self.model, experiment, self.solver, t_eval=record.time,
+                                      values=values)
+            except SolverError as exc:
+                shown = ", ".join(f"{c.label}={v:.6g}" for c, v in zip(self.columns, theta,
+                                                                       strict=True))
+                raise SolverError(f"fit: the simulation of {record.source} failed at {shown}: "
+                                  f"{exc}") from exc
+            self.simulations += 1
+            results.append(result)
+            sim = np.concatenate([self._weighted(s, result[s]) for s in self.signals])
+            rows.append(sim - np.concatenate([self._weighted(s, record[s])
+                                              for s in self.signals]))
+            if with_jacobian:
+                block = np.zeros((sim.size, len(self.columns)))
+                k = 0
+                for j, col in enumerate(self.columns):
+                    if col.record in (None, i):
+                        block[:, j] = np.concatenate([self.weights[s] * sens[s][:, k]
+                                                      for s in self.signals])
+                        k += 1
+                blocks.append(block)
+        out = (np.concatenate(rows), np.vstack(blocks) if with_jacobian else None, results)
+        if len(self._cache) > 8:
+            self._cache.clear()
+        self._cache[key] = out
+        return out
+
+    def _weighted(self, signal: str, values: np.ndarray) -> np.ndarray:
+        return self.weights[signal] * np.asarray(values)
+
+    def residuals(self, phi: np.ndarray) -> np.ndarray:
+        return self.evaluate(self.theta(phi), self.jacobian == "sensitivities")[0]
+
+    def jac(self, phi: np.ndarray) -> np.ndarray:
+        theta = self.theta(phi)
+        jac = self.evaluate(theta, True)[1]
+        return jac * np.where(self.log, theta, 1.0)[None, :]
+
+
+def _input_name(model) -> str:
+    valve = getattr(model, "valve", None)
+    if getattr(valve, "cli_name", "") == "regulator":
+        return "setpoint"
+    return model.drive_quantity
+
+
+# --------------------------------------------------------------------------- results
+@dataclass(eq=False)
+class Profile:
+    """Profile likelihood of one parameter: Δ = N·ln(SSR/SSR_min) against its value."""
+
+    name: str
+    grid: np.ndarray
+    delta: np.ndarray
+    estimate: float
+    threshold: float = CHI2_95
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """Where Δ crosses the 95 % threshold on each side (nan: no crossing in bounds)."""
+        out = []
+        for side in (self.grid < self.estimate, self.grid > self.estimate):
+            g, d = self.grid[side], self.delta[side]
+            above = np.flatnonzero(d > self.threshold)
+            if above.size == 0:
+                out.append(np.nan)
+                continue
+            j = above[-1] if g.size and g[0] < self.estimate else above[0]
+            k = j + 1 if g[0] < self.estimate else j - 1
+            if 0 <= k < g.size:
+                out.append(float(np.interp(self.threshold, sorted([d[j], d[k]]),
+                                           [g[j], g[k]] if d[j] < d[k] else [g[k], g[j]])))
+            else:
+                out.append(float(g[j]))
+        return out[0], out[1]
+
+    @property
+    def verdict(self) -> str:
+        low = bool(np.any(self.delta[self.grid < self.estimate] > self.threshold))
+        high = bool(np.any(self.delta[self.grid > self.estimate] > self.threshold))
+        if low and high:
+            return "identifiable"
+        if low or high:
+            return "practically non-identifiable"
+        return "structurally non-identifiable"
+
+
+@dataclass(eq=False)
+class FitResult:
+    """Estimates with standard errors, fit statistics, the simulations at the optimum."""
+
+    estimates: Estimates
+    records: list[Record]
+    simulated: list
+    statistics: pd.DataFrame
+    residuals: np.ndarray
+    cost: float
+    aic: float
+    success: bool
+    message: str
+    iterations: int
+    simulations: int
+    wall_time: float
+    signals: tuple[str, ...]
+    jacobian: np.ndarray
+    starts: pd.DataFrame = field(default_factory=pd.DataFrame)
+    profiles: dict[str, Profile] = field(default_factory=dict)
+    base_values: dict[str, float] = field(default_factory=dict)
+    model: object = None
+
+    @property
+    def values(self) -> dict[str, float]:
+        return self.estimates.as_dict()
+
+    @property
+    def correlation(self) -> pd.DataFrame:
+        names = list(self.estimates.names)
+        return pd.DataFrame(self.estimates.correlation, index=names, columns=names)
+
+    def table(self) -> pd.DataFrame:
+        return self.estimates.to_pandas()
+
+    def parameters(self, name: str = "fitted"):
+        """The model's parameter set with the shared estimates (per-record ones are not
+        one set's values: they stay in ``values``)."""
+        shared = {n: v for n, v in self.values.items() if "[" not in n}
+        params = self.model.params
+        from ..parameters import ParameterSet
+
+        return ParameterSet({**dict(params.values), **shared}, name=name,
+                            description=f"fitted from {len(self.records)} record(s)",
+                            provenance={**dict(params.provenance),
+                                        **{n: "fit" for n in shared}})
+
+    def plot_fit(self):
+        """Measured and simulated signals per record, with residuals."""
+        import matplotlib.pyplot as plt
+
+        from ..plotting import DISPLAY_UNITS
+
+        n = len(self.records)
+        fig, axes = plt.subplots(2 * len(self.signals), n, squeeze=False, sharex="col",
+                                 figsize=(4.5 * n, 2.4 * 2 * len(self.signals)))
+        for i, (rec, sim) in enumerate(zip(self.records, self.simulated, strict=True)):
+            for j, s in enumerate(self.signals):
+                unit, factor = DISPLAY_UNITS.get(rec.units.get(s, ""), ("", 1.0))
+                ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
+                ax.plot(rec.time, rec[s] * factor, "k.", ms=1.5, label="measured")
+                ax.plot(sim.time, sim[s] * factor, "C0-", lw=1, label="fitted model")
+                axr.plot(rec.time, (sim[s] - rec[s]) * factor, "C3-", lw=0.8)
+                ax.set_ylabel(f"{s} [{unit}]")
+                axr.set_ylabel(f"residual [{unit}]")
+                ax.set_title(os.path.basename(rec.source), fontsize=9)
+                for a in (ax, axr):
+                    a.grid(True, alpha=0.3)
+            axes[-1, i].set_xlabel("time [s]")
+        axes[0, 0].legend(fontsize=8)
+        fig.tight_layout()
+        return fig
+
+    def plot_waterfall(self):
+        """Final cost of every start, sorted: a flat first step means a found optimum."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 3.5))
+        costs = np.sort(self.starts["cost"].to_numpy()) if len(self.starts) else [self.cost]
+        ax.semilogy(np.arange(1, len(costs) + 1), costs, "o-")
+        ax.set_xlabel("start (sorted by final cost)")
+        ax.set_ylabel("final cost ½Σr²")
+        ax.grid(True, alpha=0.3)
+        return fig
+
+    def plot_profiles(self):
+        import matplotlib.pyplot as plt
+
+        n = max(1, len(self.profiles))
+        fig, axes = plt.subplots(1, n, squeeze=False, figsize=(4.2 * n, 3.4))
+        for ax, prof in zip(axes[0], self.profiles.values(), strict=False):
+            ax.plot(prof.grid, prof.delta, "o-")
+            ax.axhline(prof.threshold, color="k", ls="--", lw=0.8, label="95 % threshold")
+            ax.axvline(prof.estimate, color="C3", lw=0.8)
+            ax.set_xlabel(prof.name)
+            ax.set_ylabel("Δ = N·ln(SSR/SSR_min)")
+            ax.set_title(prof.verdict, fontsize=9)
+            ax.grid(True, alpha=0.3)
+            if prof.grid.min() > 0 and prof.grid.max() / prof.grid.min() > 20:
+                ax.set_xscale("log")
+        fig.tight_layout()
+        return fig
+
+
+# --------------------------------------------------------------------------- fitting
+def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int) -> list[_Column]:
+    unknown = [n for n in per_record if n not in free]
+    if unknown:
+        raise ParameterError(f"fit: per_record names {unknown} are not among the free "
+                             f"parameters {list(free)}")
+    cols = []
+    for name in free:
+        if name in per_record:
+            cols += [_Column(f"{name}[{i}]", name, i) for i in range(n_records)]
+        else:
+            cols.append(_Column(name, name, None))
+    return cols
+
+
+def _bounds(columns, start, bounds, log):
+    from ..parameters import catalogue
+
+    specs = catalogue()
+    lo, hi = np.empty(len(columns)), np.empty(len(columns))
+    for j, col in enumerate(columns):
+        spec = specs[col.name]
+        given = (bounds or {}).get(col.name)
+        if given is not None:
+            lo[j], hi[j] = map(float, given)
+        else:
+            lo[j] = spec.minimum if spec.minimum is not None else -np.inf
+            hi[j] = spec.maximum if spec.maximum is not None else np.inf
+            if log[j]:
+                lo[j] = max(lo[j], start[j] / 100)
+                hi[j] = min(hi[j], start[j] * 100)
+        if log[j] and lo[j] <= 0:
+            lo[j] = start[j] / 100 if given is None else lo[j]
+        if not lo[j] < hi[j] or not lo[j] <= start[j] <= hi[j] or (log[j] and lo[j] <= 0):
+            raise ParameterError(
+                f"fit: bounds of {col.label} are ({lo[j]:.6g}, {hi[j]:.6g}) with start "
+                f"{start[j]:.6g}; need low < high, the start inside"
+                + (" and low > 0 (log scale)" if log[j] else ""))
+    return lo, hi
+
+
+def _statistics(records, simulated, signals, n_par, weighted_residuals):
+    rows = []
+    for rec, sim in zip(records, simulated, strict=True):
+        for s in signals:
+            e = sim[s] - rec[s]
+            y = rec[s]
+            nrmse = float(np.linalg.norm(e) / max(np.linalg.norm(y - y.mean()), 1e-300))
+            rows.append({"record": rec.source, "signal": s, "unit": rec.units.get(s, ""),
+                         "samples": e.size, "rms": float(np.sqrt(np.mean(e**2))),
+                         "max_abs": float(np.max(np.abs(e))), "nrmse": nrmse,
+                         "fit_percent": 100 * (1 - nrmse)})
+    stats = pd.DataFrame(rows)
+    n = weighted_residuals.size
+    ssr = float(weighted_residuals @ weighted_residuals)
+    aic = n * np.log(max(ssr, 1e-300) / n) + 2 * n_par
+    return stats, aic
+
+
+def _solve(problem: _Problem, phi0, lo, hi, loss, f_scale, max_nfev):
+    jac = problem.jac if problem.jacobian == "sensitivities" else problem.jacobian
+    return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi), loss=loss,
+                         f_scale=f_scale, x_scale="jac", max_nfev=max_nfev, method="trf")
+
+
+def _starts(n, lo, hi, seed):
+    from scipy.stats import qmc
+
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ParameterError("fit: multistart needs finite bounds for every free parameter")
+    sample = qmc.LatinHypercube(d=lo.size, seed=seed).random(n)
+    return lo + sample * (hi - lo)
+
+
+def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
+        per_record: Sequence[str] = (), start: Mapping[str, float] | None = None,
+        bounds: Mapping[str, tuple[float, float]] | None = None,
+        log: bool | Sequence[str] = True, signals: Sequence[str] = ("position",),
+        weights: Mapping[str, float] | None = None, loss: str = "linear",
+        f_scale: float = 1.0, jacobian: str = "sensitivities", solver=None,
+        multistart: int = 0, seed: int = 0, workers: int | None = None, scheduler=None,
+        profile: Sequence[str] = (), profile_points: int = 13, max_nfev: int | None = None,
+        progress: Callable[[str, float], None] | None = None) -> FitResult:
+    """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
+
+    ``start`` gives starting values (default: the model's parameter set); ``weights``
+    multiplies each signal's residual (default 1/std of the measured signal); ``loss``
+    and ``f_scale`` are those of ``least_squares`` (e.g. "soft_l1" for outliers);
+    ``multistart`` adds that many Latin-hypercube starts inside the bounds, run on
+    ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
+    profile likelihood is computed.
+    """
+    records = [records] if isinstance(records, Record) else list(records)
+    if not records:
+        raise DataError("fit: give at least one record")
+    free = list(dict.fromkeys(free))
+    if not free:
+        raise ParameterError("fit: give at least one free parameter")
+    if jacobian not in ("sensitivities", "2-point", "3-point"):
+        raise ParameterError(f"fit: jacobian = {jacobian!r}; allowed: sensitivities, "
+                             "2-point, 3-point")
+    signals = tuple(signals)
+    for rec in records:
+        rec.require([*signals, _input_name(model)], "this fit")
+    from ..simulation import Rodas4
+    from ..simulation.assembly import assemble
+
+    assembly = assemble(model)
+    assembly.check_parameters(free, "fit")
+    base = assembly.values(assembly.pack())
+    unknown = [n for n in (start or {}) if n not in base]
+    if unknown:
+        assembly.check_parameters(unknown, "fit start")
+    columns = _columns(free, per_record, len(records))
+    theta0 = np.array([float((start or {}).get(c.name, base[c.name])) for c in columns])
+    names_log = free if log is True else ([] if log is False else list(log))
+    log_mask = np.array([c.name in names_log and theta0[j] > 0
+                         for j, c in enumerate(columns)])
+    lo, hi = _bounds(columns, theta0, bounds, log_mask)
+    if weights is None:
+        weights = {}
+        for s in signals:
+            y = np.concatenate([r[s] for r in records])
+            weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
+    problem = _Problem(model, records, columns, log_mask, signals, weights,
+                       solver or Rodas4(rtol=1e-6), jacobian, base)
+    plo, phi_ = problem.phi(lo), problem.phi(hi)
+    tic = _time.perf_counter()
+    starts = [problem.phi(theta0)]
+    if multistart:
+        starts += list(_starts(multistart, plo, phi_, seed))
+    solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
+                            scheduler, progress)
+    best = min(solutions, key=lambda s: s.cost)
+    theta = problem.theta(best.x)
+    r, jac, simulated = problem.evaluate(theta, True)
+    cov, dof = covariance_from_jacobian(jac, r, len(columns))
+    from ..parameters import catalogue
+
+    units = tuple(catalogue()[c.name].unit for c in columns)
+    est = Estimates(tuple(c.label for c in columns), theta, np.sqrt(np.diag(cov)), cov, dof,
+                    units)
+    stats, aic = _statistics(records, simulated, signals, len(columns), r)
+    start_table = pd.DataFrame(
+        [{"start": k, **{f"{c.label}_start": v for c, v in zip(columns, problem.theta(s0),
+                                                            strict=True)},
+          "cost": sol.cost, "converged": bool(sol.success), "nfev": sol.nfev}
+         for k, (s0, sol) in enumerate(zip(starts, solutions, strict=True))])
+    result = FitResult(est, records, simulated, stats, r, float(best.cost), float(aic),
+                       bool(best.success), str(best.message), int(best.nfev),
+                       problem.simulations, 0.0, signals, jac, start_table, {}, base, model)
+    for name in profile:
+        result.profiles[name] = _profile(problem, result, name, plo, phi_, loss, f_scale,
+                                         profile_points, progress)
+    result.simulations = problem.simulations
+    result.wall_time = _time.perf_counter() - tic
+    return result
+
+
+def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, scheduler,
+                progress):
+    if len(starts) == 1:
+        return [_solve(problem, starts[0], lo, hi, loss, f_scale, max_nfev)]
+    options = (lo, hi, loss, f_scale, max_nfev)
+    if scheduler is not None:
+        from ..simulation.batch.engine import _client_for
+
+        client, owned = _client_for(scheduler)
+        try:
+            futures = client.map(_solve_copy, [problem] * len(starts), starts,
+                                 [options] * len(starts), pure=False)
+            done = client.gather(futures)
+        finally:
+            if owned:
+                client.close()
+        problem.simulations += sum(sol.simulations for sol in done)
+        return done
+    done = []
+    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+        futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
+        for k, fut in enumerate(futures):
+            done.append(fut.result())
+            problem.simulations += done[-1].simulations
+            if progress:
+                progress("multistart", (k + 1) / len(futures))
+    return done
+
+
+def _own_copy(problem: _Problem) -> _Problem:
+    """A shallow copy with its own cache and counter (one per thread or start)."""
+    own = copy.copy(problem)
+    own._cache = {}
+    own.simulations = 0
+    return own
+
+
+def _solve_copy(problem, phi0, options):
+    """One start on its own copy of the problem; returns the solution and its count of
+    simulations (summed by the caller, so Dask workers report theirs too)."""
+    own = _own_copy(problem)
+    sol = _solve(own, phi0, *options)
+    sol.simulations = own.simulations
+    return sol
+
+
+def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -> Profile:
+    labels = [c.label for c in problem.columns]
+    if name not in labels:
+        raise ParameterError(f"fit: profile of {name!r}, which is not a free parameter "
+                             f"({', '.join(labels)})")
+    j = labels.index(name)
+    phi_hat = problem.phi(result.estimates.values)
+    ssr_min = 2 * result.cost
+    n = result.residuals.size
+    grid_phi = np.unique(np.concatenate([np.linspace(lo[j], hi[j], n_points), [phi_hat[j]]]))
+    keep = [k for k in range(len(labels)) if k != j]
+    delta = np.empty(grid_phi.size)
+    centre = int(np.searchsorted(grid_phi, phi_hat[j]))
+    order = list(range(centre, grid_phi.size)) + list(range(centre - 1, -1, -1))
+    warm = {}
+    for count, g in enumerate(order):
+        sub = _Fixed(problem, j, grid_phi[g])
+        x0 = warm.get(g + (1 if g < centre else -1), phi_hat[keep])
+        if keep:
+            sol = least_squares(sub.residuals, x0, jac=sub.jac if problem.jacobian ==
+                                "sensitivities" else problem.jacobian,
+                                bounds=(lo[keep], hi[keep]), loss=loss, f_scale=f_scale,
+                                x_scale="jac", method="trf")
+            warm[g], ssr = sol.x, 2 * sol.cost
+        else:
+            r = sub.residuals(np.empty(0))
+            ssr = float(r @ r)
+        problem.simulations += sub.inner.simulations
+        delta[g] = n * np.log(max(ssr, 1e-300) / ssr_min)
+        if progress:
+            progress(f"profile {name}", (count + 1) / grid_phi.size)
+    grid = np.exp(grid_phi) if problem.log[j] else grid_phi
+    return Profile(name, grid, np.maximum(delta, 0.0), float(result.estimates.values[j]))
+
+
+class _Fixed:
+    """The problem with parameter ``j`` held at ``phi_j``: residuals over the others."""
+
+    def __init__(self, problem, j, phi_j):
+        self.inner = _own_copy(problem)
+        self.j, self.phi_j = j, phi_j
+
+    def _full(self, phi_rest):
+        return np.insert(np.asarray(phi_rest, dtype=float), self.j, self.phi_j)
+
+    def residuals(self, phi_rest):
+        return self.inner.residuals(self._full(phi_rest))
+
+    def jac(self, phi_rest):
+        return np.delete(self.inner.jac(self._full(phi_rest)), self.j, axis=1)
