@@ -55,7 +55,7 @@ class Noise:
     """Measurement effects: white noise (standard deviations, SI) and the position
     sensor's resolution [m] (0: none)."""
 
-    pressure: float = 50.0
+    pressure: float = 20.0
     position: float = 1e-6
     resolution: float = 1e-6
 
@@ -86,7 +86,7 @@ def _test(name, kind, points, valve, rate) -> BenchTest:
 
 
 def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3,
-                                                      1e-2, 2e-2, 4e-2),
+                                                      1e-2, 2e-2, 4e-2, 6e-2, 8e-2),
                    sweep_period: float = 60.0) -> list[BenchTest]:
     """The tests of the paper's procedure, sized from ``params`` (spring, preload, area):
 
@@ -107,7 +107,7 @@ def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e
     band = 2.0 * friction / area
     for v in speeds:
         rate = k * v / area
-        travel = min(8e-3, max(0.3e-3, 3.0 * v))  # steady part long enough at any speed
+        travel = min(11e-3, max(0.3e-3, 3.0 * v))  # steady part long enough at any speed
         span = k * travel / area + band
         ramp = span / rate
         sample_rate = float(np.clip(400.0 / ramp, 1000.0, 2000.0))
@@ -115,11 +115,11 @@ def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e
                            [(0, high), (0.5, high), (1.5, mid), (0.5, mid), (ramp, mid - span),
                             (0.5, mid - span), (ramp, mid), (0.5, mid)],
                            "regulator", sample_rate))
-    step = 0.25 * friction / area
+    step = 0.35 * friction / area
     points = [(0, high), (0.2, high), (1.5, mid), (0.3, mid), (0.02, mid + band / 2),
               (0.3, mid + band / 2)]
     for sign in (1, -2, 2, -2, 1):
-        points += [(0.002, points[-1][1] + sign * step), (0.15, points[-1][1] + sign * step)]
+        points += [(0.005, points[-1][1] + sign * step), (0.15, points[-1][1] + sign * step)]
     tests.append(_test("presliding", "presliding", points, "source", 5000.0))
     return tests
 

@@ -65,24 +65,78 @@ class Estimates:
         return frame
 
 
-def covariance_from_jacobian(jac: np.ndarray, residuals: np.ndarray, n_par: int
+def covariance_from_jacobian(jac: np.ndarray, residuals: np.ndarray, n_par: int,
+                             groups: Sequence[int] | None = None, correlated: bool = True
                              ) -> tuple[np.ndarray, int]:
-    """s²·(JᵀJ)⁻¹ with s² = Σr²/(N − P): the Gauss-Newton covariance; infinite where
-    JᵀJ is singular (the data cannot separate the parameters). Returns (cov, dof)."""
+    """Covariance of least-squares estimates from the Jacobian and residuals at the optimum.
+
+    With ``correlated`` (the default) the Newey-West (HAC) sandwich
+    (JᵀJ)⁻¹·S·(JᵀJ)⁻¹, S = Σ_l w_l·Σ_t g_t·g_{t−l}ᵀ, g_t = J_tᵀ·r_t, Bartlett weights,
+    within each group of consecutive rows (one record or signal; ``groups`` gives their
+    lengths): residuals of a time series are correlated (input errors, unmodelled
+    dynamics, quantisation), and the textbook s²·(JᵀJ)⁻¹ then claims intervals several
+    times too narrow. The bandwidth is three times the lag at which the residuals'
+    autocorrelation falls below 1/e. ``correlated=False`` gives s²·(JᵀJ)⁻¹ with
+    s² = Σr²/(N − P). Infinite where JᵀJ is singular. Returns (cov, dof)."""
+    jac = np.asarray(jac, dtype=float)
+    residuals = np.asarray(residuals, dtype=float)
     dof = residuals.size - n_par
-    s2 = float(residuals @ residuals) / dof if dof > 0 else np.nan
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     tol = (sv.max() if sv.size else 0.0) * max(jac.shape) * np.finfo(float).eps
     if sv.size < n_par or sv.min() <= tol:
         return np.full((n_par, n_par), np.inf), dof  # not identifiable from these data
-    cov = (vt.T / sv**2) @ vt
-    return s2 * cov, dof
+    bread = (vt.T / sv**2) @ vt
+    if not correlated:
+        s2 = float(residuals @ residuals) / dof if dof > 0 else np.nan
+        return s2 * bread, dof
+    scale = residuals.size / dof if dof > 0 else np.nan  # small-sample correction
+    meat = np.zeros((n_par, n_par))
+    start = 0
+    for length in (groups or [residuals.size]):
+        g = jac[start:start + length] * residuals[start:start + length, None]
+        r = residuals[start:start + length]
+        start += length
+        meat += _long_run_covariance(g, _bandwidth(r))
+    return scale * bread @ meat @ bread, dof
+
+
+def _long_run_covariance(g: np.ndarray, bandwidth: int) -> np.ndarray:
+    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ, by FFT (O(P²·n·log n))."""
+    n, p = g.shape
+    if bandwidth == 0:
+        return g.T @ g
+    spectra = np.fft.rfft(g, 2 * n, axis=0)
+    weights = 1.0 - np.arange(1, bandwidth + 1) / (bandwidth + 1.0)
+    out = np.empty((p, p))
+    for a in range(p):
+        for b in range(a, p):
+            cross = np.fft.irfft(spectra[:, a] * np.conj(spectra[:, b]), 2 * n)
+            # cross[l] = Σ_t g_a(t+l)·g_b(t); negative lags wrap to the end
+            value = cross[0] + weights @ (cross[1:bandwidth + 1] + cross[-bandwidth:][::-1])
+            out[a, b] = out[b, a] = value
+    return out
+
+
+def _bandwidth(r: np.ndarray) -> int:
+    """Three times the lag where the autocorrelation of ``r`` first drops below 1/e."""
+    n = r.size
+    if n < 4:
+        return 0
+    centred = r - r.mean()
+    spectrum = np.fft.rfft(centred, 2 * n)
+    acf = np.fft.irfft(np.abs(spectrum) ** 2)[:n]
+    if acf[0] <= 0:
+        return 0
+    below = np.flatnonzero(acf / acf[0] < np.exp(-1.0))
+    lag = int(below[0]) if below.size else n
+    return int(min(n // 4, 3 * lag))
 
 
 def linear_least_squares(design: np.ndarray, target: np.ndarray, names: Sequence[str],
-                         units: Sequence[str] = (), what: str = "linear fit"
-                         ) -> tuple[Estimates, np.ndarray, float]:
-    """Ordinary least squares ``target ≈ design @ θ`` with standard errors.
+                         units: Sequence[str] = (), what: str = "linear fit",
+                         correlated: bool = False) -> tuple[Estimates, np.ndarray, float]:
+    """Ordinary least squares ``target ≈ design @ θ`` with standard errors (``correlated``:
+    the rows are a time series, see :func:`covariance_from_jacobian`).
 
     Returns (estimates, residuals, condition number of the column-scaled design)."""
     design = np.asarray(design, dtype=float)
@@ -99,7 +153,8 @@ def linear_least_squares(design: np.ndarray, target: np.ndarray, names: Sequence
     theta_s, *_ = np.linalg.lstsq(scaled, target, rcond=None)
     theta = theta_s / scale
     residuals = target - design @ theta
-    cov, dof = covariance_from_jacobian(design, residuals, design.shape[1])
+    cov, dof = covariance_from_jacobian(design, residuals, design.shape[1],
+                                        correlated=correlated)
     cond = float(np.linalg.cond(scaled))
     est = Estimates(tuple(names), theta, np.sqrt(np.diag(cov)), cov, dof, tuple(units))
     return est, residuals, cond

@@ -38,16 +38,17 @@ CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood thr
 
 @dataclass(frozen=True)
 class _Column:
-    label: str  # "sigma0" or "F0[1]"
-    name: str
+    label: str  # "sigma0", "F0[1]" or "offset_position[0]"
+    name: str  # a model parameter, or the signal of an offset
     record: int | None  # None: shared by all records
+    offset: bool = False  # an additive sensor offset of signal ``name``, not a parameter
 
 
 class _Problem:
     """The residual vector and its Jacobian as functions of the free parameters."""
 
     def __init__(self, model, records, columns, log, signals, weights, solver, jacobian,
-                 base_values):
+                 base_values, window):
         from ..simulation.assembly import assemble
 
         self.model, self.records, self.columns = model, list(records), list(columns)
@@ -58,7 +59,12 @@ class _Problem:
         self.assembly = assemble(model)
         quantity = _input_name(model)
         self.experiments = [r.to_experiment(quantity) for r in self.records]
-        self.targets = [np.concatenate([r[s] for s in self.signals]) for r in self.records]
+        lo, hi = window if window is not None else (-np.inf, np.inf)
+        self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
+        for r, m in zip(self.records, self.masks, strict=True):
+            if m.sum() < 2:
+                raise DataError(f"fit: window {window} s leaves {m.sum()} samples of "
+                                f"{r.source} ({r.time[0]:.6g}..{r.time[-1]:.6g} s)")
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
 
@@ -72,9 +78,13 @@ class _Problem:
     def values_for(self, theta: np.ndarray, i: int) -> dict[str, float]:
         values = dict(self.base)
         for col, value in zip(self.columns, theta, strict=True):
-            if col.record is None or col.record == i:
+            if not col.offset and col.record in (None, i):
                 values[col.name] = float(value)
         return values
+
+    def offset_of(self, theta: np.ndarray, i: int, signal: str) -> float:
+        return sum(float(v) for c, v in zip(self.columns, theta, strict=True)
+                   if c.offset and c.record == i and c.name == signal)
 
     # -- evaluation
     def evaluate(self, theta: np.ndarray, with_jacobian: bool):
@@ -89,9 +99,9 @@ class _Problem:
         for i, (record, experiment) in enumerate(zip(self.records, self.experiments,
                                                      strict=True)):
             values = self.values_for(theta, i)
-            names = [c.name for c in self.columns if c.record in (None, i)]
+            names = [c.name for c in self.columns if not c.offset and c.record in (None, i)]
             try:
-                if with_jacobian:
+                if with_jacobian and names:
                     sens = simulate_sensitivities(self.model, experiment, names, self.solver,
                                                   t_eval=record.time, values=values)
                     result = sens.result
@@ -105,23 +115,34 @@ class _Problem:
                                   f"{exc}") from exc
             self.simulations += 1
             results.append(result)
-            sim = np.concatenate([self._weighted(s, result[s]) for s in self.signals])
-            rows.append(sim - np.concatenate([self._weighted(s, record[s])
-                                              for s in self.signals]))
+            mask = self.masks[i]
+            rows.append(np.concatenate([
+                self.weights[s] * (result[s] + self.offset_of(theta, i, s) - record[s])[mask]
+                for s in self.signals]))
             if with_jacobian:
-                block = np.zeros((sim.size, len(self.columns)))
-                k = 0
-                for j, col in enumerate(self.columns):
-                    if col.record in (None, i):
-                        block[:, j] = np.concatenate([self.weights[s] * sens[s][:, k]
-                                                      for s in self.signals])
-                        k += 1
-                blocks.append(block)
+                blocks.append(self._block(i, sens if names else None, mask))
         out = (np.concatenate(rows), np.vstack(blocks) if with_jacobian else None, results)
         if len(self._cache) > 8:
             self._cache.clear()
         self._cache[key] = out
         return out
+
+    def _block(self, i, sens, mask) -> np.ndarray:
+        """Rows of record ``i`` in the Jacobian (θ-space)."""
+        n = int(mask.sum())
+        block = np.zeros((n * len(self.signals), len(self.columns)))
+        k = 0
+        for j, col in enumerate(self.columns):
+            if col.record not in (None, i):
+                continue
+            if col.offset:
+                q = self.signals.index(col.name)
+                block[q * n:(q + 1) * n, j] = self.weights[col.name]
+                continue
+            block[:, j] = np.concatenate([self.weights[s] * sens[s][mask, k]
+                                          for s in self.signals])
+            k += 1
+        return block
 
     def _weighted(self, signal: str, values: np.ndarray) -> np.ndarray:
         return self.weights[signal] * np.asarray(values)
@@ -133,6 +154,18 @@ class _Problem:
         theta = self.theta(phi)
         jac = self.evaluate(theta, True)[1]
         return jac * np.where(self.log, theta, 1.0)[None, :]
+
+
+def _smoothed(record: Record, quantity: str) -> Record:
+    """The record with its input rebuilt piecewise linear (unchanged if noiseless)."""
+    from .inputs import piecewise_linear_input
+
+    knots_t, knots_v = piecewise_linear_input(record.time, record[quantity])
+    if knots_t.size == record.time.size:
+        return record
+    signals = dict(record.signals)
+    signals[quantity] = np.interp(record.time, knots_t, knots_v)
+    return Record.from_arrays(record.time, signals, record.units, record.source, record.meta)
 
 
 def _input_name(model) -> str:
@@ -205,6 +238,7 @@ class FitResult:
     profiles: dict[str, Profile] = field(default_factory=dict)
     base_values: dict[str, float] = field(default_factory=dict)
     model: object = None
+    window: tuple[float, float] | None = None
 
     @property
     def values(self) -> dict[str, float]:
@@ -246,6 +280,11 @@ class FitResult:
                 ax.plot(rec.time, rec[s] * factor, "k.", ms=1.5, label="measured")
                 ax.plot(sim.time, sim[s] * factor, "C0-", lw=1, label="fitted model")
                 axr.plot(rec.time, (sim[s] - rec[s]) * factor, "C3-", lw=0.8)
+                if self.window is not None:
+                    for a in (ax, axr):
+                        a.axvspan(max(self.window[0], rec.time[0]),
+                                  min(self.window[1], rec.time[-1]), color="C2", alpha=0.08,
+                                  label="fitted window" if a is ax else None)
                 ax.set_ylabel(f"{s} [{unit}]")
                 axr.set_ylabel(f"residual [{unit}]")
                 ax.set_title(os.path.basename(rec.source), fontsize=9)
@@ -288,7 +327,8 @@ class FitResult:
 
 
 # --------------------------------------------------------------------------- fitting
-def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int) -> list[_Column]:
+def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
+             offsets: Sequence[str] = ()) -> list[_Column]:
     unknown = [n for n in per_record if n not in free]
     if unknown:
         raise ParameterError(f"fit: per_record names {unknown} are not among the free "
@@ -299,6 +339,9 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int) -> 
             cols += [_Column(f"{name}[{i}]", name, i) for i in range(n_records)]
         else:
             cols.append(_Column(name, name, None))
+    for signal in offsets:
+        cols += [_Column(f"offset_{signal}[{i}]", signal, i, offset=True)
+                 for i in range(n_records)]
     return cols
 
 
@@ -308,6 +351,9 @@ def _bounds(columns, start, bounds, log):
     specs = catalogue()
     lo, hi = np.empty(len(columns)), np.empty(len(columns))
     for j, col in enumerate(columns):
+        if col.offset:
+            lo[j], hi[j] = -np.inf, np.inf
+            continue
         spec = specs[col.name]
         given = (bounds or {}).get(col.name)
         if given is not None:
@@ -369,6 +415,8 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         f_scale: float = 1.0, jacobian: str = "sensitivities", solver=None,
         multistart: int = 0, seed: int = 0, workers: int | None = None, scheduler=None,
         profile: Sequence[str] = (), profile_points: int = 13, max_nfev: int | None = None,
+        offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
+        smooth_input: bool = True, covariance: str = "hac",
         progress: Callable[[str, float], None] | None = None) -> FitResult:
     """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
 
@@ -377,7 +425,13 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     and ``f_scale`` are those of ``least_squares`` (e.g. "soft_l1" for outliers);
     ``multistart`` adds that many Latin-hypercube starts inside the bounds, run on
     ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
-    profile likelihood is computed.
+    profile likelihood is computed. ``offsets`` names signals that get a free additive
+    sensor offset per record; ``window`` = (t0, t1) restricts the residuals to that time
+    span (the simulation still starts at each record's start). ``smooth_input`` rebuilds
+    a noisy measured input as piecewise linear before it drives the model (see
+    ``identification.inputs``: noise on the input dithers LuGre bristles and biases the
+    estimates). ``covariance`` is "hac" (residuals correlated in time, the default) or
+    "iid" (see ``estimates.covariance_from_jacobian``).
     """
     records = [records] if isinstance(records, Record) else list(records)
     if not records:
@@ -385,6 +439,8 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     free = list(dict.fromkeys(free))
     if not free:
         raise ParameterError("fit: give at least one free parameter")
+    if covariance not in ("hac", "iid"):
+        raise ParameterError(f"fit: covariance = {covariance!r}; allowed: hac, iid")
     if jacobian not in ("sensitivities", "2-point", "3-point"):
         raise ParameterError(f"fit: jacobian = {jacobian!r}; allowed: sensitivities, "
                              "2-point, 3-point")
@@ -400,8 +456,15 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     unknown = [n for n in (start or {}) if n not in base]
     if unknown:
         assembly.check_parameters(unknown, "fit start")
-    columns = _columns(free, per_record, len(records))
-    theta0 = np.array([float((start or {}).get(c.name, base[c.name])) for c in columns])
+    bad = [s for s in offsets if s not in signals]
+    if bad:
+        raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
+                             f"({', '.join(signals)})")
+    if smooth_input:
+        records = [_smoothed(r, _input_name(model)) for r in records]
+    columns = _columns(free, per_record, len(records), offsets)
+    theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.name, base[c.name]))
+                       for c in columns])
     names_log = free if log is True else ([] if log is False else list(log))
     log_mask = np.array([c.name in names_log and theta0[j] > 0
                          for j, c in enumerate(columns)])
@@ -412,7 +475,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
             y = np.concatenate([r[s] for r in records])
             weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
     problem = _Problem(model, records, columns, log_mask, signals, weights,
-                       solver or Rodas4(rtol=1e-6), jacobian, base)
+                       solver or Rodas4(rtol=1e-6), jacobian, base, window)
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]
@@ -423,10 +486,13 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     best = min(solutions, key=lambda s: s.cost)
     theta = problem.theta(best.x)
     r, jac, simulated = problem.evaluate(theta, True)
-    cov, dof = covariance_from_jacobian(jac, r, len(columns))
+    groups = [int(m.sum()) for m in problem.masks for _ in signals]
+    cov, dof = covariance_from_jacobian(jac, r, len(columns), groups=groups,
+                                        correlated=covariance == "hac")
     from ..parameters import catalogue
 
-    units = tuple(catalogue()[c.name].unit for c in columns)
+    units = tuple(records[0].units.get(c.name, "") if c.offset else catalogue()[c.name].unit
+                  for c in columns)
     est = Estimates(tuple(c.label for c in columns), theta, np.sqrt(np.diag(cov)), cov, dof,
                     units)
     stats, aic = _statistics(records, simulated, signals, len(columns), r)
@@ -437,7 +503,8 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
          for k, (s0, sol) in enumerate(zip(starts, solutions, strict=True))])
     result = FitResult(est, records, simulated, stats, r, float(best.cost), float(aic),
                        bool(best.success), str(best.message), int(best.nfev),
-                       problem.simulations, 0.0, signals, jac, start_table, {}, base, model)
+                       problem.simulations, 0.0, signals, jac, start_table, {}, base, model,
+                       window)
     for name in profile:
         result.profiles[name] = _profile(problem, result, name, plo, phi_, loss, f_scale,
                                          profile_points, progress)
