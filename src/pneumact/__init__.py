@@ -49,6 +49,13 @@ _EXPORTS: dict[str, str] = {
     "simulate_sensitivities": "pneumact.simulation",
     "BatchResult": "pneumact.simulation.batch",
     "simulate_batch": "pneumact.simulation.batch",
+    "fit": "pneumact.identification",
+    "identify_paper": "pneumact.identification",
+    "inverse_friction": "pneumact.identification",
+    "synthetic_campaign": "pneumact.identification",
+    "Record": "pneumact.io",
+    "read_record": "pneumact.io",
+    "read_records": "pneumact.io",
     "DataError": "pneumact.errors",
     "ExperimentError": "pneumact.errors",
     "ParameterError": "pneumact.errors",
@@ -82,6 +89,7 @@ __all__ = [
     "PressureCycle",
     "PressureRegulator",
     "PressureSource",
+    "Record",
     "Result",
     "Rodas4",
     "SensitivityResult",
@@ -89,10 +97,16 @@ __all__ = [
     "StribeckMap",
     "available_params",
     "experiments",
+    "fit",
+    "identify_paper",
+    "inverse_friction",
     "load_params",
+    "read_record",
+    "read_records",
     "simulate",
     "simulate_batch",
     "simulate_sensitivities",
+    "synthetic_campaign",
     "write_params",
 ]
 
@@ -123,6 +137,13 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         SolverError,
     )
     from pneumact.experiments import CommandCycle, Experiment, PressureCycle
+    from pneumact.identification import (
+        fit,
+        identify_paper,
+        inverse_friction,
+        synthetic_campaign,
+    )
+    from pneumact.io import Record, read_record, read_records
     from pneumact.models import (
         Actuator,
         Adiabatic,

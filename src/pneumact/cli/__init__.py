@@ -5,6 +5,10 @@
     pneumact friction-test stick-slip --duration 5
     pneumact batch table.csv --out batch1
     pneumact params list | show NAME|FILE | check FILE
+    pneumact campaign --out bench                # synthetic bench records (CSV)
+    pneumact identify paper bench --out ident    # the paper's staged procedure
+    pneumact identify friction DATA_EMPS.mat --validate DATA_EMPS_PULSES.mat
+    pneumact fit bench/presliding.csv --free sigma0,sigma1 --offsets position
 
 Options map onto exactly the objects of the library (parameter set, friction model,
 valve, experiment, solver); no physics lives here. Output files are written only after
@@ -22,6 +26,7 @@ from pneumact import __version__
 from pneumact.cli.batch import batch
 from pneumact.cli.common import out_console
 from pneumact.cli.friction_test import friction_test_app
+from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
 from pneumact.cli.simulate import simulate
 
@@ -52,5 +57,8 @@ app.command()(simulate)
 app.command("batch")(batch)
 app.add_typer(friction_test_app, name="friction-test")
 app.add_typer(params_app, name="params")
+app.command("campaign")(campaign)
+app.add_typer(identify_app, name="identify")
+app.command("fit")(fit_command)
 
 __all__ = ["app"]

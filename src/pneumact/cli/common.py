@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import shutil
-import tempfile
 import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -185,32 +183,10 @@ def use_agg() -> None:
 
 
 def write_outputs(out_dir: Path, writers: dict[str, Callable[[Path], Any]]) -> list[Path]:
-    """Write every file into a private staging directory first, then move each into
-    ``out_dir`` atomically; on any failure, remove what was already moved (and the
-    directory if this call created it), so no partial set of outputs is left."""
-    from pneumact.io.tables import atomic_write
+    """All files or none: see ``pneumact.io.tables.write_files``."""
+    from pneumact.io.tables import write_files
 
-    created_dir = not out_dir.exists()
-    staging = Path(tempfile.mkdtemp(prefix="pneumact-"))
-    written: list[Path] = []
-    try:
-        for name, write in writers.items():
-            write(staging / name)
-        for name in writers:
-            target = out_dir / name
-            with atomic_write(target) as tmp:
-                shutil.copyfile(staging / name, tmp)
-            written.append(target)
-    except BaseException:
-        for path in written:
-            path.unlink(missing_ok=True)
-        if created_dir:
-            with contextlib.suppress(OSError):
-                out_dir.rmdir()
-        raise
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return written
+    return write_files(out_dir, writers)
 
 
 def run_with_progress(run: Callable[[Callable[[float], None] | None], Any],

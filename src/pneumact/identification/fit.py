@@ -414,7 +414,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         weights: Mapping[str, float] | None = None, loss: str = "linear",
         f_scale: float = 1.0, jacobian: str = "sensitivities", solver=None,
         multistart: int = 0, seed: int = 0, workers: int | None = None, scheduler=None,
-        profile: Sequence[str] = (), profile_points: int = 13, max_nfev: int | None = None,
+        profile: Sequence[str] = (), profile_points: int = 8, max_nfev: int | None = None,
         offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
         smooth_input: bool = True, covariance: str = "hac",
         progress: Callable[[str, float], None] | None = None) -> FitResult:
@@ -560,38 +560,57 @@ def _solve_copy(problem, phi0, options):
 
 
 def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -> Profile:
+    """Step out from the optimum on each side (steps doubling from one standard error)
+    until Δ exceeds twice the 95 % threshold or the bound is reached, refitting the other
+    parameters at each point from the previous one."""
     labels = [c.label for c in problem.columns]
     if name not in labels:
         raise ParameterError(f"fit: profile of {name!r}, which is not a free parameter "
                              f"({', '.join(labels)})")
     j = labels.index(name)
     phi_hat = problem.phi(result.estimates.values)
+    se = result.estimates.stderr[j]
+    se_phi = se / abs(result.estimates.values[j]) if problem.log[j] else se
+    first = se_phi if np.isfinite(se_phi) and se_phi > 0 else 0.01 * max(abs(phi_hat[j]), 1)
     ssr_min = 2 * result.cost
     n = result.residuals.size
-    grid_phi = np.unique(np.concatenate([np.linspace(lo[j], hi[j], n_points), [phi_hat[j]]]))
     keep = [k for k in range(len(labels)) if k != j]
-    delta = np.empty(grid_phi.size)
-    centre = int(np.searchsorted(grid_phi, phi_hat[j]))
-    order = list(range(centre, grid_phi.size)) + list(range(centre - 1, -1, -1))
-    warm = {}
-    for count, g in enumerate(order):
-        sub = _Fixed(problem, j, grid_phi[g])
-        x0 = warm.get(g + (1 if g < centre else -1), phi_hat[keep])
-        if keep:
-            sol = least_squares(sub.residuals, x0, jac=sub.jac if problem.jacobian ==
-                                "sensitivities" else problem.jacobian,
-                                bounds=(lo[keep], hi[keep]), loss=loss, f_scale=f_scale,
-                                x_scale="jac", method="trf")
-            warm[g], ssr = sol.x, 2 * sol.cost
-        else:
-            r = sub.residuals(np.empty(0))
-            ssr = float(r @ r)
-        problem.simulations += sub.inner.simulations
-        delta[g] = n * np.log(max(ssr, 1e-300) / ssr_min)
-        if progress:
-            progress(f"profile {name}", (count + 1) / grid_phi.size)
+    points = {float(phi_hat[j]): 0.0}
+    count = 0
+    for side, bound in ((-1, lo[j]), (1, hi[j])):
+        x0 = phi_hat[keep]
+        for k in range(n_points):
+            target = phi_hat[j] + side * first * 2.0**k
+            at_bound = side * (target - bound) >= 0
+            target = bound if at_bound else target
+            ssr, x0 = _refit(problem, j, target, keep, x0, lo, hi, loss, f_scale)
+            delta = max(n * np.log(max(ssr, 1e-300) / ssr_min), 0.0)
+            points[float(target)] = delta
+            count += 1
+            if progress:
+                progress(f"profile {name}", min(1.0, count / (2 * n_points)))
+            if at_bound or delta > 2 * CHI2_95:
+                break
+    grid_phi = np.array(sorted(points))
+    delta = np.array([points[g] for g in grid_phi])
     grid = np.exp(grid_phi) if problem.log[j] else grid_phi
-    return Profile(name, grid, np.maximum(delta, 0.0), float(result.estimates.values[j]))
+    return Profile(name, grid, delta, float(result.estimates.values[j]))
+
+
+def _refit(problem, j, phi_j, keep, x0, lo, hi, loss, f_scale):
+    """(SSR, optimum of the others) with parameter ``j`` held at ``phi_j``."""
+    sub = _Fixed(problem, j, phi_j)
+    if keep:
+        jac = sub.jac if problem.jacobian == "sensitivities" else problem.jacobian
+        sol = least_squares(sub.residuals, np.clip(x0, lo[keep], hi[keep]), jac=jac,
+                            bounds=(lo[keep], hi[keep]), loss=loss, f_scale=f_scale,
+                            x_scale="jac", method="trf")
+        ssr, x = 2 * sol.cost, sol.x
+    else:
+        r = sub.residuals(np.empty(0))
+        ssr, x = float(r @ r), x0
+    problem.simulations += sub.inner.simulations
+    return ssr, x
 
 
 class _Fixed:

@@ -149,28 +149,34 @@ class PaperIdentification:
                 (table["truth"] <= table["ci95_high"])
         return table
 
-    def write(self, out_dir: str | Path, truth=None) -> dict[str, Path]:
-        """identified.toml, estimates.csv, one PNG per stage and report.md, atomically."""
-        import matplotlib.pyplot as plt
-
-        from ..io.tables import atomic_write
+    def writers(self, truth=None) -> dict:
+        """File name -> writer: identified.toml, estimates.csv, stage_*.png, report.md."""
         from ..parameters import write_params
-        from ..plotting import save_figure
 
-        out = Path(out_dir)
-        written = {"parameters": write_params(self.parameters, out / "identified.toml")}
-        table = self.table(truth)
-        with atomic_write(out / "estimates.csv") as tmp:
-            table.to_csv(tmp)
-        written["estimates"] = out / "estimates.csv"
+        def figure_writer(stage):
+            def write(path):
+                import matplotlib.pyplot as plt
+
+                fig = stage.plot()
+                try:
+                    fig.savefig(path, format="png", dpi=120, bbox_inches="tight")
+                finally:
+                    plt.close(fig)
+            return write
+
+        writers = {"identified.toml": lambda p: write_params(self.parameters, p),
+                   "estimates.csv": lambda p: self.table(truth).to_csv(p)}
         for name, stage in self.stages.items():
-            fig = stage.plot()
-            written[f"stage_{name}"] = save_figure(fig, out / f"stage_{name}.png")
-            plt.close(fig)
-        with atomic_write(out / "report.md") as tmp:
-            tmp.write_text(self.report(truth), encoding="utf-8")
-        written["report"] = out / "report.md"
-        return written
+            writers[f"stage_{name}.png"] = figure_writer(stage)
+        writers["report.md"] = lambda p: Path(p).write_text(self.report(truth),
+                                                            encoding="utf-8")
+        return writers
+
+    def write(self, out_dir: str | Path, truth=None) -> list[Path]:
+        """Write every file of ``writers`` into ``out_dir``, all or none."""
+        from ..io.tables import write_files
+
+        return write_files(out_dir, self.writers(truth))
 
     def report(self, truth=None) -> str:
         """A short Markdown report: the records, the estimates table, the figures."""

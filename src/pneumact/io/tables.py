@@ -23,7 +23,8 @@ import pandas as pd
 
 from pneumact.errors import DataError
 
-__all__ = ["UNITS_METADATA_KEY", "atomic_write", "parse_cell", "read_table", "write_table"]
+__all__ = ["UNITS_METADATA_KEY", "atomic_write", "parse_cell", "read_table", "write_files",
+           "write_table"]
 
 PathLike = str | os.PathLike[str]
 
@@ -66,6 +67,39 @@ def atomic_write(path: PathLike) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             tmp.unlink(missing_ok=True)
         raise
+
+
+def write_files(out_dir: PathLike, writers: Mapping[str, Any]) -> list[Path]:
+    """Write a set of files together: ``writers`` maps each file name to a function that
+    writes it to a given path. Everything is written into a private staging directory
+    first, then moved into ``out_dir`` file by file atomically; on any failure what was
+    already moved is removed (and ``out_dir`` if this call created it), so no partial
+    set of outputs is left."""
+    import shutil
+    import tempfile
+
+    out = Path(out_dir)
+    created_dir = not out.exists()
+    staging = Path(tempfile.mkdtemp(prefix="pneumact-"))
+    written: list[Path] = []
+    try:
+        for name, write in writers.items():
+            write(staging / name)
+        for name in writers:
+            target = out / name
+            with atomic_write(target) as tmp:
+                shutil.copyfile(staging / name, tmp)
+            written.append(target)
+    except BaseException:
+        for path in written:
+            path.unlink(missing_ok=True)
+        if created_dir:
+            with contextlib.suppress(OSError):
+                out.rmdir()
+        raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return written
 
 
 def _check_suffix(path: Path) -> str:

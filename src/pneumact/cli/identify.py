@@ -1,0 +1,287 @@
+"""``pneumact campaign``, ``pneumact identify paper|friction`` and ``pneumact fit``."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from pneumact.cli.common import (
+    Chamber,
+    ChamberOption,
+    Friction,
+    FrictionOption,
+    ModelOptions,
+    ParamsOption,
+    Valve,
+    ValveOption,
+    build_model,
+    err_console,
+    fmt,
+    load_quietly,
+    names,
+    out_console,
+    use_agg,
+    user_errors,
+    write_outputs,
+)
+from pneumact.errors import DataError, ParameterError
+
+identify_app = typer.Typer(help="Identify parameters from measured records.",
+                           no_args_is_help=True)
+
+RecordsArgument = Annotated[list[Path], typer.Argument(
+    help="Record files (CSV with 'name [unit]' headers, or Parquet) or folders of them.")]
+
+
+def _estimates_table(title: str, table) -> Table:
+    out = Table(title=title)
+    for column in ("parameter", "value", "std. error", "95 % interval", "unit"):
+        out.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
+    for name, row in table.iterrows():
+        out.add_row(str(name), fmt(row["value"], 6), fmt(row["stderr"], 3),
+                    f"{fmt(row['ci95_low'], 5)} .. {fmt(row['ci95_high'], 5)}",
+                    str(row.get("unit", "")))
+    return out
+
+
+def _figure_writer(make):
+    def write(path):
+        import matplotlib.pyplot as plt
+
+        fig = make()
+        try:
+            fig.savefig(path, format="png", dpi=120, bbox_inches="tight")
+        finally:
+            plt.close(fig)
+    return write
+
+
+def _status(what: str):
+    return err_console.status(what, spinner="dots")
+
+
+# --------------------------------------------------------------------------- campaign
+def campaign(
+    params: ParamsOption = "vgt-paper",
+    out: Annotated[Path, typer.Option(help="Output directory for the records.")] = Path(
+        "pneumact-campaign"),
+    seed: Annotated[int, typer.Option(help="Seed of the measurement noise.")] = 0,
+    pressure_noise: Annotated[float, typer.Option(
+        "--pressure-noise", help="Pressure sensor noise, standard deviation [kPa].")] = 0.02,
+    position_noise: Annotated[float, typer.Option(
+        "--position-noise", help="Position sensor noise, standard deviation [µm].")] = 1.0,
+    resolution: Annotated[float, typer.Option(
+        help="Position sensor resolution [µm] (0: none).")] = 1.0,
+) -> None:
+    """Write a synthetic bench campaign (sweep, ramps, presliding) as CSV records."""
+    with user_errors():
+        from pneumact.identification import Noise, synthetic_campaign
+
+        for label, value in (("--pressure-noise", pressure_noise),
+                             ("--position-noise", position_noise),
+                             ("--resolution", resolution)):
+            if not value >= 0:
+                raise ParameterError(f"{label} = {value}; must be >= 0")
+        parameter_set = load_quietly(params)
+        noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
+        with _status("simulating the bench campaign"):
+            records = synthetic_campaign(parameter_set, noise=noise, seed=seed)
+        units = {"pressure": "kPa", "position": "mm"}
+        written = write_outputs(out, {f"{r.source}.csv": (lambda p, r=r: r.save(p, units))
+                                      for r in records})
+        table = Table(title=f"synthetic campaign from {parameter_set.name} (seed {seed})")
+        for column in ("record", "kind", "samples", "duration [s]"):
+            table.add_column(column)
+        for r in records:
+            table.add_row(r.source, r.meta["kind"], str(len(r)), fmt(r.time[-1], 4))
+        out_console.print(table)
+        out_console.print(f"wrote {len(written)} records to {out}")
+
+
+# --------------------------------------------------------------------------- identify
+@identify_app.command("paper")
+def identify_paper_command(
+    records: RecordsArgument,
+    params: ParamsOption = "vgt-paper",
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-identify"),
+    sliding_speed: Annotated[float, typer.Option(
+        "--sliding-speed", help="Speed [mm/s] above which eq. 13 applies (v >> vs).")] = 5.0,
+    fit_delta: Annotated[bool, typer.Option(
+        "--fit-delta", help="Also fit the Stribeck exponent delta in stage (c).")] = False,
+) -> None:
+    """The paper's staged identification (section III.2) on bench records named
+    sweep*, ramp* and presliding*."""
+    with user_errors():
+        from pneumact.identification import identify_paper
+        from pneumact.io import read_records
+
+        parameter_set = load_quietly(params)
+        recs = read_records(records, required=("pressure", "position"),
+                            p_atm=parameter_set["p_atm"])
+        with _status("identifying") as status:
+            result = identify_paper(recs, parameter_set, sliding_speed=sliding_speed * 1e-3,
+                                    fit_delta=fit_delta,
+                                    progress=lambda s: status.update(f"stage {s}"))
+        use_agg()
+        written = write_outputs(out, result.writers())
+        out_console.print(_estimates_table("identified parameters", result.table()))
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+class DataFormat(StrEnum):
+    auto = "auto"
+    record = "record"
+    emps = "emps"
+    tudelft = "tudelft"
+
+
+class FrictionLaw(StrEnum):
+    coulomb_viscous = "coulomb-viscous"
+    stribeck = "stribeck"
+
+
+def _read_any(path: Path, data_format: DataFormat):
+    from pneumact.io import read_record
+    from pneumact.io.datasets import read_emps, read_tudelft_cylinder
+
+    if data_format is DataFormat.emps or (data_format is DataFormat.auto and
+                                          path.suffix.lower() == ".mat"):
+        return read_emps(path)
+    if data_format is DataFormat.tudelft:
+        return read_tudelft_cylinder(path)
+    return read_record(path)
+
+
+@identify_app.command("friction")
+def identify_friction_command(
+    record: Annotated[Path, typer.Argument(help="Record with position and force.")],
+    model: Annotated[FrictionLaw, typer.Option(help="Friction law.")] = (
+        FrictionLaw.coulomb_viscous),
+    data_format: Annotated[DataFormat, typer.Option(
+        "--format", help="auto (.mat: EMPS), record (CSV/Parquet), emps, tudelft.")] = (
+        DataFormat.auto),
+    force: Annotated[str | None, typer.Option(
+        help="Signal holding the force: 'force' (with inertia) or 'friction'.")] = None,
+    mass: Annotated[bool, typer.Option(help="Estimate the moving mass (F = M·a + F_f).")] = True,
+    asymmetric: Annotated[bool, typer.Option(help="Coulomb and viscous per direction.")] = (
+        False),
+    cutoff: Annotated[float | None, typer.Option(
+        help="Zero-phase low-pass cut-off [Hz] before differentiation.")] = None,
+    decimate: Annotated[int, typer.Option(help="Keep every n-th sample after filtering.")] = 1,
+    validate: Annotated[Path | None, typer.Option(
+        help="A second record: report the relative force error there.")] = None,
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-friction"),
+) -> None:
+    """Friction from measured motion and force (inverse model, linear/nonlinear least
+    squares)."""
+    with user_errors():
+        from pneumact.identification import inverse_friction
+
+        rec = _read_any(record, data_format)
+        force_name = force or ("friction" if "friction" in rec and not mass else "force")
+        if data_format is DataFormat.tudelft and force is None:
+            force_name, mass = "friction", False
+        if decimate < 1:
+            raise ParameterError(f"--decimate = {decimate}; must be >= 1")
+        result = inverse_friction(rec, model.value, force=force_name, mass=mass,
+                                  asymmetric=asymmetric, cutoff=cutoff, decimate=decimate)
+        checked = result.validate(_read_any(validate, data_format)) if validate else None
+        use_agg()
+        table = result.table()
+        summary = {"relative_force_error": result.relative_force_error,
+                   "condition_number": result.condition_number}
+        if checked is not None:
+            summary["relative_force_error_validation"] = checked
+        written = write_outputs(out, {
+            "friction.csv": lambda p: table.to_csv(p),
+            "summary.csv": lambda p: _series_csv(summary, p),
+            "friction.png": _figure_writer(result.plot),
+        })
+        out_console.print(_estimates_table(f"{model.value} friction from {record.name}", table))
+        out_console.print(f"relative force error {100 * result.relative_force_error:.2f} %, "
+                          f"condition number {result.condition_number:.3g}")
+        if checked is not None:
+            out_console.print(f"relative force error on {validate.name}: {100 * checked:.2f} %")
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+def _series_csv(values: dict, path) -> None:
+    import pandas as pd
+
+    pd.Series(values, name="value").rename_axis("quantity").to_csv(path)
+
+
+# --------------------------------------------------------------------------- fit
+def fit_command(
+    records: RecordsArgument,
+    free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
+    params: ParamsOption = "vgt-paper",
+    valve: ValveOption = Valve.source,
+    friction: FrictionOption = Friction.lugre,
+    chamber: ChamberOption = Chamber.isothermal,
+    per_record: Annotated[str | None, typer.Option(
+        "--per-record", help="Free parameters with one value per record.")] = None,
+    signals: Annotated[str, typer.Option(help="Measured signals to match.")] = "position",
+    offsets: Annotated[str | None, typer.Option(
+        help="Signals with a free sensor offset per record.")] = None,
+    window: Annotated[str | None, typer.Option(
+        help="'t0,t1' [s]: match only this time span.")] = None,
+    multistart: Annotated[int, typer.Option(help="Extra space-filling starts.")] = 0,
+    profile: Annotated[str | None, typer.Option(
+        help="Parameters whose profile likelihood to compute.")] = None,
+    loss: Annotated[str, typer.Option(
+        help="linear, soft_l1, huber, cauchy or arctan (robust losses).")] = "linear",
+    seed: Annotated[int, typer.Option(help="Seed of the multistart points.")] = 0,
+    rtol: Annotated[float, typer.Option(help="Relative tolerance of the solver.")] = 1e-6,
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-fit"),
+) -> None:
+    """Fit parameters of the actuator to measured records (forward-sensitivity Jacobian)."""
+    with user_errors():
+        import pneumact as pa
+        from pneumact.identification import fit
+        from pneumact.io import read_records
+
+        parameter_set, actuator = build_model(ModelOptions(params, valve, friction, chamber,
+                                                           rtol=rtol))
+        span = None
+        if window is not None:
+            try:
+                span = tuple(float(x) for x in window.split(","))
+            except ValueError:
+                span = ()
+            if len(span) != 2:
+                raise DataError(f"--window = {window!r}; give 't0,t1' in seconds")
+        recs = read_records(records, p_atm=parameter_set["p_atm"])
+        with _status("fitting"):
+            result = fit(actuator, recs, names(free) or [], per_record=names(per_record) or (),
+                         signals=names(signals) or ("position",), offsets=names(offsets) or (),
+                         window=span, multistart=multistart, profile=names(profile) or (),
+                         loss=loss, seed=seed, solver=pa.Rodas4(rtol=rtol))
+        use_agg()
+        writers = {"estimates.csv": lambda p: result.table().to_csv(p),
+                   "statistics.csv": lambda p: result.statistics.to_csv(p, index=False),
+                   "correlation.csv": lambda p: result.correlation.to_csv(p),
+                   "fit.png": _figure_writer(result.plot_fit)}
+        if multistart:
+            writers["starts.csv"] = lambda p: result.starts.to_csv(p, index=False)
+            writers["waterfall.png"] = _figure_writer(result.plot_waterfall)
+        if result.profiles:
+            writers["profiles.png"] = _figure_writer(result.plot_profiles)
+        if not per_record:
+            writers["fitted.toml"] = lambda p: pa.write_params(result.parameters(), p)
+        written = write_outputs(out, writers)
+        out_console.print(_estimates_table("fitted parameters", result.table()))
+        for _, row in result.statistics.iterrows():
+            out_console.print(f"{Path(row['record']).name} {row['signal']}: fit "
+                              f"{row['fit_percent']:.2f} %, RMS {row['rms']:.4g} {row['unit']}")
+        for name, prof in result.profiles.items():
+            out_console.print(f"profile of {name}: {prof.verdict}")
+        out_console.print(f"{result.simulations} simulations in {result.wall_time:.2f} s")
+        for path in written:
+            out_console.print(f"wrote {path}")
