@@ -22,13 +22,15 @@ __all__ = ["Kinematics", "drive_force", "kinematics", "steady_segments"]
 
 @dataclass(frozen=True)
 class Kinematics:
-    """Position, velocity and acceleration on a uniform grid (SI)."""
+    """Position (smoothed, and as measured), velocity and acceleration on a uniform grid
+    (SI)."""
 
     time: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
     pressure: np.ndarray
+    measured_position: np.ndarray
 
 
 def _uniform(record: Record) -> Record:
@@ -51,7 +53,7 @@ def kinematics(record: Record, window: float = 0.02) -> Kinematics:
     x = rec["position"]
     v = savgol_filter(x, n, 3, deriv=1, delta=dt)
     a = savgol_filter(x, n, 3, deriv=2, delta=dt)
-    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec["pressure"])
+    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec["pressure"], x)
 
 
 def drive_force(pressure: np.ndarray, params) -> np.ndarray:
@@ -67,7 +69,8 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
                     min_duration: float = 0.2, keep: tuple[float, float] = (0.4, 0.9),
-                    max_variation: float = 0.25, window: float = 0.1) -> pd.DataFrame:
+                    max_variation: float = 0.25, window: float = 0.1,
+                    min_travel: float = 50e-6) -> pd.DataFrame:
     """Segments of steady sliding and their mean velocity and friction force.
 
     A segment is a run of one velocity sign with |v| > ``min_speed`` lasting at least
@@ -75,10 +78,16 @@ def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
     break-away transient, and kept only if std(v)/|mean v| < ``max_variation``. The
     friction is the force balance with F0, k, m and A_d from ``params``; the velocity
     is the slope of a straight line through the positions (robust to sensor noise).
+    A segment must also travel at least ``min_travel`` (beyond the bristles' presliding
+    range Fs/σ0, some tens of µm: slower creep before break-away is not sliding) and its
+    friction must oppose the motion.
     """
     kin = kinematics(record, window)
-    force = drive_force(kin.pressure, params) - params["F0"] - params["k"] * kin.position \
-        - params["m"] * kin.acceleration
+    fast = kinematics(record, 0.01).velocity  # follows the mechanics' ringing
+    # the measured position: a smoothed one is biased where the motion accelerates, and
+    # the noise averages out over a segment anyway
+    force = drive_force(kin.pressure, params) - params["F0"] - \
+        params["k"] * kin.measured_position
     moving = np.abs(kin.velocity) > min_speed
     rows = []
     for sign in (1, -1):
@@ -95,7 +104,14 @@ def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
             slope = np.polyfit(kin.time[sel], kin.position[sel], 1)[0]
             if slope * sign < 2 * min_speed:
                 continue  # a creep or a reversal transient, not steady sliding
-            f = force[sel]
+            if abs(slope) * (kin.time[sel][-1] - kin.time[sel][0]) < min_travel:
+                continue  # presliding creep before break-away
+            i_first, i_last = np.flatnonzero(sel)[[0, -1]]
+            duration = kin.time[i_last] - kin.time[i_first]
+            inertia = params["m"] * (fast[i_last] - fast[i_first]) / duration  # mean m·a
+            f = force[sel] - inertia
+            if np.mean(f) * sign <= 0:
+                continue  # friction that does not oppose the motion: a transient
             rows.append({"record": record.source, "t_start": kin.time[sel][0],
                          "t_end": kin.time[sel][-1], "velocity": slope,
                          "friction": float(np.mean(f)), "samples": int(sel.sum()),

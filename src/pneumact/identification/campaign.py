@@ -29,7 +29,7 @@ from ..errors import ExperimentError
 from ..experiments import Experiment, PiecewiseLinear
 from ..io.records import Record
 
-__all__ = ["BenchTest", "Noise", "paper_campaign", "synthetic_campaign"]
+__all__ = ["BenchTest", "Noise", "add_noise", "paper_campaign", "synthetic_campaign"]
 
 KINDS = ("sweep", "ramp", "presliding")
 
@@ -135,16 +135,24 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
     from ..simulation import simulate
 
     tests = paper_campaign(params) if tests is None else list(tests)
-    noise = Noise() if noise is None else noise
-    rng = np.random.default_rng(seed)
     friction = LuGre() if friction is None else friction
     records = []
     for test in tests:
         valve = PressureRegulator() if test.valve == "regulator" else PressureSource()
         result = simulate(Actuator(params, friction=friction, valve=valve), test.experiment)
-        pressure, position = noise.apply(rng, result["pressure"], result["position"])
         records.append(Record.from_arrays(
-            result.time, {"pressure": pressure, "position": position},
-            source=test.name, meta={"kind": test.kind, "truth": params.name,
-                                    "seed": str(seed)}))
-    return records
+            result.time, {"pressure": result["pressure"], "position": result["position"]},
+            source=test.name, meta={"kind": test.kind, "truth": params.name}))
+    return add_noise(records, Noise() if noise is None else noise, seed)
+
+
+def add_noise(records: Sequence[Record], noise: Noise, seed: int = 0) -> list[Record]:
+    """The records with measurement ``noise`` on pressure and position, reproducible by
+    ``seed`` (one simulation serves many noise realisations)."""
+    rng = np.random.default_rng(seed)
+    noisy = []
+    for rec in records:
+        pressure, position = noise.apply(rng, rec["pressure"], rec["position"])
+        noisy.append(Record.from_arrays(rec.time, {"pressure": pressure, "position": position},
+                                        rec.units, rec.source, {**rec.meta, "seed": str(seed)}))
+    return noisy

@@ -6,7 +6,8 @@
     ``sliding_speed`` (≫ vs), with an offset and a slope in x that absorb the errors of
     stage (a) (0.1 % of k is 0.13 N at 10 mm, as much as σ2·v at 30 mm/s);
 (c) Fs and vs (optionally δ) by nonlinear least squares of eq. 12 over the slower steady
-    segments;
+    segments, within Fs ≥ Fc; the uncertainty of the stage-(b) values it holds is
+    propagated into its standard errors (delta method);
 (d) σ0 and σ1 by output-error least squares on the presliding records, with the model
     in the loop (forward-sensitivity Jacobian), after the approach to the stop.
 
@@ -281,12 +282,25 @@ def stage_stribeck(segments: pd.DataFrame, sliding: StageResult, params,
 
     q0 = [max(params["Fs"], y.max()), np.log(params["vs"])] + ([params["delta"]]
                                                                 if fit_delta else [])
-    sol = least_squares(lambda q: model(q) - y, q0, x_scale="jac")
+    # Fs ≥ Fc (Fc + (Fs − Fc)·e^… ≥ Fc), vs within 1 µm/s … 1 m/s, δ within 0.3 … 5
+    lower = [fc, np.log(1e-6)] + ([0.3] if fit_delta else [])
+    upper = [10 * max(fc, y.max()), 0.0] + ([5.0] if fit_delta else [])
+    q0 = np.clip(q0, np.nextafter(lower, np.inf), np.nextafter(upper, -np.inf))
+    sol = least_squares(lambda q: model(q) - y, q0, bounds=(lower, upper), x_scale="jac")
     jac = sol.jac.copy()
     values = sol.x.copy()
     values[1] = np.exp(values[1])
     jac[:, 1] /= values[1]  # back from log vs to vs
     cov, dof = covariance_from_jacobian(jac, sol.fun, n_par, correlated=False)
+    # the estimates of stage (b) are held here: add their uncertainty (delta method)
+    sign = np.sign(v)
+    decay = np.exp(-((speed / values[1]) ** (values[2] if fit_delta else params["delta"])))
+    held = np.column_stack([1 - decay, speed, sign, sign * x])  # ∂r/∂(Fc, σ2, offset, dk)
+    b_idx = [sliding.estimates.names.index(n)
+             for n in ("Fc", "sigma2", "offset", "spring_error")]
+    cov_b = sliding.estimates.covariance[np.ix_(b_idx, b_idx)]
+    gain = -np.linalg.pinv(jac) @ held  # ∂θ_c/∂θ_b at the optimum
+    cov = cov + gain @ cov_b @ gain.T
     names = ["Fs", "vs"] + (["delta"] if fit_delta else [])
     est = Estimates(tuple(names), values, np.sqrt(np.diag(cov)), cov, dof,
                     ("N", "m/s", "")[:n_par])
