@@ -70,7 +70,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
                     min_duration: float = 0.2, keep: tuple[float, float] = (0.4, 0.9),
                     max_variation: float = 0.25, window: float = 0.1,
-                    min_travel: float = 50e-6) -> pd.DataFrame:
+                    min_travel: float = 50e-6, max_drift: float = 0.03) -> pd.DataFrame:
     """Segments of steady sliding and their mean velocity and friction force.
 
     A segment is a run of one velocity sign with |v| > ``min_speed`` lasting at least
@@ -79,8 +79,9 @@ def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
     friction is the force balance with F0, k, m and A_d from ``params``; the velocity
     is the slope of a straight line through the positions (robust to sensor noise).
     A segment must also travel at least ``min_travel`` (beyond the bristles' presliding
-    range Fs/σ0, some tens of µm: slower creep before break-away is not sliding) and its
-    friction must oppose the motion.
+    range Fs/σ0, some tens of µm: slower creep before break-away is not sliding), its
+    friction must oppose the motion, and the slopes of its two halves must agree within
+    ``max_drift`` (relative): a segment still accelerating after a reversal is not steady.
     """
     kin = kinematics(record, window)
     fast = kinematics(record, 0.01).velocity  # follows the mechanics' ringing
@@ -106,6 +107,11 @@ def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
                 continue  # a creep or a reversal transient, not steady sliding
             if abs(slope) * (kin.time[sel][-1] - kin.time[sel][0]) < min_travel:
                 continue  # presliding creep before break-away
+            idx = np.flatnonzero(sel)
+            halves = np.array_split(idx, 2)
+            v1, v2 = (np.polyfit(kin.time[h], kin.measured_position[h], 1)[0] for h in halves)
+            if abs(v2 - v1) > max_drift * abs(slope):
+                continue  # still accelerating
             i_first, i_last = np.flatnonzero(sel)[[0, -1]]
             duration = kin.time[i_last] - kin.time[i_first]
             inertia = params["m"] * (fast[i_last] - fast[i_first]) / duration  # mean m·a

@@ -86,13 +86,14 @@ def _test(name, kind, points, valve, rate) -> BenchTest:
 
 
 def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3,
-                                                      1e-2, 2e-2, 4e-2, 6e-2, 8e-2),
+                                                      1e-2, 2e-2, 3e-2, 4e-2),
                    sweep_period: float = 60.0) -> list[BenchTest]:
     """The tests of the paper's procedure, sized from ``params`` (spring, preload, area):
 
     - one quasi-static sweep 100 → 20 → 100 kPa over ``sweep_period`` (step a);
     - per speed [m/s], a ramp pair at the pressure rate that moves the spring at that
-      speed (k·v/A_d), in both directions, from mid-stroke (steps b and c);
+      speed (k·v/A_d), in both directions, from mid-stroke (steps b and c); the default
+      regulator reaches about 50 mm/s, so faster ramps would not slide steadily;
     - one presliding test: stop at mid-stroke, reverse by the friction band, then small
       fast steps that stay below break-away (step d).
     """
@@ -107,7 +108,7 @@ def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e
     band = 2.0 * friction / area
     for v in speeds:
         rate = k * v / area
-        travel = min(11e-3, max(0.3e-3, 3.0 * v))  # steady part long enough at any speed
+        travel = min(11e-3, max(0.6e-3, 3.0 * v))  # steady part long enough at any speed
         span = k * travel / area + band
         ramp = span / rate
         sample_rate = float(np.clip(400.0 / ramp, 1000.0, 2000.0))

@@ -207,16 +207,24 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 # --------------------------------------------------------------------------- stages
-def stage_spring(sweeps: Sequence[Record], params, min_speed=1e-4, margin=0.3e-3
-                 ) -> StageResult:
-    """(a): F0, k and the friction level from the moving parts of quasi-static sweeps
-    (|v| > ``min_speed``, and ``margin`` away from the rest stop and the turning point,
-    where the actuator sticks while the pressure reverses)."""
+def stage_spring(sweeps: Sequence[Record], params, min_speed=1e-4, margin=0.3e-3,
+                 steady=0.8) -> StageResult:
+    """(a): F0, k and the friction level from the moving parts of quasi-static sweeps:
+    |v| > ``min_speed``, ``margin`` away from the rest stop and the turning point, and on
+    each branch at least ``steady`` × its median speed (the break-away transient at the
+    start of a branch has Stribeck friction, at small x on one branch and large x on the
+    other, which would leak into k)."""
     xs, fs, signs = [], [], []
     for rec in sweeps:
         kin = kinematics(rec, 0.1)
         moving = (np.abs(kin.velocity) > min_speed) & (kin.position > margin) & \
             (kin.position < kin.position.max() - margin)
+        for sign in (1, -1):
+            branch = moving & (np.sign(kin.velocity) == sign)
+            if branch.any():
+                branch &= np.abs(kin.velocity) >= steady * np.median(
+                    np.abs(kin.velocity[branch]))
+            moving = moving & ~((np.sign(kin.velocity) == sign) & ~branch)
         force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
         xs.append(kin.position[moving])
         fs.append(force[moving])
