@@ -90,7 +90,7 @@ def campaign(
         noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
         with _status("simulating the bench campaign"):
             records = synthetic_campaign(parameter_set, noise=noise, seed=seed)
-        units = {"pressure": "kPa", "position": "mm"}
+        units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
         written = write_outputs(out, {f"{r.source}.csv": (lambda p, r=r: r.save(p, units))
                                       for r in records})
         table = Table(title=f"synthetic campaign from {parameter_set.name} (seed {seed})")

@@ -129,7 +129,8 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
                        noise: Noise | None = None, seed: int = 0, friction=None
                        ) -> list[Record]:
     """Simulate each bench test on ``params`` (LuGre friction unless ``friction``) and
-    return measured-like records: chamber pressure [Pa abs] and position [m] with
+    return measured-like records: chamber pressure [Pa abs] and position [m] (and the
+    regulator's set-point [Pa abs], as commanded, for the regulator-driven tests) with
     ``noise`` (default ``Noise()``; ``Noise(0, 0, 0)`` for exact data), reproducible by
     ``seed``. Each record's ``meta`` holds its kind and the truth's parameter set name."""
     from ..models import Actuator, LuGre, PressureRegulator, PressureSource
@@ -141,9 +142,12 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
     for test in tests:
         valve = PressureRegulator() if test.valve == "regulator" else PressureSource()
         result = simulate(Actuator(params, friction=friction, valve=valve), test.experiment)
+        signals = {"pressure": result["pressure"], "position": result["position"]}
+        if test.valve == "regulator":  # the bench logs what it commanded, too
+            signals["setpoint"] = test.experiment.drive(result.time)
         records.append(Record.from_arrays(
-            result.time, {"pressure": result["pressure"], "position": result["position"]},
-            source=test.name, meta={"kind": test.kind, "truth": params.name}))
+            result.time, signals, source=test.name,
+            meta={"kind": test.kind, "truth": params.name}))
     return add_noise(records, Noise() if noise is None else noise, seed)
 
 
@@ -154,6 +158,7 @@ def add_noise(records: Sequence[Record], noise: Noise, seed: int = 0) -> list[Re
     noisy = []
     for rec in records:
         pressure, position = noise.apply(rng, rec["pressure"], rec["position"])
-        noisy.append(Record.from_arrays(rec.time, {"pressure": pressure, "position": position},
-                                        rec.units, rec.source, {**rec.meta, "seed": str(seed)}))
+        signals = {**rec.signals, "pressure": pressure, "position": position}
+        noisy.append(Record.from_arrays(rec.time, signals, rec.units, rec.source,
+                                        {**rec.meta, "seed": str(seed)}))
     return noisy

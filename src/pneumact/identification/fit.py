@@ -57,8 +57,9 @@ class _Problem:
         self.jacobian = jacobian
         self.base = dict(base_values)
         self.assembly = assemble(model)
-        quantity = _input_name(model)
-        self.experiments = [r.to_experiment(quantity) for r in self.records]
+        signal = _input_name(model)
+        self.experiments = [r.to_experiment(model.drive_quantity, signal=signal)
+                            for r in self.records]
         lo, hi = window if window is not None else (-np.inf, np.inf)
         self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
         for r, m in zip(self.records, self.masks, strict=True):
@@ -70,10 +71,14 @@ class _Problem:
 
     # -- parameter spaces
     def theta(self, phi: np.ndarray) -> np.ndarray:
-        return np.where(self.log, np.exp(phi), phi)
+        out = np.array(phi, dtype=float)
+        out[self.log] = np.exp(out[self.log])
+        return out
 
     def phi(self, theta: np.ndarray) -> np.ndarray:
-        return np.where(self.log, np.log(np.where(self.log, theta, 1.0)), theta)
+        out = np.array(theta, dtype=float)
+        out[self.log] = np.log(out[self.log])
+        return out
 
     def values_for(self, theta: np.ndarray, i: int) -> dict[str, float]:
         values = dict(self.base)
@@ -239,6 +244,7 @@ class FitResult:
     base_values: dict[str, float] = field(default_factory=dict)
     model: object = None
     window: tuple[float, float] | None = None
+    weights: dict[str, float] = field(default_factory=dict)
 
     @property
     def values(self) -> dict[str, float]:
@@ -253,16 +259,23 @@ class FitResult:
         return self.estimates.to_pandas()
 
     def parameters(self, name: str = "fitted"):
-        """The model's parameter set with the shared estimates (per-record ones are not
-        one set's values: they stay in ``values``)."""
-        shared = {n: v for n, v in self.values.items() if "[" not in n}
-        params = self.model.params
+        """The model's parameter set with the shared estimates, each value's source
+        saying it was fitted (per-record values are not one set's: see ``values``)."""
         from ..parameters import ParameterSet
+        from ..parameters.parameter_set import ParameterInfo, number_text
 
-        return ParameterSet({**dict(params.values), **shared}, name=name,
-                            description=f"fitted from {len(self.records)} record(s)",
-                            provenance={**dict(params.provenance),
-                                        **{n: "fit" for n in shared}})
+        params = self.model.params
+        values, info = dict(params.values), dict(params.info)
+        for j, label in enumerate(self.estimates.names):
+            if "[" in label:
+                continue
+            values[label] = float(self.estimates.values[j])
+            info[label] = ParameterInfo(
+                number_text(label, values[label]), "fitted",
+                f"± {self.estimates.stderr[j]:.3g} (standard error); records: "
+                + ", ".join(os.path.basename(r.source) for r in self.records))
+        return ParameterSet(values, name=name, provenance=params.provenance, info=info,
+                            description=f"fitted from {len(self.records)} record(s)")
 
     def plot_fit(self):
         """Measured and simulated signals per record, with residuals."""
@@ -504,7 +517,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     result = FitResult(est, records, simulated, stats, r, float(best.cost), float(aic),
                        bool(best.success), str(best.message), int(best.nfev),
                        problem.simulations, 0.0, signals, jac, start_table, {}, base, model,
-                       window)
+                       window, dict(weights))
     for name in profile:
         result.profiles[name] = _profile(problem, result, name, plo, phi_, loss, f_scale,
                                          profile_points, progress)

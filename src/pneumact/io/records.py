@@ -119,13 +119,16 @@ class Record:
             raise DataError(f"{self.source}: {use} needs signal(s) {', '.join(missing)}; the "
                             f"record has: time, {', '.join(self.signals) or '(nothing)'}")
 
-    def to_experiment(self, quantity: str, n_points: int | None = None):
-        """The record's ``quantity`` (pressure, command, ...) as a simulation input,
-        linear between samples."""
+    def to_experiment(self, quantity: str, n_points: int | None = None,
+                      signal: str | None = None):
+        """The record's ``signal`` (default: ``quantity``) as a simulation input of that
+        ``quantity`` (pressure, command, ...), linear between samples; e.g. a regulator's
+        ``setpoint`` signal drives its ``pressure`` input."""
         from pneumact.experiments import from_samples
 
-        self.require([quantity], f"driving a simulation with its {quantity}")
-        return from_samples(self.time, self.signals[quantity], quantity,
+        signal = quantity if signal is None else signal
+        self.require([signal], f"driving a simulation with its {signal}")
+        return from_samples(self.time, self.signals[signal], quantity,
                             name=Path(self.source).name or "record",
                             n_points=n_points or self.time.size)
 
