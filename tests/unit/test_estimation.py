@@ -94,7 +94,8 @@ def test_piecewise_linear_input_keeps_steps_and_removes_noise():
     assert np.max(np.abs(rebuilt - clean)) < ref.PWL_MAX_ERROR * ref.PWL_NOISE
     assert knots_t.size < 20
     same_t, same_v = piecewise_linear_input(t, clean)
-    assert same_t.size == t.size and np.array_equal(same_v, clean)
+    assert same_t.size < 20
+    assert np.allclose(np.interp(t, same_t, same_v), clean, rtol=1e-12)
 
 
 # --------------------------------------------------------------------------- records

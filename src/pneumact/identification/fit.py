@@ -48,7 +48,7 @@ class _Problem:
     """The residual vector and its Jacobian as functions of the free parameters."""
 
     def __init__(self, model, records, columns, log, signals, weights, solver, jacobian,
-                 base_values, window):
+                 base_values, window, smooth_input=True):
         from ..simulation.assembly import assemble
 
         self.model, self.records, self.columns = model, list(records), list(columns)
@@ -57,9 +57,7 @@ class _Problem:
         self.jacobian = jacobian
         self.base = dict(base_values)
         self.assembly = assemble(model)
-        signal = _input_name(model)
-        self.experiments = [r.to_experiment(model.drive_quantity, signal=signal)
-                            for r in self.records]
+        self.experiments = [_experiment(model, r, smooth_input) for r in self.records]
         lo, hi = window if window is not None else (-np.inf, np.inf)
         self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
         for r, m in zip(self.records, self.masks, strict=True):
@@ -161,16 +159,20 @@ class _Problem:
         return jac * np.where(self.log, theta, 1.0)[None, :]
 
 
-def _smoothed(record: Record, quantity: str) -> Record:
-    """The record with its input rebuilt piecewise linear (unchanged if noiseless)."""
+def _experiment(model, record: Record, smooth: bool):
+    """The record's measured input as the model's experiment; with ``smooth`` rebuilt
+    piecewise linear (``identification.inputs``), which also leaves the integrator far
+    fewer breakpoints than one per sample."""
+    from ..experiments import from_samples
     from .inputs import piecewise_linear_input
 
-    knots_t, knots_v = piecewise_linear_input(record.time, record[quantity])
-    if knots_t.size == record.time.size:
-        return record
-    signals = dict(record.signals)
-    signals[quantity] = np.interp(record.time, knots_t, knots_v)
-    return Record.from_arrays(record.time, signals, record.units, record.source, record.meta)
+    signal = _input_name(model)
+    if not smooth:
+        return record.to_experiment(model.drive_quantity, signal=signal)
+    knots_t, knots_v = piecewise_linear_input(record.time, record[signal])
+    return from_samples(knots_t, knots_v, model.drive_quantity,
+                        name=os.path.basename(record.source) or "record",
+                        n_points=record.time.size)
 
 
 def _input_name(model) -> str:
@@ -473,8 +475,6 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     if bad:
         raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
                              f"({', '.join(signals)})")
-    if smooth_input:
-        records = [_smoothed(r, _input_name(model)) for r in records]
     columns = _columns(free, per_record, len(records), offsets)
     theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.name, base[c.name]))
                        for c in columns])
@@ -488,7 +488,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
             y = np.concatenate([r[s] for r in records])
             weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
     problem = _Problem(model, records, columns, log_mask, signals, weights,
-                       solver or Rodas4(rtol=1e-6), jacobian, base, window)
+                       solver or Rodas4(rtol=1e-6), jacobian, base, window, smooth_input)
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]

@@ -53,12 +53,16 @@ def piecewise_linear_input(time: np.ndarray, values: np.ndarray,
     """(knot times, knot values) of a piecewise-linear signal fitted to a noisy input.
 
     ``tolerance`` (default 6 × the estimated noise level) is the largest deviation left
-    unexplained by a segment; a noiseless input is returned as is."""
+    unexplained by a segment; a noiseless input keeps its corners exactly."""
     time = np.asarray(time, dtype=float)
     values = np.asarray(values, dtype=float)
     sigma = noise_level(values)
-    if tolerance is None and sigma <= 1e-9 * max(np.ptp(values), np.abs(values).max()):
-        return time, values  # noiseless (a simulated or already clean input)
+    scale = max(np.ptp(values), np.abs(values).max())
+    if tolerance is None and sigma <= 1e-9 * scale:
+        # noiseless (simulated, or already clean): drop only the samples that lie on a
+        # straight line between their neighbours (exactly the same signal, fewer knots)
+        knots = _rdp_knots(time, values, 1e-9 * scale)
+        return time[knots], values[knots]
     tol = 6.0 * sigma if tolerance is None else float(tolerance)
     knots = _rdp_knots(time, values, tol)
     # hat-function basis on the knots: linear least squares for the knot values
