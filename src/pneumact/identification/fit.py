@@ -19,6 +19,7 @@ from __future__ import annotations
 import copy
 import os
 import time as _time
+import weakref
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -159,6 +160,10 @@ class _Problem:
         return jac * np.where(self.log, theta, 1.0)[None, :]
 
 
+#: record -> {input signal: (knot times, knot values)}, forgotten with the record
+_REBUILT_INPUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _experiment(model, record: Record, smooth: bool):
     """The record's measured input as the model's experiment; with ``smooth`` rebuilt
     piecewise linear (``identification.inputs``), which also leaves the integrator far
@@ -169,7 +174,10 @@ def _experiment(model, record: Record, smooth: bool):
     signal = _input_name(model)
     if not smooth:
         return record.to_experiment(model.drive_quantity, signal=signal)
-    knots_t, knots_v = piecewise_linear_input(record.time, record[signal])
+    per_record = _REBUILT_INPUTS.setdefault(record, {})
+    if signal not in per_record:  # records are immutable: rebuild each input once
+        per_record[signal] = piecewise_linear_input(record.time, record[signal])
+    knots_t, knots_v = per_record[signal]
     return from_samples(knots_t, knots_v, model.drive_quantity,
                         name=os.path.basename(record.source) or "record",
                         n_points=record.time.size)

@@ -82,21 +82,46 @@ def piecewise_linear_input(time: np.ndarray, values: np.ndarray,
 
 def _refine_knot_times(time, values, knot_t, knot_v):
     """Move the interior knots in time (between their neighbours' midpoints) and adjust
-    all knot values, by nonlinear least squares: a step's corners fall between samples,
-    and a knot on the nearest sample misplaces a 2 ms step by 10 % of its length."""
+    all knot values, by nonlinear least squares with the analytic sparse Jacobian: a
+    step's corners fall between samples, and a knot on the nearest sample misplaces a
+    2 ms step by 10 % of its length."""
     from scipy.optimize import least_squares
+    from scipy.sparse import csr_matrix
 
-    if knot_t.size <= 2 or knot_t.size > MAX_REFINED_KNOTS:
+    n_knots = knot_t.size
+    if n_knots <= 2 or n_knots > MAX_REFINED_KNOTS:
         return knot_t, knot_v
+    n_in = n_knots - 2
     mid = 0.5 * (knot_t[1:] + knot_t[:-1])
-    lo = np.concatenate([mid[:-1], np.full(knot_v.size, -np.inf)])
-    hi = np.concatenate([mid[1:], np.full(knot_v.size, np.inf)])
-    x0 = np.concatenate([knot_t[1:-1], knot_v])
-    n_in = knot_t.size - 2
+    lo = np.concatenate([mid[:-1], np.full(n_knots, -np.inf)])
+    hi = np.concatenate([mid[1:], np.full(n_knots, np.inf)])
+    rows = np.arange(time.size)
+
+    def unpack(x):
+        t = np.concatenate([[knot_t[0]], np.sort(x[:n_in]), [knot_t[-1]]])
+        seg = np.clip(np.searchsorted(t, time, side="right") - 1, 0, n_knots - 2)
+        h = t[seg + 1] - t[seg]
+        w = (time - t[seg]) / h
+        return t, x[n_in:], seg, w, h
 
     def residual(x):
-        t = np.concatenate([[knot_t[0]], np.sort(x[:n_in]), [knot_t[-1]]])
-        return np.interp(time, t, x[n_in:]) - values
+        _t, v, seg, w, _ = unpack(x)
+        return v[seg] + (v[seg + 1] - v[seg]) * w - values
 
-    sol = least_squares(residual, x0, bounds=(lo, hi), x_scale="jac", method="trf")
-    return np.concatenate([[knot_t[0]], np.sort(sol.x[:n_in]), [knot_t[-1]]]), sol.x[n_in:]
+    def jacobian(x):
+        _t, v, seg, w, h = unpack(x)
+        slope = (v[seg + 1] - v[seg]) / h
+        # columns: interior knot times 0..n_in-1 (knot k ↔ column k-1), then values
+        cols = [n_in + seg, n_in + seg + 1, seg - 1, seg]
+        data = [1 - w, w, -slope * (1 - w), -slope * w]
+        keep = [np.ones_like(w, bool), np.ones_like(w, bool), seg >= 1, seg + 1 <= n_in]
+        r = np.concatenate([rows[m] for m in keep])
+        c = np.concatenate([col[m] for col, m in zip(cols, keep, strict=True)])
+        d = np.concatenate([dat[m] for dat, m in zip(data, keep, strict=True)])
+        return csr_matrix((d, (r, c)), shape=(time.size, n_in + n_knots))
+
+    x0 = np.concatenate([knot_t[1:-1], knot_v])
+    sol = least_squares(residual, x0, jac=jacobian, bounds=(lo, hi), x_scale="jac",
+                        method="trf", tr_solver="lsmr", ftol=1e-6, max_nfev=40)
+    t, v, *_ = unpack(sol.x)
+    return t, v
