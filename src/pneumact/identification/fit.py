@@ -50,14 +50,11 @@ class _Problem:
 
     def __init__(self, model, records, columns, log, signals, weights, solver, jacobian,
                  base_values, window, smooth_input=True):
-        from ..simulation.assembly import assemble
-
         self.model, self.records, self.columns = model, list(records), list(columns)
         self.log = np.asarray(log, dtype=bool)
         self.signals, self.weights, self.solver = tuple(signals), dict(weights), solver
         self.jacobian = jacobian
         self.base = dict(base_values)
-        self.assembly = assemble(model)
         self.experiments = [_experiment(model, r, smooth_input) for r in self.records]
         lo, hi = window if window is not None else (-np.inf, np.inf)
         self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
@@ -67,6 +64,10 @@ class _Problem:
                                 f"{r.source} ({r.time[0]:.6g}..{r.time[-1]:.6g} s)")
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
+
+    def __getstate__(self) -> dict:
+        """Pickled (for Dask) without the cache of simulated results."""
+        return {**self.__dict__, "_cache": {}}
 
     # -- parameter spaces
     def theta(self, phi: np.ndarray) -> np.ndarray:
