@@ -213,3 +213,18 @@ def test_multistart_on_dask_equals_local(vgt, clean_presliding, monkeypatch):
                      **options)
     np.testing.assert_array_equal(remote.estimates.values, local.estimates.values)
     assert remote.simulations == local.simulations
+
+
+def test_fit_of_the_friction_rig_to_a_measured_friction(canudas):
+    """Any model: the Canudas rig driven by a recorded velocity, fitted on its friction."""
+    from pneumact.experiments import Experiment, Sine
+
+    rig = pa.FrictionRig(canudas, drive="velocity")
+    experiment = Experiment(Sine(0.0, 0.01, 0.5), "velocity", 4.0, n_points=4001)
+    truth = pa.simulate(rig, experiment)
+    record = Record.from_arrays(truth.time, {"velocity": truth["drive_velocity"],
+                                             "friction": truth["friction"]}, source="rig")
+    result = fit(rig, record, ["Fc", "sigma2"], signals=["friction"],
+                 start={"Fc": 1.3 * canudas["Fc"], "sigma2": 0.7 * canudas["sigma2"]})
+    for name in ("Fc", "sigma2"):
+        assert result.values[name] == pytest.approx(canudas[name], rel=ref.FIT_RTOL)
