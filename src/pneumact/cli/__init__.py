@@ -28,6 +28,7 @@ from pneumact.cli.common import out_console
 from pneumact.cli.friction_test import friction_test_app
 from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
+from pneumact.cli.sensitivity import sensitivity
 from pneumact.cli.simulate import simulate
 
 app = typer.Typer(
@@ -60,5 +61,6 @@ app.add_typer(params_app, name="params")
 app.command("campaign")(campaign)
 app.add_typer(identify_app, name="identify")
 app.command("fit")(fit_command)
+app.command("sensitivity")(sensitivity)
 
 __all__ = ["app"]

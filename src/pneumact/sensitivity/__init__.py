@@ -1,0 +1,32 @@
+"""Sensitivity analysis (paper section III.A): the one-at-a-time study of eq. 15, and
+global methods (Sobol, Morris, RBD-FAST through SALib; standardised regression
+coefficients, eq. 14) on any function or on the actuator through the batch engine."""
+
+from .methods import (
+    SensitivityWarning,
+    StudyResult,
+    model_outputs,
+    morris,
+    rbd_fast,
+    sobol,
+    src,
+    src_coefficients,
+)
+from .oat import PAPER_VARIATIONS, OneAtATime, one_at_a_time
+from .problem import Factor, Problem
+
+__all__ = [
+    "PAPER_VARIATIONS",
+    "Factor",
+    "OneAtATime",
+    "Problem",
+    "SensitivityWarning",
+    "StudyResult",
+    "model_outputs",
+    "morris",
+    "one_at_a_time",
+    "rbd_fast",
+    "sobol",
+    "src",
+    "src_coefficients",
+]

@@ -1,0 +1,241 @@
+"""Global sensitivity indices: SALib's Sobol, Morris and RBD-FAST, and the standardised
+regression coefficients (paper eq. 14) SALib lacks.
+
+Every method takes a ``Problem`` and an ``evaluate`` function from a sample (n × k, SI)
+to outputs (a DataFrame, one column per output), so the same code serves a test function
+with known indices and the actuator on the batch engine (``model_outputs``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import PneumactError
+from .problem import Problem
+
+__all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_fast",
+           "sobol", "src"]
+
+Evaluate = Callable[[np.ndarray], pd.DataFrame]
+SRC_MIN_R2 = 0.7  # below this the linear regression explains too little for SRC to mean much
+
+
+class SensitivityWarning(UserWarning):
+    """An index that should not be trusted as it stands (low R², negative beyond its CI)."""
+
+
+@dataclass(eq=False)
+class StudyResult:
+    """Indices per output (``indices``: long table output × parameter × index), the
+    sample and the outputs it gave."""
+
+    method: str
+    indices: pd.DataFrame
+    sample: pd.DataFrame
+    outputs: pd.DataFrame
+    extra: dict = field(default_factory=dict)
+
+    def table(self, output: str) -> pd.DataFrame:
+        """The indices of one output, one row per parameter."""
+        sub = self.indices[self.indices["output"] == output]
+        return sub.drop(columns="output").set_index("parameter")
+
+    def ranking(self, output: str, by: str | None = None) -> list[str]:
+        """Parameters from most to least influential on ``output``."""
+        table = self.table(output)
+        key = by or {"sobol": "ST", "morris": "mu_star", "src": "SRC2", "rbd_fast": "S1"
+                     }.get(self.method, table.columns[0])
+        return list(table[key].abs().sort_values(ascending=False).index)
+
+    def plot(self, output: str, index: str | None = None):
+        """Bar chart of an index (with its confidence interval where there is one)."""
+        import matplotlib.pyplot as plt
+
+        table = self.table(output)
+        keys = {"sobol": ["S1", "ST"], "morris": ["mu_star"], "src": ["SRC"],
+                "rbd_fast": ["S1"]}.get(self.method, [table.columns[0]])
+        keys = [index] if index else keys
+        fig, ax = plt.subplots(figsize=(6.5, 3.8))
+        x = np.arange(len(table))
+        width = 0.8 / len(keys)
+        for i, key in enumerate(keys):
+            err = table[f"{key}_conf"] if f"{key}_conf" in table else None
+            ax.bar(x + i * width, table[key], width, yerr=err, capsize=3, label=key)
+        ax.set_xticks(x + 0.4 - width / 2, table.index)
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_title(f"{self.method}: {output}", fontsize=10)
+        ax.legend(fontsize=8)
+        ax.grid(True, axis="y", alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+
+def _evaluate(problem: Problem, evaluate: Evaluate, sample: np.ndarray) -> pd.DataFrame:
+    values = problem.transform(sample)
+    outputs = evaluate(values)
+    if not isinstance(outputs, pd.DataFrame):
+        outputs = pd.DataFrame(np.asarray(outputs, dtype=float).reshape(len(values), -1))
+        outputs.columns = [f"y{i}" if len(outputs.columns) > 1 else "y"
+                           for i in range(len(outputs.columns))]
+    bad = ~np.isfinite(outputs.to_numpy(dtype=float))
+    if bad.any():
+        rows = np.flatnonzero(bad.any(axis=1))
+        raise PneumactError(
+            f"{rows.size} of {len(values)} runs gave no value for "
+            f"{', '.join(outputs.columns[bad.any(axis=0)])} (first: run {rows[0]}); an index "
+            "cannot leave runs out without biasing it: fix or narrow the ranges, or study "
+            "the failures (StudyResult.extra) first")
+    return outputs
+
+
+def _frame(problem: Problem, values: np.ndarray) -> pd.DataFrame:
+    return pd.DataFrame(problem.transform(values), columns=problem.names)
+
+
+def sobol(problem: Problem, evaluate: Evaluate, n: int = 1024, second_order: bool = False,
+          seed: int = 0, resamples: int = 200, conf_level: float = 0.95) -> StudyResult:
+    """First-order (S1) and total (ST) Sobol indices with bootstrap confidence intervals
+    (and S2 with ``second_order``): Saltelli's scheme on a scrambled Sobol sequence,
+    n·(k + 2) runs (n·(2k + 2) with second order)."""
+    from SALib.analyze import sobol as analyze
+    from SALib.sample import sobol as sample
+
+    salib = problem.to_salib()
+    x = sample.sample(salib, n, calc_second_order=second_order, seed=seed)
+    outputs = _evaluate(problem, evaluate, x)
+    rows = []
+    for column in outputs.columns:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # constant outputs: 0/0
+            res = analyze.analyze(salib, outputs[column].to_numpy(float),
+                                  calc_second_order=second_order, num_resamples=resamples,
+                                  conf_level=conf_level, seed=seed)
+        for j, name in enumerate(problem.names):
+            rows.append({"output": column, "parameter": name, "S1": res["S1"][j],
+                         "S1_conf": res["S1_conf"][j], "ST": res["ST"][j],
+                         "ST_conf": res["ST_conf"][j]})
+        _warn_negative(column, rows[-len(problem.names):], n)
+    return StudyResult("sobol", pd.DataFrame(rows), _frame(problem, x), outputs,
+                       {"n": n, "second_order": second_order})
+
+
+def _warn_negative(output: str, rows: list[dict], n: int) -> None:
+    bad = [r["parameter"] for r in rows
+           if r["S1"] + r["S1_conf"] < 0 or r["ST"] + r["ST_conf"] < 0]
+    if bad:
+        warnings.warn(f"Sobol indices of {output} for {', '.join(bad)} are negative beyond "
+                      f"their confidence interval with n = {n}: try n = {4 * n}",
+                      SensitivityWarning, stacklevel=3)
+
+
+def morris(problem: Problem, evaluate: Evaluate, trajectories: int = 20, levels: int = 4,
+           seed: int = 0, resamples: int = 200) -> StudyResult:
+    """Morris elementary effects: μ* (mean |effect|, with CI), μ and σ; r·(k + 1) runs."""
+    from SALib.analyze import morris as analyze
+    from SALib.sample import morris as sample
+
+    salib = problem.to_salib()
+    x = sample.sample(salib, trajectories, num_levels=levels, seed=seed)
+    outputs = _evaluate(problem, evaluate, x)
+    rows = []
+    for column in outputs.columns:
+        res = analyze.analyze(salib, x, outputs[column].to_numpy(float), num_levels=levels,
+                              num_resamples=resamples, seed=seed)
+        for j, name in enumerate(problem.names):
+            rows.append({"output": column, "parameter": name, "mu_star": res["mu_star"][j],
+                         "mu_star_conf": res["mu_star_conf"][j], "mu": res["mu"][j],
+                         "sigma": res["sigma"][j]})
+    return StudyResult("morris", pd.DataFrame(rows), _frame(problem, x), outputs,
+                       {"trajectories": trajectories, "levels": levels})
+
+
+def rbd_fast(problem: Problem, evaluate: Evaluate, n: int = 1000, seed: int = 0
+             ) -> StudyResult:
+    """First-order indices by RBD-FAST on a Latin hypercube of n runs."""
+    from SALib.analyze import rbd_fast as analyze
+    from SALib.sample import latin
+
+    salib = problem.to_salib()
+    x = latin.sample(salib, n, seed=seed)
+    outputs = _evaluate(problem, evaluate, x)
+    rows = []
+    for column in outputs.columns:
+        res = analyze.analyze(salib, x, outputs[column].to_numpy(float), seed=seed)
+        for j, name in enumerate(problem.names):
+            rows.append({"output": column, "parameter": name, "S1": res["S1"][j],
+                         "S1_conf": res["S1_conf"][j]})
+    return StudyResult("rbd_fast", pd.DataFrame(rows), _frame(problem, x), outputs, {"n": n})
+
+
+def src(problem: Problem, evaluate: Evaluate, n: int = 500, seed: int = 0,
+        rank: bool = False) -> StudyResult:
+    """Standardised regression coefficients (paper eq. 14): SRC_i = b_i·sd(x_i)/sd(y) of
+    the linear regression of y on the parameters over a Latin hypercube of n runs, with
+    SRC² (the share of variance for independent inputs) and the regression's R²; with
+    ``rank`` the same on ranks (SRRC, for monotone non-linear responses). Warns when
+    R² < 0.7: the linear model then explains too little for the coefficients to rank."""
+    from SALib.sample import latin
+
+    x = latin.sample(problem.to_salib(), n, seed=seed)
+    outputs = _evaluate(problem, evaluate, x)
+    values = problem.transform(x)
+    rows = []
+    for column in outputs.columns:
+        coef, r2 = src_coefficients(values, outputs[column].to_numpy(float), rank)
+        if r2 < SRC_MIN_R2:
+            warnings.warn(f"{'SRRC' if rank else 'SRC'} of {column}: R² = {r2:.2f} < "
+                          f"{SRC_MIN_R2}; the regression explains too little of the variance "
+                          "for the coefficients to mean much (use Sobol or Morris)",
+                          SensitivityWarning, stacklevel=2)
+        for j, name in enumerate(problem.names):
+            rows.append({"output": column, "parameter": name, "SRC": coef[j],
+                         "SRC2": coef[j] ** 2, "R2": r2})
+    return StudyResult("src", pd.DataFrame(rows), _frame(problem, x), outputs,
+                       {"n": n, "rank": rank})
+
+
+def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
+                     ) -> tuple[np.ndarray, float]:
+    """(SRC per column of x, R²) of the least-squares line y ≈ a + Σ b_i·x_i."""
+    from scipy.stats import rankdata
+
+    if rank:
+        x = np.column_stack([rankdata(c) for c in x.T])
+        y = rankdata(y)
+    sx, sy = x.std(axis=0), y.std()
+    if sy == 0:
+        return np.zeros(x.shape[1]), 1.0
+    design = np.column_stack([np.ones(len(y)), (x - x.mean(axis=0)) / np.where(sx > 0, sx, 1)])
+    coef, *_ = np.linalg.lstsq(design, (y - y.mean()) / sy, rcond=None)
+    fitted = design @ coef
+    r2 = 1.0 - np.sum(((y - y.mean()) / sy - fitted) ** 2) / len(y)
+    return coef[1:], float(r2)
+
+
+def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
+                  workers=None, scheduler=None, out_dir=None, resume=False, progress=None,
+                  solver=None) -> Evaluate:
+    """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
+    Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
+    are reported with their errors, never dropped."""
+    from ..simulation.batch import simulate_batch
+
+    def evaluate(values: np.ndarray) -> pd.DataFrame:
+        table = pd.DataFrame(values, columns=problem.names)
+        batch = simulate_batch(model, experiment, table, features=list(features),
+                               workers=workers, scheduler=scheduler, out_dir=out_dir,
+                               resume=resume, progress=progress, solver=solver)
+        failed = batch.failed
+        if len(failed):
+            raise PneumactError(
+                f"{len(failed)} of {len(table)} runs failed (first, row {failed.index[0]}: "
+                f"{failed['error'].iloc[0]}); an index cannot leave runs out: narrow the "
+                "ranges or loosen the solver")
+        return batch.table[list(features)].reset_index(drop=True)
+
+    return evaluate

@@ -1,0 +1,109 @@
+"""The paper's one-at-a-time study (eq. 15, Figs. 3 and 5): each parameter varied by
+given amounts with the others nominal, the runs overlaid, the feature changes ranked."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ParameterError
+
+__all__ = ["PAPER_VARIATIONS", "OneAtATime", "one_at_a_time"]
+
+#: The amounts of the paper's Fig. 5 a-f (fractions, applied in both directions); vs is
+#: varied "around its nominal value": ±50 % here.
+PAPER_VARIATIONS = {"sigma0": 0.50, "sigma1": 0.68, "sigma2": 0.90, "Fs": 0.16,
+                    "Fc": 0.1536, "vs": 0.50}
+DEFAULT_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
+                    "breakaway_pressure")
+
+
+@dataclass(eq=False)
+class OneAtATime:
+    """Runs of the study: ``runs`` (parameter, change, value, features, Δ vs nominal,
+    RMS position change), the position and pressure of every run for the loop plots."""
+
+    runs: pd.DataFrame
+    signals: dict[str, np.ndarray]
+    time: np.ndarray
+    features: tuple[str, ...]
+
+    def ranking(self, feature: str = "rms_position_change") -> pd.Series:
+        """Largest |change| of ``feature`` per parameter, most influential first."""
+        column = feature if feature == "rms_position_change" else f"delta_{feature}"
+        varied = self.runs[self.runs["parameter"] != "nominal"]
+        return varied.groupby("parameter")[column].apply(lambda c: c.abs().max()) \
+            .sort_values(ascending=False)
+
+    def plot_loops(self):
+        """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5)."""
+        import matplotlib.pyplot as plt
+
+        params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
+        cols = min(3, len(params))
+        rows = -(-len(params) // cols)
+        fig, axes = plt.subplots(rows, cols, squeeze=False, figsize=(4.3 * cols, 3.4 * rows))
+        nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
+        p, x = self.signals["pressure"] * 1e-3, self.signals["position"] * 1e3
+        for ax, name in zip(axes.ravel(), params, strict=False):
+            ax.plot(p[nominal], x[nominal], "k-", lw=1.2, label="nominal")
+            for i in np.flatnonzero(self.runs["parameter"] == name):
+                change = self.runs["change_%"].iloc[i]
+                ax.plot(p[i], x[i], lw=0.9, label=f"{name} {change:+.3g} %")
+            ax.set_xlabel("pressure [kPa abs]")
+            ax.set_ylabel("position [mm]")
+            ax.legend(fontsize=7)
+            ax.grid(True, alpha=0.3)
+        for ax in axes.ravel()[len(params):]:
+            ax.set_visible(False)
+        fig.tight_layout()
+        return fig
+
+
+def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = None, *,
+                  features: Sequence[str] = DEFAULT_FEATURES, workers=None,
+                  solver=None) -> OneAtATime:
+    """Vary each parameter of ``variations`` (fractions, "N%" strings, or lists of them;
+    default ``PAPER_VARIATIONS``, both directions) with the others nominal, on the batch
+    engine; the nominal run comes first."""
+    from ..simulation.batch import simulate_batch
+    from .problem import parse_variation
+
+    params = model.params
+    variations = PAPER_VARIATIONS if variations is None else variations
+    rows, labels = [{}], [("nominal", 0.0, np.nan)]
+    for name, spec in variations.items():
+        if name not in params:
+            raise ParameterError(f"one_at_a_time: {name!r} is not a parameter of the model's "
+                                 "set")
+        nominal = params[name]
+        amounts = spec if isinstance(spec, (list, tuple)) and not _is_pair(spec) else [spec]
+        for amount in amounts:
+            low, high = parse_variation(name, amount, nominal)
+            for value in dict.fromkeys((low, high)):
+                change = 100 * (value - nominal) / nominal if nominal else np.nan
+                rows.append({name: value})
+                labels.append((name, change, value))
+    names = list(dict.fromkeys(n for r in rows for n in r))
+    table = pd.DataFrame([{n: r.get(n, params[n]) for n in names} for r in rows])
+    if table.empty or not names:
+        table = pd.DataFrame({"Fc": [params["Fc"]]})
+    batch = simulate_batch(model, experiment, table, features=list(features),
+                           signals=["pressure", "position"], workers=workers, solver=solver)
+    runs = pd.DataFrame(labels, columns=["parameter", "change_%", "value"])
+    for feature in features:
+        values = batch.table[feature].to_numpy(float)
+        runs[feature] = values
+        runs[f"delta_{feature}"] = values - values[0]
+    x = batch.signals["position"]
+    runs["rms_position_change"] = np.sqrt(np.mean((x - x[0]) ** 2, axis=1))
+    runs["status"] = batch.table["status"].to_numpy()
+    return OneAtATime(runs, dict(batch.signals), batch.time, tuple(features))
+
+
+def _is_pair(spec) -> bool:
+    return len(spec) == 2 and all(isinstance(v, (int, float)) for v in spec) and \
+        not isinstance(spec, list)

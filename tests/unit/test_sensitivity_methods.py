@@ -1,0 +1,87 @@
+"""Sensitivity methods against known analytic answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import reference as ref
+from pneumact.errors import ParameterError, PneumactError
+from pneumact.sensitivity import Factor, Problem, SensitivityWarning, morris, sobol, src
+
+
+def _uniform(names, low, high):
+    return Problem(tuple(Factor(n, low, high, 0.5 * (low + high)) for n in names))
+
+
+def ishigami(x):
+    a, b = ref.ISHIGAMI_A, ref.ISHIGAMI_B
+    return pd.DataFrame({"y": np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2
+                         + b * x[:, 2] ** 4 * np.sin(x[:, 0])})
+
+
+def test_sobol_matches_the_ishigami_indices():
+    a, b = ref.ISHIGAMI_A, ref.ISHIGAMI_B
+    v1 = 0.5 * (1 + b * np.pi**4 / 5) ** 2
+    v2 = a**2 / 8
+    v13 = b**2 * np.pi**8 * (1 / 18 - 1 / 50)
+    var = v1 + v2 + v13
+    problem = _uniform(["x1", "x2", "x3"], -np.pi, np.pi)
+    table = sobol(problem, ishigami, n=ref.SOBOL_N).table("y")
+    assert table["S1"].to_numpy() == pytest.approx([v1 / var, v2 / var, 0.0],
+                                                   abs=ref.SOBOL_ATOL)
+    assert table["ST"].to_numpy() == pytest.approx([(v1 + v13) / var, v2 / var, v13 / var],
+                                                   abs=ref.SOBOL_ATOL)
+
+
+def test_src_of_a_linear_model_is_exact():
+    coefficients = np.array([3.0, -1.0, 0.5])
+    problem = Problem((Factor("a", 0, 1, 0.5), Factor("b", 0, 2, 1), Factor("c", -1, 1, 0)))
+    result = src(problem, lambda x: pd.DataFrame({"y": x @ coefficients}), n=400)
+    table = result.table("y")
+    x = result.sample.to_numpy()
+    y = x @ coefficients
+    expected = coefficients**2 * x.var(axis=0) / y.var()
+    assert table["SRC2"].to_numpy() == pytest.approx(expected, rel=1e-6)
+    assert table["R2"].iloc[0] == pytest.approx(1.0, abs=ref.SRC_RTOL)
+    assert np.sign(table["SRC"].to_numpy()).tolist() == [1, -1, 1]
+
+
+def test_src_warns_when_the_regression_explains_little():
+    problem = _uniform(["x1", "x2", "x3"], -np.pi, np.pi)
+    with pytest.warns(SensitivityWarning, match="R²"):
+        src(problem, ishigami, n=300)
+
+
+def test_morris_ranks_inputs_in_their_known_order():
+    weights = np.array([10.0, 3.0, 1.0, 0.0])
+    problem = _uniform(["w10", "w3", "w1", "w0"], 0, 1)
+    result = morris(problem, lambda x: pd.DataFrame({"y": x @ weights + x[:, 0] ** 2}),
+                    trajectories=ref.MORRIS_TRAJECTORIES)
+    assert result.ranking("y") == ["w10", "w3", "w1", "w0"]
+    assert result.table("y").loc["w0", "mu_star"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_failed_runs_are_reported_not_dropped():
+    problem = _uniform(["x1", "x2", "x3"], -np.pi, np.pi)
+
+    def sometimes_nan(x):
+        y = ishigami(x)
+        y.loc[3, "y"] = np.nan
+        return y
+
+    with pytest.raises(PneumactError, match=r"1 of \d+ runs gave no value"):
+        sobol(problem, sometimes_nan, n=64)
+
+
+def test_problem_from_a_parameter_set_and_bad_ranges(vgt):
+    problem = Problem.around(vgt, {"sigma0": "50%", "Fs": (2.8, 3.6)})
+    assert (problem.factors[0].low, problem.factors[0].high) == pytest.approx((5e4, 1.5e5))
+    assert problem.to_salib()["bounds"][1] == [2.8, 3.6]
+    with pytest.raises(ParameterError, match="sigma9"):
+        Problem.around(vgt, {"sigma9": "10%"})
+    with pytest.raises(ParameterError, match="low < high"):
+        Problem.around(vgt, {"Fs": (3.6, 2.8)})
+    with pytest.raises(ParameterError, match="per cent"):
+        Problem.around(vgt, {"Fs": "ten%"})
