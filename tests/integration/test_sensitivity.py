@@ -44,3 +44,43 @@ def test_cli_sensitivity_oat_and_sobol(tmp_path, monkeypatch):
     assert result.exit_code == EXIT_USER_ERROR
     assert "Fs" in result.output and "runs failed" in result.output
     assert not (tmp_path / "bad").exists()
+
+
+def test_position_indices_along_the_cycle(vgt):
+    from pneumact import sensitivity as sa
+
+    model = pa.Actuator(vgt, valve=pa.CommandValve())
+    experiment = pa.CommandCycle(period=20.0)
+    problem = sa.Problem.around(vgt, {"Fc": "10%", "sigma2": "20%"})
+    times = np.linspace(6.0, 16.0, 5)  # while the diaphragm moves
+    study = sa.src(problem, sa.model_signal(model, experiment, problem, "position", times),
+                   n=64)
+    curves = sa.along_time(study, "SRC2")
+    assert curves.shape == (5, 2)
+    assert curves.index.tolist() == times.tolist()
+    assert np.all(curves["Fc"] > curves["sigma2"])  # Coulomb friction moves the loop
+
+
+def test_sobol_on_dask_equals_local(vgt, monkeypatch):
+    import os
+    from pathlib import Path
+
+    import pytest
+
+    from pneumact import sensitivity as sa
+
+    distributed = pytest.importorskip("distributed")
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
+        src, os.environ.get("PYTHONPATH")])))
+    model = pa.Actuator(vgt, valve=pa.CommandValve())
+    experiment = pa.CommandCycle(period=20.0)
+    problem = sa.Problem.around(vgt, {"Fc": "10%", "Fs": "10%"})
+    features = ["loop_width_pressure"]
+    local = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features), n=8)
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features,
+                                                    scheduler=client), n=8)
+    np.testing.assert_array_equal(remote.outputs.to_numpy(), local.outputs.to_numpy())

@@ -85,3 +85,49 @@ def test_problem_from_a_parameter_set_and_bad_ranges(vgt):
         Problem.around(vgt, {"Fs": (3.6, 2.8)})
     with pytest.raises(ParameterError, match="per cent"):
         Problem.around(vgt, {"Fs": "ten%"})
+
+
+def _decay(times):
+    def evaluate(x):
+        return pd.DataFrame(x[:, [0]] * np.exp(-x[:, [1]] * np.asarray(times)[None, :]),
+                            columns=[repr(float(t)) for t in times])
+    return evaluate
+
+
+def test_indices_along_time_match_the_closed_form():
+    """x(t) = a·e^(−bt): S1_a = Var(a)·E[e^(−bt)]²/Var(x), S1_b = E[a]²·Var(e^(−bt))/Var(x)."""
+    from pneumact.sensitivity import along_time
+
+    t = np.asarray(ref.EXP_TIMES)
+    problem = Problem((Factor("a", 1.0, 2.0, 1.5), Factor("b", 0.5, 1.5, 1.0)))
+    s1 = along_time(sobol(problem, _decay(t), n=ref.EXP_SOBOL_N), "S1")
+    safe = np.where(t > 0, t, 1.0)
+    e_b = np.where(t > 0, (np.exp(-0.5 * t) - np.exp(-1.5 * t)) / safe, 1.0)
+    e_b2 = np.where(t > 0, (np.exp(-t) - np.exp(-3.0 * t)) / (2 * safe), 1.0)
+    mean_a, var_a = 1.5, 1.0 / 12.0
+    variance = (mean_a**2 + var_a) * e_b2 - mean_a**2 * e_b**2
+    assert s1.index.tolist() == pytest.approx(t.tolist())
+    assert s1["a"].to_numpy() == pytest.approx(var_a * e_b**2 / variance, abs=ref.SOBOL_ATOL)
+    assert s1["b"].to_numpy() == pytest.approx(mean_a**2 * (e_b2 - e_b**2) / variance,
+                                               abs=ref.SOBOL_ATOL)
+
+
+def test_convergence_reuses_the_sample_and_says_what_n_to_try():
+    from pneumact.sensitivity import sobol_convergence
+
+    problem = Problem((Factor("a", 1.0, 2.0, 1.5), Factor("b", 0.5, 1.5, 1.0)))
+    calls = []
+
+    def counted(x):
+        calls.append(len(x))
+        return _decay(ref.EXP_TIMES)(x)
+
+    with pytest.warns(SensitivityWarning, match="try n = "):
+        final, table = sobol_convergence(problem, counted, n_max=256, n_min=32,
+                                         target_width=0.01)
+    assert calls == [256 * 4]  # one evaluation of the largest sample
+    assert sorted(table["n"].unique()) == [32, 64, 128, 256]
+    direct = sobol(problem, _decay(ref.EXP_TIMES), n=256).indices
+    assert np.allclose(final.indices["ST"], direct["ST"])
+    widths = table[table["parameter"] == "b"].groupby("n")["ST_width"].mean()
+    assert widths.iloc[-1] < widths.iloc[0]

@@ -2,6 +2,13 @@
 global methods (Sobol, Morris, RBD-FAST through SALib; standardised regression
 coefficients, eq. 14) on any function or on the actuator through the batch engine."""
 
+from .along import (
+    along_time,
+    model_signal,
+    plot_along_time,
+    plot_convergence,
+    sobol_convergence,
+)
 from .methods import (
     SensitivityWarning,
     StudyResult,
@@ -22,11 +29,16 @@ __all__ = [
     "Problem",
     "SensitivityWarning",
     "StudyResult",
+    "along_time",
     "model_outputs",
+    "model_signal",
     "morris",
     "one_at_a_time",
+    "plot_along_time",
+    "plot_convergence",
     "rbd_fast",
     "sobol",
+    "sobol_convergence",
     "src",
     "src_coefficients",
 ]

@@ -1,0 +1,136 @@
+"""Indices along time, and Sobol indices in doubling stages (convergence).
+
+SALib analyses one scalar output at a time and has no notion of a signal; here a signal
+on a time grid is many outputs (one per time), analysed together and returned as curves
+of each index against time. Sobol samples of n and 2n base points share their first
+n·(k + 2) runs (same scrambled sequence), so a convergence study evaluates the largest
+sample once and analyses its growing prefixes.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ParameterError
+from .methods import Evaluate, SensitivityWarning, StudyResult, sobol
+from .problem import Problem
+
+__all__ = ["along_time", "model_signal", "plot_along_time", "plot_convergence",
+           "sobol_convergence"]
+
+
+def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
+                 *, workers=None, scheduler=None, solver=None) -> Evaluate:
+    """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
+    by the time) from the batch engine."""
+    from ..errors import PneumactError
+    from ..simulation.batch import simulate_batch
+
+    grid = np.asarray(times, dtype=float)
+
+    def evaluate(values: np.ndarray) -> pd.DataFrame:
+        table = pd.DataFrame(values, columns=problem.names)
+        batch = simulate_batch(model, experiment, table, features=[], signals=[signal],
+                               t_eval=grid, workers=workers, scheduler=scheduler,
+                               solver=solver)
+        if len(batch.failed):
+            raise PneumactError(f"{len(batch.failed)} of {len(table)} runs failed (first: "
+                                f"{batch.failed['error'].iloc[0]}); an index cannot leave "
+                                "runs out")
+        return pd.DataFrame(batch.signals[signal], columns=[repr(float(t)) for t in grid])
+
+    return evaluate
+
+
+def along_time(study: StudyResult, index: str | None = None) -> pd.DataFrame:
+    """One index of every parameter against time (rows: the times of the output columns;
+    with ``index + '_conf'`` columns where the method gives a confidence interval)."""
+    index = index or {"sobol": "ST", "morris": "mu_star", "src": "SRC",
+                      "rbd_fast": "S1"}[study.method]
+    wide = study.indices.pivot(index="output", columns="parameter", values=index)
+    out = wide.loc[list(study.outputs.columns), list(study.sample.columns)]
+    out.index = pd.Index([float(c) for c in out.index], name="time")
+    out.columns.name = index
+    return out
+
+
+def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
+                      n_min: int = 64, seed: int = 0, target_width: float | None = 0.1
+                      ) -> tuple[StudyResult, pd.DataFrame]:
+    """Sobol indices at n = n_min, 2·n_min, … n_max base points from one evaluation of
+    the largest sample. Returns (the final study, a table of S1, ST and their CI widths
+    per output, parameter and n). Warns, naming the n to try, when a CI at n_max is
+    wider than ``target_width`` (CI widths shrink as 1/√n)."""
+    from SALib.analyze import sobol as analyze
+
+    if n_min < 1 or n_max < n_min:
+        raise ParameterError(f"sobol_convergence: need 1 <= n_min <= n_max, got {n_min}, "
+                             f"{n_max}")
+    sizes = [n_min * 2**s for s in range(int(np.log2(n_max / n_min)) + 1)]
+    salib = problem.to_salib()
+    final = sobol(problem, evaluate, sizes[-1], seed=seed)  # the largest sample, once
+    rows = []
+    k = len(problem.names)
+    for n in sizes:
+        runs = n * (k + 2)
+        for column in final.outputs.columns:
+            y = final.outputs[column].to_numpy(float)[:runs]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                res = analyze.analyze(salib, y, calc_second_order=False, seed=seed)
+            for j, name in enumerate(problem.names):
+                rows.append({"output": column, "parameter": name, "n": n, "runs": runs,
+                             "S1": res["S1"][j], "S1_width": 2 * res["S1_conf"][j],
+                             "ST": res["ST"][j], "ST_width": 2 * res["ST_conf"][j]})
+    table = pd.DataFrame(rows)
+    if target_width is not None:
+        last = table[table["n"] == sizes[-1]]
+        widest = float(last[["S1_width", "ST_width"]].max().max())
+        if widest > target_width:
+            needed = int(2 ** np.ceil(np.log2(sizes[-1] * (widest / target_width) ** 2)))
+            warnings.warn(f"Sobol confidence intervals at n = {sizes[-1]} are up to "
+                          f"{widest:.3g} wide (asked: {target_width}); try n = {needed}",
+                          SensitivityWarning, stacklevel=2)
+    return final, table
+
+
+def plot_along_time(study: StudyResult, index: str | None = None):
+    """Each parameter's index against time."""
+    import matplotlib.pyplot as plt
+
+    curves = along_time(study, index)
+    fig, ax = plt.subplots(figsize=(6.5, 3.8))
+    for name in curves.columns:
+        ax.plot(curves.index, curves[name], label=name)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(curves.columns.name)
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plot_convergence(table: pd.DataFrame, output: str):
+    """S1 and ST with their CI widths against the base sample size n (log axis)."""
+    import matplotlib.pyplot as plt
+
+    sub = table[table["output"] == output]
+    fig, (ax, axw) = plt.subplots(1, 2, figsize=(10, 3.6))
+    for name, rows in sub.groupby("parameter", sort=False):
+        line, = ax.plot(rows["n"], rows["ST"], "o-", label=f"{name} ST")
+        ax.plot(rows["n"], rows["S1"], "s--", color=line.get_color(), alpha=0.6)
+        axw.loglog(rows["n"], rows["ST_width"], "o-", color=line.get_color(), label=name)
+    ax.set_xscale("log", base=2)
+    ax.set_xlabel("base sample size n")
+    ax.set_ylabel("S1 (dashed), ST")
+    axw.set_xlabel("base sample size n")
+    axw.set_ylabel("width of the ST interval")
+    ax.legend(fontsize=7)
+    for a in (ax, axw):
+        a.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
