@@ -220,7 +220,7 @@ def test_fit_of_the_friction_rig_to_a_measured_friction(canudas):
     from pneumact.experiments import Experiment, Sine
 
     rig = pa.FrictionRig(canudas, drive="velocity")
-    experiment = Experiment(Sine(0.0, 0.01, 0.5), "velocity", 4.0, n_points=4001)
+    experiment = Experiment(Sine(0.01, 0.5), "velocity", 4.0, n_points=4001)
     truth = pa.simulate(rig, experiment)
     record = Record.from_arrays(truth.time, {"velocity": truth["drive_velocity"],
                                              "friction": truth["friction"]}, source="rig")

@@ -36,6 +36,7 @@ def test_cli_sensitivity_oat_and_sobol(tmp_path, monkeypatch):
     result = runner.invoke(app, ["sensitivity", "oat", "--out", "oat"])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "oat" / "loops.png").exists()
+    assert (tmp_path / "oat" / "friction_velocity.png").exists()
     result = runner.invoke(app, ["sensitivity", "sobol", "--n", "16", "--out", "sobol"])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "sobol" / "indices.csv").exists()
@@ -84,3 +85,31 @@ def test_sobol_on_dask_equals_local(vgt, monkeypatch):
         remote = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features,
                                                     scheduler=client), n=8)
     np.testing.assert_array_equal(remote.outputs.to_numpy(), local.outputs.to_numpy())
+
+
+def test_dgsm_of_the_actuator_from_forward_sensitivities(vgt):
+    from pneumact import sensitivity as sa
+
+    model = pa.Actuator(vgt, valve=pa.CommandValve())
+    problem = sa.Problem.around(vgt, {"Fc": "10%", "sigma1": "20%"})
+    gradient = sa.model_gradient(model, pa.CommandCycle(period=20.0), problem, "position",
+                                 [8.0, 12.0])
+    study = sa.dgsm(problem, gradient, n=8)
+    table = study.table("8.0")
+    assert table.loc["Fc", "nu_scaled"] > 100 * table.loc["sigma1", "nu_scaled"]
+
+
+def test_friction_velocity_curves_follow_the_varied_parameter(vgt):
+    """Fig. 3: at |v| ≫ vs the friction is Fc + σ2·v, so ±15.36 % on Fc shifts the
+    plateau by exactly 0.1536·Fc."""
+    from pneumact.sensitivity import friction_velocity
+
+    curves = friction_velocity(vgt, {"Fc": 0.1536, "sigma0": 0.0})
+    (_, v0, f0), (_, _, f_low), (_, _, f_high) = curves.curves["Fc"]
+    fast = v0 > 0.9 * v0.max()
+    shift = 0.1536 * vgt["Fc"]
+    assert np.allclose(f_high[fast] - f0[fast], shift, rtol=1e-3)
+    assert np.allclose(f0[fast] - f_low[fast], shift, rtol=1e-3)
+    (_, _, same), (_, _, low), (_, _, high) = curves.curves["sigma0"]
+    assert np.array_equal(low, same) and np.array_equal(high, same)
+    assert curves.plot() is not None

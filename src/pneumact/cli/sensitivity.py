@@ -118,8 +118,10 @@ def sensitivity(
                        Method.fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[method]
                 study = run()
         if method is Method.oat:
+            curves = sa.friction_velocity(parameter_set, _variations(vary))
             writers = {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
-                       "loops.png": _figure_writer(study.plot_loops)}
+                       "loops.png": _figure_writer(study.plot_loops),
+                       "friction_velocity.png": _figure_writer(curves.plot)}
             _print_oat(study, feature_names)
         else:
             writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),

@@ -9,6 +9,7 @@ from .along import (
     plot_convergence,
     sobol_convergence,
 )
+from .dgsm import dgsm, model_gradient
 from .methods import (
     SensitivityWarning,
     StudyResult,
@@ -19,17 +20,27 @@ from .methods import (
     src,
     src_coefficients,
 )
-from .oat import PAPER_VARIATIONS, OneAtATime, one_at_a_time
+from .oat import (
+    PAPER_VARIATIONS,
+    FrictionCurves,
+    OneAtATime,
+    friction_velocity,
+    one_at_a_time,
+)
 from .problem import Factor, Problem
 
 __all__ = [
     "PAPER_VARIATIONS",
     "Factor",
+    "FrictionCurves",
     "OneAtATime",
     "Problem",
     "SensitivityWarning",
     "StudyResult",
     "along_time",
+    "dgsm",
+    "friction_velocity",
+    "model_gradient",
     "model_outputs",
     "model_signal",
     "morris",

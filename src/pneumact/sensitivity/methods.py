@@ -48,8 +48,8 @@ class StudyResult:
     def ranking(self, output: str, by: str | None = None) -> list[str]:
         """Parameters from most to least influential on ``output``."""
         table = self.table(output)
-        key = by or {"sobol": "ST", "morris": "mu_star", "src": "SRC2", "rbd_fast": "S1"
-                     }.get(self.method, table.columns[0])
+        key = by or {"sobol": "ST", "morris": "mu_star", "src": "SRC2", "rbd_fast": "S1",
+                     "dgsm": "ST_bound"}.get(self.method, table.columns[0])
         return list(table[key].abs().sort_values(ascending=False).index)
 
     def plot(self, output: str, index: str | None = None):
@@ -58,7 +58,8 @@ class StudyResult:
 
         table = self.table(output)
         keys = {"sobol": ["S1", "ST"], "morris": ["mu_star"], "src": ["SRC"],
-                "rbd_fast": ["S1"]}.get(self.method, [table.columns[0]])
+                "rbd_fast": ["S1"], "dgsm": ["ST_bound"]}.get(self.method,
+                                                              [table.columns[0]])
         keys = [index] if index else keys
         fig, ax = plt.subplots(figsize=(6.5, 3.8))
         x = np.arange(len(table))

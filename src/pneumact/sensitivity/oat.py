@@ -11,7 +11,8 @@ import pandas as pd
 
 from ..errors import ParameterError
 
-__all__ = ["PAPER_VARIATIONS", "OneAtATime", "one_at_a_time"]
+__all__ = ["PAPER_VARIATIONS", "FrictionCurves", "OneAtATime", "friction_velocity",
+           "one_at_a_time"]
 
 #: The amounts of the paper's Fig. 5 a-f (fractions, applied in both directions); vs is
 #: varied "around its nominal value": ±50 % here.
@@ -107,3 +108,62 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
 def _is_pair(spec) -> bool:
     return len(spec) == 2 and all(isinstance(v, (int, float)) for v in spec) and \
         not isinstance(spec, list)
+
+
+@dataclass(eq=False)
+class FrictionCurves:
+    """Friction against velocity of a prescribed-velocity run, per parameter variation
+    (the paper's Fig. 3): ``curves[parameter]`` is a list of (label, velocity, friction)."""
+
+    curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]]
+
+    def plot(self):
+        import matplotlib.pyplot as plt
+
+        params = list(self.curves)
+        cols = min(3, len(params))
+        rows = -(-len(params) // cols)
+        fig, axes = plt.subplots(rows, cols, squeeze=False, figsize=(4.3 * cols, 3.4 * rows))
+        for ax, name in zip(axes.ravel(), params, strict=False):
+            for label, v, f in self.curves[name]:
+                ax.plot(v * 1e3, f, lw=1.2 if label == "nominal" else 0.9,
+                        color="k" if label == "nominal" else None, label=label)
+            ax.set_xlabel("velocity [mm/s]")
+            ax.set_ylabel("friction [N]")
+            ax.legend(fontsize=7)
+            ax.grid(True, alpha=0.3)
+        for ax in axes.ravel()[len(params):]:
+            ax.set_visible(False)
+        fig.tight_layout()
+        return fig
+
+
+def friction_velocity(params, variations: Mapping[str, object] | None = None, *,
+                      friction=None, amplitude: float = 5e-3, period: float = 2.0,
+                      cycles: int = 2) -> FrictionCurves:
+    """Fig. 3: the friction law driven by a velocity sine of ``amplitude`` [m/s] (the
+    last of ``cycles`` periods kept, so the bristles have settled), for the nominal set
+    and each parameter at its low and high value (default ``PAPER_VARIATIONS``)."""
+    from ..experiments import Experiment, Sine
+    from ..models import FrictionRig, LuGre
+    from ..simulation import simulate
+    from .problem import parse_variation
+
+    friction = LuGre() if friction is None else friction
+    rig = FrictionRig(params, friction=friction, drive="velocity")
+    t_end = period * cycles
+    experiment = Experiment(Sine(amplitude, 1.0 / period), "velocity", t_end,
+                            n_points=2001 * cycles)
+    nominal = simulate(rig, experiment)
+    keep = nominal.time >= t_end - period
+    curves = {}
+    for name, spec in (PAPER_VARIATIONS if variations is None else variations).items():
+        low, high = parse_variation(name, spec, params[name])
+        entries = [("nominal", nominal["drive_velocity"][keep], nominal["friction"][keep])]
+        for value in (low, high):
+            run = simulate(rig, experiment, values={name: value})
+            change = 100 * (value - params[name]) / params[name]
+            entries.append((f"{name} {change:+.3g} %", run["drive_velocity"][keep],
+                            run["friction"][keep]))
+        curves[name] = entries
+    return FrictionCurves(curves)
