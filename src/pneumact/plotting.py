@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DISPLAY_UNITS",
     "FRICTION_TEST_KINDS",
+    "figure_writer",
     "plot_friction_test",
     "plot_hysteresis",
     "plot_time_series",
@@ -293,3 +294,19 @@ def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike
     with atomic_write(target) as tmp:
         figure.savefig(tmp, format="png", dpi=PNG_DPI, bbox_inches="tight")
     return target
+
+
+def figure_writer(make):
+    """A writer for ``write_files``: ``make()`` builds a Figure, written as PNG to the
+    path it is given and closed (so a long study does not keep its figures open)."""
+
+    def write(path):
+        import matplotlib.pyplot as plt
+
+        fig = make()
+        try:
+            fig.savefig(path, format="png", dpi=PNG_DPI, bbox_inches="tight")
+        finally:
+            plt.close(fig)
+
+    return write

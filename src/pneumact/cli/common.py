@@ -189,6 +189,14 @@ def write_outputs(out_dir: Path, writers: dict[str, Callable[[Path], Any]]) -> l
     return write_files(out_dir, writers)
 
 
+def figure_writer(make):
+    """``pneumact.plotting.figure_writer``, imported only when a command writes a figure
+    (numpy and matplotlib stay out of the command line's start-up)."""
+    from pneumact.plotting import figure_writer as writer
+
+    return writer(make)
+
+
 def run_with_progress(run: Callable[[Callable[[float], None] | None], Any],
                       what: str = "simulating") -> Any:
     """Call ``run(progress)`` under a rich progress bar; a spinner says the kernel is

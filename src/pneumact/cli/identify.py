@@ -20,6 +20,7 @@ from pneumact.cli.common import (
     ValveOption,
     build_model,
     err_console,
+    figure_writer,
     fmt,
     load_quietly,
     names,
@@ -46,18 +47,6 @@ def _estimates_table(title: str, table) -> Table:
                     f"{fmt(row['ci95_low'], 5)} .. {fmt(row['ci95_high'], 5)}",
                     str(row.get("unit", "")))
     return out
-
-
-def _figure_writer(make):
-    def write(path):
-        import matplotlib.pyplot as plt
-
-        fig = make()
-        try:
-            fig.savefig(path, format="png", dpi=120, bbox_inches="tight")
-        finally:
-            plt.close(fig)
-    return write
 
 
 def _status(what: str):
@@ -200,7 +189,7 @@ def identify_friction_command(
         written = write_outputs(out, {
             "friction.csv": lambda p: table.to_csv(p),
             "summary.csv": lambda p: _series_csv(summary, p),
-            "friction.png": _figure_writer(result.plot),
+            "friction.png": figure_writer(result.plot),
         })
         out_console.print(_estimates_table(f"{model.value} friction from {record.name}", table))
         out_console.print(f"relative force error {100 * result.relative_force_error:.2f} %, "
@@ -284,12 +273,12 @@ def fit_command(
         writers = {"estimates.csv": lambda p: result.table().to_csv(p),
                    "statistics.csv": lambda p: result.statistics.to_csv(p, index=False),
                    "correlation.csv": lambda p: result.correlation.to_csv(p),
-                   "fit.png": _figure_writer(result.plot_fit)}
+                   "fit.png": figure_writer(result.plot_fit)}
         if multistart:
             writers["starts.csv"] = lambda p: result.starts.to_csv(p, index=False)
-            writers["waterfall.png"] = _figure_writer(result.plot_waterfall)
+            writers["waterfall.png"] = figure_writer(result.plot_waterfall)
         if result.profiles:
-            writers["profiles.png"] = _figure_writer(result.plot_profiles)
+            writers["profiles.png"] = figure_writer(result.plot_profiles)
         if not per_record:
             writers["fitted.toml"] = lambda p: pa.write_params(result.parameters(), p)
         written = write_outputs(out, writers)

@@ -22,6 +22,7 @@ from pneumact.cli.common import (
     build_experiment,
     build_model,
     err_console,
+    figure_writer,
     fmt,
     names,
     out_console,
@@ -56,18 +57,6 @@ def _variations(text: str | None) -> dict[str, str] | None:
             raise ParameterError(f"--vary item {item!r}; write name=N% (e.g. sigma0=50%)")
         out[name.strip()] = amount.strip()
     return out
-
-
-def _figure_writer(make):
-    def write(path):
-        import matplotlib.pyplot as plt
-
-        fig = make()
-        try:
-            fig.savefig(path, format="png", dpi=120, bbox_inches="tight")
-        finally:
-            plt.close(fig)
-    return write
 
 
 def sensitivity(
@@ -120,15 +109,15 @@ def sensitivity(
         if method is Method.oat:
             curves = sa.friction_velocity(parameter_set, _variations(vary))
             writers = {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
-                       "loops.png": _figure_writer(study.plot_loops),
-                       "friction_velocity.png": _figure_writer(curves.plot)}
+                       "loops.png": figure_writer(study.plot_loops),
+                       "friction_velocity.png": figure_writer(curves.plot)}
             _print_oat(study, feature_names)
         else:
             writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),
                        "sample.csv": lambda p: study.sample.to_csv(p, index=False),
                        "outputs.csv": lambda p: study.outputs.to_csv(p, index=False)}
             for feature in feature_names:
-                writers[f"indices_{feature}.png"] = _figure_writer(
+                writers[f"indices_{feature}.png"] = figure_writer(
                     lambda f=feature: study.plot(f))
                 _print_indices(study, feature)
         for path in write_outputs(out, writers):

@@ -149,9 +149,6 @@ class _Problem:
             k += 1
         return block
 
-    def _weighted(self, signal: str, values: np.ndarray) -> np.ndarray:
-        return self.weights[signal] * np.asarray(values)
-
     def residuals(self, phi: np.ndarray) -> np.ndarray:
         return self.evaluate(self.theta(phi), self.jacobian == "sensitivities")[0]
 

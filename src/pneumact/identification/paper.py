@@ -153,22 +153,12 @@ class PaperIdentification:
     def writers(self, truth=None) -> dict:
         """File name -> writer: identified.toml, estimates.csv, stage_*.png, report.md."""
         from ..parameters import write_params
-
-        def figure_writer(stage):
-            def write(path):
-                import matplotlib.pyplot as plt
-
-                fig = stage.plot()
-                try:
-                    fig.savefig(path, format="png", dpi=120, bbox_inches="tight")
-                finally:
-                    plt.close(fig)
-            return write
+        from ..plotting import figure_writer
 
         writers = {"identified.toml": lambda p: write_params(self.parameters, p),
                    "estimates.csv": lambda p: self.table(truth).to_csv(p)}
         for name, stage in self.stages.items():
-            writers[f"stage_{name}.png"] = figure_writer(stage)
+            writers[f"stage_{name}.png"] = figure_writer(stage.plot)
         writers["report.md"] = lambda p: Path(p).write_text(self.report(truth),
                                                             encoding="utf-8")
         return writers
@@ -219,12 +209,13 @@ def stage_spring(sweeps: Sequence[Record], params, min_speed=1e-4, margin=0.3e-3
         kin = kinematics(rec, 0.1)
         moving = (np.abs(kin.velocity) > min_speed) & (kin.position > margin) & \
             (kin.position < kin.position.max() - margin)
+        speed = np.abs(kin.velocity)
+        keep = np.zeros_like(moving)
         for sign in (1, -1):
             branch = moving & (np.sign(kin.velocity) == sign)
             if branch.any():
-                branch &= np.abs(kin.velocity) >= steady * np.median(
-                    np.abs(kin.velocity[branch]))
-            moving = moving & ~((np.sign(kin.velocity) == sign) & ~branch)
+                keep |= branch & (speed >= steady * np.median(speed[branch]))
+        moving = keep
         force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
         xs.append(kin.position[moving])
         fs.append(force[moving])

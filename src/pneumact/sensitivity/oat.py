@@ -41,12 +41,8 @@ class OneAtATime:
 
     def plot_loops(self):
         """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5)."""
-        import matplotlib.pyplot as plt
-
         params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
-        cols = min(3, len(params))
-        rows = -(-len(params) // cols)
-        fig, axes = plt.subplots(rows, cols, squeeze=False, figsize=(4.3 * cols, 3.4 * rows))
+        fig, axes = _panels(len(params))
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
         p, x = self.signals["pressure"] * 1e-3, self.signals["position"] * 1e3
         for ax, name in zip(axes.ravel(), params, strict=False):
@@ -54,14 +50,32 @@ class OneAtATime:
             for i in np.flatnonzero(self.runs["parameter"] == name):
                 change = self.runs["change_%"].iloc[i]
                 ax.plot(p[i], x[i], lw=0.9, label=f"{name} {change:+.3g} %")
-            ax.set_xlabel("pressure [kPa abs]")
-            ax.set_ylabel("position [mm]")
-            ax.legend(fontsize=7)
-            ax.grid(True, alpha=0.3)
-        for ax in axes.ravel()[len(params):]:
-            ax.set_visible(False)
-        fig.tight_layout()
-        return fig
+            _label(ax, "pressure [kPa abs]", "position [mm]")
+        return _finish(fig, axes, len(params))
+
+
+def _panels(n: int):
+    """A grid of up to three columns of panels, one per parameter."""
+    import matplotlib.pyplot as plt
+
+    cols = min(3, n)
+    rows = -(-n // cols)
+    return plt.subplots(rows, cols, squeeze=False, figsize=(4.3 * cols, 3.4 * rows))
+
+
+def _label(ax, xlabel: str, ylabel: str) -> None:
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=7)
+    ax.grid(True, alpha=0.3)
+
+
+def _finish(fig, axes, n: int):
+    """Hide the unused panels, tighten, return the figure."""
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    return fig
 
 
 def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = None, *,
@@ -118,24 +132,14 @@ class FrictionCurves:
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]]
 
     def plot(self):
-        import matplotlib.pyplot as plt
-
         params = list(self.curves)
-        cols = min(3, len(params))
-        rows = -(-len(params) // cols)
-        fig, axes = plt.subplots(rows, cols, squeeze=False, figsize=(4.3 * cols, 3.4 * rows))
+        fig, axes = _panels(len(params))
         for ax, name in zip(axes.ravel(), params, strict=False):
             for label, v, f in self.curves[name]:
                 ax.plot(v * 1e3, f, lw=1.2 if label == "nominal" else 0.9,
                         color="k" if label == "nominal" else None, label=label)
-            ax.set_xlabel("velocity [mm/s]")
-            ax.set_ylabel("friction [N]")
-            ax.legend(fontsize=7)
-            ax.grid(True, alpha=0.3)
-        for ax in axes.ravel()[len(params):]:
-            ax.set_visible(False)
-        fig.tight_layout()
-        return fig
+            _label(ax, "velocity [mm/s]", "friction [N]")
+        return _finish(fig, axes, len(params))
 
 
 def friction_velocity(params, variations: Mapping[str, object] | None = None, *,
