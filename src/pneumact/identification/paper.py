@@ -361,7 +361,7 @@ def identify_paper(records: Sequence[Record], params, *, sliding_speed: float = 
     if missing:
         raise DataError(f"identify_paper: no {', '.join(missing)} record among "
                         f"{', '.join(Path(r.source).name for r in records)}")
-    step = (lambda label: progress(label)) if progress else (lambda label: None)
+    step = progress or (lambda label: None)
     step("spring")
     spring = stage_spring(kinds["sweep"], params)
     current = params.replace(F0=spring.estimates["F0"], k=spring.estimates["k"])
