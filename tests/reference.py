@@ -208,7 +208,9 @@ TUDELFT_FORCE_ERROR = 0.25  # relative friction error (measured 9-11 %; seal hys
 ISHIGAMI_A, ISHIGAMI_B = 7.0, 0.1  # the standard Ishigami constants (SALib's too)
 SOBOL_N = 4096  # base sample: 4096·5 = 20 480 runs of an analytic function
 SOBOL_ATOL = 0.02  # issue #9: first and total indices within 0.02 of the analytic ones
+G_FUNCTION_A = (0.0, 1.0, 4.5, 9.0, 99.0, 99.0)  # Saltelli & Sobol's g-function
 SRC_RTOL = 1e-10  # a linear model: SRC² = a_i²·Var(x_i)/Var(y) up to round-off
 MORRIS_TRAJECTORIES = 50
 EXP_TIMES = (0.0, 0.5, 1.0, 2.0, 3.0)  # s: x(t) = a·e^(−b·t), a ~ U(1, 2), b ~ U(0.5, 1.5)
 EXP_SOBOL_N = 2048
+LOCAL_FD_RTOL = 0.02  # local normalised sensitivity vs central differences, of max|change|

@@ -6,6 +6,7 @@ import numpy as np
 from typer.testing import CliRunner
 
 import pneumact as pa
+import reference as ref
 from pneumact.cli import app
 from pneumact.sensitivity import one_at_a_time
 
@@ -45,6 +46,31 @@ def test_cli_sensitivity_oat_and_sobol(tmp_path, monkeypatch):
     assert result.exit_code == EXIT_USER_ERROR
     assert "Fs" in result.output and "runs failed" in result.output
     assert not (tmp_path / "bad").exists()
+
+
+def test_cli_signals_convergence_and_resume(tmp_path, monkeypatch):
+    import pandas as pd
+
+    monkeypatch.chdir(tmp_path)
+    args = ["sensitivity", "sobol", "--vary", "Fc=10%,sigma2=20%", "--n", "16",
+            "--features", "loop_width_pressure", "--signals", "position", "--times", "11",
+            "--convergence", "--out", "study"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    for name in ("convergence.csv", "convergence_loop_width_pressure.png", "local_position.csv",
+                 "indices_position.csv", "along_time_position.png", "along_loop_position.png"):
+        assert (tmp_path / "study" / name).exists(), name
+    convergence = pd.read_csv(tmp_path / "study" / "convergence.csv")
+    assert sorted(convergence["n"].unique()) == [1, 2, 4, 8, 16]
+    along = pd.read_csv(tmp_path / "study" / "indices_position.csv")
+    assert along["output"].nunique() == 11
+    first = pd.read_csv(tmp_path / "study" / "indices.csv")
+    result = runner.invoke(app, args)  # the runs are kept: neither mixed nor redone silently
+    assert result.exit_code == EXIT_USER_ERROR
+    assert "--resume" in result.output
+    result = runner.invoke(app, [*args, "--resume"])
+    assert result.exit_code == 0, result.output
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "study" / "indices.csv"), first)
 
 
 def test_position_indices_along_the_cycle(vgt):
@@ -113,3 +139,23 @@ def test_friction_velocity_curves_follow_the_varied_parameter(vgt):
     (_, _, same), (_, _, low), (_, _, high) = curves.curves["sigma0"]
     assert np.array_equal(low, same) and np.array_equal(high, same)
     assert curves.plot() is not None
+
+
+def test_local_sensitivities_along_time_match_differences(vgt):
+    from pneumact import sensitivity as sa
+
+    model = pa.Actuator(vgt, valve=pa.CommandValve())
+    experiment = pa.CommandCycle(period=20.0)
+    times = np.linspace(2.0, 18.0, 9)
+    curves = sa.local_along_time(model, experiment, ["Fc", "k"], "position", times)
+    scale = np.max(np.abs(pa.simulate(model, experiment, t_eval=times)["position"]))
+    for name in ("Fc", "k"):
+        step = 1e-2 * vgt[name]  # smaller steps drown in the solver tolerance
+        up, down = (pa.simulate(model, experiment, t_eval=times,
+                                values={name: vgt[name] + s * step})["position"]
+                    for s in (1.0, -1.0))
+        differences = vgt[name] * (up - down) / (2 * step) / scale
+        error = np.max(np.abs(curves[name].to_numpy() - differences))
+        assert error <= ref.LOCAL_FD_RTOL * np.max(np.abs(differences))
+    assert sa.plot_along_time(curves) is not None
+    assert sa.plot_along_loop(curves, np.arange(9.0), "pressure [kPa]") is not None

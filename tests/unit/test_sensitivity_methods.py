@@ -35,6 +35,27 @@ def test_sobol_matches_the_ishigami_indices():
                                                    abs=ref.SOBOL_ATOL)
 
 
+def test_sobol_matches_the_g_function_indices():
+    a = np.array(ref.G_FUNCTION_A)
+    partial = 1.0 / (3.0 * (1.0 + a) ** 2)  # V_i of (|4x − 2| + a)/(1 + a), x ~ U(0, 1)
+    total = np.prod(1.0 + partial) - 1.0
+    problem = _uniform([f"x{i}" for i in range(a.size)], 0.0, 1.0)
+
+    def g_function(x):
+        return pd.DataFrame({"y": np.prod((np.abs(4 * x - 2) + a) / (1 + a), axis=1)})
+
+    table = sobol(problem, g_function, n=ref.SOBOL_N).table("y")
+    expected_st = partial * np.prod(1.0 + partial) / (1.0 + partial) / total
+    assert table["S1"].to_numpy() == pytest.approx(partial / total, abs=ref.SOBOL_ATOL)
+    assert table["ST"].to_numpy() == pytest.approx(expected_st, abs=ref.SOBOL_ATOL)
+
+
+def test_sobol_confidence_intervals_are_reproducible_with_seed_zero():
+    problem = _uniform(["x1", "x2", "x3"], -np.pi, np.pi)
+    first, again = (sobol(problem, ishigami, n=64, seed=0).indices for _ in range(2))
+    pd.testing.assert_frame_equal(first, again)
+
+
 def test_src_of_a_linear_model_is_exact():
     coefficients = np.array([3.0, -1.0, 0.5])
     problem = Problem((Factor("a", 0, 1, 0.5), Factor("b", 0, 2, 1), Factor("c", -1, 1, 0)))

@@ -8,7 +8,6 @@ values converted to SI), builds the model and experiment from the same options a
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Annotated
 
@@ -27,6 +26,7 @@ from pneumact.cli.common import (
     TEndOption,
     Valve,
     ValveOption,
+    batch_progress,
     build_experiment,
     build_model,
     err_console,
@@ -92,15 +92,6 @@ def batch(
     = None,
 ) -> None:
     """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
     with user_errors():
         import pneumact as pa
 
@@ -108,23 +99,7 @@ def batch(
         options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
         parameter_set, model = build_model(options)
         experiment = build_experiment(options, parameter_set)
-        started = time.perf_counter()
-        with Progress(TextColumn("[bold]batch"), BarColumn(), MofNCompleteColumn(),
-                      TextColumn("failed {task.fields[failed]}"),
-                      TextColumn("{task.fields[rate]} sims/s"),
-                      TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
-                      console=err_console) as bar:
-            task = bar.add_task("batch", total=len(table), failed=0, rate="-")
-            first: list[int] = []
-
-            def progress(done: int, failed: int, total: int) -> None:
-                if not first:
-                    first.append(done)  # chunks reused from disk do not count in the rate
-                elapsed = time.perf_counter() - started
-                rate = (done - first[0]) / elapsed if elapsed > 0 else 0.0
-                bar.update(task, completed=done, total=total, failed=failed,
-                           rate=f"{rate:.0f}")
-
+        with batch_progress() as progress:
             result = pa.simulate_batch(model, experiment, table, features=names(features),
                                        signals=names(signals), solver=pa.Rodas4(rtol=rtol),
                                        scheduler=scheduler, out_dir=out, resume=resume,

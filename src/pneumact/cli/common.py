@@ -221,6 +221,40 @@ def run_with_progress(run: Callable[[Callable[[float], None] | None], Any],
         return run(report)
 
 
+@contextlib.contextmanager
+def batch_progress(label: str = "batch") -> Iterator[Callable[[int, int, int], None]]:
+    """A rich progress bar for the batch engine: yields ``progress(done, failed, total)``
+    (sets done and failed, and the rate of this session: reused chunks do not count)."""
+    import time
+
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    started = time.perf_counter()
+    with Progress(TextColumn(f"[bold]{label}"), BarColumn(), MofNCompleteColumn(),
+                  TextColumn("failed {task.fields[failed]}"),
+                  TextColumn("{task.fields[rate]} sims/s"),
+                  TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
+                  console=err_console) as bar:
+        task = bar.add_task(label, total=None, failed=0, rate="-")
+        first: list[int] = []
+
+        def progress(done: int, failed: int, total: int) -> None:
+            if not first:
+                first.append(done)
+            elapsed = time.perf_counter() - started
+            rate = (done - first[0]) / elapsed if elapsed > 0 else 0.0
+            bar.update(task, completed=done, total=total, failed=failed, rate=f"{rate:.0f}")
+
+        yield progress
+
+
 def fmt(value: float | None, digits: int = 4) -> str:
     return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import shutil
+from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -19,6 +22,7 @@ from pneumact.cli.common import (
     TEndOption,
     Valve,
     ValveOption,
+    batch_progress,
     build_experiment,
     build_model,
     err_console,
@@ -30,7 +34,7 @@ from pneumact.cli.common import (
     user_errors,
     write_outputs,
 )
-from pneumact.errors import ParameterError
+from pneumact.errors import ParameterError, PneumactError
 
 #: Ranges of the global methods unless --vary: Fc and Fs at ±10 % so that no run has
 #: Fs < Fc (vgt-paper: Fc ≤ 2.86 N < 2.88 N ≤ Fs).
@@ -72,56 +76,168 @@ def sensitivity(
              "sigma1, sigma2, vs and ±10 % of Fc, Fs (so that Fs >= Fc in every run).")] = None,
     features: Annotated[str, typer.Option(help="Features to analyse.")] = (
         "loop_width_pressure,breakaway_pressure"),
+    signals: Annotated[str | None, typer.Option(
+        help="Signals to analyse along time (e.g. position): indices against time and along "
+             "the loop, and local normalised sensitivities.")] = None,
+    times: Annotated[int, typer.Option(help="Points of the time grid of --signals.")] = 41,
     n: Annotated[int, typer.Option("--n", help="Base sample size (sobol, src, fast) or "
                                                "trajectories (morris).")] = 256,
     second_order: Annotated[bool, typer.Option("--second-order",
                                                help="Sobol second-order indices.")] = False,
+    convergence: Annotated[bool, typer.Option(
+        "--convergence", help="Sobol: indices and CI widths at n/16, n/8, ... n from the "
+                              "same sample.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sample.")] = 0,
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address.")] = None,
+    workers: Annotated[int | None, typer.Option(help="Local threads (default all cores).")
+                       ] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue the runs kept in "
+                                                          "OUT/runs after an interruption.")
+                      ] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start the runs in OUT/runs "
+                                                                "again.")] = False,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-sensitivity"),
 ) -> None:
-    """Sensitivity of the actuator's features to its parameters, on the batch engine."""
+    """Sensitivity of the actuator's features (and signals) to its parameters, on the
+    batch engine. The runs of the global methods are kept in OUT/runs (resumable)."""
     with user_errors():
-        from pneumact import sensitivity as sa
+        import numpy as np
 
         options = ModelOptions(params, valve, friction, chamber, t_end)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         feature_names = names(features) or []
-        if n < 1:
-            raise ParameterError(f"--n = {n}; must be >= 1")
+        signal_names = names(signals) or []
+        for name, value, low in (("--n", n, 1), ("--times", times, 2)):
+            if value < low:
+                raise ParameterError(f"{name} = {value}; must be >= {low}")
+        if convergence and method is not Method.sobol:
+            raise ParameterError(f"--convergence is for sobol, not {method.value}")
+        if convergence and second_order:
+            raise ParameterError("--convergence follows first and total indices; run "
+                                 "--second-order separately")
         use_agg()
-        with err_console.status(f"{method.value}: simulating"):
-            if method is Method.oat:
-                study = sa.one_at_a_time(actuator, experiment, _variations(vary),
-                                         features=feature_names)
-            else:
-                variations = _variations(vary) or DEFAULT_GLOBAL
-                problem = sa.Problem.around(parameter_set, variations)
-                evaluate = sa.model_outputs(actuator, experiment, problem, feature_names,
-                                            scheduler=scheduler)
-                run = {Method.sobol: lambda: sa.sobol(problem, evaluate, n, second_order,
-                                                      seed),
-                       Method.morris: lambda: sa.morris(problem, evaluate, n, seed=seed),
-                       Method.src: lambda: sa.src(problem, evaluate, n, seed),
-                       Method.fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[method]
-                study = run()
-        if method is Method.oat:
-            curves = sa.friction_velocity(parameter_set, _variations(vary))
-            writers = {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
-                       "loops.png": figure_writer(study.plot_loops),
-                       "friction_velocity.png": figure_writer(curves.plot)}
-            _print_oat(study, feature_names)
-        else:
-            writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),
-                       "sample.csv": lambda p: study.sample.to_csv(p, index=False),
-                       "outputs.csv": lambda p: study.outputs.to_csv(p, index=False)}
-            for feature in feature_names:
-                writers[f"indices_{feature}.png"] = figure_writer(
-                    lambda f=feature: study.plot(f))
-                _print_indices(study, feature)
+        study = Study(method, actuator, experiment, parameter_set, vary, n, second_order, seed,
+                      dict(scheduler=scheduler, workers=workers, resume=resume,
+                           overwrite=overwrite))
+        with _runs_kept_for_resume_only(out):
+            writers = study.features(feature_names, out, convergence)
+            grid = np.linspace(experiment.t_start, experiment.t_end, times)
+            for signal in signal_names:
+                writers.update(study.signal(signal, grid, out))
         for path in write_outputs(out, writers):
             out_console.print(f"wrote {path}")
+
+
+@contextlib.contextmanager
+def _runs_kept_for_resume_only(out: Path):
+    """Runs written under ``out`` by this command are kept if it is interrupted (so that
+    --resume continues them) but removed if it fails on an error, which a rerun with other
+    options would otherwise meet as "a different batch"."""
+    existed = out.exists()
+    before = set(out.glob("runs*")) if existed else set()
+    try:
+        yield
+    except PneumactError:
+        for path in set(out.glob("runs*")) - before:
+            shutil.rmtree(path, ignore_errors=True)
+        if not existed and out.exists() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+
+
+@dataclass
+class Study:
+    """One sensitivity command: the method, the model and the batch options, and the
+    writers of what each analysis produced."""
+
+    method: Method
+    model: object
+    experiment: object
+    parameter_set: object
+    vary: str | None
+    n: int
+    second_order: bool
+    seed: int
+    batch: dict
+
+    def problem(self):
+        from pneumact import sensitivity as sa
+
+        return sa.Problem.around(self.parameter_set, _variations(self.vary) or DEFAULT_GLOBAL)
+
+    def _run(self, evaluate, convergence: bool = False):
+        from pneumact import sensitivity as sa
+
+        problem, n, seed = self.problem(), self.n, self.seed
+        if convergence:
+            return sa.sobol_convergence(problem, evaluate, n_max=n, n_min=max(1, n // 16),
+                                        seed=seed, target_width=None)
+        run = {Method.sobol: lambda: sa.sobol(problem, evaluate, n, self.second_order, seed),
+               Method.morris: lambda: sa.morris(problem, evaluate, n, seed=seed),
+               Method.src: lambda: sa.src(problem, evaluate, n, seed),
+               Method.fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[self.method]
+        return run(), None
+
+    def features(self, feature_names: list[str], out: Path, convergence: bool) -> dict:
+        """Writers of the feature study (oat: Figs. 3 and 5 and the change table)."""
+        from pneumact import sensitivity as sa
+
+        if self.method is Method.oat:
+            with err_console.status("oat: simulating"):
+                study = sa.one_at_a_time(self.model, self.experiment, _variations(self.vary),
+                                         features=feature_names)
+            curves = sa.friction_velocity(self.parameter_set, _variations(self.vary))
+            _print_oat(study, feature_names)
+            return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
+                    "loops.png": figure_writer(study.plot_loops),
+                    "friction_velocity.png": figure_writer(curves.plot)}
+        problem = self.problem()
+        with batch_progress(f"{self.method.value}: features") as progress:
+            evaluate = sa.model_outputs(self.model, self.experiment, problem, feature_names,
+                                        out_dir=out / "runs", progress=progress, **self.batch)
+            study, table = self._run(evaluate, convergence)
+        writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),
+                   "sample.csv": lambda p: study.sample.to_csv(p, index=False),
+                   "outputs.csv": lambda p: study.outputs.to_csv(p, index=False)}
+        for feature in feature_names:
+            writers[f"indices_{feature}.png"] = figure_writer(lambda f=feature: study.plot(f))
+            _print_indices(study, feature)
+        if table is not None:
+            writers["convergence.csv"] = lambda p: table.to_csv(p, index=False)
+            for feature in feature_names:
+                writers[f"convergence_{feature}.png"] = figure_writer(
+                    lambda f=feature: sa.plot_convergence(table, f))
+        return writers
+
+    def signal(self, signal: str, grid, out: Path) -> dict:
+        """Writers of the signal's indices along time and along the loop, and of its
+        local normalised sensitivities."""
+        import pneumact as pa
+        from pneumact import sensitivity as sa
+
+        problem = self.problem()
+        with err_console.status(f"local sensitivities of {signal}"):
+            local = sa.local_along_time(self.model, self.experiment, problem.names, signal,
+                                        grid)
+            nominal = pa.simulate(self.model, self.experiment, t_eval=grid)
+        pressure_kpa = nominal["pressure"] * 1e-3
+        writers = {f"local_{signal}.csv": lambda p: local.to_csv(p),
+                   f"local_{signal}.png": figure_writer(lambda: sa.plot_along_time(local))}
+        if self.method is Method.oat:
+            return writers
+        with batch_progress(f"{self.method.value}: {signal}") as progress:
+            evaluate = sa.model_signal(self.model, self.experiment, problem, signal, grid,
+                                       out_dir=out / f"runs-{signal}", progress=progress,
+                                       **self.batch)
+            study, _ = self._run(evaluate)
+        curves = sa.along_time(study)
+        writers.update({
+            f"indices_{signal}.csv": lambda p: study.indices.to_csv(p, index=False),
+            f"along_time_{signal}.png": figure_writer(lambda: sa.plot_along_time(study)),
+            f"along_loop_{signal}.png": figure_writer(
+                lambda: sa.plot_along_loop(curves, pressure_kpa, "chamber pressure [kPa]"))})
+        return writers
 
 
 def _print_oat(study, features) -> None:

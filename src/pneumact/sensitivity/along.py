@@ -16,34 +16,29 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from .methods import Evaluate, SensitivityWarning, StudyResult, sobol
+from .methods import (
+    Evaluate,
+    SensitivityWarning,
+    StudyResult,
+    batch_evaluate,
+    bootstrap_seed,
+    sobol,
+)
 from .problem import Problem
 
-__all__ = ["along_time", "model_signal", "plot_along_time", "plot_convergence",
-           "sobol_convergence"]
+__all__ = ["along_time", "local_along_time", "model_signal", "plot_along_loop",
+           "plot_along_time", "plot_convergence", "sobol_convergence"]
 
 
 def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
-                 *, workers=None, scheduler=None, solver=None) -> Evaluate:
+                 *, workers=None, scheduler=None, out_dir=None, resume=False,
+                 overwrite=False, progress=None, solver=None) -> Evaluate:
     """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
-    by the time) from the batch engine."""
-    from ..errors import PneumactError
-    from ..simulation.batch import simulate_batch
-
-    grid = np.asarray(times, dtype=float)
-
-    def evaluate(values: np.ndarray) -> pd.DataFrame:
-        table = pd.DataFrame(values, columns=problem.names)
-        batch = simulate_batch(model, experiment, table, features=[], signals=[signal],
-                               t_eval=grid, workers=workers, scheduler=scheduler,
-                               solver=solver)
-        if len(batch.failed):
-            raise PneumactError(f"{len(batch.failed)} of {len(table)} runs failed (first: "
-                                f"{batch.failed['error'].iloc[0]}); an index cannot leave "
-                                "runs out")
-        return pd.DataFrame(batch.signals[signal], columns=[repr(float(t)) for t in grid])
-
-    return evaluate
+    by the time) from the batch engine; resumable from ``out_dir`` like ``model_outputs``."""
+    return batch_evaluate(model, experiment, problem, signal=signal, times=times,
+                          workers=workers, scheduler=scheduler, out_dir=out_dir,
+                          resume=resume, overwrite=overwrite, progress=progress,
+                          solver=solver)
 
 
 def along_time(study: StudyResult, index: str | None = None) -> pd.DataFrame:
@@ -55,6 +50,24 @@ def along_time(study: StudyResult, index: str | None = None) -> pd.DataFrame:
     out = wide.loc[list(study.outputs.columns), list(study.sample.columns)]
     out.index = pd.Index([float(c) for c in out.index], name="time")
     out.columns.name = index
+    return out
+
+
+def local_along_time(model, experiment, parameters: Sequence[str], signal: str,
+                     times: Sequence[float], *, values=None, solver=None) -> pd.DataFrame:
+    """Local normalised sensitivities of ``signal`` at ``times`` from one forward
+    sensitivity run: θ_i·∂y/∂θ_i / max|y| (the change of the signal, as a share of its
+    range, per relative change of θ_i; dividing by max|y| rather than y(t) keeps the
+    curves finite where the signal passes zero)."""
+    from ..simulation import simulate_sensitivities
+
+    grid = np.asarray(times, dtype=float)
+    sens = simulate_sensitivities(model, experiment, list(parameters), solver, t_eval=grid,
+                                  values=values)
+    scale = float(np.max(np.abs(sens.result[signal])))
+    curves = sens.relative(signal) / (scale if scale > 0 else 1.0)
+    out = pd.DataFrame(curves, index=pd.Index(grid, name="time"), columns=sens.parameters)
+    out.columns.name = f"normalised sensitivity of {signal}"
     return out
 
 
@@ -81,7 +94,8 @@ def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
             y = final.outputs[column].to_numpy(float)[:runs]
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                res = analyze.analyze(salib, y, calc_second_order=False, seed=seed)
+                res = analyze.analyze(salib, y, calc_second_order=False,
+                                       seed=bootstrap_seed(seed))
             for j, name in enumerate(problem.names):
                 rows.append({"output": column, "parameter": name, "n": n, "runs": runs,
                              "S1": res["S1"][j], "S1_width": 2 * res["S1_conf"][j],
@@ -98,15 +112,47 @@ def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
     return final, table
 
 
-def plot_along_time(study: StudyResult, index: str | None = None):
-    """Each parameter's index against time."""
+def plot_along_time(study: StudyResult | pd.DataFrame, index: str | None = None):
+    """Each parameter's index against time, with its confidence band where the method
+    gives one (``study``: a study of a signal, or curves from ``local_along_time``)."""
     import matplotlib.pyplot as plt
 
-    curves = along_time(study, index)
+    curves = study if isinstance(study, pd.DataFrame) else along_time(study, index)
+    bands = None if isinstance(study, pd.DataFrame) else _bands(study, curves.columns.name)
     fig, ax = plt.subplots(figsize=(6.5, 3.8))
     for name in curves.columns:
-        ax.plot(curves.index, curves[name], label=name)
+        line, = ax.plot(curves.index, curves[name], label=name)
+        if bands is not None:
+            ax.fill_between(curves.index, curves[name] - bands[name],
+                            curves[name] + bands[name], color=line.get_color(), alpha=0.2)
     ax.set_xlabel("time [s]")
+    ax.set_ylabel(curves.columns.name)
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _bands(study: StudyResult, index: str) -> pd.DataFrame | None:
+    """Half-widths of the index's confidence intervals against time, if it has any."""
+    if f"{index}_conf" not in study.indices:
+        return None
+    return along_time(study, f"{index}_conf")
+
+
+def plot_along_loop(curves: pd.DataFrame, x: Sequence[float], xlabel: str):
+    """Index curves (rows: times) against another signal at the same times, e.g. the
+    applied pressure of a cycle, so the indices are read along the hysteresis loop."""
+    import matplotlib.pyplot as plt
+
+    x = np.asarray(x, dtype=float)
+    if x.shape != (len(curves),):
+        raise ParameterError(f"plot_along_loop: x has {x.size} values for {len(curves)} "
+                             "times")
+    fig, ax = plt.subplots(figsize=(6.5, 3.8))
+    for name in curves.columns:
+        ax.plot(x, curves[name], ".-", label=name)
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(curves.columns.name)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)

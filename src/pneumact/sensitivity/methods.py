@@ -113,25 +113,38 @@ def sobol(problem: Problem, evaluate: Evaluate, n: int = 1024, second_order: boo
     for column in outputs.columns:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # constant outputs: 0/0
+            warnings.filterwarnings("ignore", "Constant values", UserWarning)  # → zeros
             res = analyze.analyze(salib, outputs[column].to_numpy(float),
                                   calc_second_order=second_order, num_resamples=resamples,
-                                  conf_level=conf_level, seed=seed)
+                                  conf_level=conf_level, seed=bootstrap_seed(seed))
         for j, name in enumerate(problem.names):
             rows.append({"output": column, "parameter": name, "S1": res["S1"][j],
                          "S1_conf": res["S1_conf"][j], "ST": res["ST"][j],
                          "ST_conf": res["ST_conf"][j]})
-        _warn_negative(column, rows[-len(problem.names):], n)
+    _warn_negative(rows, n)
     return StudyResult("sobol", pd.DataFrame(rows), _frame(problem, x), outputs,
                        {"n": n, "second_order": second_order})
 
 
-def _warn_negative(output: str, rows: list[dict], n: int) -> None:
-    bad = [r["parameter"] for r in rows
-           if r["S1"] + r["S1_conf"] < 0 or r["ST"] + r["ST_conf"] < 0]
+def bootstrap_seed(seed: int) -> np.random.Generator:
+    """A generator for SALib's Sobol bootstrap: it tests ``if seed:``, so an int 0 would
+    leave the confidence intervals unseeded (different on every call)."""
+    return np.random.default_rng(seed)
+
+
+def _warn_negative(rows: list[dict], n: int) -> None:
+    """One warning naming the outputs (and parameters) whose S1 or ST is negative beyond
+    its confidence interval: the sample is too small for them."""
+    bad = {}
+    for r in rows:
+        if r["S1"] + r["S1_conf"] < 0 or r["ST"] + r["ST_conf"] < 0:
+            bad.setdefault(str(r["output"]), []).append(r["parameter"])
     if bad:
-        warnings.warn(f"Sobol indices of {output} for {', '.join(bad)} are negative beyond "
-                      f"their confidence interval with n = {n}: try n = {4 * n}",
-                      SensitivityWarning, stacklevel=3)
+        listed = [f"{out} ({', '.join(pars)})" for out, pars in list(bad.items())[:3]]
+        more = f" and {len(bad) - 3} more outputs" if len(bad) > 3 else ""
+        warnings.warn(f"Sobol indices negative beyond their confidence interval with n = {n}: "
+                      f"{'; '.join(listed)}{more}; try n = {4 * n}", SensitivityWarning,
+                      stacklevel=3)
 
 
 def morris(problem: Problem, evaluate: Evaluate, trajectories: int = 20, levels: int = 4,
@@ -219,24 +232,36 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
-                  workers=None, scheduler=None, out_dir=None, resume=False, progress=None,
-                  solver=None) -> Evaluate:
+                  workers=None, scheduler=None, out_dir=None, resume=False, overwrite=False,
+                  progress=None, solver=None) -> Evaluate:
     """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
     Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
     are reported with their errors, never dropped."""
+    return batch_evaluate(model, experiment, problem, features=list(features), workers=workers,
+                          scheduler=scheduler, out_dir=out_dir, resume=resume,
+                          overwrite=overwrite, progress=progress, solver=solver)
+
+
+def batch_evaluate(model, experiment, problem: Problem, *, features=(), signal=None,
+                   times=None, **batch) -> Evaluate:
+    """The batch engine as an ``evaluate``: one column per feature, or (``signal``) one per
+    time of ``times``, named by the time. ``batch``: ``simulate_batch`` keywords."""
     from ..simulation.batch import simulate_batch
+
+    grid = None if times is None else np.asarray(times, dtype=float)
 
     def evaluate(values: np.ndarray) -> pd.DataFrame:
         table = pd.DataFrame(values, columns=problem.names)
-        batch = simulate_batch(model, experiment, table, features=list(features),
-                               workers=workers, scheduler=scheduler, out_dir=out_dir,
-                               resume=resume, progress=progress, solver=solver)
-        failed = batch.failed
+        result = simulate_batch(model, experiment, table, features=list(features),
+                                signals=[signal] if signal else None, t_eval=grid, **batch)
+        failed = result.failed
         if len(failed):
             raise PneumactError(
                 f"{len(failed)} of {len(table)} runs failed (first, row {failed.index[0]}: "
                 f"{failed['error'].iloc[0]}); an index cannot leave runs out: narrow the "
                 "ranges or loosen the solver")
-        return batch.table[list(features)].reset_index(drop=True)
+        if signal:
+            return pd.DataFrame(result.signals[signal], columns=[repr(float(t)) for t in grid])
+        return result.table[list(features)].reset_index(drop=True)
 
     return evaluate
