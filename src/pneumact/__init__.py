@@ -53,6 +53,9 @@ _EXPORTS: dict[str, str] = {
     "identify_paper": "pneumact.identification",
     "inverse_friction": "pneumact.identification",
     "synthetic_campaign": "pneumact.identification",
+    "validate": "pneumact.validation",
+    "train_test": "pneumact.validation",
+    "reproduce": "pneumact.reproduce",
     "Record": "pneumact.io",
     "read_record": "pneumact.io",
     "read_records": "pneumact.io",
@@ -103,10 +106,13 @@ __all__ = [
     "load_params",
     "read_record",
     "read_records",
+    "reproduce",
     "simulate",
     "simulate_batch",
     "simulate_sensitivities",
     "synthetic_campaign",
+    "train_test",
+    "validate",
     "write_params",
 ]
 
@@ -160,6 +166,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         StribeckMap,
     )
     from pneumact.parameters import ParameterSet, available_params, load_params, write_params
+    from pneumact.reproduce import reproduce
     from pneumact.simulation import (
         Assembly,
         DormandPrince,
@@ -170,3 +177,4 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         simulate_sensitivities,
     )
     from pneumact.simulation.batch import BatchResult, simulate_batch
+    from pneumact.validation import train_test, validate

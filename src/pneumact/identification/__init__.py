@@ -11,7 +11,7 @@
 
 from .campaign import BenchTest, Noise, paper_campaign, synthetic_campaign
 from .estimates import Estimates, linear_least_squares
-from .fit import FitResult, Profile, fit
+from .fit import FitResult, Profile, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
 from .paper import PaperIdentification, StageResult, identify_paper, record_kind
 
@@ -24,6 +24,7 @@ __all__ = [
     "PaperIdentification",
     "Profile",
     "StageResult",
+    "experiment_for",
     "fit",
     "identify_paper",
     "inverse_friction",

@@ -55,7 +55,7 @@ class _Problem:
         self.signals, self.weights, self.solver = tuple(signals), dict(weights), solver
         self.jacobian = jacobian
         self.base = dict(base_values)
-        self.experiments = [_experiment(model, r, smooth_input) for r in self.records]
+        self.experiments = [experiment_for(model, r, smooth_input) for r in self.records]
         lo, hi = window if window is not None else (-np.inf, np.inf)
         self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
         for r, m in zip(self.records, self.masks, strict=True):
@@ -162,7 +162,7 @@ class _Problem:
 _REBUILT_INPUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _experiment(model, record: Record, smooth: bool):
+def experiment_for(model, record: Record, smooth: bool = False):
     """The record's measured input as the model's experiment; with ``smooth`` rebuilt
     piecewise linear (``identification.inputs``), which also leaves the integrator far
     fewer breakpoints than one per sample."""

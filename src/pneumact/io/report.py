@@ -1,0 +1,114 @@
+"""Self-contained HTML reports: tables and figures of a study, the parameter set with its
+provenance, the software version and the exact call, in one file readable offline.
+
+A ``Report`` collects blocks (headings, paragraphs, notes, tables, figures) and renders
+them with one Jinja2 template (``templates/report.html.j2``); figures are embedded as
+PNG data URIs, so the file can be mailed to a colleague. Writing is atomic.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import io
+import platform
+import shlex
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from .tables import PathLike, atomic_write
+
+__all__ = ["Block", "Report", "figure_png", "the_call"]
+
+
+@dataclass(frozen=True)
+class Block:
+    """One piece of a report: ``kind`` is heading, text, note, table or figure."""
+
+    kind: str
+    content: str
+    caption: str = ""
+    anchor: str = ""
+
+
+def figure_png(fig, dpi: int = 110) -> str:
+    """A matplotlib figure as a base64 PNG (the figure is closed)."""
+    import matplotlib.pyplot as plt
+
+    buffer = io.BytesIO()
+    try:
+        fig.savefig(buffer, format="png", dpi=dpi, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+    return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def the_call() -> str:
+    """The command line of this process, quoted so that it can be pasted back."""
+    name = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else "python"
+    return " ".join([name, *map(shlex.quote, sys.argv[1:])])
+
+
+@dataclass
+class Report:
+    """An HTML report under construction. ``call``: how it was produced (the command
+    line or the Python call); ``parameters``: the parameter set, shown with provenance."""
+
+    title: str
+    call: str = ""
+    parameters: object = None
+    blocks: list[Block] = field(default_factory=list)
+
+    def heading(self, text: str) -> Report:
+        anchor = f"s{sum(b.kind == 'heading' for b in self.blocks) + 1}"
+        self.blocks.append(Block("heading", text, anchor=anchor))
+        return self
+
+    def text(self, text: str) -> Report:
+        self.blocks.append(Block("text", text))
+        return self
+
+    def note(self, text: str) -> Report:
+        """A highlighted statement, e.g. where our numbers disagree with the paper."""
+        self.blocks.append(Block("note", text))
+        return self
+
+    def table(self, frame: pd.DataFrame, caption: str = "", digits: int = 4,
+              index: bool = True) -> Report:
+        html = frame.to_html(index=index, border=0, classes="data", na_rep="–",
+                             float_format=lambda v: f"{v:.{digits}g}")
+        self.blocks.append(Block("table", html, caption))
+        return self
+
+    def figure(self, fig, caption: str = "") -> Report:
+        self.blocks.append(Block("figure", figure_png(fig), caption))
+        return self
+
+    def render(self) -> str:
+        import jinja2
+
+        from .. import __version__
+
+        env = jinja2.Environment(loader=jinja2.PackageLoader("pneumact.io", "templates"),
+                                 autoescape=jinja2.select_autoescape(["html", "j2"]))
+        parameters = None
+        if self.parameters is not None:
+            parameters = self.parameters.to_frame().to_html(index=False, border=0,
+                                                            classes="data", na_rep="")
+        return env.get_template("report.html.j2").render(
+            title=self.title, blocks=self.blocks, call=self.call, parameters=parameters,
+            parameter_set=getattr(self.parameters, "name", ""), version=__version__,
+            python=platform.python_version(),
+            created=_dt.datetime.now().astimezone().isoformat(timespec="seconds"))
+
+    def write(self, path: PathLike) -> Path:
+        """Render and write atomically (nothing is left on disk if rendering fails)."""
+        text = self.render()
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_write(path) as tmp:
+            Path(tmp).write_text(text, encoding="utf-8")
+        return path

@@ -1,0 +1,117 @@
+"""Figures and report sections of a validation (display units: kPa, mm, N)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..plotting import DISPLAY_UNITS
+
+__all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
+
+
+def _display(rv, signal: str) -> tuple[str, float]:
+    return DISPLAY_UNITS.get(rv.record.units.get(signal, ""), ("", 1.0))
+
+
+def _grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.4):
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(rows_per, n, squeeze=False, figsize=(width * n, height * rows_per))
+    return fig, axes
+
+
+def plot_loops(validation):
+    """Measured (black dashed) and predicted pressure–position loops, one panel per
+    record with pressure and position."""
+    records = [rv for rv in validation.records if rv.has_loop]
+    fig, axes = _grid(len(records))
+    for ax, rv in zip(axes[0], records, strict=True):
+        ax.plot(rv.record["pressure"] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
+                label="measured")
+        ax.plot(rv.predicted("pressure") * 1e-3, rv.predicted("position") * 1e3, "C0-",
+                lw=1.2, label="model")
+        ax.set_xlabel("pressure [kPa abs]")
+        ax.set_ylabel("position [mm]")
+        ax.set_title(rv.name, fontsize=9)
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_time(validation):
+    """Per record and signal: measured and predicted against time, residual below."""
+    import matplotlib.pyplot as plt
+
+    n, k = len(validation.records), len(validation.signals)
+    fig, axes = plt.subplots(2 * k, n, squeeze=False, sharex="col",
+                             figsize=(4.6 * n, 2.3 * 2 * k))
+    for i, rv in enumerate(validation.records):
+        for j, s in enumerate(validation.signals):
+            unit, factor = _display(rv, s)
+            ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
+            ax.plot(rv.record.time, rv.measured(s) * factor, "k.", ms=1.5, label="measured")
+            ax.plot(rv.record.time, rv.predicted(s) * factor, "C0-", lw=1, label="model")
+            axr.plot(rv.record.time, rv.residual(s) * factor, "C3-", lw=0.8)
+            ax.set_ylabel(f"{s} [{unit}]")
+            axr.set_ylabel(f"residual [{unit}]")
+            ax.set_title(rv.name, fontsize=9)
+            for a in (ax, axr):
+                a.grid(True, alpha=0.3)
+        axes[-1, i].set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_residuals(validation):
+    """Per record: the first signal's residual against pressure (or time, without a
+    pressure record), and the residual autocorrelation with the ±1.96/√N band."""
+    from .metrics import autocorrelation
+
+    signal = validation.signals[0]
+    fig, axes = _grid(len(validation.records), rows_per=2, height=3.0)
+    for i, rv in enumerate(validation.records):
+        unit, factor = _display(rv, signal)
+        residual = rv.residual(signal)
+        if "pressure" in rv.record:
+            axes[0, i].plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
+            axes[0, i].set_xlabel("pressure [kPa abs]")
+        else:
+            axes[0, i].plot(rv.record.time, residual * factor, ".", ms=1.5)
+            axes[0, i].set_xlabel("time [s]")
+        axes[0, i].set_ylabel(f"{signal} residual [{unit}]")
+        axes[0, i].set_title(rv.name, fontsize=9)
+        acf, band = autocorrelation(residual)
+        lags = np.arange(acf.size)
+        axes[1, i].vlines(lags, 0, acf, lw=1)
+        axes[1, i].axhspan(-band, band, color="C2", alpha=0.2, label="white noise, 95 %")
+        axes[1, i].set_xlabel("lag [samples]")
+        axes[1, i].set_ylabel("autocorrelation")
+        for ax in axes[:, i]:
+            ax.grid(True, alpha=0.3)
+    axes[1, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def add_to_report(validation, report, title: str | None = None) -> None:
+    """Metrics, loop measures, reversals and the figures, as report sections."""
+    label = title or f"Validation ({validation.label})"
+    report.heading(label)
+    report.text(f"{len(validation.records)} record(s); compared: "
+                f"{', '.join(validation.signals)}. NRMSE = ‖y − ŷ‖/‖y − ȳ‖, "
+                "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; SI units.")
+    report.table(validation.metrics(), "Error metrics per record and pooled", index=False)
+    loops = validation.loops()
+    if len(loops):
+        report.table(loops, "Hysteresis-loop measures, model against measurement "
+                            "(difference = model − measured)", index=False)
+        report.figure(validation.plot_loops(), "Pressure–position loops: measured (dashed) "
+                                               "and model (like the paper's Fig. 6)")
+        reversal_table = validation.reversals()
+        if len(reversal_table):
+            report.table(reversal_table, "Reversal points of the pressure", index=False)
+    report.figure(validation.plot_time(), "Measured and predicted signals, residuals")
+    report.figure(validation.plot_residuals(), "Residuals against pressure and their "
+                                               "autocorrelation")

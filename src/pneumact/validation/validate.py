@@ -1,0 +1,274 @@
+"""Validation of a model against measured records (the paper's Fig. 6, for any record).
+
+``validate`` drives the model with each record's measured input (the pressure, or the
+command or set-point through the model's valve), simulates on the record's own time
+grid and compares the measured outputs: error metrics per record and over all records,
+the hysteresis-loop measures of model and measurement, and the residuals (over time,
+against pressure, their autocorrelation). ``train_test`` fits on some records and
+validates on others, with both sets of metrics side by side.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import DataError
+from ..io.records import Record
+from .loops import compare_loops, loop_measures, reversals
+from .metrics import METRIC_NAMES, autocorrelation, error_metrics
+
+__all__ = ["RecordValidation", "TrainTest", "Validation", "train_test", "validate"]
+
+ALL_RECORDS = "all records"
+
+
+@dataclass(eq=False)
+class RecordValidation:
+    """One record against the model's prediction of it."""
+
+    name: str
+    record: Record
+    simulated: object
+    signals: tuple[str, ...]
+
+    def measured(self, signal: str) -> np.ndarray:
+        return self.record[signal]
+
+    def predicted(self, signal: str) -> np.ndarray:
+        return np.asarray(self.simulated[signal], dtype=float)
+
+    def residual(self, signal: str) -> np.ndarray:
+        """Measured − predicted, on the record's time grid."""
+        return self.measured(signal) - self.predicted(signal)
+
+    def metrics(self) -> dict[str, dict[str, float]]:
+        return {s: error_metrics(self.measured(s), self.predicted(s), f"{self.name}: {s}")
+                for s in self.signals}
+
+    @property
+    def has_loop(self) -> bool:
+        return "pressure" in self.record and "position" in self.record
+
+    def loops(self) -> pd.DataFrame | None:
+        """Loop measures of measurement and model (None without pressure and position)."""
+        if not self.has_loop:
+            return None
+        t = self.record.time
+        measured = loop_measures(t, self.record["pressure"], self.record["position"])
+        model = loop_measures(t, self.predicted("pressure"), self.predicted("position"))
+        return compare_loops(measured, model)
+
+    def reversals(self) -> pd.DataFrame | None:
+        """Reversal points of measurement and model, side by side (matched in order)."""
+        if not self.has_loop:
+            return None
+        t = self.record.time
+        measured = reversals(t, self.record["pressure"], self.record["position"])
+        model = reversals(t, self.predicted("pressure"), self.predicted("position"))
+        n = min(len(measured), len(model))
+        out = measured.iloc[:n].add_prefix("measured_").reset_index(drop=True)
+        for column in ("pressure", "position"):
+            out[f"model_{column}"] = model[column].to_numpy()[:n]
+            out[f"{column}_difference"] = out[f"model_{column}"] - out[f"measured_{column}"]
+        return out
+
+
+@dataclass(eq=False)
+class Validation:
+    """Validation of one model on a set of records; ``label`` names the set (e.g. test)."""
+
+    records: list[RecordValidation]
+    signals: tuple[str, ...]
+    values: dict[str, float] = field(default_factory=dict)
+    label: str = "validation"
+
+    def metrics(self) -> pd.DataFrame:
+        """Per record and signal, plus all records pooled: RMS, max, NRMSE, fit %, R², n."""
+        rows = []
+        for rv in self.records:
+            for signal, m in rv.metrics().items():
+                rows.append({"record": rv.name, "signal": signal, **m})
+        for signal in self.signals:
+            measured = np.concatenate([rv.measured(signal) for rv in self.records])
+            predicted = np.concatenate([rv.predicted(signal) for rv in self.records])
+            rows.append({"record": ALL_RECORDS, "signal": signal,
+                         **error_metrics(measured, predicted, f"{ALL_RECORDS}: {signal}")})
+        return pd.DataFrame(rows, columns=["record", "signal", *METRIC_NAMES])
+
+    def loops(self) -> pd.DataFrame:
+        """Loop measures of every record with a loop (record, measure, unit, measured,
+        model, difference, relative)."""
+        frames = [frame.assign(record=rv.name) for rv in self.records
+                  if (frame := rv.loops()) is not None]
+        if not frames:
+            return pd.DataFrame(columns=["record", "measure", "unit", "measured", "model",
+                                         "difference", "relative"])
+        out = pd.concat(frames, ignore_index=True)
+        return out[["record", *[c for c in out.columns if c != "record"]]]
+
+    def reversals(self) -> pd.DataFrame:
+        frames = [frame.assign(record=rv.name) for rv in self.records
+                  if (frame := rv.reversals()) is not None]
+        return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+    def residual_autocorrelation(self, max_lag: int | None = None) -> pd.DataFrame:
+        """Autocorrelation of each record's residual (lag, acf, band) per signal."""
+        rows = []
+        for rv in self.records:
+            for signal in self.signals:
+                acf, band = autocorrelation(rv.residual(signal), max_lag)
+                rows.append(pd.DataFrame({"record": rv.name, "signal": signal,
+                                          "lag": np.arange(acf.size), "acf": acf,
+                                          "band": band}))
+        return pd.concat(rows, ignore_index=True)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Long table: record, time, signal, measured, model, residual (SI)."""
+        frames = []
+        for rv in self.records:
+            for s in self.signals:
+                frames.append(pd.DataFrame({"record": rv.name, "time": rv.record.time,
+                                            "signal": s, "measured": rv.measured(s),
+                                            "model": rv.predicted(s),
+                                            "residual": rv.residual(s)}))
+        return pd.concat(frames, ignore_index=True)
+
+    # ----------------------------------------------------------------------- plots
+    def plot_loops(self):
+        """Measured and predicted pressure–position loops per record (the paper's Fig. 6)."""
+        from .plots import plot_loops
+
+        return plot_loops(self)
+
+    def plot_time(self):
+        """Measured and predicted signals against time, with the residuals."""
+        from .plots import plot_time
+
+        return plot_time(self)
+
+    def plot_residuals(self):
+        """Residuals against pressure and their autocorrelation with the white-noise band."""
+        from .plots import plot_residuals
+
+        return plot_residuals(self)
+
+    # ----------------------------------------------------------------------- output
+    def add_to(self, report, title: str | None = None) -> None:
+        """This validation's tables and figures as sections of a ``Report``."""
+        from .plots import add_to_report
+
+        add_to_report(self, report, title)
+
+    def writers(self, prefix: str = "") -> dict[str, Callable[[Path], object]]:
+        """Files of this validation: metrics, loops and the time series (CSV), figures."""
+        from ..plotting import figure_writer
+
+        writers: dict[str, Callable[[Path], object]] = {
+            f"{prefix}metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
+            f"{prefix}loops.csv": lambda p: self.loops().to_csv(p, index=False),
+            f"{prefix}timeseries.csv": lambda p: self.to_pandas().to_csv(p, index=False),
+            f"{prefix}time.png": figure_writer(self.plot_time),
+            f"{prefix}residuals.png": figure_writer(self.plot_residuals)}
+        if any(rv.has_loop for rv in self.records):
+            writers[f"{prefix}loops.png"] = figure_writer(self.plot_loops)
+        return writers
+
+    def write(self, out_dir: str | os.PathLike, *, call: str = "", parameters=None,
+              title: str = "Validation") -> list[Path]:
+        """All files and ``report.html``, all or nothing."""
+        from ..io.report import Report
+        from ..io.tables import write_files
+
+        report = Report(title, call=call, parameters=parameters)
+        self.add_to(report)
+        writers = self.writers()
+        writers["report.html"] = report.write
+        return write_files(out_dir, writers)
+
+
+def validate(model, records: Record | Sequence[Record], *,
+             signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
+             solver=None, smooth_input: bool = False, label: str = "validation",
+             progress: Callable[[int, int], None] | None = None) -> Validation:
+    """Simulate ``model`` (with parameter ``values`` if given) under each record's
+    measured input and compare ``signals`` with the measurement."""
+    from ..identification import experiment_for
+    from ..simulation import simulate
+
+    records = [records] if isinstance(records, Record) else list(records)
+    if not records:
+        raise DataError("validate: give at least one record")
+    signals = tuple(dict.fromkeys(signals))
+    out = []
+    for i, record in enumerate(records):
+        record.require(signals, "validation")
+        name = os.path.basename(record.source) or f"record {i + 1}"
+        experiment = experiment_for(model, record, smooth_input)
+        simulated = simulate(model, experiment, solver, t_eval=record.time,
+                             values=dict(values or {}))
+        out.append(RecordValidation(name, record, simulated, signals))
+        if progress is not None:
+            progress(i + 1, len(records))
+    return Validation(out, signals, dict(values or {}), label)
+
+
+@dataclass(eq=False)
+class TrainTest:
+    """A fit on training records and its validation on those and on test records."""
+
+    fit: object
+    train: Validation
+    test: Validation
+
+    def metrics(self) -> pd.DataFrame:
+        """Training and test metrics in one table (``set`` column): over-fitting shows as
+        a test fit % well below the training one."""
+        return pd.concat([self.train.metrics().assign(set="training"),
+                          self.test.metrics().assign(set="test")], ignore_index=True)
+
+    def summary(self) -> pd.DataFrame:
+        """Pooled metrics of each set side by side, one row per signal."""
+        table = self.metrics()
+        pooled = table[table["record"] == ALL_RECORDS]
+        return pooled.pivot(index="signal", columns="set",
+                            values=["rms", "fit_percent", "r2"])
+
+    def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:
+        from ..io.report import Report
+        from ..io.tables import write_files
+
+        parameters = self.fit.parameters()
+        report = Report("Identification and validation on held-out records", call=call,
+                        parameters=parameters)
+        report.heading("Fitted parameters")
+        report.table(self.fit.table(), "Estimates with standard errors (training records)")
+        report.heading("Training against test")
+        report.table(self.metrics(), "Error metrics per record and pooled", index=False)
+        self.train.add_to(report, "Training records")
+        self.test.add_to(report, "Test records")
+        writers = {**self.train.writers("train_"), **self.test.writers("test_"),
+                   "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
+                   "estimates.csv": lambda p: self.fit.table().to_csv(p),
+                   "report.html": report.write}
+        return write_files(out_dir, writers)
+
+
+def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Sequence[str],
+               *, signals: Sequence[str] = ("position",), **fit_options) -> TrainTest:
+    """Fit ``free`` parameters on ``train`` (``identification.fit`` options), then
+    validate the fitted model on both sets."""
+    from ..identification import fit
+
+    if not list(train) or not list(test):
+        raise DataError("train_test: give at least one training and one test record")
+    result = fit(model, list(train), free, signals=signals, **fit_options)
+    values = {k: v for k, v in result.values.items() if "[" not in k}
+    return TrainTest(result,
+                     validate(model, train, signals=signals, values=values, label="training"),
+                     validate(model, test, signals=signals, values=values, label="test"))
