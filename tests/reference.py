@@ -214,3 +214,11 @@ MORRIS_TRAJECTORIES = 50
 EXP_TIMES = (0.0, 0.5, 1.0, 2.0, 3.0)  # s: x(t) = a·e^(−b·t), a ~ U(1, 2), b ~ U(0.5, 1.5)
 EXP_SOBOL_N = 2048
 LOCAL_FD_RTOL = 0.02  # local normalised sensitivity vs central differences, of max|change|
+
+# ------------------------------------------------------------------- validation
+# A parallelogram loop: pressure 100 → 20 → 100 kPa, slope c, width w, sticking at the
+# reversal until the pressure has come back by w (Coulomb friction on a spring)
+PARALLELOGRAM_CENTRE = 90e3  # Pa: mid-way between the branches
+PARALLELOGRAM_WIDTH = 4e3  # Pa: 2·Fc/A
+PARALLELOGRAM_SLOPE = 0.015 / 70e3  # m/Pa: A/k
+LOOP_RTOL = 1e-3  # loop measures of a finely sampled analytic loop

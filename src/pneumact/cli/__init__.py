@@ -9,6 +9,8 @@
     pneumact identify paper bench --out ident    # the paper's staged procedure
     pneumact identify friction DATA_EMPS.mat --validate DATA_EMPS_PULSES.mat
     pneumact fit bench/presliding.csv --free sigma0,sigma1 --offsets position
+    pneumact validate bench/sweep.csv --out val   # model against records, HTML report
+    pneumact reproduce                           # the whole paper, one folder
 
 Options map onto exactly the objects of the library (parameter set, friction model,
 valve, experiment, solver); no physics lives here. Output files are written only after
@@ -30,6 +32,7 @@ from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
 from pneumact.cli.sensitivity import sensitivity
 from pneumact.cli.simulate import simulate
+from pneumact.cli.validate import validate_command
 
 app = typer.Typer(
     name="pneumact",
@@ -62,5 +65,6 @@ app.command("campaign")(campaign)
 app.add_typer(identify_app, name="identify")
 app.command("fit")(fit_command)
 app.command("sensitivity")(sensitivity)
+app.command("validate")(validate_command)
 
 __all__ = ["app"]

@@ -1,0 +1,97 @@
+"""``pneumact validate RECORDS... --out DIR``: the model against measured records.
+
+With ``--train`` records and ``--free`` parameters, fits on the training records first
+and validates on both sets, with the metrics side by side.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from pneumact.cli.common import (
+    Chamber,
+    ChamberOption,
+    Friction,
+    FrictionOption,
+    ModelOptions,
+    ParamsOption,
+    RtolOption,
+    Valve,
+    ValveOption,
+    build_model,
+    err_console,
+    fmt,
+    names,
+    out_console,
+    use_agg,
+    user_errors,
+)
+from pneumact.cli.identify import RecordsArgument, _fit_with_progress
+from pneumact.errors import ParameterError
+
+
+def validate_command(
+    records: RecordsArgument,
+    params: ParamsOption = "vgt-paper",
+    valve: ValveOption = Valve.regulator,
+    friction: FrictionOption = Friction.lugre,
+    chamber: ChamberOption = Chamber.isothermal,
+    signals: Annotated[str, typer.Option(help="Measured signals to compare.")] = "position",
+    train: Annotated[list[Path] | None, typer.Option(
+        help="Training records (repeat the option): fit --free on them first.")] = None,
+    free: Annotated[str | None, typer.Option(
+        help="Parameters to fit on the --train records.")] = None,
+    smooth_input: Annotated[bool, typer.Option(
+        "--smooth-input", help="Rebuild a noisy measured input as piecewise linear.")] = False,
+    rtol: RtolOption = 1e-6,
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-validation"),
+) -> None:
+    """Validate the model against measured records: metrics, loop measures, residuals,
+    plots and a self-contained HTML report."""
+    with user_errors():
+        import pneumact as pa
+        from pneumact.io import read_records
+        from pneumact.io.report import the_call
+        from pneumact.validation import train_test, validate
+
+        parameter_set, model = build_model(ModelOptions(params, valve, friction, chamber,
+                                                        rtol=rtol))
+        wanted = tuple(names(signals) or ("position",))
+        test = read_records(records, p_atm=parameter_set["p_atm"])
+        solver = pa.Rodas4(rtol=rtol)
+        use_agg()
+        if bool(train) != bool(free):
+            raise ParameterError("--train and --free go together: the parameters to fit "
+                                 "and the records to fit them on")
+        if train:
+            training = read_records(train, p_atm=parameter_set["p_atm"])
+            result = _fit_with_progress(lambda report: train_test(
+                model, training, test, names(free) or [], signals=wanted,
+                smooth_input=smooth_input, solver=solver, progress=report))
+            written = result.write(out, call=the_call())
+            _print_metrics(result.metrics())
+        else:
+            with err_console.status("simulating the records"):
+                validation = validate(model, test, signals=wanted, solver=solver,
+                                      smooth_input=smooth_input)
+            written = validation.write(out, call=the_call(), parameters=parameter_set)
+            _print_metrics(validation.metrics())
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+def _print_metrics(frame) -> None:
+    table = Table(title="validation")
+    columns = [c for c in ("set", "record", "signal", "rms", "max", "fit_percent", "r2")
+               if c in frame]
+    for column in columns:
+        table.add_column(column, justify="left" if column in ("set", "record", "signal")
+                         else "right")
+    for _, row in frame.iterrows():
+        table.add_row(*(str(row[c]) if c in ("set", "record", "signal") else fmt(row[c], 4)
+                        for c in columns))
+    out_console.print(table)
