@@ -55,7 +55,7 @@ _EXPORTS: dict[str, str] = {
     "synthetic_campaign": "pneumact.identification",
     "validate": "pneumact.validation",
     "train_test": "pneumact.validation",
-    "reproduce": "pneumact.reproduce",
+    "reproduce": "pneumact.reproduction",
     "Record": "pneumact.io",
     "read_record": "pneumact.io",
     "read_records": "pneumact.io",
@@ -166,7 +166,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         StribeckMap,
     )
     from pneumact.parameters import ParameterSet, available_params, load_params, write_params
-    from pneumact.reproduce import reproduce
+    from pneumact.reproduction import reproduce
     from pneumact.simulation import (
         Assembly,
         DormandPrince,

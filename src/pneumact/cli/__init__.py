@@ -30,6 +30,7 @@ from pneumact.cli.common import out_console
 from pneumact.cli.friction_test import friction_test_app
 from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
+from pneumact.cli.reproduce import reproduce_command
 from pneumact.cli.sensitivity import sensitivity
 from pneumact.cli.simulate import simulate
 from pneumact.cli.validate import validate_command
@@ -66,5 +67,6 @@ app.add_typer(identify_app, name="identify")
 app.command("fit")(fit_command)
 app.command("sensitivity")(sensitivity)
 app.command("validate")(validate_command)
+app.command("reproduce")(reproduce_command)
 
 __all__ = ["app"]

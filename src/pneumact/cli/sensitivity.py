@@ -36,11 +36,6 @@ from pneumact.cli.common import (
 )
 from pneumact.errors import ParameterError, PneumactError
 
-#: Ranges of the global methods unless --vary: Fc and Fs at ±10 % so that no run has
-#: Fs < Fc (vgt-paper: Fc ≤ 2.86 N < 2.88 N ≤ Fs).
-DEFAULT_GLOBAL = {"sigma0": "20%", "sigma1": "20%", "sigma2": "20%", "vs": "20%",
-                  "Fc": "10%", "Fs": "10%"}
-
 
 class Method(StrEnum):
     oat = "oat"
@@ -164,7 +159,7 @@ class Study:
     def problem(self):
         from pneumact import sensitivity as sa
 
-        return sa.Problem.around(self.parameter_set, _variations(self.vary) or DEFAULT_GLOBAL)
+        return sa.Problem.around(self.parameter_set, _variations(self.vary) or sa.DEFAULT_RANGES)
 
     def _run(self, evaluate, convergence: bool = False):
         from pneumact import sensitivity as sa

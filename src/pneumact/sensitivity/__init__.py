@@ -30,9 +30,10 @@ from .oat import (
     friction_velocity,
     one_at_a_time,
 )
-from .problem import Factor, Problem
+from .problem import DEFAULT_RANGES, Factor, Problem
 
 __all__ = [
+    "DEFAULT_RANGES",
     "PAPER_VARIATIONS",
     "Factor",
     "FrictionCurves",

@@ -14,7 +14,13 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["DISTRIBUTIONS", "Factor", "Problem", "parse_variation"]
+__all__ = ["DEFAULT_RANGES", "DISTRIBUTIONS", "Factor", "Problem", "parse_variation"]
+
+#: Ranges of a global study of the six LuGre parameters unless given: ±20 % of sigma0,
+#: sigma1, sigma2 and vs, ±10 % of Fc and Fs (so that no run of vgt-paper has Fs < Fc:
+#: Fc ≤ 2.86 N < 2.88 N ≤ Fs).
+DEFAULT_RANGES = {"sigma0": "20%", "sigma1": "20%", "sigma2": "20%", "vs": "20%",
+                  "Fc": "10%", "Fs": "10%"}
 
 #: our name -> SALib's: uniform on [low, high]; normal with mean ± 2 sd = [low, high];
 #: log-uniform on [low, high] (sampled uniform in log, mapped back).
