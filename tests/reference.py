@@ -222,3 +222,5 @@ PARALLELOGRAM_CENTRE = 90e3  # Pa: mid-way between the branches
 PARALLELOGRAM_WIDTH = 4e3  # Pa: 2·Fc/A
 PARALLELOGRAM_SLOPE = 0.015 / 70e3  # m/Pa: A/k
 LOOP_RTOL = 1e-3  # loop measures of a finely sampled analytic loop
+REPORT_DIGITS_RTOL = 1e-3  # numbers shown to 4 significant digits in the HTML reports
+PERFECT_FIT_PERCENT = 99.99  # validation of the model on its own noise-free record

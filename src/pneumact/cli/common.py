@@ -255,6 +255,28 @@ def batch_progress(label: str = "batch") -> Iterator[Callable[[int, int, int], N
         yield progress
 
 
+def the_call(ctx) -> str:
+    """The command being run (``ctx``: its ``typer.Context``), as a line that can be
+    pasted back: its path and every argument and option that differs from its default
+    (from the parsed context, so it is right under a test runner too)."""
+    import shlex
+
+    words = ctx.command_path.split()
+    for param in ctx.command.params:
+        value = ctx.params.get(param.name)
+        values = value if isinstance(value, list | tuple) else [value]
+        if param.param_type_name == "argument":
+            words += [str(v) for v in values]
+        elif value not in (None, param.default, False) and value != []:
+            flag = max(param.opts, key=len)
+            if value is True:
+                words.append(flag)
+                continue
+            for item in values:
+                words += [flag, str(getattr(item, "value", item))]
+    return " ".join(shlex.quote(w) for w in words)
+
+
 def fmt(value: float | None, digits: int = 4) -> str:
     return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
 

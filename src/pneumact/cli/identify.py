@@ -25,6 +25,7 @@ from pneumact.cli.common import (
     load_quietly,
     names,
     out_console,
+    the_call,
     use_agg,
     user_errors,
     write_outputs,
@@ -94,6 +95,7 @@ def campaign(
 # --------------------------------------------------------------------------- identify
 @identify_app.command("paper")
 def identify_paper_command(
+    ctx: typer.Context,
     records: RecordsArgument,
     params: ParamsOption = "vgt-paper",
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-identify"),
@@ -116,7 +118,7 @@ def identify_paper_command(
                                     fit_delta=fit_delta,
                                     progress=lambda s: status.update(f"stage {s}"))
         use_agg()
-        written = write_outputs(out, result.writers())
+        written = write_outputs(out, result.writers(call=the_call(ctx)))
         out_console.print(_estimates_table("identified parameters", result.table()))
         for path in written:
             out_console.print(f"wrote {path}")
@@ -225,6 +227,7 @@ def _series_csv(values: dict, path) -> None:
 
 # --------------------------------------------------------------------------- fit
 def fit_command(
+    ctx: typer.Context,
     records: RecordsArgument,
     free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
     params: ParamsOption = "vgt-paper",
@@ -279,6 +282,7 @@ def fit_command(
             writers["waterfall.png"] = figure_writer(result.plot_waterfall)
         if result.profiles:
             writers["profiles.png"] = figure_writer(result.plot_profiles)
+        writers["report.html"] = lambda p: result.html_report(the_call(ctx)).write(p)
         if not per_record:
             writers["fitted.toml"] = lambda p: pa.write_params(result.parameters(), p)
         written = write_outputs(out, writers)

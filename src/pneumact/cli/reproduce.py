@@ -7,10 +7,11 @@ from typing import Annotated
 
 import typer
 
-from pneumact.cli.common import ParamsOption, err_console, out_console, user_errors
+from pneumact.cli.common import ParamsOption, err_console, out_console, the_call, user_errors
 
 
 def reproduce_command(
+    ctx: typer.Context,
     params: ParamsOption = "vgt-paper",
     quick: Annotated[bool, typer.Option("--quick", help="Small campaign and samples (for "
                                                         "tests); rough numbers.")] = False,
@@ -22,13 +23,12 @@ def reproduce_command(
     OUT/index.html with every table and figure (also as CSV and PNG)."""
     with user_errors():
         from pneumact.cli.common import load_quietly
-        from pneumact.io.report import the_call
         from pneumact.reproduction import reproduce
 
         parameter_set = load_quietly(params)
         with err_console.status("reproducing") as status:
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,
-                               call=the_call(),
+                               call=the_call(ctx),
                                progress=lambda label: status.update(f"reproducing: {label}"))
     statements = result.tables["paper_statements"]
     for _, row in statements.iterrows():

@@ -30,6 +30,7 @@ from pneumact.cli.common import (
     fmt,
     names,
     out_console,
+    the_call,
     use_agg,
     user_errors,
     write_outputs,
@@ -59,6 +60,7 @@ def _variations(text: str | None) -> dict[str, str] | None:
 
 
 def sensitivity(
+    ctx: typer.Context,
     method: Annotated[Method, typer.Argument(help="oat (paper eq. 15), sobol, morris, src "
                                                   "(eq. 14) or fast (RBD-FAST).")],
     params: ParamsOption = "vgt-paper",
@@ -120,6 +122,7 @@ def sensitivity(
             grid = np.linspace(experiment.t_start, experiment.t_end, times)
             for signal in signal_names:
                 writers.update(study.signal(signal, grid, out))
+        writers["report.html"] = _report_writer(study, the_call(ctx), writers)
         for path in write_outputs(out, writers):
             out_console.print(f"wrote {path}")
 
@@ -233,6 +236,35 @@ class Study:
             f"along_loop_{signal}.png": figure_writer(
                 lambda: sa.plot_along_loop(curves, pressure_kpa, "chamber pressure [kPa]"))})
         return writers
+
+
+def _report_writer(study: Study, call: str, writers: dict):
+    """report.html: every CSV table and PNG figure the command writes, in one page."""
+    writers = dict(writers)  # the files as they are now, without the report itself
+
+    def write(path: Path) -> None:
+        import base64
+        import tempfile
+
+        import pandas as pd
+
+        from pneumact.io.report import Block, Report
+
+        report = Report(f"Sensitivity study: {study.method.value}", call=call,
+                        parameters=study.parameter_set)
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, write_file in writers.items():
+                target = Path(tmp) / name
+                write_file(target)
+                if name.endswith(".csv") and name not in ("sample.csv", "outputs.csv"):
+                    report.heading(name.removesuffix(".csv"))
+                    report.table(pd.read_csv(target).head(400), name, index=False)
+                elif name.endswith(".png"):
+                    data = base64.b64encode(target.read_bytes()).decode("ascii")
+                    report.blocks.append(Block("figure", data, name.removesuffix(".png")))
+        report.write(path)
+
+    return write
 
 
 def _print_oat(study, features) -> None:

@@ -27,6 +27,7 @@ from pneumact.cli.common import (
     fmt,
     names,
     out_console,
+    the_call,
     use_agg,
     user_errors,
 )
@@ -35,6 +36,7 @@ from pneumact.errors import ParameterError
 
 
 def validate_command(
+    ctx: typer.Context,
     records: RecordsArgument,
     params: ParamsOption = "vgt-paper",
     valve: ValveOption = Valve.regulator,
@@ -55,7 +57,6 @@ def validate_command(
     with user_errors():
         import pneumact as pa
         from pneumact.io import read_records
-        from pneumact.io.report import the_call
         from pneumact.validation import train_test, validate
 
         parameter_set, model = build_model(ModelOptions(params, valve, friction, chamber,
@@ -72,13 +73,13 @@ def validate_command(
             result = _fit_with_progress(lambda report: train_test(
                 model, training, test, names(free) or [], signals=wanted,
                 smooth_input=smooth_input, solver=solver, progress=report))
-            written = result.write(out, call=the_call())
+            written = result.write(out, call=the_call(ctx))
             _print_metrics(result.metrics())
         else:
             with err_console.status("simulating the records"):
                 validation = validate(model, test, signals=wanted, solver=solver,
                                       smooth_input=smooth_input)
-            written = validation.write(out, call=the_call(), parameters=parameter_set)
+            written = validation.write(out, call=the_call(ctx), parameters=parameter_set)
             _print_metrics(validation.metrics())
         for path in written:
             out_console.print(f"wrote {path}")

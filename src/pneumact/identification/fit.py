@@ -285,6 +285,23 @@ class FitResult:
         return ParameterSet(values, name=name, provenance=params.provenance, info=info,
                             description=f"fitted from {len(self.records)} record(s)")
 
+    def html_report(self, call: str = ""):
+        """Estimates, statistics, correlation and the fit figures as an HTML ``Report``."""
+        from ..io.report import Report
+
+        report = Report("Parameter fit", call=call, parameters=self.parameters()
+                        if all("[" not in n for n in self.estimates.names) else None)
+        report.text(f"{len(self.records)} record(s), signals {', '.join(self.signals)}; "
+                    f"{self.iterations} iterations, {self.simulations} simulations, "
+                    f"{self.wall_time:.1f} s; {self.message}")
+        report.table(self.table(), "Estimates with standard errors and 95 % intervals (SI)")
+        report.table(self.statistics, "Fit statistics per record and signal", index=False)
+        report.table(self.correlation, "Correlation of the estimates")
+        report.figure(self.plot_fit(), "Measured and fitted signals, residuals")
+        if self.profiles:
+            report.figure(self.plot_profiles(), "Profile likelihoods")
+        return report
+
     def plot_fit(self):
         """Measured and simulated signals per record, with residuals."""
         import matplotlib.pyplot as plt

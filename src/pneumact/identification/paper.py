@@ -150,8 +150,9 @@ class PaperIdentification:
                 (table["truth"] <= table["ci95_high"])
         return table
 
-    def writers(self, truth=None) -> dict:
-        """File name -> writer: identified.toml, estimates.csv, stage_*.png, report.md."""
+    def writers(self, truth=None, call: str = "") -> dict:
+        """File name -> writer: identified.toml, estimates.csv, stage_*.png, report.md,
+        report.html."""
         from ..parameters import write_params
         from ..plotting import figure_writer
 
@@ -161,13 +162,29 @@ class PaperIdentification:
             writers[f"stage_{name}.png"] = figure_writer(stage.plot)
         writers["report.md"] = lambda p: Path(p).write_text(self.report(truth),
                                                             encoding="utf-8")
+        writers["report.html"] = lambda p: self.html_report(truth, call).write(p)
         return writers
 
-    def write(self, out_dir: str | Path, truth=None) -> list[Path]:
+    def html_report(self, truth=None, call: str = ""):
+        """The estimates, the records and each stage's figure as a self-contained HTML
+        ``Report`` (parameter set: the identified one, with each value's provenance)."""
+        from ..io.report import Report
+
+        report = Report("Identification of the actuator (paper section III.2)", call=call,
+                        parameters=self.parameters)
+        report.text("Records: " + ", ".join(Path(r.source).name for r in self.records))
+        report.table(self.table(truth), "Estimates, standard errors and 95 % intervals "
+                     "(SI)" + (", against the true values" if truth is not None else ""))
+        for stage in self.stages.values():
+            report.heading(stage.title)
+            report.figure(stage.plot(), stage.title)
+        return report
+
+    def write(self, out_dir: str | Path, truth=None, call: str = "") -> list[Path]:
         """Write every file of ``writers`` into ``out_dir``, all or none."""
         from ..io.tables import write_files
 
-        return write_files(out_dir, self.writers(truth))
+        return write_files(out_dir, self.writers(truth, call))
 
     def report(self, truth=None) -> str:
         """A short Markdown report: the records, the estimates table, the figures."""

@@ -12,8 +12,6 @@ import base64
 import datetime as _dt
 import io
 import platform
-import shlex
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,7 +19,7 @@ import pandas as pd
 
 from .tables import PathLike, atomic_write
 
-__all__ = ["Block", "Report", "figure_png", "the_call"]
+__all__ = ["Block", "Report", "figure_png"]
 
 
 @dataclass(frozen=True)
@@ -44,12 +42,6 @@ def figure_png(fig, dpi: int = 110) -> str:
     finally:
         plt.close(fig)
     return base64.b64encode(buffer.getvalue()).decode("ascii")
-
-
-def the_call() -> str:
-    """The command line of this process, quoted so that it can be pasted back."""
-    name = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else "python"
-    return " ".join([name, *map(shlex.quote, sys.argv[1:])])
 
 
 @dataclass

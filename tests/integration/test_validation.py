@@ -1,0 +1,84 @@
+"""Validation against records: API, train/test, CLI, report, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+import pneumact as pa
+import reference as ref
+from pneumact.cli import app
+from pneumact.errors import DataError
+from pneumact.identification import Noise, paper_campaign, synthetic_campaign
+from pneumact.validation import train_test, validate
+
+runner = CliRunner()
+EXIT_USER_ERROR = 2
+
+
+@pytest.fixture(scope="module")
+def sweep(vgt):
+    tests = paper_campaign(vgt, speeds=(), sweep_period=30.0)[:1]
+    return synthetic_campaign(vgt, tests, noise=Noise(0.0, 0.0, 0.0))[0]
+
+
+def test_the_model_validates_perfectly_on_its_own_noise_free_record(vgt, sweep):
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    validation = validate(model, sweep, signals=("position", "pressure"))
+    metrics = validation.metrics()
+    assert (metrics["fit_percent"] > ref.PERFECT_FIT_PERCENT).all()
+    loops = validation.loops()
+    assert np.all(np.abs(loops["relative"]) < 1e-3)
+    frame = validation.to_pandas()
+    assert set(frame.columns) == {"record", "time", "signal", "measured", "model", "residual"}
+    np.testing.assert_allclose(frame["residual"], frame["measured"] - frame["model"])
+
+
+def test_a_wrong_friction_shows_in_the_metrics_and_loop_widths(vgt, sweep):
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    validation = validate(model, sweep, values={"Fc": 1.5 * vgt["Fc"]})
+    loops = validation.loops().set_index("measure")
+    assert loops.loc["loop_width_pressure", "difference"] > 0  # more friction, wider loop
+    assert validation.metrics()["fit_percent"].iloc[0] < ref.PERFECT_FIT_PERCENT
+
+
+def test_train_test_puts_both_sets_side_by_side(vgt, sweep, tmp_path):
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    tests = [t for t in paper_campaign(vgt, speeds=(1e-3,)) if t.kind == "ramp"]
+    ramps = synthetic_campaign(vgt, tests, seed=1)
+    result = train_test(model, ramps, [sweep], ["Fc"], start={"Fc": 2.0})
+    assert result.fit.values["Fc"] == pytest.approx(vgt["Fc"], rel=0.02)
+    table = result.metrics()
+    assert set(table["set"]) == {"training", "test"}
+    assert result.summary().shape[0] == 1
+    written = result.write(tmp_path / "tt")
+    assert (tmp_path / "tt" / "report.html") in written
+
+
+def test_cli_validate_writes_a_report_and_refuses_bad_records(vgt, sweep, tmp_path,
+                                                              monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    sweep.save(tmp_path / "sweep.csv")
+    result = runner.invoke(app, ["validate", "sweep.csv", "--signals", "position,pressure",
+                                 "--out", "val"])
+    assert result.exit_code == 0, result.output
+    html = (tmp_path / "val" / "report.html").read_text(encoding="utf-8")
+    assert "data:image/png;base64," in html and "pneumact validate" in html
+    metrics = pd.read_csv(tmp_path / "val" / "metrics.csv")
+    assert set(metrics["signal"]) == {"position", "pressure"}
+    pd.DataFrame({"time [s]": [0.0, 1.0], "pressure [kPa]": [100.0, 90.0]}).to_csv(
+        tmp_path / "nopos.csv", index=False)
+    result = runner.invoke(app, ["validate", "nopos.csv", "--valve", "source", "--out", "bad"])
+    assert result.exit_code == EXIT_USER_ERROR
+    assert "position" in result.output
+    assert not (tmp_path / "bad").exists()
+    result = runner.invoke(app, ["validate", "sweep.csv", "--free", "Fc", "--out", "bad"])
+    assert result.exit_code == EXIT_USER_ERROR and "--train" in result.output
+    assert not (tmp_path / "bad").exists()
+
+
+def test_validate_needs_records(vgt):
+    with pytest.raises(DataError, match="at least one record"):
+        validate(pa.Actuator(vgt), [])
