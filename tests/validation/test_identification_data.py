@@ -86,3 +86,26 @@ def test_tudelft_seal_friction_grows_with_supply_pressure():
         speed = np.median(np.abs(result.data["velocity"]))
         levels[bar] = result.estimates["Fc"] + result.estimates["Fv"] * speed
     assert levels[7] > levels[1], levels
+
+
+@needs_data
+def test_real_data_examples_write_their_reports(tmp_path):
+    import importlib.util
+
+    import pandas as pd
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "real_data_validation.py"
+    spec = importlib.util.spec_from_file_location("real_data_validation", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    example.main(DATA, tmp_path)
+    emps = pd.read_csv(tmp_path / "emps" / "metrics.csv").set_index("role")
+    assert emps.loc["identification", "relative_force_error"] < ref.EMPS_FORCE_ERROR
+    assert emps.loc["validation", "relative_force_error"] < ref.EMPS_PULSES_FORCE_ERROR
+    tudelft = pd.read_csv(tmp_path / "tudelft" / "metrics.csv")
+    predicted = tudelft[tudelft["role"] == "validation"]
+    assert len(predicted) == 2
+    assert (predicted["relative_force_error"] < ref.TUDELFT_ACROSS_FORCE_ERROR).all()
+    for name in ("emps", "tudelft"):
+        html = (tmp_path / name / "report.html").read_text(encoding="utf-8")
+        assert "data:image/png;base64," in html

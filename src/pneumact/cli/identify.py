@@ -150,6 +150,7 @@ def _read_any(path: Path, data_format: DataFormat):
 
 @identify_app.command("friction")
 def identify_friction_command(
+    ctx: typer.Context,
     record: Annotated[Path, typer.Argument(help="Record with position and force.")],
     model: Annotated[FrictionLaw, typer.Option(help="Friction law.")] = (
         FrictionLaw.coulomb_viscous),
@@ -181,8 +182,24 @@ def identify_friction_command(
             raise ParameterError(f"--decimate = {decimate}; must be >= 1")
         result = inverse_friction(rec, model.value, force=force_name, mass=mass,
                                   asymmetric=asymmetric, cutoff=cutoff, decimate=decimate)
-        checked = result.validate(_read_any(validate, data_format)) if validate else None
+        other = [_read_any(validate, data_format)] if validate else []
+        checked = result.validate(other[0]) if other else None
         use_agg()
+        from pneumact.io.report import Report
+        from pneumact.validation import validate_friction
+
+        validation = validate_friction(result, other)
+
+        def report(path: Path) -> None:
+            page = Report(f"{model.value} friction identified on {record.name}",
+                          call=the_call(ctx))
+            page.table(table, "Estimates with standard errors and 95 % intervals (SI)")
+            page.figure(result.plot(), "Inverse model on the identification record")
+            page.table(validation.metrics(), "Force error per record", index=False)
+            if other:
+                page.figure(validation.plot(), "Measured and predicted force")
+            page.write(path)
+
         table = result.table()
         summary = {"relative_force_error": result.relative_force_error,
                    "condition_number": result.condition_number}
@@ -192,6 +209,8 @@ def identify_friction_command(
             "friction.csv": lambda p: table.to_csv(p),
             "summary.csv": lambda p: _series_csv(summary, p),
             "friction.png": figure_writer(result.plot),
+            "metrics.csv": lambda p: validation.metrics().to_csv(p, index=False),
+            "report.html": report,
         })
         out_console.print(_estimates_table(f"{model.value} friction from {record.name}", table))
         out_console.print(f"relative force error {100 * result.relative_force_error:.2f} %, "

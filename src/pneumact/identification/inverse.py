@@ -10,6 +10,7 @@ condition number of the regression and the relative force error ‖F − F̂‖/
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,16 +71,27 @@ class InverseFriction:
         return _predict(self.model, self.estimates.as_dict(), np.asarray(velocity),
                         np.asarray(acceleration), self.options["asymmetric"])
 
-    def validate(self, record: Record) -> float:
-        """Relative force error ‖F − F̂‖/‖F‖ on another record (same processing)."""
+    def prediction(self, record: Record, values: dict[str, float] | None = None
+                   ) -> pd.DataFrame:
+        """time, velocity, measured and predicted force on another record, processed as
+        the identification record was (filter, decimation, minimum speed); ``values``
+        replaces the estimates (e.g. interpolated between operating points)."""
         force_name = self.options["force"]
         record.require(["position", force_name], "inverse-model validation")
         m = _motion(record.time, record["position"], record[force_name],
                     self.options["cutoff"], self.options["decimate"])
         used = np.abs(m.velocity) >= self.options["min_speed"]
-        predicted = self.predict(m.velocity[used], m.acceleration[used])
-        return float(np.linalg.norm(m.force[used] - predicted) /
-                     np.linalg.norm(m.force[used]))
+        params = {**self.estimates.as_dict(), **(values or {})}
+        predicted = _predict(self.model, params, m.velocity[used], m.acceleration[used],
+                             self.options["asymmetric"])
+        return pd.DataFrame({"time": m.time[used], "velocity": m.velocity[used],
+                             "measured": m.force[used], "predicted": predicted})
+
+    def validate(self, record: Record) -> float:
+        """Relative force error ‖F − F̂‖/‖F‖ on another record (same processing)."""
+        frame = self.prediction(record)
+        return float(np.linalg.norm(frame["measured"] - frame["predicted"]) /
+                     np.linalg.norm(frame["measured"]))
 
     def table(self) -> pd.DataFrame:
         return self.estimates.to_pandas()
@@ -193,7 +205,8 @@ def inverse_friction(record: Record, model: str = "coulomb-viscous", *, force: s
     data = pd.DataFrame({"time": m.time[used], "velocity": v, "acceleration": a, "force": f,
                          "predicted": predicted})
     options = {"cutoff": cutoff, "decimate": decimate, "min_speed": speed_floor,
-               "asymmetric": asymmetric, "force": force}
+               "asymmetric": asymmetric, "force": force,
+               "source": os.path.basename(record.source)}
     return InverseFriction(model, est, cond, float(np.linalg.norm(res) / np.linalg.norm(f)),
                            data, options)
 

@@ -2,6 +2,7 @@
 fit %, R²), hysteresis-loop measures of model and measurement, residual analysis,
 training/test splits, and self-contained HTML reports."""
 
+from .friction import FrictionValidation, friction_across_levels, validate_friction
 from .loops import LOOP_MEASURES, compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
 from .validate import RecordValidation, TrainTest, Validation, train_test, validate
@@ -9,14 +10,17 @@ from .validate import RecordValidation, TrainTest, Validation, train_test, valid
 __all__ = [
     "LOOP_MEASURES",
     "METRIC_NAMES",
+    "FrictionValidation",
     "RecordValidation",
     "TrainTest",
     "Validation",
     "autocorrelation",
     "compare_loops",
     "error_metrics",
+    "friction_across_levels",
     "loop_measures",
     "reversals",
     "train_test",
     "validate",
+    "validate_friction",
 ]
