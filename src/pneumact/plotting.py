@@ -25,6 +25,7 @@ __all__ = [
     "figure_writer",
     "plot_friction_test",
     "plot_hysteresis",
+    "plot_measured_and_model",
     "plot_time_series",
     "save_figure",
 ]
@@ -294,6 +295,40 @@ def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike
     with atomic_write(target) as tmp:
         figure.savefig(tmp, format="png", dpi=PNG_DPI, bbox_inches="tight")
     return target
+
+
+def plot_measured_and_model(entries: Sequence[tuple], signals: Sequence[str],
+                            model_label: str = "model",
+                            window: tuple[float, float] | None = None) -> Figure:
+    """Per record (a column) and signal: measured and model against time, with the
+    residual (measured − model) below, in display units. ``entries``: (title, time,
+    measured, model, units), ``measured``/``model`` mapping each signal to values on
+    ``time``, ``units`` each signal to its SI unit; ``window`` shades a time span."""
+    import matplotlib.pyplot as plt
+
+    n, k = len(entries), len(signals)
+    fig, axes = plt.subplots(2 * k, n, squeeze=False, sharex="col",
+                             figsize=(4.6 * n, 2.3 * 2 * k))
+    for i, (title, time, measured, model, units) in enumerate(entries):
+        for j, s in enumerate(signals):
+            unit, factor = DISPLAY_UNITS.get(units.get(s, ""), ("", 1.0))
+            ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
+            ax.plot(time, measured[s] * factor, "k.", ms=1.5, label="measured")
+            ax.plot(time, model[s] * factor, "C0-", lw=1, label=model_label)
+            axr.plot(time, (measured[s] - model[s]) * factor, "C3-", lw=0.8)
+            if window is not None:
+                for a in (ax, axr):
+                    a.axvspan(max(window[0], time[0]), min(window[1], time[-1]), color="C2",
+                              alpha=0.08, label="fitted window" if a is ax else None)
+            ax.set_ylabel(f"{s} [{unit}]")
+            axr.set_ylabel(f"measured − model [{unit}]")
+            ax.set_title(title, fontsize=9)
+            for a in (ax, axr):
+                a.grid(True, alpha=0.3)
+        axes[-1, i].set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
 
 
 def figure_writer(make):

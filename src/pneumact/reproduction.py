@@ -95,17 +95,11 @@ class _Parts:
 
     def figure(self, name: str, make, caption: str):
         """Render once: the PNG file and the report's embedded copy."""
-        import io
+        from .io.report import figure_png
 
-        import matplotlib.pyplot as plt
-
-        fig = make()
-        buffer = io.BytesIO()
-        fig.savefig(buffer, format="png", dpi=120, bbox_inches="tight")
-        data = buffer.getvalue()
-        self.writers[f"{name}.png"] = lambda p: Path(p).write_bytes(data)
-        self.report.figure(fig, caption)
-        plt.close(fig)
+        png = figure_png(make(), dpi=120)
+        self.writers[f"{name}.png"] = lambda p: Path(p).write_bytes(png)
+        self.report.image(png, caption)
 
 
 def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = False,

@@ -33,6 +33,7 @@ __all__ = [
     "max_error",
     "rms_error",
     "stroke",
+    "turning_points",
 ]
 
 #: Every feature, in the order of the compiled ``all_features`` vector, with its SI unit.
@@ -425,6 +426,14 @@ def rms_error(time, position, ref_time, ref_position) -> float:
 def max_error(time, position, ref_time, ref_position) -> float:
     """Largest absolute position error [m] against a reference interpolated on ``time``."""
     return _errors(time, position, ref_time, ref_position)[1]
+
+
+def turning_points(time, pressure, position) -> np.ndarray:
+    """Indices cutting the record into branches of one pressure trend: 0, each reversal
+    of the pressure beyond 10 % of its range, and the last sample (the cuts every loop
+    feature uses)."""
+    _, p, _ = _signals(time=time, pressure=pressure, position=position)
+    return _turning_points(p)
 
 
 def hysteresis_summary(time, pressure, position) -> dict[str, float]:

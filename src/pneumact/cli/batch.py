@@ -21,11 +21,15 @@ from pneumact.cli.common import (
     InputOption,
     LowOption,
     ModelOptions,
+    OverwriteOption,
     ParamsOption,
+    ResumeOption,
     RtolOption,
+    SchedulerOption,
     TEndOption,
     Valve,
     ValveOption,
+    WorkersOption,
     batch_progress,
     build_experiment,
     build_model,
@@ -83,13 +87,10 @@ def batch(
     features: Annotated[str | None, typer.Option(help="comma-separated feature names")]
     = None,
     signals: Annotated[str | None, typer.Option(help="comma-separated signal names")] = None,
-    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address")] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="continue the batch in --out")]
-    = False,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="start the batch in --out "
-                                                                "again")] = False,
-    workers: Annotated[int | None, typer.Option(help="local threads (default all cores)")]
-    = None,
+    scheduler: SchedulerOption = None,
+    resume: ResumeOption = False,
+    overwrite: OverwriteOption = False,
+    workers: WorkersOption = None,
 ) -> None:
     """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
     with user_errors():

@@ -75,6 +75,13 @@ LowOption = Annotated[float, typer.Option(
 InputOption = Annotated[Path | None, typer.Option(
     "--input", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
+# the batch engine's options, shared by every command that runs batches
+SchedulerOption = Annotated[str | None, typer.Option(help="Dask scheduler address.")]
+WorkersOption = Annotated[int | None, typer.Option(help="Local threads (default all cores).")]
+ResumeOption = Annotated[bool, typer.Option(
+    "--resume", help="Continue the runs kept in the output directory after an interruption.")]
+OverwriteOption = Annotated[bool, typer.Option(
+    "--overwrite", help="Start the runs kept in the output directory again.")]
 
 
 @dataclass(frozen=True)
@@ -275,6 +282,23 @@ def the_call(ctx) -> str:
             for item in values:
                 words += [flag, str(getattr(item, "value", item))]
     return " ".join(shlex.quote(w) for w in words)
+
+
+def fit_with_progress(run):
+    """Run a fit under a progress display: a spinner while fitting, a bar per stage that
+    reports progress (multistart starts, profile points)."""
+    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
+                  TimeElapsedColumn(), console=err_console, transient=True) as bar:
+        tasks = {"fit": bar.add_task("fitting", total=None)}
+
+        def report(label: str, fraction: float) -> None:
+            if label not in tasks:
+                tasks[label] = bar.add_task(label, total=1.0)
+            bar.update(tasks[label], completed=fraction)
+
+        return run(report)
 
 
 def fmt(value: float | None, digits: int = 4) -> str:

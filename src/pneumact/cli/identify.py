@@ -21,6 +21,7 @@ from pneumact.cli.common import (
     build_model,
     err_console,
     figure_writer,
+    fit_with_progress,
     fmt,
     load_quietly,
     names,
@@ -221,23 +222,6 @@ def identify_friction_command(
             out_console.print(f"wrote {path}")
 
 
-def _fit_with_progress(run):
-    """Run a fit under a progress display: a spinner while fitting, a bar per stage that
-    reports progress (multistart starts, profile points)."""
-    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
-                  TimeElapsedColumn(), console=err_console, transient=True) as bar:
-        tasks = {"fit": bar.add_task("fitting", total=None)}
-
-        def report(label: str, fraction: float) -> None:
-            if label not in tasks:
-                tasks[label] = bar.add_task(label, total=1.0)
-            bar.update(tasks[label], completed=fraction)
-
-        return run(report)
-
-
 def _series_csv(values: dict, path) -> None:
     import pandas as pd
 
@@ -286,7 +270,7 @@ def fit_command(
             if len(span) != 2:
                 raise DataError(f"--window = {window!r}; give 't0,t1' in seconds")
         recs = read_records(records, p_atm=parameter_set["p_atm"])
-        result = _fit_with_progress(lambda report: fit(
+        result = fit_with_progress(lambda report: fit(
             actuator, recs, names(free) or [], per_record=names(per_record) or (),
             signals=names(signals) or ("position",), offsets=names(offsets) or (),
             window=span, multistart=multistart, profile=names(profile) or (), loss=loss,

@@ -18,10 +18,14 @@ from pneumact.cli.common import (
     Friction,
     FrictionOption,
     ModelOptions,
+    OverwriteOption,
     ParamsOption,
+    ResumeOption,
+    SchedulerOption,
     TEndOption,
     Valve,
     ValveOption,
+    WorkersOption,
     batch_progress,
     build_experiment,
     build_model,
@@ -85,14 +89,10 @@ def sensitivity(
         "--convergence", help="Sobol: indices and CI widths at n/16, n/8, ... n from the "
                               "same sample.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sample.")] = 0,
-    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address.")] = None,
-    workers: Annotated[int | None, typer.Option(help="Local threads (default all cores).")
-                       ] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue the runs kept in "
-                                                          "OUT/runs after an interruption.")
-                      ] = False,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Start the runs in OUT/runs "
-                                                                "again.")] = False,
+    scheduler: SchedulerOption = None,
+    workers: WorkersOption = None,
+    resume: ResumeOption = False,
+    overwrite: OverwriteOption = False,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-sensitivity"),
 ) -> None:
     """Sensitivity of the actuator's features (and signals) to its parameters, on the
@@ -122,7 +122,7 @@ def sensitivity(
             grid = np.linspace(experiment.t_start, experiment.t_end, times)
             for signal in signal_names:
                 writers.update(study.signal(signal, grid, out))
-        writers["report.html"] = _report_writer(study, the_call(ctx), writers)
+        writers["report.html"] = _report_writer(study, the_call(ctx), list(writers))
         for path in write_outputs(out, writers):
             out_console.print(f"wrote {path}")
 
@@ -238,30 +238,24 @@ class Study:
         return writers
 
 
-def _report_writer(study: Study, call: str, writers: dict):
-    """report.html: every CSV table and PNG figure the command writes, in one page."""
-    writers = dict(writers)  # the files as they are now, without the report itself
+def _report_writer(study: Study, call: str, names: list[str]):
+    """report.html: the CSV tables and PNG figures of ``names``, read back from beside it
+    (``write_outputs`` stages every file before the report), in one page."""
 
     def write(path: Path) -> None:
-        import base64
-        import tempfile
-
         import pandas as pd
 
-        from pneumact.io.report import Block, Report
+        from pneumact.io.report import Report
 
         report = Report(f"Sensitivity study: {study.method.value}", call=call,
                         parameters=study.parameter_set)
-        with tempfile.TemporaryDirectory() as tmp:
-            for name, write_file in writers.items():
-                target = Path(tmp) / name
-                write_file(target)
-                if name.endswith(".csv") and name not in ("sample.csv", "outputs.csv"):
-                    report.heading(name.removesuffix(".csv"))
-                    report.table(pd.read_csv(target).head(400), name, index=False)
-                elif name.endswith(".png"):
-                    data = base64.b64encode(target.read_bytes()).decode("ascii")
-                    report.blocks.append(Block("figure", data, name.removesuffix(".png")))
+        for name in names:
+            staged = path.parent / name
+            if name.endswith(".csv") and name not in ("sample.csv", "outputs.csv"):
+                report.heading(name.removesuffix(".csv"))
+                report.table(pd.read_csv(staged).head(400), name, index=False)
+            elif name.endswith(".png"):
+                report.image(staged.read_bytes(), name.removesuffix(".png"))
         report.write(path)
 
     return write

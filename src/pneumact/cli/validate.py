@@ -24,6 +24,7 @@ from pneumact.cli.common import (
     ValveOption,
     build_model,
     err_console,
+    fit_with_progress,
     fmt,
     names,
     out_console,
@@ -31,7 +32,7 @@ from pneumact.cli.common import (
     use_agg,
     user_errors,
 )
-from pneumact.cli.identify import RecordsArgument, _fit_with_progress
+from pneumact.cli.identify import RecordsArgument
 from pneumact.errors import ParameterError
 
 
@@ -70,7 +71,7 @@ def validate_command(
                                  "and the records to fit them on")
         if train:
             training = read_records(train, p_atm=parameter_set["p_atm"])
-            result = _fit_with_progress(lambda report: train_test(
+            result = fit_with_progress(lambda report: train_test(
                 model, training, test, names(free) or [], signals=wanted,
                 smooth_input=smooth_input, solver=solver, progress=report))
             written = result.write(out, call=the_call(ctx))

@@ -304,34 +304,11 @@ class FitResult:
 
     def plot_fit(self):
         """Measured and simulated signals per record, with residuals."""
-        import matplotlib.pyplot as plt
+        from ..plotting import plot_measured_and_model
 
-        from ..plotting import DISPLAY_UNITS
-
-        n = len(self.records)
-        fig, axes = plt.subplots(2 * len(self.signals), n, squeeze=False, sharex="col",
-                                 figsize=(4.5 * n, 2.4 * 2 * len(self.signals)))
-        for i, (rec, sim) in enumerate(zip(self.records, self.simulated, strict=True)):
-            for j, s in enumerate(self.signals):
-                unit, factor = DISPLAY_UNITS.get(rec.units.get(s, ""), ("", 1.0))
-                ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
-                ax.plot(rec.time, rec[s] * factor, "k.", ms=1.5, label="measured")
-                ax.plot(sim.time, sim[s] * factor, "C0-", lw=1, label="fitted model")
-                axr.plot(rec.time, (sim[s] - rec[s]) * factor, "C3-", lw=0.8)
-                if self.window is not None:
-                    for a in (ax, axr):
-                        a.axvspan(max(self.window[0], rec.time[0]),
-                                  min(self.window[1], rec.time[-1]), color="C2", alpha=0.08,
-                                  label="fitted window" if a is ax else None)
-                ax.set_ylabel(f"{s} [{unit}]")
-                axr.set_ylabel(f"residual [{unit}]")
-                ax.set_title(os.path.basename(rec.source), fontsize=9)
-                for a in (ax, axr):
-                    a.grid(True, alpha=0.3)
-            axes[-1, i].set_xlabel("time [s]")
-        axes[0, 0].legend(fontsize=8)
-        fig.tight_layout()
-        return fig
+        entries = [(os.path.basename(rec.source), rec.time, rec, sim, rec.units)
+                   for rec, sim in zip(self.records, self.simulated, strict=True)]
+        return plot_measured_and_model(entries, self.signals, "fitted model", self.window)
 
     def plot_waterfall(self):
         """Final cost of every start, sorted: a flat first step means a found optimum."""

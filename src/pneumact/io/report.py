@@ -32,8 +32,8 @@ class Block:
     anchor: str = ""
 
 
-def figure_png(fig, dpi: int = 110) -> str:
-    """A matplotlib figure as a base64 PNG (the figure is closed)."""
+def figure_png(fig, dpi: int = 110) -> bytes:
+    """A matplotlib figure as PNG bytes (the figure is closed)."""
     import matplotlib.pyplot as plt
 
     buffer = io.BytesIO()
@@ -41,7 +41,7 @@ def figure_png(fig, dpi: int = 110) -> str:
         fig.savefig(buffer, format="png", dpi=dpi, bbox_inches="tight")
     finally:
         plt.close(fig)
-    return base64.b64encode(buffer.getvalue()).decode("ascii")
+    return buffer.getvalue()
 
 
 @dataclass
@@ -76,7 +76,11 @@ class Report:
         return self
 
     def figure(self, fig, caption: str = "") -> Report:
-        self.blocks.append(Block("figure", figure_png(fig), caption))
+        return self.image(figure_png(fig), caption)
+
+    def image(self, png: bytes, caption: str = "") -> Report:
+        """An already rendered PNG (e.g. the file a command also writes)."""
+        self.blocks.append(Block("figure", base64.b64encode(png).decode("ascii"), caption))
         return self
 
     def render(self) -> str:

@@ -74,7 +74,8 @@ def write_files(out_dir: PathLike, writers: Mapping[str, Any]) -> list[Path]:
     writes it to a given path. Everything is written into a private staging directory
     first, then moved into ``out_dir`` file by file atomically; on any failure what was
     already moved is removed (and ``out_dir`` if this call created it), so no partial
-    set of outputs is left."""
+    set of outputs is left. Writers run in order in one staging folder, so a later one
+    may read the files of earlier ones beside its path (a report embedding them)."""
     import shutil
     import tempfile
 

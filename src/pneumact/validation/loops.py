@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..analysis.features import FEATURE_UNITS, _signals, _turning_points, hysteresis_summary
+from ..analysis.features import FEATURE_UNITS, hysteresis_summary, turning_points
 
 __all__ = ["LOOP_MEASURES", "compare_loops", "loop_measures", "reversals"]
 
@@ -22,8 +22,8 @@ LOOP_MEASURES = ("stroke", "loop_width_pressure", "loop_width_position", "loop_a
 def reversals(time, pressure, position) -> pd.DataFrame:
     """The pressure's reversal points (turning points beyond 10 % of its range): time,
     pressure, position, and whether the pressure turned at a minimum or a maximum."""
-    t, p, x = _signals(time=time, pressure=pressure, position=position)
-    cuts = _turning_points(p)
+    cuts = turning_points(time, pressure, position)
+    t, p, x = (np.asarray(a, dtype=float) for a in (time, pressure, position))
     turns = cuts[1:-1]
     kind = ["minimum" if p[cuts[j]] < p[cuts[j - 1]] else "maximum"
             for j in range(1, cuts.size - 1)]

@@ -41,27 +41,12 @@ def plot_loops(validation):
 
 def plot_time(validation):
     """Per record and signal: measured and predicted against time, residual below."""
-    import matplotlib.pyplot as plt
+    from ..plotting import plot_measured_and_model
 
-    n, k = len(validation.records), len(validation.signals)
-    fig, axes = plt.subplots(2 * k, n, squeeze=False, sharex="col",
-                             figsize=(4.6 * n, 2.3 * 2 * k))
-    for i, rv in enumerate(validation.records):
-        for j, s in enumerate(validation.signals):
-            unit, factor = _display(rv, s)
-            ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
-            ax.plot(rv.record.time, rv.measured(s) * factor, "k.", ms=1.5, label="measured")
-            ax.plot(rv.record.time, rv.predicted(s) * factor, "C0-", lw=1, label="model")
-            axr.plot(rv.record.time, rv.residual(s) * factor, "C3-", lw=0.8)
-            ax.set_ylabel(f"{s} [{unit}]")
-            axr.set_ylabel(f"residual [{unit}]")
-            ax.set_title(rv.name, fontsize=9)
-            for a in (ax, axr):
-                a.grid(True, alpha=0.3)
-        axes[-1, i].set_xlabel("time [s]")
-    axes[0, 0].legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    entries = [(rv.name, rv.record.time, rv.record,
+                {s: rv.predicted(s) for s in validation.signals}, rv.record.units)
+               for rv in validation.records]
+    return plot_measured_and_model(entries, validation.signals)
 
 
 def plot_residuals(validation):
@@ -95,8 +80,9 @@ def plot_residuals(validation):
     return fig
 
 
-def add_to_report(validation, report, title: str | None = None) -> None:
-    """Metrics, loop measures, reversals and the figures, as report sections."""
+def add_to_report(validation, report, title: str | None, figures: dict[str, bytes]) -> None:
+    """Metrics, loop measures, reversals and the rendered ``figures``, as report
+    sections."""
     label = title or f"Validation ({validation.label})"
     report.heading(label)
     report.text(f"{len(validation.records)} record(s); compared: "
@@ -107,11 +93,10 @@ def add_to_report(validation, report, title: str | None = None) -> None:
     if len(loops):
         report.table(loops, "Hysteresis-loop measures, model against measurement "
                             "(difference = model − measured)", index=False)
-        report.figure(validation.plot_loops(), "Pressure–position loops: measured (dashed) "
-                                               "and model (like the paper's Fig. 6)")
+        report.image(figures["loops"], "Pressure–position loops: measured (dashed) and "
+                                       "model (like the paper's Fig. 6)")
         reversal_table = validation.reversals()
         if len(reversal_table):
             report.table(reversal_table, "Reversal points of the pressure", index=False)
-    report.figure(validation.plot_time(), "Measured and predicted signals, residuals")
-    report.figure(validation.plot_residuals(), "Residuals against pressure and their "
-                                               "autocorrelation")
+    report.image(figures["time"], "Measured and predicted signals, residuals")
+    report.image(figures["residuals"], "Residuals against pressure and their autocorrelation")

@@ -159,24 +159,35 @@ class Validation:
         return plot_residuals(self)
 
     # ----------------------------------------------------------------------- output
-    def add_to(self, report, title: str | None = None) -> None:
-        """This validation's tables and figures as sections of a ``Report``."""
+    def figures(self) -> dict[str, bytes]:
+        """The figures as PNG, rendered once for both the files and the report: time,
+        residuals, and loops when a record has pressure and position."""
+        from ..io.report import figure_png
+        from ..plotting import PNG_DPI
+
+        makes = {"time": self.plot_time, "residuals": self.plot_residuals}
+        if any(rv.has_loop for rv in self.records):
+            makes["loops"] = self.plot_loops
+        return {name: figure_png(make(), dpi=PNG_DPI) for name, make in makes.items()}
+
+    def add_to(self, report, title: str | None = None,
+               figures: dict[str, bytes] | None = None) -> None:
+        """This validation's tables and figures (``figures()`` unless given) as sections
+        of a ``Report``."""
         from .plots import add_to_report
 
-        add_to_report(self, report, title)
+        add_to_report(self, report, title, self.figures() if figures is None else figures)
 
-    def writers(self, prefix: str = "") -> dict[str, Callable[[Path], object]]:
+    def writers(self, prefix: str = "", figures: dict[str, bytes] | None = None
+                ) -> dict[str, Callable[[Path], object]]:
         """Files of this validation: metrics, loops and the time series (CSV), figures."""
-        from ..plotting import figure_writer
-
+        figures = self.figures() if figures is None else figures
         writers: dict[str, Callable[[Path], object]] = {
             f"{prefix}metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
             f"{prefix}loops.csv": lambda p: self.loops().to_csv(p, index=False),
-            f"{prefix}timeseries.csv": lambda p: self.to_pandas().to_csv(p, index=False),
-            f"{prefix}time.png": figure_writer(self.plot_time),
-            f"{prefix}residuals.png": figure_writer(self.plot_residuals)}
-        if any(rv.has_loop for rv in self.records):
-            writers[f"{prefix}loops.png"] = figure_writer(self.plot_loops)
+            f"{prefix}timeseries.csv": lambda p: self.to_pandas().to_csv(p, index=False)}
+        for name, png in figures.items():
+            writers[f"{prefix}{name}.png"] = lambda p, png=png: Path(p).write_bytes(png)
         return writers
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "", parameters=None,
@@ -185,9 +196,10 @@ class Validation:
         from ..io.report import Report
         from ..io.tables import write_files
 
+        figures = self.figures()
         report = Report(title, call=call, parameters=parameters)
-        self.add_to(report)
-        writers = self.writers()
+        self.add_to(report, figures=figures)
+        writers = self.writers(figures=figures)
         writers["report.html"] = report.write
         return write_files(out_dir, writers)
 
@@ -250,9 +262,11 @@ class TrainTest:
         report.table(self.fit.table(), "Estimates with standard errors (training records)")
         report.heading("Training against test")
         report.table(self.metrics(), "Error metrics per record and pooled", index=False)
-        self.train.add_to(report, "Training records")
-        self.test.add_to(report, "Test records")
-        writers = {**self.train.writers("train_"), **self.test.writers("test_"),
+        train_figures, test_figures = self.train.figures(), self.test.figures()
+        self.train.add_to(report, "Training records", train_figures)
+        self.test.add_to(report, "Test records", test_figures)
+        writers = {**self.train.writers("train_", train_figures),
+                   **self.test.writers("test_", test_figures),
                    "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
                    "estimates.csv": lambda p: self.fit.table().to_csv(p),
                    "report.html": report.write}
