@@ -73,8 +73,11 @@ class Assembly:
         self.slots: dict[str, tuple[int, ...]] = {k: tuple(v) for k, v in slots.items()}
         self.states: tuple[StateSpec, ...] = tuple(s for part in self.parts for s in part.states)
         module = importlib.import_module(self.template)
-        self.output_names: tuple[str, ...] = tuple(module.OUTPUT_NAMES)
-        self.output_units: tuple[str, ...] = tuple(module.OUTPUT_UNITS)
+        # a model may name its outputs itself (a closed loop: its plant's, then its own)
+        self.output_names: tuple[str, ...] = tuple(
+            getattr(model, "output_names", None) or module.OUTPUT_NAMES)
+        self.output_units: tuple[str, ...] = tuple(
+            getattr(model, "output_units", None) or module.OUTPUT_UNITS)
 
     # -- names -------------------------------------------------------------------------
     @property
@@ -213,8 +216,9 @@ class Assembly:
         keys = [part.key for part in self.parts if part.key]
         label = "_".join([self.template.rpartition(".")[2], *keys])
         templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS, BATCH))
+        children = tuple(getattr(self.model, "kernel_children", tuple)())
         return codegen.KernelSpec(label, tuple(templates), tuple(imports),
-                                  tuple(dict.fromkeys(constants)))
+                                  tuple(dict.fromkeys(constants)), children)
 
     @cached_property
     def kernel(self) -> ModuleType:

@@ -36,7 +36,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["KernelSpec", "cache_dir", "dependency_files", "kernel", "kernel_key", "load"]
+__all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "kernel", "kernel_key", "load"]
 
 _LOCK = threading.RLock()
 _LOADED: dict[str, types.ModuleType] = {}
@@ -67,11 +67,15 @@ class KernelSpec:
     templates: tuple[str, ...]
     imports: tuple[tuple[str, str], ...]
     constants: tuple[tuple[str, object], ...]
+    children: tuple[Child, ...] = ()
 
     def source(self) -> str:
         """Text of the generated module: a docstring, imports and constants."""
         lines = [f'"""pneumact kernel {self.label}: generated, do not edit.',
-                 "", f"Templates bound to it: {', '.join(self.templates)}.", '"""']
+                 "", f"Templates bound to it: {', '.join(self.templates)}."]
+        lines += [f"Bound under '{c.prefix}': {c.template} with {dict(c.constants)}."
+                  for c in self.children]
+        lines.append('"""')
         for alias, target in self.imports:
             module, attribute = target.split(":")
             lines.append(f"from {module} import {attribute} as {alias}")
@@ -82,7 +86,24 @@ class KernelSpec:
     def modules(self) -> tuple[str, ...]:
         """The modules the kernel's code comes from (templates and component modules)."""
         imported = (target.split(":")[0] for _, target in self.imports)
-        return tuple(dict.fromkeys((*self.templates, *imported)))
+        children = (c.template for c in self.children)
+        return tuple(dict.fromkeys((*self.templates, *children, *imported)))
+
+
+@dataclass(frozen=True)
+class Child:
+    """A template bound in a namespace of its own and exposed under ``prefix``.
+
+    A closed loop binds its plant's template this way: the plant's ``rhs`` becomes
+    ``plant_rhs`` beside the loop's own ``rhs``. The child sees the kernel's imports and
+    constants, with ``constants`` overriding some (its own NSTATE and NOUT: the plant's
+    states come first in the loop's state vector, so the plant's code reads them where
+    it always does).
+    """
+
+    prefix: str
+    template: str
+    constants: tuple[tuple[str, object], ...] = ()
 
 
 def cache_dir() -> Path:
@@ -230,6 +251,20 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str) -> None:
         namespace[name] = numba.njit(cache=True, **options)(bound)
 
 
+def _bind_child(namespace: dict, child: Child, filename: str) -> None:
+    """Bind ``child.template`` in a copy of ``namespace`` and export its compiled
+    functions to ``namespace`` under ``child.prefix``."""
+    own = {k: v for k, v in namespace.items() if not k.startswith("__")}
+    own["__name__"] = namespace["__name__"]
+    own.update(child.constants)
+    template = importlib.import_module(child.template)
+    _bind(own, template, filename)
+    for name, obj in vars(template).items():
+        if getattr(obj, "__kernel_options__", None) is not None and \
+                getattr(obj, "__module__", None) == template.__name__:
+            namespace[child.prefix + name] = own[name]
+
+
 def load(spec: KernelSpec) -> types.ModuleType:
     """The kernel module of ``spec``: generated on first use, then cached on disk and in
     this process."""
@@ -246,6 +281,8 @@ def load(spec: KernelSpec) -> types.ModuleType:
         module_spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(module_spec)
         module_spec.loader.exec_module(module)
+        for child in spec.children:
+            _bind_child(module.__dict__, child, str(path))
         for template in spec.templates:
             _bind(module.__dict__, importlib.import_module(template), str(path))
         sys.modules[name] = module

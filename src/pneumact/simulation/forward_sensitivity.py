@@ -114,6 +114,11 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     names = list(parameters)
     if not names:
         raise ParameterError("sensitivities: give at least one parameter name")
+    if not getattr(model, "has_sensitivities", True):
+        raise ParameterError(
+            f"sensitivities: {model.describe()} does not carry forward sensitivities (a "
+            f"closed loop's controller is not differentiated through); use finite "
+            f"differences or the batch engine")
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     assembly, kernel = prep.assembly, prep.kernel
     names = assembly.check_parameters(names, "sensitivities")

@@ -50,12 +50,14 @@ class Prepared:
         return 0.5 * (self.breakpoints[0] + self.breakpoints[1])
 
 
-def _breakpoints(experiment: Experiment, channels) -> np.ndarray:
+def _breakpoints(model, experiment: Experiment, channels) -> np.ndarray:
     bp = experiment.breakpoints()
     load = channels[1]  # a load against time has corners of its own
     if load is not None:
         bp = np.unique(np.concatenate([bp, load.breakpoints()]))
         bp = bp[(bp >= experiment.t_start) & (bp <= experiment.t_end)]
+    if hasattr(model, "breakpoints"):  # a closed loop: its own inputs and samples
+        bp = model.breakpoints(bp, channels, experiment.t_start, experiment.t_end)
     return bp
 
 
@@ -90,7 +92,7 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
         kernel.derive(vec)
     channels = model.channels(experiment.drive)
     sig, ptr = pack_channels(channels)
-    bp = _breakpoints(experiment, channels)
+    bp = _breakpoints(model, experiment, channels)
     t_out = _output_times(experiment, t_eval)
     n = len(assembly.states)
     if y0 is None:

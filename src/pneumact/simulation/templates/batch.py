@@ -19,6 +19,8 @@ INFO_LENGTH = 8
 INFO_STATUS = 0
 INFO_T = 1
 INFO_STEPS = 2
+#: the model writes its own input (a closed loop's controller output) into ``sig``
+PRIVATE_INPUTS = False
 # ------------------------------------------------------------------------------------------
 
 #: where a feature reads a signal: from the states or from the derived outputs
@@ -55,6 +57,8 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
     for r in range(values.shape[0]):
         if not valid[r]:
             continue
+        # a closed loop writes its controller output into its own copy of the inputs
+        sig_row = sig.copy() if PRIVATE_INPUTS else sig
         prm = prm0.copy()
         for c in range(values.shape[1]):
             for k in range(slot_ptr[c], slot_ptr[c + 1]):
@@ -64,15 +68,15 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
             for i in range(NSTATE):
                 y0[i] = y0_given[i]
         else:
-            initial_state(tb[0], ts0, prm, sig, ptr, y0)
+            initial_state(tb[0], ts0, prm, sig_row, ptr, y0)
         state_scales(prm, scales)
         for i in range(NSTATE):
             atol[i] = atol_given[i] if atol_given[i] > 0.0 else rtol * scales[i]
         if explicit is None:
-            integrate_rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
+            integrate_rodas4(y0, prm, sig_row, ptr, tb, t_out, rtol, atol, h_init, h_max,
                              max_steps, y_out, out, info)
         else:
-            integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
+            integrate_dopri5(y0, prm, sig_row, ptr, tb, t_out, rtol, atol, h_init, h_max,
                              max_steps, y_out, out, info)
         for i in range(INFO_LENGTH):
             info_rows[r, i] = info[i]

@@ -8,8 +8,10 @@ numba prunes the sensitivity code from it). ``integrate_dopri5``: Dormand-Prince
 explicit, for non-stiff variants.
 
 All integrate interval by interval between breakpoints (corners and jumps of the
-inputs) and control the step on a per-state rtol/atol. At the requested output times
-they write
+inputs, the samples of a digital controller) and control the step on a per-state
+rtol/atol. A model with sampled parts (``HAS_JUMPS``) updates them by its ``jump`` at
+the start of every interval: the held states jump there and stay constant inside. At
+the requested output times they write
 
 - the states, by cubic Hermite interpolation of each step (shape-preserving for the
   states a component declares bounded, such as the bristle deflection);
@@ -29,7 +31,9 @@ from pneumact.simulation.codegen import kernel
 from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------
-rhs = jac = outputs = param_jac = derive = project = None
+rhs = jac = outputs = param_jac = derive = project = jump = None
+#: a model with a sampled part (a digital controller) updates it at breakpoints
+HAS_JUMPS = False
 NSTATE = 3
 NOUT = 1
 NPARAM = 0
@@ -317,6 +321,8 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
+        if HAS_JUMPS:
+            jump(t, ts, y, prm, sig, ptr)
         rhs(t, ts, y, prm, sig, ptr, f0)
         n_rhs += 1
         jm_valid = False
@@ -662,6 +668,8 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
+        if HAS_JUMPS:
+            jump(t, ts, y, prm, sig, ptr)
         rhs(t, ts, y, prm, sig, ptr, ks[0])
         n_rhs += 1
         o0_valid = False

@@ -1,0 +1,251 @@
+"""The closed loop as a model: a plant under a controller, one compiled kernel.
+
+``ClosedLoop(plant, controller)`` is simulated like any model:
+``simulate(loop, step_setpoint(...))``. Its experiment is the position set-point; its
+states are the plant's then the controller's; its outputs are the plant's then
+``setpoint``, ``error``, ``command`` (the controller output), ``plant_input`` (what the
+plant receives: drive_gain·command + disturbance) and ``friction_compensation`` (F̂).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ExperimentError, ParameterError
+from ..experiments.signals import Constant, Signal
+from ..models.actuator import Actuator
+from ..models.channels import N_CHANNELS
+from ..models.component import Part
+from ..models.rig import FrictionRig
+from ..simulation.codegen import Child
+from .controllers import Controller, LuGreObserver, StaticCompensation
+
+__all__ = ["ClosedLoop"]
+
+LOOP_TEMPLATE = "pneumact.simulation.templates.loop"
+#: breakpoints closer than this fraction of a period to a sample are that sample
+SNAP = 1e-6
+
+
+def _plant_kind(plant) -> str:
+    if isinstance(plant, FrictionRig):
+        if plant.drive != "force":
+            raise ParameterError(f"ClosedLoop: a FrictionRig plant needs drive='force' (the "
+                                 f"controller's output is the force), got {plant.drive!r}")
+        return "force"
+    if isinstance(plant, Actuator):
+        return plant.valve.drive
+    raise ParameterError(f"ClosedLoop: plant = {type(plant).__name__}; allowed: Actuator, "
+                         "FrictionRig(drive='force')")
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedLoop:
+    """``plant`` (an ``Actuator`` behind any valve, or a ``FrictionRig`` with a force
+    drive) under ``controller`` (``PID`` or ``Cascade``), as one model.
+
+    ``bias``: the plant input (controller units) the controller's terms add to, and the
+    input the plant rests under at the start (``holding_input`` finds the one that holds
+    a position). ``drive_gain``: plant input per controller unit (the EMPS drive's
+    N/V). ``feedforward``: a signal added to the controller output. ``disturbance``: a
+    force [N] added to a rig's drive force. ``compensation_gain``: controller units per
+    newton of friction compensation (default: 1/drive_gain for a rig, −1/(A_d·drive_gain)
+    for a pressure-driven actuator; a command valve has no static one, give it).
+    """
+
+    plant: Actuator | FrictionRig
+    controller: Controller
+    bias: float = 0.0
+    drive_gain: float = 1.0
+    feedforward: Signal | None = None
+    disturbance: Signal | None = None
+    compensation_gain: float | None = None
+    template: ClassVar[str] = LOOP_TEMPLATE
+    has_sensitivities: ClassVar[bool] = False
+
+    def __post_init__(self):
+        kind = _plant_kind(self.plant)
+        if not isinstance(self.controller, Controller):
+            raise ParameterError(f"ClosedLoop: controller = {self.controller!r}; give a PID "
+                                 "or a Cascade")
+        for name in ("bias", "drive_gain"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                raise ParameterError(f"ClosedLoop: {name} = {value!r}; must be a finite number")
+        if self.drive_gain == 0.0:
+            raise ParameterError("ClosedLoop: drive_gain = 0; the controller would not act")
+        if self.disturbance is not None and kind != "force":
+            raise ParameterError("ClosedLoop: disturbance is a force on a rig's mass; an "
+                                 "actuator takes its loads as Actuator(load=...)")
+        needs_gain = self.controller.has(StaticCompensation) or self.controller.has(
+            LuGreObserver)
+        if needs_gain and self._compensation_gain() is None:
+            raise ParameterError(
+                "ClosedLoop: friction compensation behind a command valve needs "
+                "compensation_gain (command per newton): the valve has no static force map")
+
+    # -- what the plant is ---------------------------------------------------------------
+    @property
+    def params(self):
+        return self.plant.params
+
+    @property
+    def plant_kind(self) -> str:
+        """What the plant's input is: ``force``, ``pressure`` or ``command``."""
+        return _plant_kind(self.plant)
+
+    @property
+    def action(self) -> float:
+        """+1, or −1 for a plant whose position falls as its input rises (pressure)."""
+        return -1.0 if self.plant_kind == "pressure" else 1.0
+
+    @property
+    def input_unit(self) -> str:
+        return {"force": "N", "pressure": "Pa", "command": "1"}[self.plant_kind]
+
+    @property
+    def command_unit(self) -> str:
+        if self.drive_gain == 1.0:
+            return self.input_unit
+        return f"{self.input_unit}/{self.drive_gain:g}"
+
+    def _compensation_gain(self) -> float | None:
+        if self.compensation_gain is not None:
+            return float(self.compensation_gain)
+        kind = self.plant_kind
+        if kind == "force":
+            return 1.0 / self.drive_gain
+        if kind == "pressure":
+            return -1.0 / (float(self.params["A_d"]) * self.drive_gain)
+        return None
+
+    # -- the model protocol ----------------------------------------------------------------
+    drive_quantity: ClassVar[str] = "position"
+    drive_unit: ClassVar[str] = "m"
+
+    @property
+    def required(self) -> tuple[str, ...]:
+        return self.plant.required
+
+    def parts(self) -> tuple[Part, ...]:
+        loop = {"action": self.action, "drive_gain": float(self.drive_gain),
+                "bias": float(self.bias), "comp_gain": self._compensation_gain() or 0.0}
+        return (*self.plant.parts(), self.controller.part(loop))
+
+    def _plant_module(self):
+        import importlib
+
+        return importlib.import_module(self.plant.template)
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        from ..simulation.templates.loop import LOOP_OUTPUTS
+
+        # the rig's "drive" output is the drive signal, here the controller's force
+        plant = tuple("drive_input" if n == "drive" else n
+                      for n in self._plant_module().OUTPUT_NAMES)
+        return plant + LOOP_OUTPUTS
+
+    @property
+    def output_units(self) -> tuple[str, ...]:
+        plant = tuple(self.input_unit if n == "drive" else u for n, u in zip(
+            self._plant_module().OUTPUT_NAMES, self._plant_module().OUTPUT_UNITS, strict=True))
+        return (*plant, "m", "m", self.command_unit, self.input_unit, "N")
+
+    def _plant_states(self) -> int:
+        return sum(len(p.states) for p in self.plant.parts())
+
+    def kernel_constants(self) -> dict[str, object]:
+        plant = getattr(self.plant, "kernel_constants", dict)()
+        n_plant_out = len(self._plant_module().OUTPUT_NAMES)
+        return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
+                "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
+                "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True,
+                "HAS_FEEDFORWARD": self.feedforward is not None,
+                "HAS_DISTURBANCE": self.disturbance is not None}
+
+    def kernel_children(self) -> tuple[Child, ...]:
+        n_plant_out = len(self._plant_module().OUTPUT_NAMES)
+        return (Child("plant_", self.plant.template,
+                      (("NSTATE", self._plant_states()), ("NOUT", n_plant_out))),)
+
+    @property
+    def kernel_templates(self) -> tuple[str, ...]:
+        from ..simulation.assembly import BATCH, INTEGRATORS
+
+        return (LOOP_TEMPLATE, INTEGRATORS, BATCH)
+
+    def channels(self, setpoint: Signal) -> list[Signal | None]:
+        held = Constant(self.drive_gain * self.bias)
+        plant = self.plant.channels(held)
+        if len(plant) != N_CHANNELS:
+            raise ExperimentError(f"ClosedLoop: the plant gave {len(plant)} channels")
+        return [*plant, setpoint, self.feedforward, self.disturbance]
+
+    def breakpoints(self, bp: np.ndarray, channels, t_start: float, t_end: float
+                    ) -> np.ndarray:
+        """The experiment's breakpoints, the feed-forward's and disturbance's corners,
+        and every sample time of a sampled controller (others within SNAP·T_s of a
+        sample are merged into it)."""
+        extra = [c.breakpoints() for c in (self.feedforward, self.disturbance) if c is not None]
+        points = np.unique(np.concatenate([bp, *extra, [t_start, t_end]]))
+        points = points[(points >= t_start) & (points <= t_end)]
+        if self.controller.sampled:
+            period = float(self.controller.sample_time)
+            k = np.arange(math.ceil(t_start / period - SNAP), math.floor(t_end / period + SNAP)
+                          + 1)
+            samples = k * period
+            nearest = np.round(points / period) * period
+            keep = np.abs(points - nearest) > SNAP * period
+            keep[[0, -1]] = True
+            points = np.unique(np.concatenate([points[keep], samples]))
+            points = points[(points >= t_start) & (points <= t_end)]
+            if points[0] > t_start:
+                points = np.concatenate([[t_start], points])
+        return points
+
+    def describe(self) -> str:
+        plant = self.plant.describe() if hasattr(self.plant, "describe") else repr(self.plant)
+        return f"ClosedLoop({plant}, {type(self.controller).__name__})"
+
+    # -- operating points ------------------------------------------------------------------
+    def holding_input(self, position: float, lo: float | None = None,
+                      hi: float | None = None) -> float:
+        """The constant controller output that holds the plant at rest at ``position``
+        (friction unloaded), by bisection on the plant's static equilibrium; default
+        bracket: the controller's limits, else the plant input's natural range."""
+        from scipy.optimize import brentq
+
+        from ..experiments.actuator import Experiment
+        from ..simulation.assembly import assemble
+        from ..simulation.simulate import prepare
+        from ..simulation.solvers import Rodas4
+
+        plant = self.plant
+        kind = self.plant_kind
+        natural = {"force": (-1e6, 1e6), "command": (0.0, 1.0),
+                   "pressure": (0.0, float(plant.params["p_atm"]))}[kind]
+        lo = max(self.controller.u_min * self.drive_gain, natural[0]) if lo is None else lo
+        hi = min(self.controller.u_max * self.drive_gain, natural[1]) if hi is None else hi
+        if kind == "force":
+            return 0.0
+        kernel = assemble(plant).kernel
+        y0 = np.empty(len(assemble(plant).states))
+
+        def rest(value):
+            prep = prepare(plant, Experiment(Constant(value), plant.drive_quantity, 1.0),
+                           Rodas4())
+            kernel.initial_state(0.0, 0.5, prep.vector, prep.sig, prep.ptr, y0)
+            return y0[0] - position
+
+        f_lo, f_hi = rest(lo), rest(hi)
+        if f_lo * f_hi > 0:
+            reach = sorted([f_lo + position, f_hi + position])
+            raise ExperimentError(
+                f"holding_input: position {position:g} m is out of reach; inputs "
+                f"{lo:g}..{hi:g} {self.input_unit} hold {reach[0]:g}..{reach[1]:g} m")
+        return brentq(rest, lo, hi, xtol=1e-12 * max(1.0, abs(hi - lo))) / self.drive_gain

@@ -1,0 +1,357 @@
+"""Model template: a closed loop, a plant (actuator or friction rig) under a controller.
+
+The plant's own template is bound under the prefix ``plant_`` (``codegen.Child``): its
+states come first in the loop's state vector and its functions read them where they
+always do. The controller (``pneumact.control.controllers``; states after the plant's,
+settings in the ``controller`` block) computes the plant's input from the position
+set-point (channel CH_SETPOINT), the measured position and velocity and its own states.
+Before every call of a plant function the loop writes that input into the plant's
+drive channel, a one-point channel of this run's own input buffer: the plant's code
+reads its input exactly as in an open-loop run.
+
+A continuous controller integrates with the plant. A sampled one (``SAMPLED``) is
+updated by ``jump`` at every sample time t = k·T_s (the integrators stop there) and
+holds its output in between (zero-order hold); its states then have zero rates.
+"""
+
+import math
+
+import numpy as np
+
+from pneumact.control.controllers import (
+    CT_ACTION,
+    CT_BIAS,
+    CT_COMP,
+    CT_DITHER_A,
+    CT_DITHER_F,
+    CT_FF_DELTA,
+    CT_FF_FC,
+    CT_FF_FS,
+    CT_FF_VS,
+    CT_FF_VSMOOTH,
+    CT_GAIN,
+    CT_KD,
+    CT_KI,
+    CT_KP,
+    CT_KX,
+    CT_OBS_FC,
+    CT_OBS_FS,
+    CT_OBS_K,
+    CT_OBS_S0,
+    CT_OBS_S1,
+    CT_OBS_S2,
+    CT_OBS_VS,
+    CT_TF,
+    CT_TS,
+    CT_TT,
+    CT_UMAX,
+    CT_UMIN,
+    CT_VFF,
+)
+from pneumact.experiments.signals import channel_eval
+from pneumact.models.channels import (
+    CH_DISTURBANCE,
+    CH_DRIVE,
+    CH_FEEDFORWARD,
+    CH_SETPOINT,
+    INPUT_OFFSET,
+)
+from pneumact.simulation.codegen import kernel
+
+# --- bound by the generator --------------------------------------------------------------
+plant_rhs = plant_jac = plant_param_jac = plant_outputs = plant_initial_state = None
+plant_project = plant_state_scales = plant_derive = None
+NSTATE = 4
+NPARAM = 0
+NOUT = 5
+PLANT_NSTATE = 3
+PLANT_NOUT = 0
+CONTROLLER_LO = 0
+S_POSITION = 0
+S_VELOCITY = 1
+S_CONTROL_INTEGRAL = 3
+S_DERIVATIVE_FILTER = -1
+S_FRICTION_ESTIMATE_BRISTLE = -1
+S_HELD_COMMAND = -1
+S_LAST_POSITION = -1
+SAMPLED = False
+CASCADE = False
+DERIVATIVE = 0
+ANTI_WINDUP = 1
+DIFFERENCE_VELOCITY = False
+STATIC_FF = False
+DITHER = False
+OBSERVER = False
+HAS_FEEDFORWARD = False
+HAS_DISTURBANCE = False
+# ------------------------------------------------------------------------------------------
+
+#: the loop's own outputs, after the plant's
+LOOP_OUTPUTS = ("setpoint", "error", "command", "plant_input", "friction_compensation")
+O_SETPOINT = 0
+O_ERROR = 1
+O_COMMAND = 2
+O_INPUT = 3
+O_COMPENSATION = 4
+#: relative step of the finite differences of the Jacobian's coupling terms
+COUPLING_FD = 1e-7
+#: |t − k·T_s| below which a breakpoint is the sample k
+SAMPLE_MATCH = 1e-6
+
+
+@kernel()
+def _observer(v, zhat, e, prm):
+    """(a, b, F̂): dẑ/dt = a − b·ẑ of the LuGre observer and its force estimate."""
+    c = CONTROLLER_LO
+    s0 = prm[c + CT_OBS_S0]
+    fc = prm[c + CT_OBS_FC]
+    g = fc + (prm[c + CT_OBS_FS] - fc) * math.exp(-((v / prm[c + CT_OBS_VS]) ** 2))
+    a = v + prm[c + CT_OBS_K] * e
+    b = s0 * abs(v) / g
+    zrate = a - b * zhat
+    return a, b, s0 * zhat + prm[c + CT_OBS_S1] * zrate + prm[c + CT_OBS_S2] * v
+
+
+@kernel()
+def _static_ff(rdot, prm):
+    """Steady friction at the reference velocity, sign rounded over v_smooth."""
+    c = CONTROLLER_LO
+    fc = prm[c + CT_FF_FC]
+    speed = abs(rdot) / prm[c + CT_FF_VS]
+    level = fc + (prm[c + CT_FF_FS] - fc) * math.exp(-(speed ** prm[c + CT_FF_DELTA]))
+    return math.tanh(rdot / prm[c + CT_FF_VSMOOTH]) * level
+
+
+@kernel()
+def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
+    """The control law at one instant, from the measured x, v and the controller's
+    states: (u limited, u, integrator rate, derivative-filter input, observer a and b,
+    friction estimate, set-point, error)."""
+    c = CONTROLLER_LO
+    r, rdot = channel_eval(sig, ptr, CH_SETPOINT, t, ts)
+    e = r - x
+    ki = prm[c + CT_KI]
+    q = 0.0
+    if CASCADE:
+        ev = prm[c + CT_KX] * e + prm[c + CT_VFF] * rdot - v
+        terms = prm[c + CT_KP] * ev + ki * integral
+        integrand = ev
+    else:
+        terms = prm[c + CT_KP] * e + ki * integral + prm[c + CT_VFF] * rdot
+        integrand = e
+        if DERIVATIVE == 1 or DERIVATIVE == 2:
+            q = e if DERIVATIVE == 1 else -x
+            terms += prm[c + CT_KD] * (q - filt) / prm[c + CT_TF]
+        elif DERIVATIVE == 3:
+            terms -= prm[c + CT_KD] * v
+    act = prm[c + CT_ACTION]
+    u = prm[c + CT_BIAS] + act * terms
+    if HAS_FEEDFORWARD:
+        u += channel_eval(sig, ptr, CH_FEEDFORWARD, t, ts)[0]
+    f_hat = 0.0
+    obs_a = 0.0
+    obs_b = 0.0
+    if STATIC_FF:
+        f_hat += _static_ff(rdot, prm)
+    if OBSERVER:
+        obs_a, obs_b, f_obs = _observer(v, zhat, e, prm)
+        f_hat += f_obs
+    u += prm[c + CT_COMP] * f_hat
+    if DITHER:
+        u += prm[c + CT_DITHER_A] * math.sin(2.0 * math.pi * prm[c + CT_DITHER_F] * t)
+    u_sat = min(max(u, prm[c + CT_UMIN]), prm[c + CT_UMAX])
+    rate = integrand
+    if ANTI_WINDUP == 1 and ki != 0.0:
+        rate += act * (u_sat - u) / (ki * prm[c + CT_TT])
+    elif ANTI_WINDUP == 2 and u_sat != u and (u - u_sat) * act * ki * integrand > 0.0:
+        rate = 0.0
+    return u_sat, u, rate, q, obs_a, obs_b, f_hat, r, e
+
+
+@kernel()
+def _states_law(t, ts, y, prm, sig, ptr):
+    """The continuous law read from the state vector."""
+    filt = y[S_DERIVATIVE_FILTER] if DERIVATIVE == 1 or DERIVATIVE == 2 else 0.0
+    zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
+    return _law(t, ts, y[S_POSITION], y[S_VELOCITY], y[S_CONTROL_INTEGRAL], filt, zhat, prm,
+                sig, ptr)
+
+
+@kernel()
+def _command(t, ts, y, prm, sig, ptr):
+    """The controller output acting now: held (sampled) or the continuous law's."""
+    if SAMPLED:
+        return y[S_HELD_COMMAND]
+    return _states_law(t, ts, y, prm, sig, ptr)[0]
+
+
+@kernel()
+def _plant_input(t, ts, command, prm, sig, ptr):
+    value = prm[CONTROLLER_LO + CT_GAIN] * command
+    if HAS_DISTURBANCE:
+        value += channel_eval(sig, ptr, CH_DISTURBANCE, t, ts)[0]
+    return value
+
+
+@kernel()
+def _apply(t, ts, y, prm, sig, ptr):
+    """Write the plant's input for (t, y) into its drive channel; return it."""
+    value = _plant_input(t, ts, _command(t, ts, y, prm, sig, ptr), prm, sig, ptr)
+    sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value
+    return value
+
+
+@kernel()
+def derive(prm):
+    plant_derive(prm)
+
+
+@kernel()
+def _controller_rates(t, ts, y, prm, sig, ptr, dydt):
+    for i in range(PLANT_NSTATE, NSTATE):
+        dydt[i] = 0.0
+    if SAMPLED:
+        return
+    _, _, rate, q, obs_a, obs_b, _, _, _ = _states_law(t, ts, y, prm, sig, ptr)
+    dydt[S_CONTROL_INTEGRAL] = rate
+    if DERIVATIVE == 1 or DERIVATIVE == 2:
+        dydt[S_DERIVATIVE_FILTER] = (q - y[S_DERIVATIVE_FILTER]) / prm[CONTROLLER_LO + CT_TF]
+    if OBSERVER:
+        dydt[S_FRICTION_ESTIMATE_BRISTLE] = obs_a - obs_b * y[S_FRICTION_ESTIMATE_BRISTLE]
+
+
+@kernel()
+def rhs(t, ts, y, prm, sig, ptr, dydt):
+    _apply(t, ts, y, prm, sig, ptr)
+    plant_rhs(t, ts, y, prm, sig, ptr, dydt)
+    _controller_rates(t, ts, y, prm, sig, ptr, dydt)
+
+
+@kernel()
+def jac(t, ts, y, prm, sig, ptr, out):
+    """∂f/∂y: the plant's analytic Jacobian at its present input, plus the coupling
+    through the controller, (∂f_plant/∂input)·(∂input/∂y), and the controller's rows,
+    both by finite differences of the (cheap) law."""
+    value = _apply(t, ts, y, prm, sig, ptr)
+    plant_jac(t, ts, y, prm, sig, ptr, out)
+    f0 = np.empty(NSTATE)
+    f1 = np.empty(NSTATE)
+    plant_rhs(t, ts, y, prm, sig, ptr, f0)
+    dv = COUPLING_FD * max(abs(value), 1.0)
+    sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value + dv
+    plant_rhs(t, ts, y, prm, sig, ptr, f1)
+    sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value
+    b = np.empty(PLANT_NSTATE)
+    for a in range(PLANT_NSTATE):
+        b[a] = (f1[a] - f0[a]) / dv
+    scales = np.empty(NSTATE)
+    state_scales(prm, scales)
+    yp = y.copy()
+    r0 = np.empty(NSTATE)
+    r1 = np.empty(NSTATE)
+    for j in range(NSTATE):
+        h = COUPLING_FD * max(abs(y[j]), scales[j])
+        yp[j] = y[j] + h
+        up = _plant_input(t, ts, _command(t, ts, yp, prm, sig, ptr), prm, sig, ptr)
+        _controller_rates(t, ts, yp, prm, sig, ptr, r1)
+        yp[j] = y[j] - h
+        down = _plant_input(t, ts, _command(t, ts, yp, prm, sig, ptr), prm, sig, ptr)
+        _controller_rates(t, ts, yp, prm, sig, ptr, r0)
+        yp[j] = y[j]
+        slope = (up - down) / (2.0 * h)
+        if slope != 0.0:
+            for a in range(PLANT_NSTATE):
+                out[a, j] += b[a] * slope
+        for a in range(PLANT_NSTATE, NSTATE):
+            out[a, j] = (r1[a] - r0[a]) / (2.0 * h)
+
+
+@kernel()
+def param_jac(t, ts, y, prm, sig, ptr, g, needed):
+    """The plant's ∂f/∂prm at its present input (closed loops refuse sensitivities, so
+    the controller's share is never needed)."""
+    _apply(t, ts, y, prm, sig, ptr)
+    plant_param_jac(t, ts, y, prm, sig, ptr, g, needed)
+
+
+@kernel()
+def outputs(t, ts, y, prm, sig, ptr, out):
+    """The plant's outputs, then set-point, error, command, plant input and the
+    friction compensation F̂ the law holds at this instant."""
+    command = _command(t, ts, y, prm, sig, ptr)
+    value = _plant_input(t, ts, command, prm, sig, ptr)
+    sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value
+    plant_outputs(t, ts, y, prm, sig, ptr, out)
+    law = _states_law(t, ts, y, prm, sig, ptr)
+    out[PLANT_NOUT + O_SETPOINT] = law[7]
+    out[PLANT_NOUT + O_ERROR] = law[8]
+    out[PLANT_NOUT + O_COMMAND] = command
+    out[PLANT_NOUT + O_INPUT] = value
+    out[PLANT_NOUT + O_COMPENSATION] = law[6]
+
+
+@kernel()
+def initial_state(t, ts, prm, sig, ptr, y0):
+    """The plant at rest under the bias input, the controller's states at zero (its held
+    output at the bias)."""
+    bias = prm[CONTROLLER_LO + CT_BIAS]
+    sig[ptr[CH_DRIVE] + INPUT_OFFSET] = _plant_input(t, ts, bias, prm, sig, ptr)
+    plant_initial_state(t, ts, prm, sig, ptr, y0)
+    for i in range(PLANT_NSTATE, NSTATE):
+        y0[i] = 0.0
+    if SAMPLED:
+        y0[S_HELD_COMMAND] = bias
+        if DIFFERENCE_VELOCITY:
+            y0[S_LAST_POSITION] = y0[S_POSITION]
+
+
+@kernel()
+def jump(t, ts, y, prm, sig, ptr):
+    """At a sample time: sample x (and v, or its difference estimate), compute and hold
+    the output, then advance the controller's states over one period (forward Euler
+    for the integrator, the exact filter and observer updates for a constant input)."""
+    c = CONTROLLER_LO
+    period = prm[c + CT_TS]
+    k = round(t / period)
+    if abs(t - k * period) > SAMPLE_MATCH * period:
+        return
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    if DIFFERENCE_VELOCITY:
+        v = (x - y[S_LAST_POSITION]) / period
+        y[S_LAST_POSITION] = x
+    filt = y[S_DERIVATIVE_FILTER] if DERIVATIVE == 1 or DERIVATIVE == 2 else 0.0
+    zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
+    u_sat, _, rate, q, obs_a, obs_b, _, _, _ = _law(t, ts, x, v, y[S_CONTROL_INTEGRAL], filt,
+                                                    zhat, prm, sig, ptr)
+    y[S_HELD_COMMAND] = u_sat
+    y[S_CONTROL_INTEGRAL] += period * rate
+    if DERIVATIVE == 1 or DERIVATIVE == 2:
+        y[S_DERIVATIVE_FILTER] = filt + period / (prm[c + CT_TF] + period) * (q - filt)
+    if OBSERVER:
+        if obs_b * period > 1e-12:
+            steady = obs_a / obs_b
+            y[S_FRICTION_ESTIMATE_BRISTLE] = steady + (zhat - steady) * math.exp(-obs_b * period)
+        else:
+            y[S_FRICTION_ESTIMATE_BRISTLE] = zhat + obs_a * period
+
+
+@kernel()
+def project(prm, y):
+    plant_project(prm, y)
+
+
+@kernel()
+def state_scales(prm, out):
+    """The plant's scales; the controller's from the position scale (its integrator:
+    that scale over one second) and the observer's presliding range."""
+    plant_state_scales(prm, out)
+    position = out[S_POSITION]
+    for i in range(PLANT_NSTATE, NSTATE):
+        out[i] = position
+    if OBSERVER:
+        out[S_FRICTION_ESTIMATE_BRISTLE] = (prm[CONTROLLER_LO + CT_OBS_FS]
+                                            / prm[CONTROLLER_LO + CT_OBS_S0])
+    if SAMPLED:
+        scale = max(abs(prm[CONTROLLER_LO + CT_BIAS]), 1.0)
+        out[S_HELD_COMMAND] = scale
