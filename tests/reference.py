@@ -225,3 +225,19 @@ LOOP_RTOL = 1e-3  # loop measures of a finely sampled analytic loop
 REPORT_DIGITS_RTOL = 1e-3  # numbers shown to 4 significant digits in the HTML reports
 PERFECT_FIT_PERCENT = 99.99  # validation of the model on its own noise-free record
 TUDELFT_ACROSS_FORCE_ERROR = 0.25  # 3 and 5 bar predicted from 1 and 7 bar (measured 15, 20 %)
+
+# ---- closed loops (hunting, anti-windup)
+# Canudas de Wit et al. (1995, Fig. 9): the unit-mass loop with Kp = 3, Ki = 4, Kv = 6
+# settles into a limit cycle of about ±0.06 m around xd = 1 m (we measure 0.936 to
+# 1.064 m); a swing above 0.05 m after 50 s is hunting, below 1e-6 m the mass is still.
+HUNTING_MIN_SWING = 0.05
+HUNTING_STICK_SPEED = 1e-4  # m/s: stuck (presliding speeds are ~1e-6 m/s and below)
+STILL_SWING = 1e-6
+# with Fs = Fc the stick points close in on xd (0.952-1.096 m in 20-40 s, 0.998 m at
+# 300 s): over the last 100 s it moves < 1/5 of the hunting swing, and ends within 5 mm
+FS_EQUALS_FC_DURATION = 300.0
+FS_EQUALS_FC_FINAL_ERROR = 5e-3
+# a ±2 N limit on a 5 m step saturates the rig for seconds: without anti-windup the
+# integrator winds up; with it the integrator stays below a third of that
+WINDUP_LIMIT = 2.0
+WINDUP_REDUCTION = 1.0 / 3.0

@@ -11,6 +11,8 @@
     pneumact fit bench/presliding.csv --free sigma0,sigma1 --offsets position
     pneumact validate bench/sweep.csv --out val   # model against records, HTML report
     pneumact reproduce                           # the whole paper, one folder
+    pneumact control step --start 4 --stop 8     # closed-loop position step, metrics
+    pneumact control hunting                     # Canudas et al. (1995) hunting
 
 Options map onto exactly the objects of the library (parameter set, friction model,
 valve, experiment, solver); no physics lives here. Output files are written only after
@@ -27,6 +29,7 @@ import typer
 from pneumact import __version__
 from pneumact.cli.batch import batch
 from pneumact.cli.common import out_console
+from pneumact.cli.control import control_app
 from pneumact.cli.friction_test import friction_test_app
 from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
@@ -68,5 +71,6 @@ app.command("fit")(fit_command)
 app.command("sensitivity")(sensitivity)
 app.command("validate")(validate_command)
 app.command("reproduce")(reproduce_command)
+app.add_typer(control_app, name="control")
 
 __all__ = ["app"]

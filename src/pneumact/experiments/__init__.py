@@ -1,9 +1,11 @@
 """Experiments: what is applied to the actuator or the friction rig, and for how long."""
 
 from .actuator import QUANTITIES, CommandCycle, Experiment, PressureCycle, from_csv, from_samples
+from .setpoints import SetpointProfile, SetpointRamp, SetpointStep, SetpointTable
 from .signals import Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
 
 __all__ = [
     "QUANTITIES", "CommandCycle", "Constant", "Experiment", "PiecewiseLinear", "PressureCycle",
-    "Ramp", "Signal", "Sine", "Step", "Triangle", "from_csv", "from_samples",
+    "Ramp", "SetpointProfile", "SetpointRamp", "SetpointStep", "SetpointTable",
+    "Signal", "Sine", "Step", "Triangle", "from_csv", "from_samples",
 ]

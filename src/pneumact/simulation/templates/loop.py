@@ -95,6 +95,9 @@ O_INPUT = 3
 O_COMPENSATION = 4
 #: relative step of the finite differences of the Jacobian's coupling terms
 COUPLING_FD = 1e-7
+#: clamping anti-windup: width of the output layer over which the integrator stops,
+#: relative to the limit (an error of at most this much in the output)
+CLAMP_LAYER = 1e-4
 #: |t − k·T_s| below which a breakpoint is the sample k
 SAMPLE_MATCH = 1e-6
 
@@ -164,7 +167,10 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
     if ANTI_WINDUP == 1 and ki != 0.0:
         rate += act * (u_sat - u) / (ki * prm[c + CT_TT])
     elif ANTI_WINDUP == 2 and u_sat != u and (u - u_sat) * act * ki * integrand > 0.0:
-        rate = 0.0
+        # stop integrating while pushing into the limit; faded out over a thin layer of
+        # the output, since a switched rate would chatter on the limit (Filippov sliding)
+        layer = CLAMP_LAYER * max(abs(u_sat), 1.0)
+        rate = integrand * max(1.0 - abs(u - u_sat) / layer, 0.0)
     return u_sat, u, rate, q, obs_a, obs_b, f_hat, r, e
 
 

@@ -1,0 +1,319 @@
+"""``pneumact control step|profile|hunting``: closed-loop position control runs.
+
+Each writes signals.csv (SI), metrics.csv, loop.png and report.html into ``--out`` and
+prints the metrics. Gains are SI, per metre of position error, in the plant input's
+units (N for the rig, Pa for a pressure regulator, 1 for a command valve); positions
+on the command line are in mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from pneumact.cli.common import (
+    Friction,
+    FrictionOption,
+    ParamsOption,
+    RtolOption,
+    load_quietly,
+    out_console,
+    run_with_progress,
+    the_call,
+    use_agg,
+    user_errors,
+)
+from pneumact.errors import ParameterError
+
+control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting.",
+                          no_args_is_help=True)
+
+
+class Plant(StrEnum):
+    regulator = "regulator"
+    command = "command"
+    source = "source"
+    rig = "rig"
+
+
+class Structure(StrEnum):
+    pid = "pid"
+    cascade = "cascade"
+
+
+#: starting gains per plant (kp [input/m], ki [input/(m·s)]) that give a well damped
+#: 4 → 8 mm step of the vgt-paper actuator; the rig's are Canudas et al.'s
+DEFAULT_GAINS = {"regulator": (5e6, 5e7), "source": (5e6, 5e7), "command": (200.0, 2000.0),
+                 "rig": (3.0, 4.0)}
+#: the regulator's set-point range [Pa abs] below p_atm when no limits are given
+REGULATOR_MIN_PRESSURE = 10e3
+
+PlantOption = Annotated[Plant, typer.Option(
+    help="regulator / command / source: the vgt actuator behind that valve (the input is "
+         "the pressure set-point, the valve command or the chamber pressure); rig: a mass "
+         "with friction and a force actuator.")]
+ControllerOption = Annotated[Structure, typer.Option(
+    "--controller", help="pid, or cascade (outer P on position --kx, inner PI on velocity "
+                         "--kv, --ki).")]
+KpOption = Annotated[float | None, typer.Option(help="Proportional gain (plant default).")]
+KiOption = Annotated[float | None, typer.Option(help="Integral gain (plant default).")]
+KdOption = Annotated[float, typer.Option(help="Derivative gain.")]
+DerivativeOption = Annotated[str, typer.Option(
+    help="Derivative on: measurement, error, velocity (measured v), none.")]
+FilterOption = Annotated[float, typer.Option(help="Derivative filter time constant [s].")]
+KxOption = Annotated[float, typer.Option(help="Cascade: outer position gain [1/s].")]
+KvOption = Annotated[float, typer.Option(help="Cascade: inner velocity gain.")]
+UMinOption = Annotated[float | None, typer.Option(help="Lower output limit (input units).")]
+UMaxOption = Annotated[float | None, typer.Option(help="Upper output limit (input units).")]
+AntiWindupOption = Annotated[str, typer.Option(
+    help="back-calculation, clamping or none.")]
+TrackingOption = Annotated[float | None, typer.Option(
+    help="Back-calculation tracking time [s] (default sqrt(Ti*Td) or Ti).")]
+SampleOption = Annotated[float | None, typer.Option(
+    help="Sample time [s] of a digital controller with zero-order hold (default: "
+         "continuous).")]
+VelocityEstimateOption = Annotated[str, typer.Option(
+    help="Sampled: measured velocity, or difference of sampled positions.")]
+CoulombOption = Annotated[float | None, typer.Option(
+    "--coulomb-ff", help="Coulomb friction feed-forward on the set-point velocity [N].")]
+DitherOption = Annotated[str | None, typer.Option(
+    help="Dither 'AMPLITUDE,FREQUENCY' (controller units, Hz).")]
+ObserverOption = Annotated[bool, typer.Option(
+    "--observer", help="LuGre observer-based compensation (Canudas et al. 1995) with the "
+                       "parameter set's LuGre values.")]
+ObserverGainOption = Annotated[float, typer.Option(help="Observer gain k.")]
+OutOption = Annotated[Path, typer.Option(help="Output directory.")]
+
+
+@dataclass(frozen=True)
+class ControllerOptions:
+    structure: Structure
+    kp: float | None
+    ki: float | None
+    kd: float
+    derivative: str
+    filter_time: float
+    kx: float
+    kv: float
+    u_min: float | None
+    u_max: float | None
+    anti_windup: str
+    tracking_time: float | None
+    sample_time: float | None
+    velocity_estimate: str
+    coulomb_ff: float | None
+    dither: str | None
+    observer: bool
+    observer_gain: float
+
+
+def _limits(plant: Plant, params, options: ControllerOptions) -> tuple[float, float]:
+    natural = {"regulator": (REGULATOR_MIN_PRESSURE, params["p_atm"]),
+               "source": (REGULATOR_MIN_PRESSURE, params["p_atm"]),
+               "command": (0.0, 1.0), "rig": (-math.inf, math.inf)}[plant.value]
+    return (natural[0] if options.u_min is None else options.u_min,
+            natural[1] if options.u_max is None else options.u_max)
+
+
+def _compensation(options: ControllerOptions, params) -> tuple:
+    from pneumact.control import Dither, LuGreObserver, StaticCompensation
+
+    terms = []
+    if options.coulomb_ff is not None:
+        terms.append(StaticCompensation(options.coulomb_ff))
+    if options.dither:
+        parts = [p for p in options.dither.split(",") if p.strip()]
+        if len(parts) != 2:
+            raise ParameterError(f"--dither = {options.dither!r}; give AMPLITUDE,FREQUENCY")
+        terms.append(Dither(float(parts[0]), float(parts[1])))
+    if options.observer:
+        terms.append(LuGreObserver.from_parameters(params, gain=options.observer_gain))
+    return tuple(terms)
+
+
+def build_controller(plant: Plant, params, options: ControllerOptions):
+    """The controller the options describe."""
+    from pneumact.control import PID, Cascade
+
+    kp0, ki0 = DEFAULT_GAINS[plant.value]
+    u_min, u_max = _limits(plant, params, options)
+    common = dict(u_min=u_min, u_max=u_max, anti_windup=options.anti_windup,
+                  tracking_time=options.tracking_time, sample_time=options.sample_time,
+                  velocity_estimate=options.velocity_estimate,
+                  compensation=_compensation(options, params))
+    if options.structure is Structure.cascade:
+        return Cascade(kx=options.kx, kv=options.kv,
+                       ki=0.0 if options.ki is None else options.ki, **common)
+    return PID(kp=kp0 if options.kp is None else options.kp,
+               ki=ki0 if options.ki is None else options.ki, kd=options.kd,
+               derivative=options.derivative, filter_time=options.filter_time, **common)
+
+
+def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
+               start: float):
+    """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0."""
+    from pneumact.control import ClosedLoop
+    from pneumact.models import VALVES, Actuator, FrictionRig, friction_models
+
+    params = load_quietly(params_name)
+    law = friction_models()[str(friction)]()
+    if plant is Plant.rig:
+        model = FrictionRig(params, law, drive="force")
+    else:
+        model = Actuator(params, law, valve=VALVES[plant.value]())
+    controller = build_controller(plant, params, options)
+    loop = ClosedLoop(model, controller)
+    bias = loop.holding_input(start)
+    return params, ClosedLoop(model, controller, bias=bias)
+
+
+def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str) -> None:
+    import pneumact as pa
+    from pneumact.control.study import run_loop
+
+    study = run_with_progress(lambda report: run_loop(
+        loop, experiment, solver=pa.Rodas4(rtol=rtol), progress=report, title=title))
+    use_agg()
+    written = study.write(out, call=the_call(ctx))
+    _print_metrics(study.metrics.to_pandas())
+    for path in written:
+        out_console.print(f"wrote {path}")
+
+
+def _print_metrics(frame) -> None:
+    from pneumact.cli.common import fmt
+
+    table = Table(title="closed loop")
+    for column in ("metric", "value", "unit"):
+        table.add_column(column, justify="right" if column == "value" else "left")
+    for _, row in frame.iterrows():
+        value = row["value"]
+        text = str(value) if isinstance(value, bool) else fmt(float(value), 4)
+        table.add_row(str(row["metric"]), text, str(row["unit"]))
+    out_console.print(table)
+
+
+def _options(**kwargs) -> ControllerOptions:
+    return ControllerOptions(**kwargs)
+
+
+@control_app.command("step")
+def step_command(
+    ctx: typer.Context,
+    start: Annotated[float, typer.Option(help="Initial position and set-point [mm].")] = 4.0,
+    stop: Annotated[float, typer.Option(help="Set-point after the step [mm].")] = 8.0,
+    t_step: Annotated[float, typer.Option(help="Time of the step [s].")] = 0.1,
+    t_end: Annotated[float, typer.Option(help="Duration [s].")] = 1.0,
+    plant: PlantOption = Plant.regulator,
+    params: ParamsOption = "vgt-paper",
+    friction: FrictionOption = Friction.lugre,
+    controller: ControllerOption = Structure.pid,
+    kp: KpOption = None, ki: KiOption = None, kd: KdOption = 0.0,
+    derivative: DerivativeOption = "measurement", filter_time: FilterOption = 1e-3,
+    kx: KxOption = 50.0, kv: KvOption = 1e4,
+    u_min: UMinOption = None, u_max: UMaxOption = None,
+    anti_windup: AntiWindupOption = "back-calculation", tracking_time: TrackingOption = None,
+    sample_time: SampleOption = None, velocity_estimate: VelocityEstimateOption = "measured",
+    coulomb_ff: CoulombOption = None, dither: DitherOption = None,
+    observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
+    rtol: RtolOption = 1e-6,
+    out: OutOption = Path("pneumact-control-step"),
+) -> None:
+    """A position set-point step: rise and settling time, overshoot, steady-state
+    error, stick phases and control effort."""
+    with user_errors():
+        from pneumact.experiments import SetpointStep
+
+        options = _options(structure=controller, kp=kp, ki=ki, kd=kd, derivative=derivative,
+                           filter_time=filter_time, kx=kx, kv=kv, u_min=u_min, u_max=u_max,
+                           anti_windup=anti_windup, tracking_time=tracking_time,
+                           sample_time=sample_time, velocity_estimate=velocity_estimate,
+                           coulomb_ff=coulomb_ff, dither=dither, observer=observer,
+                           observer_gain=observer_gain)
+        experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
+        _, loop = build_loop(plant, params, friction, options, start * 1e-3)
+        _run_and_write(ctx, loop, experiment, out, rtol,
+                       f"Position step {start:g} → {stop:g} mm ({plant.value})")
+
+
+@control_app.command("profile")
+def profile_command(
+    ctx: typer.Context,
+    profile: Annotated[Path, typer.Argument(
+        help="CSV with 'time [s]' and a position column ('reference' or 'position', unit "
+             "in the header, e.g. 'position [mm]').", exists=False)],
+    column: Annotated[str | None, typer.Option(
+        help="The set-point column (default: reference, else position).")] = None,
+    plant: PlantOption = Plant.regulator,
+    params: ParamsOption = "vgt-paper",
+    friction: FrictionOption = Friction.lugre,
+    controller: ControllerOption = Structure.pid,
+    kp: KpOption = None, ki: KiOption = None, kd: KdOption = 0.0,
+    derivative: DerivativeOption = "measurement", filter_time: FilterOption = 1e-3,
+    kx: KxOption = 50.0, kv: KvOption = 1e4,
+    u_min: UMinOption = None, u_max: UMaxOption = None,
+    anti_windup: AntiWindupOption = "back-calculation", tracking_time: TrackingOption = None,
+    sample_time: SampleOption = None, velocity_estimate: VelocityEstimateOption = "measured",
+    coulomb_ff: CoulombOption = None, dither: DitherOption = None,
+    observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
+    rtol: RtolOption = 1e-6,
+    out: OutOption = Path("pneumact-control-profile"),
+) -> None:
+    """Follow a measured or designed position profile (piecewise linear between its
+    samples)."""
+    with user_errors():
+        from pneumact.errors import DataError
+        from pneumact.experiments import SetpointProfile
+        from pneumact.io import read_record
+
+        record = read_record(profile)
+        name = column or next((c for c in ("reference", "position") if c in record), None)
+        if name is None or name not in record:
+            raise DataError(f"{profile}: no set-point column {column or 'reference/position'}"
+                            f"; columns: {', '.join(record.signals)}")
+        if record.units.get(name) != "m":
+            raise DataError(f"{profile}: column '{name}' has unit "
+                            f"'{record.units.get(name)}'; give it a length unit in the "
+                            f"header, e.g. '{name} [mm]'")
+        positions = record[name]
+        experiment = SetpointProfile(record.time, positions, name=profile.name)
+        options = _options(structure=controller, kp=kp, ki=ki, kd=kd, derivative=derivative,
+                           filter_time=filter_time, kx=kx, kv=kv, u_min=u_min, u_max=u_max,
+                           anti_windup=anti_windup, tracking_time=tracking_time,
+                           sample_time=sample_time, velocity_estimate=velocity_estimate,
+                           coulomb_ff=coulomb_ff, dither=dither, observer=observer,
+                           observer_gain=observer_gain)
+        _, loop = build_loop(plant, params, friction, options, float(positions[0]))
+        _run_and_write(ctx, loop, experiment, out, rtol,
+                       f"Position profile {profile.name} ({plant.value})")
+
+
+@control_app.command("hunting")
+def hunting_command(
+    ctx: typer.Context,
+    kp: Annotated[float, typer.Option(help="Kp [N/m].")] = 3.0,
+    ki: Annotated[float, typer.Option(help="Ki [N/(m·s)].")] = 4.0,
+    kv: Annotated[float, typer.Option(help="Kv [N·s/m] (on the measured velocity).")] = 6.0,
+    setpoint: Annotated[float, typer.Option(help="Set-point xd [m].")] = 1.0,
+    t_end: Annotated[float, typer.Option(help="Duration [s].")] = 100.0,
+    params: ParamsOption = "canudas1995",
+    sample_time: SampleOption = None,
+    rtol: RtolOption = 1e-6,
+    out: OutOption = Path("pneumact-hunting"),
+) -> None:
+    """Canudas de Wit et al. (1995): a unit mass with LuGre friction under
+    u = −Kv·v − Kp·(x − xd) − Ki·∫(x − xd) dt hunts around the set-point."""
+    with user_errors():
+        from pneumact.control.study import canudas_hunting
+
+        loop, experiment = canudas_hunting(load_quietly(params), kp=kp, ki=ki, kv=kv,
+                                           setpoint=setpoint, t_end=t_end,
+                                           sample_time=sample_time)
+        _run_and_write(ctx, loop, experiment, out, rtol,
+                       "Hunting (Canudas de Wit et al. 1995)")
