@@ -241,3 +241,72 @@ FS_EQUALS_FC_FINAL_ERROR = 5e-3
 # integrator winds up; with it the integrator stays below a third of that
 WINDUP_LIMIT = 2.0
 WINDUP_REDUCTION = 1.0 / 3.0
+
+# ---- EMPS closed loop
+# The drive identified on DATA_EMPS.mat (inverse model, EMPS_CUTOFF) under its own
+# sampled P/P cascade (kp 160.18 1/s, kv 243.45 V/(m/s), gtau 35.15 N/V, ±10 V, backward
+# difference at Ts = 1 ms) follows the recorded reference (pneumact.control.drives).
+# Measured here (Rodas4 rtol 1e-6; rtol 1e-8 changes x by < 1e-6 µm): DATA_EMPS.mat
+# position 1.39e-5 relative (2.06 µm RMS), tracking 0.36 %, velocity 0.13 %, force
+# 4.47 %; DATA_EMPS_PULSES.mat (never fitted) 2.0e-5 (2.98 µm), 0.51 %, 0.22 %, 6.36 %.
+# Position: 1e-4 of the 0.149 m RMS stroke is 15 µm RMS, 2.6 % of the measured
+# tracking error (580 µm RMS); with kp halved it is 3.9e-3, with the pulses ignored 6.2e-4.
+EMPS_LOOP_POSITION_ERROR = 1e-4
+EMPS_LOOP_TRACKING_ERROR = 0.02  # ‖x̂ − x‖/‖r − x‖ (measured 0.36 %, 0.51 %; kp/2: 100 %)
+EMPS_LOOP_VELOCITY_ERROR = 0.01  # 50 Hz-filtered central differences (measured 0.13, 0.22 %)
+# Force: not worse than the inverse model on its own fit (EMPS_FORCE_ERROR, 5.1 %) and
+# on the pulse record (EMPS_PULSES_FORCE_ERROR, 6.7 %); kp/2 gives 23 %, the pulses
+# ignored 36.9 %, the pulses as a 5 N force on the carriage 36.5 %.
+EMPS_LOOP_FORCE_ERROR = 0.07
+EMPS_LOOP_PULSES_FORCE_ERROR = 0.10
+# P/P cascade at steady speed: kp·e = v + F/(gtau·kv), e ∝ 1/kp. Halving kp doubles
+# ‖r − x̂‖ (measured ×1.9995); the nominal ‖r − x̂‖/‖r − x‖ is 1.00007.
+EMPS_LOOP_KP_FACTOR = 0.5
+EMPS_LOOP_LAG_TOL = 0.02
+# vir against kv·(kp·(qg − qm) − Δqm/Ts) from the recorded signals: 0.050 V RMS
+# (0.056 V on the pulse record once its pulses are added; vir is ~1.6 V RMS). The
+# pulses come back with the least-squares gain 1.014 in volts of vir (a +1 command
+# input; a force on the carriage would enter vir with the opposite sign, delayed).
+EMPS_LOOP_LAW_RMS = 0.1  # V
+EMPS_LOOP_PULSE_GAIN = (0.95, 1.05)
+
+# ---- linearisation and linear loops
+# linearise() against the tests' own central differences of the kernel's rhs (tests/unit/
+# test_linearise.py), the closed-form presliding rig and python-control.
+LIN_FD_REL_STEP = 1e-6  # the test's state step, relative to max(|y_j|, the state's scale)
+LIN_B_FD_REL_STEP = 1e-4  # its input step: 100x linearise's own 1e-6, an independent one
+#   (rhs is linear in the command/pressure/force, so any step is exact up to round-off)
+LIN_FD_RTOL = 1e-6  # entry error / largest scaled entry of its row; measured 6.2e-9
+#   (actuator, sliding: O(h²) of the Stribeck curvature), ≤ 7e-11 at the other points
+LIN_SLIDING_VELOCITY = 2e-3  # m/s: 4·vs (vgt-paper), 2·vs (canudas1995): sliding, Stribeck on
+LIN_DC_GAIN_RTOL = 1e-8  # closed forms 1/σ0, 1/c and k/(k+σ0)·d(rest x)/du (the latter by a
+#   1e-6 central difference of bisected rests): measured 1.2e-10, the others round-off
+LIN_RESPONSE_RTOL = 1e-10  # C(jωI−A)⁻¹B vs closed form / python-control: measured 1e-14
+LIN_POLE_RTOL = 1e-9  # eigenvalues of the same A (or the closed-form roots): measured 0
+# (a) continuous PID on a mass-damper vs python-control's closed loop r -> x
+LINEAR_LOOP_MASS_DAMPER = (1.0, 5.0)  # m [kg], c [N·s/m]: x/F = 1/(m s² + c s)
+# Kp [N/m], Ki [N/(m·s)], Kd [N·s/m], Tf [s]: closed-loop poles
+LINEAR_LOOP_GAINS = (100.0, 200.0, 15.0, 0.02)  # −2.84 ± 2.08j and −24.7 ± 14.1j rad/s
+LINEAR_LOOP_STEP = 1e-3  # m, set-point step at t = 0, 2 s on a 1 ms grid
+LINEAR_LOOP_RTOL = 1e-8  # Rodas4 rtol of the run compared with python-control
+LINEAR_LOOP_VS_CONTROL_TOL = 1e-6  # × step; measured 3.4e-9 (3.1e-7 at rtol 1e-6, 3.4e-10
+#   at 1e-9: the difference is the integrator's, ∝ rtol; forced_response is exact for a step)
+# (b) sampled PID (ZOH, forward-Euler integrator) -> continuous PID as T_s halves
+SAMPLED_REFERENCE_RTOL = 1e-10  # both runs; integration error 3e-11 of the step (vs rtol
+#   1e-12), far below the sampling errors (8.7e-3 to 6.5e-2 of the step)
+LINEAR_LOOP_SAMPLE_TIMES = (4e-3, 2e-3, 1e-3, 5e-4)  # s: ω·T_s ≤ 0.11 at the fastest pole
+SAMPLED_ORDER_RATIO_TOL = 0.15  # |error ratio − 2|; measured 1.92, 1.96, 1.98 (observed order
+#   0.94, 0.97, 0.99: first order, the O(T_s²) term fading as T_s halves)
+# (c) presliding linearisation of vgt-paper behind the command valve vs its sine sweep
+SWEEP_COMMAND = 0.6  # rest at x = 5.51 mm of 20 mm, p = 64.6 kPa: sweeps stay off the stops
+SWEEP_FREQUENCIES = (0.5, 2.0, 8.0)  # Hz: about the chamber pole (0.79 Hz), below the
+#   presliding resonance (≈ 70 Hz)
+SWEEP_PERIODS = (4, 2)  # periods fitted, periods discarded (and ≥ 5 chamber time constants)
+SWEEP_SMALL_AMPLITUDE = 1e-4  # command: ±0.43 µm, bristle force ±0.04 N = 1.4 % of Fs
+SWEEP_SMALL_GAIN_RTOL = 1e-3  # measured −1.6e-4, −6.7e-5, −2.2e-5 (same at rtol 1e-11)
+SWEEP_SMALL_PHASE_TOL = 0.5  # deg; measured −0.28, −0.12, −0.03: the presliding hysteresis
+#   (σ0·|v|·z/g), ∝ amplitude (−0.0028° at 1e-6, −0.85° at 3e-4, at 0.5 Hz)
+SWEEP_SMALL_RESIDUAL = 1e-2  # RMS fit residual / RMS fundamental; measured ≤ 9.5e-4 at the
+#   small amplitude, 0.049 to 0.12 at the large one (harmonics of stick-slide)
+SWEEP_LARGE_AMPLITUDE = 0.03  # command: ±0.76 mm at 0.5 Hz, spring force ±10 N ≫ Fs = 3.2 N
+SWEEP_LARGE_MIN_GAIN_ERROR = 0.05  # measured +4.83, +2.32, +0.107: sliding sees k, not k + σ0

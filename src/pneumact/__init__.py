@@ -59,6 +59,13 @@ _EXPORTS: dict[str, str] = {
     "Record": "pneumact.io",
     "read_record": "pneumact.io",
     "read_records": "pneumact.io",
+    "control": "pneumact.control",
+    "ClosedLoop": "pneumact.control",
+    "PID": "pneumact.control",
+    "Cascade": "pneumact.control",
+    "SetpointStep": "pneumact.experiments",
+    "SetpointRamp": "pneumact.experiments",
+    "SetpointProfile": "pneumact.experiments",
     "DataError": "pneumact.errors",
     "ExperimentError": "pneumact.errors",
     "ParameterError": "pneumact.errors",
@@ -68,11 +75,14 @@ _EXPORTS: dict[str, str] = {
 }
 
 __all__ = [
+    "PID",
     "Actuator",
     "Adiabatic",
     "Assembly",
     "BatchResult",
     "BoucWen",
+    "Cascade",
+    "ClosedLoop",
     "CommandCycle",
     "CommandValve",
     "CoulombViscous",
@@ -96,9 +106,13 @@ __all__ = [
     "Result",
     "Rodas4",
     "SensitivityResult",
+    "SetpointProfile",
+    "SetpointRamp",
+    "SetpointStep",
     "SolverError",
     "StribeckMap",
     "available_params",
+    "control",
     "experiments",
     "fit",
     "identify_paper",
@@ -133,7 +147,8 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
-    from pneumact import experiments
+    from pneumact import control, experiments
+    from pneumact.control import PID, Cascade, ClosedLoop
     from pneumact.errors import (
         DataError,
         ExperimentError,
@@ -142,7 +157,14 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         PneumactError,
         SolverError,
     )
-    from pneumact.experiments import CommandCycle, Experiment, PressureCycle
+    from pneumact.experiments import (
+        CommandCycle,
+        Experiment,
+        PressureCycle,
+        SetpointProfile,
+        SetpointRamp,
+        SetpointStep,
+    )
     from pneumact.identification import (
         fit,
         identify_paper,

@@ -66,6 +66,8 @@ UNSTABLE_STEP = 0.5
 #: relative step of the finite differences in time (∂f/∂t) and along the trajectory
 TIME_FD = 1.4901161193847656e-08
 OUTPUT_FD = 1e-7
+#: relative distance below a breakpoint from which an output point waits for its jump
+JUMP_EDGE = 1e-12
 
 # RODAS (Hairer & Wanner 1996, rodas.f METH=1)
 GAM = 0.25
@@ -189,6 +191,17 @@ def _write_point(t, ts, y, prm, sig, ptr, y_row, out_row):
 
 
 @kernel()
+def _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out):
+    """Output points at a breakpoint of a model with jumps take the state after the jump
+    (a held value is right-continuous, as a zero-order hold's output is)."""
+    n_out = t_out.shape[0]
+    while j < n_out and t_out[j] <= t:
+        _write_point(t, ts, y, prm, sig, ptr, y_out[j], out[j])
+        j += 1
+    return j
+
+
+@kernel()
 def _finish(info, status, t, steps, rejected, n_rhs, n_jac, h):
     info[INFO_STATUS] = status
     info[INFO_T] = t
@@ -306,7 +319,7 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
     n_jac = 0
     j = 0
     t = tb[0]
-    while j < n_out and t_out[j] <= t:
+    while not HAS_JUMPS and j < n_out and t_out[j] <= t:
         _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out[j], out[j])
         if sens is not None:
             _sens_point(s, sens.s_out, j)
@@ -321,8 +334,12 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
+        t_stop = t_end
         if HAS_JUMPS:
             jump(t, ts, y, prm, sig, ptr)
+            j = _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out)
+            if seg < tb.shape[0] - 2:  # a point on the next breakpoint: after its jump
+                t_stop = t_end - JUMP_EDGE * max(1.0, abs(t_end))
         rhs(t, ts, y, prm, sig, ptr, f0)
         n_rhs += 1
         jm_valid = False
@@ -391,7 +408,7 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
                     _output_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1, do1,
                                  ybuf, obuf)
                     j0 = j
-                    j = _dense(t, hh, y, f0, ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
+                    j = _dense(t, hh, y, f0, ynew, f1, o0, do0, o1, do1, t_out, j, t_stop,
                                y_out, out, slopes, prm)
                     if sens is not None:
                         _sens_dense(t, hh, t_out, j0, j, work, s, sens.s_out)
@@ -658,7 +675,7 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
     n_rhs = 0
     j = 0
     t = tb[0]
-    while j < n_out and t_out[j] <= t:
+    while not HAS_JUMPS and j < n_out and t_out[j] <= t:
         _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out[j], out[j])
         j += 1
     status = STATUS_OK
@@ -668,8 +685,12 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
         if t_end <= t:
             continue
         ts = 0.5 * (t + t_end)
+        t_stop = t_end
         if HAS_JUMPS:
             jump(t, ts, y, prm, sig, ptr)
+            j = _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out)
+            if seg < tb.shape[0] - 2:  # a point on the next breakpoint: after its jump
+                t_stop = t_end - JUMP_EDGE * max(1.0, abs(t_end))
         rhs(t, ts, y, prm, sig, ptr, ks[0])
         n_rhs += 1
         o0_valid = False
@@ -714,7 +735,7 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
                     outputs(t_new, ts, ynew, prm, sig, ptr, o1)
                     _output_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1, do1,
                                  ybuf, obuf)
-                    j = _dense(t, hh, y, ks[0], ynew, f1, o0, do0, o1, do1, t_out, j, t_end,
+                    j = _dense(t, hh, y, ks[0], ynew, f1, o0, do0, o1, do1, t_out, j, t_stop,
                                y_out, out, slopes, prm)
                     for k in range(NOUT):
                         o0[k] = o1[k]
