@@ -310,3 +310,32 @@ SWEEP_SMALL_RESIDUAL = 1e-2  # RMS fit residual / RMS fundamental; measured ≤ 
 #   small amplitude, 0.049 to 0.12 at the large one (harmonics of stick-slide)
 SWEEP_LARGE_AMPLITUDE = 0.03  # command: ±0.76 mm at 0.5 Hz, spring force ±10 N ≫ Fs = 3.2 N
 SWEEP_LARGE_MIN_GAIN_ERROR = 0.05  # measured +4.83, +2.32, +0.107: sliding sees k, not k + σ0
+
+# ---- loop metrics
+# Synthetic responses with closed-form answers (tests/unit/test_loop_metrics.py). The metrics
+# interpolate crossings linearly and integrate by trapezoids, so their errors are set by the
+# sampling: (curvature)·dt²/8 per crossing, (ω·dt)²/12 per integral.
+LOOP_TAU = 0.5  # s: first-order response 1 − e^(−t/τ): rise τ·ln 9, settling (2 %) τ·ln 50
+LOOP_ZETA = 0.3  # underdamped second order: overshoot exp(−πζ/√(1 − ζ²)) = 37.2 %
+LOOP_OMEGA_N = 6.283185307179586  # rad/s (1 Hz natural frequency)
+LOOP_DT = 1e-4  # s: sample interval of the step responses (τ/dt = 5000)
+LOOP_CROSSING_RTOL = 1e-6  # rise, settling, stick ends vs closed forms: measured ≤ 5.6e-8
+LOOP_INTEGRAL_RTOL = 1e-5  # trapezoidal means/IAE/ISE/effort: measured ≤ 1.3e-8 at LOOP_DT,
+#                            8.2e-7 = (ω·dt)²/12 for the sine on LOOP_CYCLE_DT
+LOOP_PEAK_RTOL = 1e-6  # overshoot and amplitude from the largest sample: measured ≤ 3.6e-8
+LOOP_CYCLE_AMPLITUDE = 0.05  # m: a sine about a 1 m target, above the 2 % band of a 1 m step
+LOOP_CYCLE_PERIOD = 2.0  # s
+LOOP_CYCLE_DT = 1e-3  # s: sample interval of the limit-cycle and stick-slip signals
+LOOP_PERIOD_SAMPLES = 2  # maxima sit on samples: the mean interval is within 2 samples
+#                          (measured exact: the synthetic peaks fall on the grid)
+LOOP_STICK_ATOL = 1e-6  # s: interpolated |v| = stick_speed crossings of sine-shaped slips,
+#                         total over 19 ends (measured 4.6e-8)
+LOOP_GRADIENT_RTOL = 1e-5  # max|np.gradient(x)| vs max|v| of a half-sine: (π·dt)²/6 = 1.6e-6
+
+# ---- control command line
+# the default gains settle a 4 -> 8 mm step of the vgt actuator within 0.5 s; 50 µm is
+# 1.25 % of the step (the settling band is 2 %)
+CLI_STEP_FINAL_ERROR = 50e-6
+# the CLI integrates in chunks (progress bar), the API in one call: different steps at
+# rtol 1e-6 give results within a few rtol of each other
+CLI_API_RTOL = 1e-5

@@ -10,8 +10,13 @@ joined by straight lines, so every crossing time below is linearly interpolated)
 
 * the **step** goes from ``start`` (default x(t_step)) to ``target`` (default the last
   set-point value); ``t_step`` defaults to the first sample at which the set-point differs
-  from its initial value (t0 if it never changes). p(t) = (x − start)/(target − start)
-  is the progress, 0 → 1 for a step up and a step down alike.
+  from its initial value by more than 1e-9 of its largest magnitude (round-off of the
+  kernel's output is not a step), t0 if it never does. That is exact for right-continuous
+  records (pneumact's signals, a sampled controller's outputs, a logged r(t_k)); a loop
+  without jumps (continuous controller) reports the left value at a breakpoint, so its
+  step is found one sample late: pass ``t_step`` to be sample-exact.
+  p(t) = (x − start)/(target − start) is the progress, 0 → 1 for a step up and a step
+  down alike.
 * **rise_time**: first time p reaches 0.9 minus first time p reaches 0.1, both searched
   from t_step on [s]; NaN if p never reaches 0.9.
 * **settling_time**: the last time |x − target| > band·|step|, minus t_step [s]; 0 if the
@@ -19,7 +24,8 @@ joined by straight lines, so every crossing time below is linearly interpolated)
 * **overshoot**: 100·max(0, max over t ≥ t_step of (x − target)·sign(step))/|step| [%].
   The three step metrics are NaN when the step is zero.
 * **steady_state_error**: target − (time average of x over the evaluation window) [m].
-* **iae**, **ise**: ∫|e| dt and ∫e² dt over the whole record (trapezoidal rule).
+* **iae**, **ise**: ∫|e| dt and ∫e² dt over the whole record (trapezoidal rule: a
+  set-point jump between two samples counts as a straight line across that interval).
 * **control_effort**: ∫(u − u(t0))² dt over the whole record: the effort spent away from
   the initial (holding) command, in (command unit)²·s; NaN without a command signal.
 * **command_variation**: Σ|u[k+1] − u[k]|, the total variation of the command.
@@ -153,7 +159,9 @@ class LoopMetrics:
         x, u = self.position_unit, self.command_unit
         out = {}
         for name, (unit, _) in _DESCRIPTIONS.items():
-            if "{u}" in unit and u in ("", "1"):
+            if "{u}" in unit and u == "":  # a command of unknown unit
+                unit = ""
+            elif "{u}" in unit and u == "1":  # dimensionless: (1)²·s is s
                 unit = unit.replace("{u}^2*", "").replace("{u}", "1")
             out[name] = unit.replace("{x}", x).replace("{u}", u)
         return out
@@ -224,7 +232,7 @@ def _read(result: Any) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, str
     if not np.all(np.diff(time) > 0):
         k = int(np.argmin(np.diff(time)))
         raise DataError(f"loop_metrics: time must increase strictly; time[{k + 1}] = "
-                        f"{time[k + 1]!r} s after time[{k}] = {time[k]!r} s")
+                        f"{float(time[k + 1])!r} s after time[{k}] = {float(time[k])!r} s")
     out = {}
     for name in ("position", "setpoint", "velocity", "command"):
         if name in signals:
@@ -242,8 +250,8 @@ def _floats(name: str, values: Any) -> np.ndarray:
         raise DataError(f"loop_metrics: {name} is not numeric; allowed: finite numbers") from None
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
-        raise DataError(f"loop_metrics: {name}[{bad[0]}] = {array[bad[0]]!r}; allowed: finite "
-                        f"numbers ({bad.size} non-finite sample(s))")
+        raise DataError(f"loop_metrics: {name}[{bad[0]}] = {float(array[bad[0]])!r}; allowed: "
+                        f"finite numbers ({bad.size} non-finite sample(s))")
     return array
 
 
@@ -364,9 +372,9 @@ def loop_metrics(result: Any, *, start: float | None = None, target: float | Non
     ``result``: a pneumact Result, or a DataFrame with the columns (or index) ``time``
     [s], ``position`` [m], ``setpoint`` [m] and optionally ``velocity`` [m/s] and
     ``command``. ``start``/``target`` [m]: the step (default: the position at
-    ``t_step`` / the last set-point value); ``t_step`` [s]: default the first sample at
-    which the set-point differs from its first value (else the first time); ``band``:
-    settling band as a fraction of |step| (0 < band < 1); ``stick_speed`` [m/s]: default
+    ``t_step`` / the last set-point value); ``t_step`` [s]: default the first sample
+    at which the set-point departs from its first value (else the first time); ``band``:
+    settling band as a fraction of |step| (0 < band ≤ 1); ``stick_speed`` [m/s]: default
     1e-3·max|v|; ``window`` [s]: evaluation window at the end of the record (default
     10 % of the duration, widened to 2.5 periods of an oscillation); ``min_stick`` [s]:
     shortest stick phase counted (default 1e-3 of the duration). The definitions are in
@@ -380,7 +388,7 @@ def loop_metrics(result: Any, *, start: float | None = None, target: float | Non
 
     # -- the step
     if t_step is None:
-        changed = np.flatnonzero(r != r[0])
+        changed = np.flatnonzero(np.abs(r - r[0]) > ROUND_OFF * float(np.max(np.abs(r))))
         t_step = float(time[changed[0]]) if changed.size else t0
     else:
         t_step = _option("t_step", t_step, "s", low=t0, high=t_end, low_open=False,

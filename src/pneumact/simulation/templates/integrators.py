@@ -171,12 +171,15 @@ def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out
                                                                 h * do1[k])
     n_out = t_out.shape[0]
     while j < n_out and t_out[j] <= t_stop and t_out[j] <= t0 + h:
-        h00, h10, h01, h11 = _hermite((t_out[j] - t0) / h)
+        # y0 + h01·(y1 − y0) + ...: the Hermite form with h00 = 1 − h01, exact for a
+        # flat step (a held command stays exactly at its limit)
+        _, h10, h01, h11 = _hermite((t_out[j] - t0) / h)
         for i in range(NSTATE):
-            y_out[j, i] = h00 * y0[i] + h10 * slopes[0, i] + h01 * y1[i] + h11 * slopes[1, i]
+            y_out[j, i] = (y0[i] + h01 * (y1[i] - y0[i]) + h10 * slopes[0, i]
+                           + h11 * slopes[1, i])
         project(prm, y_out[j])
         for k in range(NOUT):
-            out[j, k] = (h00 * o0[k] + h10 * slopes[0, NSTATE + k] + h01 * o1[k]
+            out[j, k] = (o0[k] + h01 * (o1[k] - o0[k]) + h10 * slopes[0, NSTATE + k]
                          + h11 * slopes[1, NSTATE + k])
         j += 1
     return j
