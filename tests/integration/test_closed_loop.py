@@ -138,3 +138,29 @@ def test_bad_input_is_one_clear_message(canudas, vgt):
     loop, experiment = canudas_hunting(canudas, t_end=1.0)
     with pytest.raises(ParameterError, match="sensitivities"):
         pa.simulate_sensitivities(loop, experiment, ["Fc"])
+
+
+def test_dither_frees_a_pd_loop_stuck_short_of_the_target(canudas):
+    rig = pa.FrictionRig(canudas, pa.LuGre(), drive="force")
+    experiment = pa.Experiment(pa.experiments.Constant(1.0), "position", 60.0, n_points=6001)
+    late = np.linspace(0.0, 60.0, 6001) > 40.0
+    errors = []
+    for terms in ((), (Dither(ref.DITHER_AMPLITUDE, ref.DITHER_FREQUENCY),)):
+        pd_loop = ClosedLoop(rig, PID(kp=3.0, kd=6.0, derivative="velocity",
+                                      compensation=terms))
+        x = pa.simulate(pd_loop, experiment).signals["position"]
+        errors.append(abs(1.0 - x[late].mean()))
+    assert errors[0] > ref.HUNTING_MIN_SWING  # stuck (Fs = 1.5 N holds it at 0.66 m)
+    assert errors[1] < errors[0] / 10
+
+
+def test_coulomb_feedforward_cuts_the_ramp_tracking_error(canudas):
+    rig = pa.FrictionRig(canudas, pa.LuGre(), drive="force")
+    ramp = pa.experiments.SetpointRamp(0.0, 0.1, 10.0, t_end=12.0)
+    worst = []
+    for terms in ((), (StaticCompensation(canudas["Fc"]),)):
+        pid = PID(kp=30.0, ki=20.0, kd=10.0, derivative="velocity", compensation=terms)
+        result = pa.simulate(ClosedLoop(rig, pid), ramp)
+        inside = (result.time > 2.0) & (result.time < 10.0)
+        worst.append(np.abs(result.signals["error"][inside]).max())
+    assert worst[1] < worst[0] / 5

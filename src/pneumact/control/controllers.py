@@ -31,7 +31,7 @@ CONTROL_BLOCK = Block.of(settings=(
     "velocity_ff", "sample_time", "action", "drive_gain", "bias", "comp_gain",
     "ff_fc", "ff_fs", "ff_vs", "ff_delta", "ff_vsmooth", "dither_amplitude",
     "dither_frequency", "obs_sigma0", "obs_sigma1", "obs_sigma2", "obs_fc", "obs_fs",
-    "obs_vs", "obs_gain"))
+    "obs_vs", "obs_gain", "derivative_mode", "anti_windup_mode", "cascade_mode"))
 CT = {name: CONTROL_BLOCK.index(name) for name in CONTROL_BLOCK.names}
 CT_KP, CT_KI, CT_KD = CT["kp"], CT["ki"], CT["kd"]
 CT_TF, CT_TT, CT_UMIN, CT_UMAX = CT["filter_time"], CT["tracking_time"], CT["u_min"], CT["u_max"]
@@ -43,8 +43,10 @@ CT_DITHER_A, CT_DITHER_F = CT["dither_amplitude"], CT["dither_frequency"]
 CT_OBS_S0, CT_OBS_S1, CT_OBS_S2 = CT["obs_sigma0"], CT["obs_sigma1"], CT["obs_sigma2"]
 CT_OBS_FC, CT_OBS_FS, CT_OBS_VS, CT_OBS_K = (CT["obs_fc"], CT["obs_fs"], CT["obs_vs"],
                                              CT["obs_gain"])
+CT_DERIVATIVE, CT_ANTI_WINDUP = CT["derivative_mode"], CT["anti_windup_mode"]
+CT_CASCADE = CT["cascade_mode"]
 
-#: derivative options -> the kernel's DERIVATIVE switch
+#: derivative options -> the ``derivative_mode`` setting the kernel reads
 DERIVATIVES = {"none": 0, "error": 1, "measurement": 2, "velocity": 3}
 ANTI_WINDUPS = {"none": 0, "back-calculation": 1, "clamping": 2}
 VELOCITY_ESTIMATES = ("measured", "difference")
@@ -221,39 +223,47 @@ class Controller:
         for term in self.compensation:
             values.update(term.settings())
         values.update(self.gain_settings())
+        values.update(derivative_mode=float(DERIVATIVES[getattr(self, "derivative", "none")]),
+                      anti_windup_mode=float(ANTI_WINDUPS[self.anti_windup]),
+                      cascade_mode=float(self.cascade))
         return values
 
     def gain_settings(self) -> dict[str, float]:
         raise NotImplementedError
 
     def switches(self) -> dict[str, object]:
-        """Compile-time switches of the loop kernel."""
-        return {"SAMPLED": self.sampled, "CASCADE": self.cascade,
-                "ANTI_WINDUP": ANTI_WINDUPS[self.anti_windup],
-                "DERIVATIVE": DERIVATIVES[getattr(self, "derivative", "none")],
+        """Compile-time switches of the loop kernel: only what changes its states
+        (gains, derivative kind, anti-windup, cascade, static compensation and dither
+        are settings: changing them never recompiles)."""
+        return {"SAMPLED": self.sampled, "FILTERED_DERIVATIVE": self.filtered_derivative,
                 "DIFFERENCE_VELOCITY": self.velocity_estimate == "difference",
-                "STATIC_FF": self.has(StaticCompensation), "DITHER": self.has(Dither),
                 "OBSERVER": self.has(LuGreObserver)}
 
-    def states(self, position_unit: str = "m") -> tuple[StateSpec, ...]:
+    @property
+    def filtered_derivative(self) -> bool:
+        return DERIVATIVES[getattr(self, "derivative", "none")] in (1, 2)
+
+    def states(self, position_unit: str = "m", command_unit: str = "1"
+               ) -> tuple[StateSpec, ...]:
         """The controller's states: its integrator, derivative filter, observer, and,
         sampled, the held output and the last sampled position."""
         integral_unit = "m" if self.cascade else f"{position_unit}*s"
         states = [StateSpec("control_integral", integral_unit)]
-        if DERIVATIVES[getattr(self, "derivative", "none")] in (1, 2):
+        if self.filtered_derivative:
             states.append(StateSpec("derivative_filter", position_unit))
         if self.has(LuGreObserver):
             states.append(StateSpec("friction_estimate_bristle", "m"))
         if self.sampled:
-            states.append(StateSpec("held_command", "1"))
+            states.append(StateSpec("held_command", command_unit))
             if self.velocity_estimate == "difference":
                 states.append(StateSpec("last_position", position_unit))
         return tuple(states)
 
-    def part(self, loop_settings: dict[str, float]) -> Part:
+    def part(self, loop_settings: dict[str, float], command_unit: str = "1") -> Part:
         values = self.settings()
         values.update(loop_settings)
-        return Part(role="controller", block=CONTROL_BLOCK, states=self.states(),
+        return Part(role="controller", block=CONTROL_BLOCK,
+                    states=self.states(command_unit=command_unit),
                     settings=values, label=repr(self), key="")
 
     def _tracking(self, ti: float, td: float) -> float:

@@ -134,7 +134,7 @@ class ClosedLoop:
     def parts(self) -> tuple[Part, ...]:
         loop = {"action": self.action, "drive_gain": float(self.drive_gain),
                 "bias": float(self.bias), "comp_gain": self._compensation_gain() or 0.0}
-        return (*self.plant.parts(), self.controller.part(loop))
+        return (*self.plant.parts(), self.controller.part(loop, self.command_unit))
 
     def _plant_module(self):
         import importlib
@@ -164,9 +164,7 @@ class ClosedLoop:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
-                "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True,
-                "HAS_FEEDFORWARD": self.feedforward is not None,
-                "HAS_DISTURBANCE": self.disturbance is not None}
+                "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True}
 
     def kernel_children(self) -> tuple[Child, ...]:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)

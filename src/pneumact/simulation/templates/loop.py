@@ -20,8 +20,11 @@ import numpy as np
 
 from pneumact.control.controllers import (
     CT_ACTION,
+    CT_ANTI_WINDUP,
     CT_BIAS,
+    CT_CASCADE,
     CT_COMP,
+    CT_DERIVATIVE,
     CT_DITHER_A,
     CT_DITHER_F,
     CT_FF_DELTA,
@@ -75,15 +78,9 @@ S_FRICTION_ESTIMATE_BRISTLE = -1
 S_HELD_COMMAND = -1
 S_LAST_POSITION = -1
 SAMPLED = False
-CASCADE = False
-DERIVATIVE = 0
-ANTI_WINDUP = 1
+FILTERED_DERIVATIVE = False
 DIFFERENCE_VELOCITY = False
-STATIC_FF = False
-DITHER = False
 OBSERVER = False
-HAS_FEEDFORWARD = False
-HAS_DISTURBANCE = False
 # ------------------------------------------------------------------------------------------
 
 #: the loop's own outputs, after the plant's
@@ -135,38 +132,36 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
     e = r - x
     ki = prm[c + CT_KI]
     q = 0.0
-    if CASCADE:
+    derivative = prm[c + CT_DERIVATIVE]
+    if prm[c + CT_CASCADE] > 0.5:
         ev = prm[c + CT_KX] * e + prm[c + CT_VFF] * rdot - v
         terms = prm[c + CT_KP] * ev + ki * integral
         integrand = ev
     else:
         terms = prm[c + CT_KP] * e + ki * integral + prm[c + CT_VFF] * rdot
         integrand = e
-        if DERIVATIVE == 1 or DERIVATIVE == 2:
-            q = e if DERIVATIVE == 1 else -x
+        if FILTERED_DERIVATIVE:
+            q = e if derivative == 1.0 else -x
             terms += prm[c + CT_KD] * (q - filt) / prm[c + CT_TF]
-        elif DERIVATIVE == 3:
+        elif derivative == 3.0:
             terms -= prm[c + CT_KD] * v
     act = prm[c + CT_ACTION]
     u = prm[c + CT_BIAS] + act * terms
-    if HAS_FEEDFORWARD:
-        u += channel_eval(sig, ptr, CH_FEEDFORWARD, t, ts)[0]
-    f_hat = 0.0
+    u += channel_eval(sig, ptr, CH_FEEDFORWARD, t, ts)[0]  # 0 on an empty channel
+    f_hat = _static_ff(rdot, prm)  # 0 without static compensation (Fc = Fs = 0)
     obs_a = 0.0
     obs_b = 0.0
-    if STATIC_FF:
-        f_hat += _static_ff(rdot, prm)
     if OBSERVER:
         obs_a, obs_b, f_obs = _observer(v, zhat, e, prm)
         f_hat += f_obs
     u += prm[c + CT_COMP] * f_hat
-    if DITHER:
-        u += prm[c + CT_DITHER_A] * math.sin(2.0 * math.pi * prm[c + CT_DITHER_F] * t)
+    u += prm[c + CT_DITHER_A] * math.sin(2.0 * math.pi * prm[c + CT_DITHER_F] * t)
     u_sat = min(max(u, prm[c + CT_UMIN]), prm[c + CT_UMAX])
     rate = integrand
-    if ANTI_WINDUP == 1 and ki != 0.0:
+    anti_windup = prm[c + CT_ANTI_WINDUP]
+    if anti_windup == 1.0 and ki != 0.0:
         rate += act * (u_sat - u) / (ki * prm[c + CT_TT])
-    elif ANTI_WINDUP == 2 and u_sat != u and (u - u_sat) * act * ki * integrand > 0.0:
+    elif anti_windup == 2.0 and u_sat != u and (u - u_sat) * act * ki * integrand > 0.0:
         # stop integrating while pushing into the limit; faded out over a thin layer of
         # the output, since a switched rate would chatter on the limit (Filippov sliding)
         layer = CLAMP_LAYER * max(abs(u_sat), 1.0)
@@ -177,7 +172,7 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
 @kernel()
 def _states_law(t, ts, y, prm, sig, ptr):
     """The continuous law read from the state vector."""
-    filt = y[S_DERIVATIVE_FILTER] if DERIVATIVE == 1 or DERIVATIVE == 2 else 0.0
+    filt = y[S_DERIVATIVE_FILTER] if FILTERED_DERIVATIVE else 0.0
     zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
     return _law(t, ts, y[S_POSITION], y[S_VELOCITY], y[S_CONTROL_INTEGRAL], filt, zhat, prm,
                 sig, ptr)
@@ -194,8 +189,7 @@ def _command(t, ts, y, prm, sig, ptr):
 @kernel()
 def _plant_input(t, ts, command, prm, sig, ptr):
     value = prm[CONTROLLER_LO + CT_GAIN] * command
-    if HAS_DISTURBANCE:
-        value += channel_eval(sig, ptr, CH_DISTURBANCE, t, ts)[0]
+    value += channel_eval(sig, ptr, CH_DISTURBANCE, t, ts)[0]  # 0 on an empty channel
     return value
 
 
@@ -220,7 +214,7 @@ def _controller_rates(t, ts, y, prm, sig, ptr, dydt):
         return
     _, _, rate, q, obs_a, obs_b, _, _, _ = _states_law(t, ts, y, prm, sig, ptr)
     dydt[S_CONTROL_INTEGRAL] = rate
-    if DERIVATIVE == 1 or DERIVATIVE == 2:
+    if FILTERED_DERIVATIVE:
         dydt[S_DERIVATIVE_FILTER] = (q - y[S_DERIVATIVE_FILTER]) / prm[CONTROLLER_LO + CT_TF]
     if OBSERVER:
         dydt[S_FRICTION_ESTIMATE_BRISTLE] = obs_a - obs_b * y[S_FRICTION_ESTIMATE_BRISTLE]
@@ -326,13 +320,13 @@ def jump(t, ts, y, prm, sig, ptr):
     if DIFFERENCE_VELOCITY:
         v = (x - y[S_LAST_POSITION]) / period
         y[S_LAST_POSITION] = x
-    filt = y[S_DERIVATIVE_FILTER] if DERIVATIVE == 1 or DERIVATIVE == 2 else 0.0
+    filt = y[S_DERIVATIVE_FILTER] if FILTERED_DERIVATIVE else 0.0
     zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
     u_sat, _, rate, q, obs_a, obs_b, _, _, _ = _law(t, ts, x, v, y[S_CONTROL_INTEGRAL], filt,
                                                     zhat, prm, sig, ptr)
     y[S_HELD_COMMAND] = u_sat
     y[S_CONTROL_INTEGRAL] += period * rate
-    if DERIVATIVE == 1 or DERIVATIVE == 2:
+    if FILTERED_DERIVATIVE:
         y[S_DERIVATIVE_FILTER] = filt + period / (prm[c + CT_TF] + period) * (q - filt)
     if OBSERVER:
         if obs_b * period > 1e-12:
