@@ -200,8 +200,15 @@ def _print_metrics(frame) -> None:
     out_console.print(table)
 
 
-def _options(**kwargs) -> ControllerOptions:
-    return ControllerOptions(**kwargs)
+def _options(ctx: typer.Context) -> ControllerOptions:
+    """The controller options of ``step`` and ``profile``, read from the parsed command
+    (both declare the same options)."""
+    from dataclasses import fields
+
+    given = {"structure": ctx.params["controller"]}
+    given.update({f.name: ctx.params[f.name] for f in fields(ControllerOptions)
+                  if f.name != "structure"})
+    return ControllerOptions(**given)
 
 
 @control_app.command("step")
@@ -231,12 +238,7 @@ def step_command(
     with user_errors():
         from pneumact.experiments import SetpointStep
 
-        options = _options(structure=controller, kp=kp, ki=ki, kd=kd, derivative=derivative,
-                           filter_time=filter_time, kx=kx, kv=kv, u_min=u_min, u_max=u_max,
-                           anti_windup=anti_windup, tracking_time=tracking_time,
-                           sample_time=sample_time, velocity_estimate=velocity_estimate,
-                           coulomb_ff=coulomb_ff, dither=dither, observer=observer,
-                           observer_gain=observer_gain)
+        options = _options(ctx)
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
         _, loop = build_loop(plant, params, friction, options, start * 1e-3)
         _run_and_write(ctx, loop, experiment, out, rtol,
@@ -284,12 +286,7 @@ def profile_command(
                             f"header, e.g. '{name} [mm]'")
         positions = record[name]
         experiment = SetpointProfile(record.time, positions, name=profile.name)
-        options = _options(structure=controller, kp=kp, ki=ki, kd=kd, derivative=derivative,
-                           filter_time=filter_time, kx=kx, kv=kv, u_min=u_min, u_max=u_max,
-                           anti_windup=anti_windup, tracking_time=tracking_time,
-                           sample_time=sample_time, velocity_estimate=velocity_estimate,
-                           coulomb_ff=coulomb_ff, dither=dither, observer=observer,
-                           observer_gain=observer_gain)
+        options = _options(ctx)
         _, loop = build_loop(plant, params, friction, options, float(positions[0]))
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position profile {profile.name} ({plant.value})")
