@@ -1,10 +1,12 @@
 """Controllers and friction compensation: small strategy objects a closed loop compiles.
 
-A controller is data: its gains, limits and options become the *settings* of one
-parameter block (``CONTROL_BLOCK``, read by the loop template through the local indices
-below), and its structure (sampled or continuous, which derivative, which
-compensation) becomes compile-time switches of the kernel. Changing a gain never
-recompiles; changing the structure compiles another kernel once per machine.
+A controller is data: its gains, limits and options (derivative kind, anti-windup
+scheme, cascade, static compensation, dither) become the *settings* of one parameter
+block (``CONTROL_BLOCK``, read by the loop template through the local indices below);
+only what changes the controller's states (sampled or continuous, a filtered
+derivative, the difference velocity estimate, the LuGre observer) is a compile-time
+switch of the kernel. Changing a setting never recompiles; changing a switch compiles
+another kernel once per machine.
 
 Sign convention: the error is e = r − x (set-point minus position). A plant whose
 position falls when its input rises (the vacuum actuator behind a pressure regulator:
