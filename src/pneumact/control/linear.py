@@ -39,7 +39,7 @@ from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import QUANTITIES, Experiment
 from ..experiments.signals import Constant, Sine, pack_channels
 from ..models.actuator import Actuator
-from ..models.rig import FrictionRig
+from .plants import input_kind, input_range
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -71,33 +71,6 @@ def _require_control():
 
 
 # --------------------------------------------------------------------------- the plant
-def _input_kind(plant) -> str:
-    """``force``, ``command`` or ``pressure`` (what the plant's input is)."""
-    if isinstance(plant, FrictionRig):
-        if plant.drive != "force":
-            raise ParameterError(f"linearise: plant = FrictionRig(drive={plant.drive!r}); "
-                                 "allowed: an Actuator, or a FrictionRig with drive='force' "
-                                 "(a kinematic drive has no input to linearise in)")
-        return "force"
-    if isinstance(plant, Actuator):
-        return plant.valve.drive
-    raise ParameterError(f"linearise: plant = {type(plant).__name__}; allowed: Actuator, "
-                         "FrictionRig(drive='force')")
-
-
-def _input_range(plant, kind: str) -> tuple[float, float]:
-    """The input values the plant accepts."""
-    if kind == "command":
-        return 0.0, 1.0
-    if kind == "pressure":
-        from ..models.valves import PressureRegulator
-
-        if isinstance(plant.valve, PressureRegulator):  # the set-point is clipped to this
-            return float(plant.params["p_res"]), float(plant.params["p_atm"])
-        return 0.0, math.inf
-    return -math.inf, math.inf
-
-
 def _input_scale(plant, kind: str) -> float:
     if kind == "pressure":
         return float(plant.params["p_atm"])
@@ -105,7 +78,7 @@ def _input_scale(plant, kind: str) -> float:
 
 
 def _check_input(plant, kind: str, value, what: str = "input_value") -> float:
-    lo, hi = _input_range(plant, kind)
+    lo, hi = input_range(plant)
     unit = QUANTITIES[plant.drive_quantity]
     if not (isinstance(value, int | float | np.floating) and math.isfinite(value)):
         raise ExperimentError(f"linearise: {what} = {value!r}; must be a finite "
@@ -333,7 +306,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     """
     from ..simulation.assembly import assemble
 
-    kind = _input_kind(plant)
+    kind = input_kind(plant, "linearise")
     if regime not in REGIMES:
         raise ParameterError(f"linearise: regime = {regime!r}; allowed: {', '.join(REGIMES)}")
     if regime == "sliding":
@@ -400,7 +373,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
 
 def _input_derivative(plant, kind: str, kernel, y, vec, u: float) -> np.ndarray:
     """∂f/∂u by central differences of rhs (one-sided at an end of the input's range)."""
-    lo, hi = _input_range(plant, kind)
+    lo, hi = input_range(plant)
     step = FD_REL_STEP * max(abs(u), _input_scale(plant, kind))
     up, down = u + step, u - step
     if down < lo:
@@ -452,7 +425,7 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
 
     from ..simulation import Rodas4, simulate
 
-    kind = _input_kind(plant)
+    kind = input_kind(plant, "linearise")
     u0 = _check_input(plant, kind, input_value)
     if not (isinstance(amplitude, int | float) and math.isfinite(amplitude) and amplitude > 0):
         raise ExperimentError(f"frequency_response: amplitude = {amplitude!r}; must be > 0")

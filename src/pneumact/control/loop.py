@@ -23,24 +23,13 @@ from ..models.component import Part
 from ..models.rig import FrictionRig
 from ..simulation.codegen import Child
 from .controllers import Controller, LuGreObserver, StaticCompensation
+from .plants import input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
 LOOP_TEMPLATE = "pneumact.simulation.templates.loop"
 #: breakpoints closer than this fraction of a period to a sample are that sample
 SNAP = 1e-6
-
-
-def _plant_kind(plant) -> str:
-    if isinstance(plant, FrictionRig):
-        if plant.drive != "force":
-            raise ParameterError(f"ClosedLoop: a FrictionRig plant needs drive='force' (the "
-                                 f"controller's output is the force), got {plant.drive!r}")
-        return "force"
-    if isinstance(plant, Actuator):
-        return plant.valve.drive
-    raise ParameterError(f"ClosedLoop: plant = {type(plant).__name__}; allowed: Actuator, "
-                         "FrictionRig(drive='force')")
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +57,7 @@ class ClosedLoop:
     has_sensitivities: ClassVar[bool] = False
 
     def __post_init__(self):
-        kind = _plant_kind(self.plant)
+        kind = input_kind(self.plant, "ClosedLoop")
         if not isinstance(self.controller, Controller):
             raise ParameterError(f"ClosedLoop: controller = {self.controller!r}; give a PID "
                                  "or a Cascade")
@@ -96,7 +85,7 @@ class ClosedLoop:
     @property
     def plant_kind(self) -> str:
         """What the plant's input is: ``force``, ``pressure`` or ``command``."""
-        return _plant_kind(self.plant)
+        return input_kind(self.plant, "ClosedLoop")
 
     @property
     def action(self) -> float:
@@ -164,7 +153,9 @@ class ClosedLoop:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
-                "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True}
+                "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True,
+                "HAS_FEEDFORWARD": self.feedforward is not None,
+                "HAS_DISTURBANCE": self.disturbance is not None}
 
     def kernel_children(self) -> tuple[Child, ...]:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
@@ -215,29 +206,26 @@ class ClosedLoop:
                       hi: float | None = None) -> float:
         """The constant controller output that holds the plant at rest at ``position``
         (friction unloaded), by bisection on the plant's static equilibrium; default
-        bracket: the controller's limits, else the plant input's natural range."""
+        bracket: the controller's limits within the plant's input range."""
         from scipy.optimize import brentq
 
         from ..experiments.actuator import Experiment
-        from ..simulation.assembly import assemble
+        from ..experiments.signals import pack_channels
         from ..simulation.simulate import prepare
         from ..simulation.solvers import Rodas4
 
         plant = self.plant
-        kind = self.plant_kind
-        natural = {"force": (-1e6, 1e6), "command": (0.0, 1.0),
-                   "pressure": (0.0, float(plant.params["p_atm"]))}[kind]
+        if self.plant_kind == "force":
+            return 0.0  # the rig has no spring: any position rests under zero force
+        natural = input_range(plant)
         lo = max(self.controller.u_min * self.drive_gain, natural[0]) if lo is None else lo
         hi = min(self.controller.u_max * self.drive_gain, natural[1]) if hi is None else hi
-        if kind == "force":
-            return 0.0
-        kernel = assemble(plant).kernel
-        y0 = np.empty(len(assemble(plant).states))
+        prep = prepare(plant, Experiment(Constant(lo), plant.drive_quantity, 1.0), Rodas4())
+        y0 = np.empty_like(prep.y0)
 
         def rest(value):
-            prep = prepare(plant, Experiment(Constant(value), plant.drive_quantity, 1.0),
-                           Rodas4())
-            kernel.initial_state(0.0, 0.5, prep.vector, prep.sig, prep.ptr, y0)
+            sig, ptr = pack_channels(plant.channels(Constant(value)))
+            prep.kernel.initial_state(0.0, 0.5, prep.vector, sig, ptr, y0)
             return y0[0] - position
 
         f_lo, f_hi = rest(lo), rest(hi)
