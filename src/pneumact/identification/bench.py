@@ -4,6 +4,13 @@ On a record of chamber pressure and position, the force balance of eq. 1 gives t
 friction force F_f = (p_atm − p)·A_d − (F0 + k·x) − m·a, with velocity and acceleration
 from a Savitzky-Golay filter (zero phase). Steady segments (constant velocity, so ż = 0
 and eq. 12 holds) are found in the velocity itself, so any record with ramps will do.
+
+No threshold here is tuned to one actuator: the differentiation window follows the
+record's own noise and speed (``smoothing_window``), "moving" means faster than a few
+times the velocity noise of that window, and a segment must outlast several windows and
+travel beyond the presliding range the caller states. What remains are ratios
+(``SMOOTHING_NOISE``, the ``keep`` fraction, ``max_variation``, ``max_drift``), each
+explained where it is defined.
 """
 
 from __future__ import annotations
@@ -12,12 +19,29 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.signal import savgol_filter
+from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..errors import DataError
 from ..io.records import Record
+from .inputs import sensor_noise
 
-__all__ = ["Kinematics", "drive_force", "kinematics", "steady_segments"]
+__all__ = ["Kinematics", "drive_force", "kinematics", "smoothing_window", "steady_segments",
+           "velocity_noise"]
+
+#: The differentiation window is the shortest whose velocity noise is at most this
+#: fraction of the record's typical speed: a 5 % noise averages to well below 1 % over
+#: the hundreds of samples of a steady segment, and a longer window only blurs the
+#: break-away transients the segments must exclude.
+SMOOTHING_NOISE = 0.05
+#: "Moving" means a velocity this many times its noise standard deviation (a false
+#: detection of motion from noise alone is then a 5-sigma event).
+MOVING_SIGMAS = 5.0
+#: A steady segment lasts at least this many differentiation windows (so that its mean
+#: velocity and force average independent noise, and its break-away transient, one
+#: window long, is a small part of it).
+SEGMENT_WINDOWS = 4
+#: Shortest and longest differentiation windows, in samples (a cubic filter needs 7).
+MIN_WINDOW_SAMPLES = 7
 
 
 @dataclass(frozen=True)
@@ -31,6 +55,7 @@ class Kinematics:
     acceleration: np.ndarray
     pressure: np.ndarray
     measured_position: np.ndarray
+    window: float
 
 
 def _uniform(record: Record) -> Record:
@@ -40,20 +65,60 @@ def _uniform(record: Record) -> Record:
     return record.resample(float(np.median(dt)))
 
 
-def kinematics(record: Record, window: float = 0.02) -> Kinematics:
+def velocity_noise(samples: int, dt: float, position_noise: float) -> float:
+    """Standard deviation of the cubic Savitzky-Golay velocity over ``samples`` points
+    when the position carries white noise of ``position_noise``."""
+    coefficients = savgol_coeffs(samples, 3, deriv=1, delta=dt)
+    return float(position_noise * np.linalg.norm(coefficients))
+
+
+def _window_samples(n_samples: int, dt: float, position_noise: float, speed: float) -> int:
+    """Smallest odd window whose velocity noise is ``SMOOTHING_NOISE`` × ``speed``."""
+    largest = max(MIN_WINDOW_SAMPLES, (n_samples // 4) | 1)
+    n = MIN_WINDOW_SAMPLES
+    while n < largest and velocity_noise(n, dt, position_noise) > SMOOTHING_NOISE * speed:
+        n = min(largest, int(n * 1.25) | 1)
+    return n
+
+
+def smoothing_window(record: Record, speed: float | None = None) -> float:
+    """Differentiation window [s] for ``record``: the shortest whose velocity noise is
+    ``SMOOTHING_NOISE`` of ``speed`` (default: the record's typical speed, the median
+    |v| of the samples that move, over a window of a fiftieth of the record), from the
+    position noise the record itself shows (``inputs.sensor_noise``)."""
+    rec = _uniform(record)
+    dt = float(rec.time[1] - rec.time[0])
+    x = rec["position"]
+    sigma = max(sensor_noise(x), 1e-12 * max(np.ptp(x), 1e-3))
+    if speed is None:
+        coarse = max(MIN_WINDOW_SAMPLES, (len(rec) // 50) | 1)
+        if coarse >= len(rec):
+            raise DataError(f"{record.source}: {len(rec)} samples are too few to "
+                            "differentiate")
+        v = np.abs(savgol_filter(x, coarse, 3, deriv=1, delta=dt))
+        moving = v[v > MOVING_SIGMAS * velocity_noise(coarse, dt, sigma)]
+        speed = float(np.median(moving)) if moving.size else 0.0
+    if not speed > 0:
+        return MIN_WINDOW_SAMPLES * dt
+    return _window_samples(len(rec), dt, sigma, speed) * dt
+
+
+def kinematics(record: Record, window: float | None = None) -> Kinematics:
     """Smoothed velocity and acceleration of ``record`` (Savitzky-Golay, cubic, over
-    ``window`` seconds; the record is resampled to its median step if not uniform)."""
+    ``window`` seconds; default ``smoothing_window(record)``; the record is resampled
+    to its median step if not uniform)."""
     record.require(["pressure", "position"], "the force balance")
     rec = _uniform(record)
     dt = float(rec.time[1] - rec.time[0])
-    n = max(7, round(window / dt) | 1)
+    window = smoothing_window(rec) if window is None else window
+    n = max(MIN_WINDOW_SAMPLES, round(window / dt) | 1)
     if n >= len(rec):
         raise DataError(f"{record.source}: {len(rec)} samples are too few for a {window} s "
                         "differentiation window")
     x = rec["position"]
     v = savgol_filter(x, n, 3, deriv=1, delta=dt)
     a = savgol_filter(x, n, 3, deriv=2, delta=dt)
-    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec["pressure"], x)
+    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec["pressure"], x, n * dt)
 
 
 def drive_force(pressure: np.ndarray, params) -> np.ndarray:
@@ -67,24 +132,36 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[::2], edges[1::2], strict=True))
 
 
-def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
-                    min_duration: float = 0.2, keep: tuple[float, float] = (0.4, 0.9),
-                    max_variation: float = 0.25, window: float = 0.1,
-                    min_travel: float = 50e-6, max_drift: float = 0.03) -> pd.DataFrame:
+def moving_threshold(kin: Kinematics, record: Record) -> float:
+    """Speed [m/s] above which the record clearly moves: ``MOVING_SIGMAS`` × the
+    velocity noise of the differentiation window."""
+    dt = float(kin.time[1] - kin.time[0])
+    n = max(MIN_WINDOW_SAMPLES, round(kin.window / dt) | 1)
+    sigma = sensor_noise(record["position"])
+    return MOVING_SIGMAS * velocity_noise(n, dt, sigma)
+
+
+def steady_segments(record: Record, params, *, presliding_range: float = 0.0,
+                    keep: tuple[float, float] = (0.4, 0.9), max_variation: float = 0.25,
+                    max_drift: float = 0.03) -> pd.DataFrame:
     """Segments of steady sliding and their mean velocity and friction force.
 
-    A segment is a run of one velocity sign with |v| > ``min_speed`` lasting at least
-    ``min_duration``; of it the fraction ``keep`` (in time) is used, after the
-    break-away transient, and kept only if std(v)/|mean v| < ``max_variation``. The
-    friction is the force balance with F0, k, m and A_d from ``params``; the velocity
-    is the slope of a straight line through the positions (robust to sensor noise).
-    A segment must also travel at least ``min_travel`` (beyond the bristles' presliding
-    range Fs/σ0, some tens of µm: slower creep before break-away is not sliding), its
-    friction must oppose the motion, and the slopes of its two halves must agree within
-    ``max_drift`` (relative): a segment still accelerating after a reversal is not steady.
+    A segment is a run of one velocity sign faster than ``moving_threshold`` lasting at
+    least ``SEGMENT_WINDOWS`` differentiation windows (``smoothing_window``); of it the
+    fraction ``keep`` (in time) is used, after the break-away transient, and kept only if
+    std(v)/|mean v| < ``max_variation`` (a quarter: stick-slip swings the velocity by
+    its whole size). The friction is the force balance with F0, k, m and A_d from
+    ``params``; the velocity is the slope of a straight line through the positions
+    (robust to sensor noise). A segment must also travel more than
+    ``presliding_range`` (a bristle's deflection before gross sliding, about 3·Fs/σ0:
+    slower creep before break-away is not sliding), its friction must oppose the
+    motion, and the slopes of its two halves must agree within ``max_drift`` (3 %: a
+    segment still accelerating after a reversal is not steady).
     """
-    kin = kinematics(record, window)
-    fast = kinematics(record, 0.01).velocity  # follows the mechanics' ringing
+    kin = kinematics(record)
+    fast = kinematics(record, max(kin.window / 10, 0.0)).velocity  # follows the ringing
+    min_speed = moving_threshold(kin, record)
+    min_duration = SEGMENT_WINDOWS * kin.window
     # the measured position: a smoothed one is biased where the motion accelerates, and
     # the noise averages out over a segment anyway
     force = drive_force(kin.pressure, params) - params["F0"] - \
@@ -105,7 +182,7 @@ def steady_segments(record: Record, params, *, min_speed: float = 2e-5,
             slope = np.polyfit(kin.time[sel], kin.position[sel], 1)[0]
             if slope * sign < 2 * min_speed:
                 continue  # a creep or a reversal transient, not steady sliding
-            if abs(slope) * (kin.time[sel][-1] - kin.time[sel][0]) < min_travel:
+            if abs(slope) * (kin.time[sel][-1] - kin.time[sel][0]) <= presliding_range:
                 continue  # presliding creep before break-away
             idx = np.flatnonzero(sel)
             halves = np.array_split(idx, 2)

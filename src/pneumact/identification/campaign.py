@@ -1,21 +1,28 @@
-"""Bench campaigns for the paper's identification procedure (section III.2).
+"""Bench campaigns for the identification procedure (section III.2), designed and simulated.
 
 A campaign is a list of tests, each an ``Experiment`` with a kind the staged procedure
-knows (``sweep``, ``ramp``, ``presliding``) and a sample rate. ``synthetic_campaign``
-simulates it on any parameter set and adds realistic measurement effects (pressure and
-position noise, position quantisation, a seed), giving ``Record`` objects that are the
-basis of the known-answer tests and of ``pneumact campaign``.
+knows (``sweep``, ``ramp``, ``presliding``) and a sample rate. ``design_campaign`` sizes
+the tests for an actuator from a rough prior (datasheet geometry, guessed spring and
+friction, and how far off the guesses may be), and ``CampaignPlan.to_pandas()`` prints
+them as a table a technician can run on a real bench. ``synthetic_campaign`` simulates a
+campaign on any parameter set and adds realistic measurement effects (pressure and
+position noise, position quantisation, a position-sensor lag, a seed), giving ``Record``
+objects: the basis of the known-answer tests and of ``pneumact campaign``.
 
 How the tests are driven, and why:
 
 - ``sweep`` and ``ramp`` go through the pressure regulator (the paper's EPC) on a
-  pressure set-point, and record the chamber pressure: the chamber damps the mechanics,
-  so the actuator slides steadily even at 0.1 mm/s. Driven by an ideal pressure source
-  it would stick-slip below about 6·vs (σ2 + g'(v) < 0 with δ = 1), and eq. 12 would
-  have no steady data there.
-- ``presliding`` prescribes fast pressure steps (2 ms, as a fast solenoid valve gives)
-  after a stop and a partial reversal, so that the stuck mode (~67 Hz, damped by σ1)
-  rings: slow excitation shows the stiffness σ0 only, never the damping σ1.
+  pressure set-point, and record the chamber pressure and the set-point: the chamber
+  damps the mechanics, so the actuator slides steadily even at 0.1 mm/s. Driven by an
+  ideal pressure source it would stick-slip below about 6·vs (σ2 + g'(v) < 0 with
+  δ = 1), and eq. 12 would have no steady data there.
+- ``presliding`` prescribes fast pressure steps (as a fast solenoid valve gives) after
+  a stop and a partial reversal, so that the stuck mode rings: slow excitation shows
+  the stiffness σ0 only, never the damping σ1.
+
+Every corner of a set-point lies on the test's sampling grid: a bench controller changes
+its set-point at its own samples, and a corner between two logged samples would be cut
+by the record the identification reads.
 """
 
 from __future__ import annotations
@@ -24,12 +31,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from ..errors import ExperimentError
 from ..experiments import Experiment, PiecewiseLinear
 from ..io.records import Record
 
-__all__ = ["BenchTest", "Noise", "add_noise", "paper_campaign", "synthetic_campaign"]
+__all__ = ["BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
+           "paper_campaign", "synthetic_campaign"]
 
 KINDS = ("sweep", "ramp", "presliding")
 
@@ -52,14 +61,20 @@ class BenchTest:
 
 @dataclass(frozen=True)
 class Noise:
-    """Measurement effects: white noise (standard deviations, SI) and the position
-    sensor's resolution [m] (0: none)."""
+    """Measurement effects: white noise (standard deviations, SI), the position sensor's
+    resolution [m] (0: none) and its first-order lag [s] (0: none)."""
 
     pressure: float = 20.0
     position: float = 1e-6
     resolution: float = 1e-6
+    lag: float = 0.0
 
-    def apply(self, rng: np.random.Generator, pressure: np.ndarray, position: np.ndarray):
+    def apply(self, rng: np.random.Generator, pressure: np.ndarray, position: np.ndarray,
+              time: np.ndarray | None = None):
+        if self.lag > 0:
+            if time is None:
+                raise ExperimentError("Noise.apply: a sensor lag needs the sample times")
+            position = _first_order_lag(time, position, self.lag)
         pressure = pressure + rng.normal(0.0, self.pressure, pressure.shape)
         position = position + rng.normal(0.0, self.position, position.shape)
         if self.resolution > 0:
@@ -67,18 +82,33 @@ class Noise:
         return pressure, position
 
 
-def _piecewise(points: Sequence[tuple[float, float]]) -> PiecewiseLinear:
+def _first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
+    """``values`` seen through a first-order sensor of time constant ``tau`` (exact for
+    a signal linear between samples)."""
+    out = np.empty_like(values)
+    out[0] = values[0]
+    for i in range(1, values.size):
+        h = time[i] - time[i - 1]
+        a = np.exp(-h / tau)
+        slope = (values[i] - values[i - 1]) / h
+        out[i] = values[i] - tau * slope + a * (out[i - 1] - values[i - 1] + tau * slope)
+    return out
+
+
+def _piecewise(points: Sequence[tuple[float, float]], rate: float) -> PiecewiseLinear:
     """A set-point from (duration of the segment [s], value at its end [Pa]) pairs,
-    starting from the first value."""
+    starting from the first value, with every corner on the sampling grid (a bench
+    controller changes its set-point at its own samples; a corner between two samples
+    would be cut by the logged record)."""
     times, values = [0.0], [points[0][1]]
     for duration, value in points[1:]:
-        times.append(times[-1] + duration)
+        times.append(times[-1] + max(round(duration * rate), 1) / rate)
         values.append(value)
     return PiecewiseLinear(times, values)
 
 
 def _test(name, kind, points, valve, rate) -> BenchTest:
-    drive = _piecewise(points)
+    drive = _piecewise(points, rate)
     t_end = float(drive.breakpoints()[-1])
     n = round(t_end * rate) + 1
     return BenchTest(name, kind, Experiment(drive, "pressure", t_end, n_points=n, name=name),
@@ -125,23 +155,194 @@ def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e
     return tests
 
 
+# --------------------------------------------------------------------------- design
+#: Ramps per campaign, log-spaced in speed.
+RAMP_SPEEDS = 10
+#: Lowest ramp speed [m/s]: below it a regulator-driven diaphragm seldom slides steadily.
+MIN_RAMP_SPEED = 5e-5
+#: Eq. 13 needs the Stribeck term below this fraction of Fc at its slowest speed.
+STRIBECK_NEGLIGIBLE = 2e-3
+#: Fraction of the chamber's largest pressure rate a regulator ramp may ask for (the rest
+#: is the regulator's margin to track it).
+REGULATOR_MARGIN = 0.5
+#: Presliding steps: this fraction of the prior's Fs/A_d. After the reversal by the lowest
+#: plausible Fs/A_d, the friction swings within ±0.85·Fs whatever the true Fs within
+#: ±50 % of the prior: below break-away.
+PRESLIDING_STEP = 0.35
+
+
+@dataclass(frozen=True)
+class CampaignPlan:
+    """The tests of a designed campaign and why each is there (see ``design_campaign``)."""
+
+    tests: list[BenchTest]
+    purposes: dict[str, str]
+    speeds: dict[str, float]  # test -> target sliding speed [m/s]
+    prior: object
+    spread: float
+    notes: list[str]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per test, in the units a bench technician sets: kPa, kPa/s, mm/s, s,
+        Hz."""
+        rows = []
+        for test in self.tests:
+            drive = test.experiment.drive
+            times = np.asarray(drive.breakpoints(), dtype=float)
+            values = drive(times)
+            rates = np.abs(np.diff(values) / np.diff(times))
+            rows.append({
+                "test": test.name, "kind": test.kind,
+                "valve": "pressure regulator (set-point)" if test.valve == "regulator"
+                else "fast valve (pressure steps)",
+                "from [kPa abs]": values[0] * 1e-3,
+                "lowest [kPa abs]": values.min() * 1e-3,
+                "highest [kPa abs]": values.max() * 1e-3,
+                "ramp rate [kPa/s]": float(np.median(rates[rates > 0])) * 1e-3
+                if test.kind != "presliding" else np.nan,
+                "expected speed [mm/s]": self.speeds.get(test.name, np.nan) * 1e3,
+                "duration [s]": float(times[-1] - times[0]),
+                "sample rate [Hz]": test.sample_rate,
+                "purpose": self.purposes[test.name]})
+        return pd.DataFrame(rows).set_index("test")
+
+    def breakpoints(self, test: str) -> pd.DataFrame:
+        """The set-point of one test as (time [s], pressure [kPa abs]) corners."""
+        chosen = next(t for t in self.tests if t.name == test)
+        times = np.asarray(chosen.experiment.drive.breakpoints(), dtype=float)
+        return pd.DataFrame({"time [s]": times,
+                             "pressure [kPa abs]": chosen.experiment.drive(times) * 1e-3})
+
+
+def _regulator_reach(params) -> float:
+    """Fastest steady sliding speed [m/s] a regulator ramp can ask for: a share
+    ``REGULATOR_MARGIN`` of the chamber's largest pressure rate (choked flow through the
+    smaller valve area into the rest volume), moving the spring k·v/A_d."""
+    gamma, r, temp = params["gamma"], params["R"], params["T"]
+    choked = (2 / (gamma + 1)) ** ((gamma + 1) / (2 * (gamma - 1)))
+    area = min(params["A_res"], params["A_atm"])
+    flow = area * params["p_atm"] * np.sqrt(gamma / (r * temp)) * choked
+    rate = r * temp * flow / params["V0"]  # Pa/s, isothermal
+    return float(REGULATOR_MARGIN * rate * params["A_d"] / params["k"])
+
+
+def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
+                    sweep_period: float | None = None) -> CampaignPlan:
+    """Tests that let the identification pin down every parameter of an actuator known
+    roughly as ``prior`` (each spring and friction value within ±``spread``):
+
+    - a quasi-static sweep from p_atm to the pressure that draws the diaphragm to 90 % of
+      its stroke (x_max) and back (F0, k), at about three times the highest plausible vs;
+    - ``ramps`` ramp pairs, both directions from mid-stroke, at log-spaced steady speeds
+      from a third of the lowest plausible vs (at least ``MIN_RAMP_SPEED``) up to where
+      the Stribeck term of the highest plausible vs and Fs − Fc falls below
+      ``STRIBECK_NEGLIGIBLE``·Fc (eq. 13), capped by what the regulator can follow;
+    - a presliding test: a stop at mid-stroke, a reversal by the lowest plausible
+      Fs/A_d (the friction unloads towards zero without breaking away backwards), then
+      fast steps of ``PRESLIDING_STEP``·Fs/A_d (Fs at its lowest), each rising in
+      a fifth of the stuck-mode period (0.5 to 2 ms, a fast solenoid valve) and held
+      for ten decay times, sampled at 20 points per stuck period and 10 per rise (the
+      rebuilt input must resolve each step's corners).
+    """
+    if not 0 <= spread < 1:
+        raise ExperimentError(f"design_campaign: spread = {spread}; must be in [0, 1)")
+    if ramps < 3:
+        raise ExperimentError(f"design_campaign: ramps = {ramps}; need at least 3")
+    lo, hi = 1.0 - spread, 1.0 + spread
+    p_atm, area, k, f0 = (prior[n] for n in ("p_atm", "A_d", "k", "F0"))
+    x_max, m = prior["x_max"], prior["m"]
+    fc, fs, vs, delta = (prior[n] for n in ("Fc", "Fs", "vs", "delta"))
+    floor = prior["p_res"] + 0.05 * (p_atm - prior["p_res"])  # the regulator's reach
+    reach = _regulator_reach(prior)
+    purposes, speeds = {}, {}
+
+    # sweep: 90 % of the stroke, at three times the highest plausible vs
+    low = max(p_atm - (f0 + 0.9 * k * x_max + fs * hi) / area, floor)
+    sweep_speed = float(np.clip(3 * vs * hi, 2e-4, 2e-3))
+    travel = ((p_atm - low) * area - f0) / k
+    period = sweep_period or max(2 * travel / sweep_speed, 4.0)
+    rate = 1000.0 if period < 200 else 100.0
+    tests = [_test("sweep", "sweep", [(0, p_atm), (1.0, p_atm), (period / 2, low),
+                                      (period / 2, p_atm), (1.0, p_atm)], "regulator", rate)]
+    purposes["sweep"] = "F0, k (stage a): both branches over 90 % of the stroke"
+    speeds["sweep"] = 2 * travel / period
+
+    # ramps: around the plausible vs, up to where eq. 13 holds
+    amplitude = (fs - fc) * hi
+    eq13 = vs * hi * max(np.log(max(amplitude / (STRIBECK_NEGLIGIBLE * fc * lo), 1.0)),
+                         1.0) ** (1 / delta)
+    slowest = max(vs * lo / 3, MIN_RAMP_SPEED)
+    fastest = reach  # a wide speed range above vs is what separates σ2 from Fc
+    notes = []
+    if fastest < 2 * eq13:
+        notes.append(f"eq. 13 wants steady sliding up to {2 * eq13 * 1e3:.3g} mm/s, the "
+                     f"regulator follows ramps up to about {reach * 1e3:.3g} mm/s: Fc and "
+                     "σ2 then rest on the joint fit of eq. 12")
+    if fastest <= 3 * slowest:
+        raise ExperimentError(f"design_campaign: the regulator follows ramps up to "
+                              f"{reach * 1e3:.3g} mm/s, too close to the slowest useful "
+                              f"ramp {slowest * 1e3:.3g} mm/s (vs/3) for a speed sweep")
+    mid = p_atm - (f0 + k * 0.3 * x_max) / area  # 30 % of the stroke
+    band = 2.0 * fs * hi / area
+    for v in np.geomspace(slowest, fastest, ramps):
+        v = float(f"{v:.2g}")
+        pressure_rate = k * v / area
+        ramp_travel = min(0.5 * x_max, max(0.03 * x_max, 3.0 * v))
+        span = min(k * ramp_travel / area + band, mid - floor)
+        duration = span / pressure_rate
+        sample_rate = float(np.clip(400.0 / duration, 500.0, 2000.0))
+        name = f"ramp_{v * 1e3:g}mm_s"
+        tests.append(_test(name, "ramp",
+                           [(0, p_atm), (0.5, p_atm), (1.5, mid), (0.5, mid),
+                            (duration, mid - span), (0.5, mid - span), (duration, mid),
+                            (0.5, mid)], "regulator", sample_rate))
+        speeds[name] = v
+        role = "Fs, vs (eq. 12)" if v < eq13 else "Fc, σ2 (eq. 13)"
+        purposes[name] = f"{role}: steady sliding at {v * 1e3:.3g} mm/s both ways"
+
+    # presliding: fast small steps below break-away after a stop
+    period_stuck = 2 * np.pi * np.sqrt(m / (k + prior["sigma0"] * hi))
+    rise = float(np.clip(period_stuck / 5, 5e-4, 2e-3))
+    damping = prior["sigma1"] * lo + prior["sigma2"] * lo
+    stiffness = k + prior["sigma0"] * lo
+    decay = max(2 * m / damping, damping / stiffness) if damping > 0 else 1.0
+    hold = float(np.clip(10 * decay, 0.1, 1.0))
+    sample_rate = float(np.clip(max(20 / period_stuck, 10 / rise), 2000.0, 20000.0))
+    step = PRESLIDING_STEP * fs / area
+    reversal = fs * lo / area  # unloads the friction towards 0 whatever Fs within the spread
+    points = [(0, p_atm), (0.2, p_atm), (1.5, mid), (0.3, mid), (0.02, mid + reversal),
+              (0.3, mid + reversal)]
+    for sign in (1, -2, 2, -2, 1):
+        points += [(rise, points[-1][1] + sign * step), (hold, points[-1][1] + sign * step)]
+    tests.append(_test("presliding", "presliding", points, "source", sample_rate))
+    purposes["presliding"] = (f"σ0, σ1 (stage d): steps of {step * 1e-3:.3g} kPa in "
+                              f"{rise * 1e3:.2g} ms, held {hold:.2g} s, below break-away")
+    return CampaignPlan(tests, purposes, speeds, prior, spread, notes)
+
+
 def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
-                       noise: Noise | None = None, seed: int = 0, friction=None
-                       ) -> list[Record]:
-    """Simulate each bench test on ``params`` (LuGre friction unless ``friction``) and
+                       noise: Noise | None = None, seed: int = 0, friction=None,
+                       chamber=None, solver=None) -> list[Record]:
+    """Simulate each bench test on ``params`` (LuGre friction unless ``friction``, an
+    isothermal chamber unless ``chamber``; default tests ``design_campaign(params)``) and
     return measured-like records: chamber pressure [Pa abs] and position [m] (and the
     regulator's set-point [Pa abs], as commanded, for the regulator-driven tests) with
     ``noise`` (default ``Noise()``; ``Noise(0, 0, 0)`` for exact data), reproducible by
-    ``seed``. Each record's ``meta`` holds its kind and the truth's parameter set name."""
-    from ..models import Actuator, LuGre, PressureRegulator, PressureSource
-    from ..simulation import simulate
+    ``seed``. The simulation runs at rtol 1e-9 unless ``solver``: a campaign stands for
+    measurements, which carry no integration error. Each record's ``meta`` holds its
+    kind and the truth's parameter set name."""
+    from ..models import Actuator, Isothermal, LuGre, PressureRegulator, PressureSource
+    from ..simulation import Rodas4, simulate
 
-    tests = paper_campaign(params) if tests is None else list(tests)
+    tests = design_campaign(params).tests if tests is None else list(tests)
     friction = LuGre() if friction is None else friction
+    chamber = Isothermal() if chamber is None else chamber
+    solver = Rodas4(rtol=1e-9) if solver is None else solver
     records = []
     for test in tests:
         valve = PressureRegulator() if test.valve == "regulator" else PressureSource()
-        result = simulate(Actuator(params, friction=friction, valve=valve), test.experiment)
+        model = Actuator(params, friction=friction, valve=valve, chamber=chamber)
+        result = simulate(model, test.experiment, solver)
         signals = {"pressure": result["pressure"], "position": result["position"]}
         if test.valve == "regulator":  # the bench logs what it commanded, too
             signals["setpoint"] = test.experiment.drive(result.time)
@@ -157,7 +358,7 @@ def add_noise(records: Sequence[Record], noise: Noise, seed: int = 0) -> list[Re
     rng = np.random.default_rng(seed)
     noisy = []
     for rec in records:
-        pressure, position = noise.apply(rng, rec["pressure"], rec["position"])
+        pressure, position = noise.apply(rng, rec["pressure"], rec["position"], rec.time)
         signals = {**rec.signals, "pressure": pressure, "position": position}
         noisy.append(Record.from_arrays(rec.time, signals, rec.units, rec.source,
                                         {**rec.meta, "seed": str(seed)}))

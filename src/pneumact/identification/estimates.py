@@ -16,6 +16,11 @@ from ..errors import DataError
 
 __all__ = ["Estimates", "covariance_from_jacobian", "linear_least_squares"]
 
+#: Directions of the column-scaled information matrix whose singular value is below this
+#: fraction of the largest are not determined by the data (their variance is infinite):
+#: far above round-off (1e-16) and far below any direction a fit resolves.
+RANK_TOLERANCE = 1e-10
+
 
 @dataclass(frozen=True, eq=False)
 class Estimates:
@@ -81,11 +86,7 @@ def covariance_from_jacobian(jac: np.ndarray, residuals: np.ndarray, n_par: int,
     jac = np.asarray(jac, dtype=float)
     residuals = np.asarray(residuals, dtype=float)
     dof = residuals.size - n_par
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
-    tol = (sv.max() if sv.size else 0.0) * max(jac.shape) * np.finfo(float).eps
-    if sv.size < n_par or sv.min() <= tol:
-        return np.full((n_par, n_par), np.inf), dof  # not identifiable from these data
-    bread = (vt.T / sv**2) @ vt
+    bread = _inverse_information(jac, n_par)
     if not correlated:
         s2 = float(residuals @ residuals) / dof if dof > 0 else np.nan
         return s2 * bread, dof
@@ -100,11 +101,47 @@ def covariance_from_jacobian(jac: np.ndarray, residuals: np.ndarray, n_par: int,
     return scale * bread @ meat @ bread, dof
 
 
+#: Up to this bandwidth the lag sums are direct products (O(L·n·P²)), beyond it FFTs
+#: (O(P²·n·log n)).
+DIRECT_BANDWIDTH = 32
+
+
+def _inverse_information(jac: np.ndarray, n_par: int) -> np.ndarray:
+    """(JᵀJ)⁻¹, computed on the column-scaled Jacobian (parameters of very different
+    magnitudes must not look rank-deficient); a parameter the data do not determine
+    (a direction of JᵀJ below round-off, ``RANK_TOLERANCE``) gets an infinite variance,
+    the others keep theirs."""
+    scale = np.linalg.norm(jac, axis=0)
+    if jac.shape[1] < n_par or np.any(scale == 0):
+        dead = np.zeros(n_par, bool) if jac.shape[1] < n_par else scale == 0
+        if jac.shape[1] < n_par:
+            dead[:] = True
+        return _with_infinite(np.zeros((n_par, n_par)), dead)
+    _, sv, vt = np.linalg.svd(jac / scale, full_matrices=False)
+    keep = sv > RANK_TOLERANCE * sv.max()
+    inverse = (vt[keep].T / sv[keep] ** 2) @ vt[keep]
+    # a parameter with a share of a discarded direction is not determined by the data
+    dead = np.any(np.abs(vt[~keep]) > 0.1, axis=0) if np.any(~keep) else np.zeros(n_par, bool)
+    return _with_infinite(inverse / np.outer(scale, scale), dead)
+
+
+def _with_infinite(covariance: np.ndarray, dead: np.ndarray) -> np.ndarray:
+    """``covariance`` with the rows and columns of the ``dead`` parameters infinite."""
+    covariance = covariance.copy()
+    covariance[dead, :] = np.inf
+    covariance[:, dead] = np.inf
+    return covariance
+
+
 def _long_run_covariance(g: np.ndarray, bandwidth: int) -> np.ndarray:
-    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ, by FFT (O(P²·n·log n))."""
+    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ."""
     n, p = g.shape
-    if bandwidth == 0:
-        return g.T @ g
+    if bandwidth <= DIRECT_BANDWIDTH:
+        out = g.T @ g
+        for lag in range(1, min(bandwidth, n - 1) + 1):
+            cross = g[lag:].T @ g[:-lag]
+            out += (1.0 - lag / (bandwidth + 1.0)) * (cross + cross.T)
+        return out
     spectra = np.fft.rfft(g, 2 * n, axis=0)
     weights = 1.0 - np.arange(1, bandwidth + 1) / (bandwidth + 1.0)
     out = np.empty((p, p))

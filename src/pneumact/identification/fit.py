@@ -48,20 +48,27 @@ class _Column:
 class _Problem:
     """The residual vector and its Jacobian as functions of the free parameters."""
 
-    def __init__(self, model, records, columns, log, signals, weights, solver, jacobian,
-                 base_values, window, smooth_input=True):
-        self.model, self.records, self.columns = model, list(records), list(columns)
+    def __init__(self, models, records, columns, log, signals, weights, solver, jacobian,
+                 base_values, windows, smooth_input=True, record_weights=None):
+        self.models, self.records, self.columns = list(models), list(records), list(columns)
         self.log = np.asarray(log, dtype=bool)
         self.signals, self.weights, self.solver = tuple(signals), dict(weights), solver
+        self.record_weights = (np.ones(len(self.records)) if record_weights is None
+                               else np.asarray(record_weights, dtype=float))
         self.jacobian = jacobian
         self.base = dict(base_values)
-        self.experiments = [experiment_for(model, r, smooth_input) for r in self.records]
-        lo, hi = window if window is not None else (-np.inf, np.inf)
-        self.masks = [(r.time >= lo) & (r.time <= hi) for r in self.records]
-        for r, m in zip(self.records, self.masks, strict=True):
-            if m.sum() < 2:
-                raise DataError(f"fit: window {window} s leaves {m.sum()} samples of "
+        #: the parameters each record's model reads (a joint fit mixes valves)
+        self.model_parameters = [_parameter_names(m) for m in self.models]
+        self.experiments = [experiment_for(m, r, smooth_input)
+                            for m, r in zip(self.models, self.records, strict=True)]
+        self.masks = []
+        for r, window in zip(self.records, windows, strict=True):
+            lo, hi = window if window is not None else (-np.inf, np.inf)
+            mask = (r.time >= lo) & (r.time <= hi)
+            if mask.sum() < 2:
+                raise DataError(f"fit: window {window} s leaves {mask.sum()} samples of "
                                 f"{r.source} ({r.time[0]:.6g}..{r.time[-1]:.6g} s)")
+            self.masks.append(mask)
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
 
@@ -80,12 +87,24 @@ class _Problem:
         out[self.log] = np.log(out[self.log])
         return out
 
+    def weight(self, i: int, signal: str) -> float:
+        """Weight of record ``i``'s residuals of ``signal``."""
+        return self.weights[signal] * self.record_weights[i]
+
     def values_for(self, theta: np.ndarray, i: int) -> dict[str, float]:
-        values = dict(self.base)
+        """Parameter values of record ``i``'s model at ``theta``."""
+        own = self.model_parameters[i]
+        values = {n: v for n, v in self.base.items() if n in own}
         for col, value in zip(self.columns, theta, strict=True):
-            if not col.offset and col.record in (None, i):
+            if not col.offset and col.record in (None, i) and col.name in own:
                 values[col.name] = float(value)
         return values
+
+    def free_names(self, i: int) -> list[str]:
+        """The free parameters record ``i``'s model reads, in column order."""
+        own = self.model_parameters[i]
+        return [c.name for c in self.columns
+                if not c.offset and c.record in (None, i) and c.name in own]
 
     def offset_of(self, theta: np.ndarray, i: int, signal: str) -> float:
         return sum(float(v) for c, v in zip(self.columns, theta, strict=True)
@@ -101,17 +120,17 @@ class _Problem:
         if cached is not None and (cached[1] is not None or not with_jacobian):
             return cached
         rows, blocks, results = [], [], []
-        for i, (record, experiment) in enumerate(zip(self.records, self.experiments,
-                                                     strict=True)):
+        for i, (model, record, experiment) in enumerate(zip(
+                self.models, self.records, self.experiments, strict=True)):
             values = self.values_for(theta, i)
-            names = [c.name for c in self.columns if not c.offset and c.record in (None, i)]
+            names = self.free_names(i)
             try:
                 if with_jacobian and names:
-                    sens = simulate_sensitivities(self.model, experiment, names, self.solver,
+                    sens = simulate_sensitivities(model, experiment, names, self.solver,
                                                   t_eval=record.time, values=values)
                     result = sens.result
                 else:
-                    result = simulate(self.model, experiment, self.solver, t_eval=record.time,
+                    result = simulate(model, experiment, self.solver, t_eval=record.time,
                                       values=values)
             except SolverError as exc:
                 shown = ", ".join(f"{c.label}={v:.6g}" for c, v in zip(self.columns, theta,
@@ -122,7 +141,7 @@ class _Problem:
             results.append(result)
             mask = self.masks[i]
             rows.append(np.concatenate([
-                self.weights[s] * (result[s] + self.offset_of(theta, i, s) - record[s])[mask]
+                self.weight(i, s) * (result[s] + self.offset_of(theta, i, s) - record[s])[mask]
                 for s in self.signals]))
             if with_jacobian:
                 blocks.append(self._block(i, sens if names else None, mask))
@@ -136,15 +155,16 @@ class _Problem:
         """Rows of record ``i`` in the Jacobian (θ-space)."""
         n = int(mask.sum())
         block = np.zeros((n * len(self.signals), len(self.columns)))
+        own = self.model_parameters[i]
         k = 0
         for j, col in enumerate(self.columns):
-            if col.record not in (None, i):
+            if col.record not in (None, i) or (not col.offset and col.name not in own):
                 continue
             if col.offset:
                 q = self.signals.index(col.name)
-                block[q * n:(q + 1) * n, j] = self.weights[col.name]
+                block[q * n:(q + 1) * n, j] = self.weight(i, col.name)
                 continue
-            block[:, j] = np.concatenate([self.weights[s] * sens[s][mask, k]
+            block[:, j] = np.concatenate([self.weight(i, s) * sens[s][mask, k]
                                           for s in self.signals])
             k += 1
         return block
@@ -167,18 +187,62 @@ def experiment_for(model, record: Record, smooth: bool = False):
     piecewise linear (``identification.inputs``), which also leaves the integrator far
     fewer breakpoints than one per sample."""
     from ..experiments import from_samples
-    from .inputs import piecewise_linear_input
 
     signal = _input_name(model)
     if not smooth:
         return record.to_experiment(model.drive_quantity, signal=signal)
-    per_record = _REBUILT_INPUTS.setdefault(record, {})
-    if signal not in per_record:  # records are immutable: rebuild each input once
-        per_record[signal] = piecewise_linear_input(record.time, record[signal])
-    knots_t, knots_v = per_record[signal]
+    knots_t, knots_v = rebuilt_input(model, record)
     return from_samples(knots_t, knots_v, model.drive_quantity,
                         name=os.path.basename(record.source) or "record",
                         n_points=record.time.size)
+
+
+def rebuilt_input(model, record: Record) -> tuple[np.ndarray, np.ndarray]:
+    """(knot times, knot values) of the record's measured input as rebuilt piecewise
+    linear (``identification.inputs``) to drive ``model``; computed once per record."""
+    from .inputs import piecewise_linear_input
+
+    signal = _input_name(model)
+    per_record = _REBUILT_INPUTS.setdefault(record, {})
+    if signal not in per_record:  # records are immutable: rebuild each input once
+        per_record[signal] = piecewise_linear_input(record.time, record[signal])
+    return per_record[signal]
+
+
+def input_signal(model) -> str:
+    """The record signal that drives ``model``: the regulator's set-point, else the
+    model's drive quantity (pressure, command)."""
+    return _input_name(model)
+
+
+def _models_per_record(model, n: int) -> list:
+    """One model per record: ``model`` for all, or a sequence of ``n`` models."""
+    if isinstance(model, Sequence) and not isinstance(model, str):
+        models = list(model)
+        if len(models) != n:
+            raise ParameterError(f"fit: {len(models)} models for {n} records; give one "
+                                 "model, or one per record")
+        return models
+    return [model] * n
+
+
+def _windows_per_record(window, n: int) -> list:
+    """One (t0, t1) window or None per record, from one window for all or a sequence."""
+    if window is None:
+        return [None] * n
+    if len(window) == 2 and all(isinstance(w, int | float | np.floating) for w in window):
+        return [tuple(map(float, window))] * n
+    windows = list(window)
+    if len(windows) != n:
+        raise ParameterError(f"fit: {len(windows)} windows for {n} records; give one "
+                             "(t0, t1) window, or one per record (None for all of it)")
+    return [None if w is None else tuple(map(float, w)) for w in windows]
+
+
+def _parameter_names(model) -> frozenset[str]:
+    from ..simulation.assembly import assemble
+
+    return frozenset(assemble(model).parameter_names)
 
 
 def _input_name(model) -> str:
@@ -253,6 +317,32 @@ class FitResult:
     model: object = None
     window: tuple[float, float] | None = None
     weights: dict[str, float] = field(default_factory=dict)
+    #: the model of each record (one model for all, unless a joint fit mixes valves)
+    models: list = field(default_factory=list)
+    #: the (t0, t1) window of each record's residuals (None: all of it)
+    windows: list = field(default_factory=list)
+    #: the search bounds (low, high) of each estimate
+    bounds: tuple[np.ndarray, np.ndarray] = (np.empty(0), np.empty(0))
+    #: the weight of each record's residuals (times the signal's ``weights``)
+    record_weights: np.ndarray = field(default_factory=lambda: np.ones(0))
+
+    def weight(self, i: int, signal: str) -> float:
+        """Weight of record ``i``'s residuals of ``signal`` in the fit."""
+        extra = self.record_weights[i] if len(self.record_weights) else 1.0
+        return self.weights[signal] * extra
+
+    def fitted(self, i: int, signal: str) -> np.ndarray:
+        """The model's ``signal`` for record ``i`` as fitted: simulated, plus the
+        record's sensor offset if one was fitted."""
+        offset = sum(float(v) for n, v in self.values.items()
+                     if n == f"offset_{signal}[{i}]")
+        return self.simulated[i][signal] + offset
+
+    def masks(self) -> list[np.ndarray]:
+        """Per record, the samples whose residuals the fit used (its window)."""
+        return [np.ones(r.time.size, bool) if w is None else
+                (r.time >= w[0]) & (r.time <= w[1])
+                for r, w in zip(self.records, self.windows, strict=True)]
 
     @property
     def values(self) -> dict[str, float]:
@@ -343,7 +433,8 @@ class FitResult:
 
 # --------------------------------------------------------------------------- fitting
 def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
-             offsets: Sequence[str] = ()) -> list[_Column]:
+             offsets: Sequence[str] = (), offset_records: Sequence[int] | None = None
+             ) -> list[_Column]:
     unknown = [n for n in per_record if n not in free]
     if unknown:
         raise ParameterError(f"fit: per_record names {unknown} are not among the free "
@@ -354,9 +445,13 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
             cols += [_Column(f"{name}[{i}]", name, i) for i in range(n_records)]
         else:
             cols.append(_Column(name, name, None))
+    which = range(n_records) if offset_records is None else sorted(set(offset_records))
+    bad = [i for i in which if not 0 <= i < n_records]
+    if bad:
+        raise ParameterError(f"fit: offset_records {bad} are not record indices "
+                             f"(0..{n_records - 1})")
     for signal in offsets:
-        cols += [_Column(f"offset_{signal}[{i}]", signal, i, offset=True)
-                 for i in range(n_records)]
+        cols += [_Column(f"offset_{signal}[{i}]", signal, i, offset=True) for i in which]
     return cols
 
 
@@ -432,8 +527,14 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         profile: Sequence[str] = (), profile_points: int = 8, max_nfev: int | None = None,
         offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
         smooth_input: bool = True, covariance: str = "hac",
-        progress: Callable[[str, float], None] | None = None) -> FitResult:
+        progress: Callable[[str, float], None] | None = None,
+        offset_records: Sequence[int] | None = None,
+        record_weights: Sequence[float] | None = None) -> FitResult:
     """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
+
+    ``model`` is one model for every record, or a sequence with one model per record
+    (a joint fit of records made through different valves: the parameters are shared
+    by name, and each record's model reads those it has).
 
     ``start`` gives starting values (default: the model's parameter set); ``weights``
     multiplies each signal's residual (default 1/std of the measured signal); ``loss``
@@ -442,15 +543,21 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
     profile likelihood is computed. ``offsets`` names signals that get a free additive
     sensor offset per record; ``window`` = (t0, t1) restricts the residuals to that time
-    span (the simulation still starts at each record's start). ``smooth_input`` rebuilds
+    span (the simulation still starts at each record's start), or gives one such window
+    (or None) per record. ``smooth_input`` rebuilds
     a noisy measured input as piecewise linear before it drives the model (see
     ``identification.inputs``: noise on the input dithers LuGre bristles and biases the
     estimates). ``covariance`` is "hac" (residuals correlated in time, the default) or
-    "iid" (see ``estimates.covariance_from_jacobian``).
+    "iid" (see ``estimates.covariance_from_jacobian``). ``offset_records`` limits the
+    ``offsets`` to those record indices (default: every record). ``record_weights``
+    multiply each record's residuals (default 1): records whose measurement carries
+    more noise than others (a noisy measured input) count for less.
     """
     records = [records] if isinstance(records, Record) else list(records)
     if not records:
         raise DataError("fit: give at least one record")
+    models = _models_per_record(model, len(records))
+    windows = _windows_per_record(window, len(records))
     free = list(dict.fromkeys(free))
     if not free:
         raise ParameterError("fit: give at least one free parameter")
@@ -460,22 +567,24 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         raise ParameterError(f"fit: jacobian = {jacobian!r}; allowed: sensitivities, "
                              "2-point, 3-point")
     signals = tuple(signals)
-    for rec in records:
-        rec.require([*signals, _input_name(model)], "this fit")
+    for rec, own in zip(records, models, strict=True):
+        rec.require([*signals, _input_name(own)], "this fit")
     from ..simulation import Rodas4
     from ..simulation.assembly import assemble
 
-    assembly = assemble(model)
-    assembly.check_parameters(free, "fit")
-    base = assembly.values(assembly.pack())
-    unknown = [n for n in (start or {}) if n not in base]
-    if unknown:
-        assembly.check_parameters(unknown, "fit start")
+    assemblies = [assemble(m) for m in dict.fromkeys(models)]
+    base: dict[str, float] = {}
+    for assembly in assemblies:
+        base.update(assembly.values(assembly.pack()))
+    for names_, what in ((free, "fit"), (list(start or {}), "fit start")):
+        unknown = [n for n in names_ if n not in base]
+        if unknown:
+            assemblies[0].check_parameters(unknown, what)
     bad = [s for s in offsets if s not in signals]
     if bad:
         raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
                              f"({', '.join(signals)})")
-    columns = _columns(free, per_record, len(records), offsets)
+    columns = _columns(free, per_record, len(records), offsets, offset_records)
     theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.name, base[c.name]))
                        for c in columns])
     names_log = free if log is True else ([] if log is False else list(log))
@@ -487,8 +596,13 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         for s in signals:
             y = np.concatenate([r[s] for r in records])
             weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
-    problem = _Problem(model, records, columns, log_mask, signals, weights,
-                       solver or Rodas4(rtol=1e-6), jacobian, base, window, smooth_input)
+    if record_weights is not None and (len(record_weights) != len(records) or not all(
+            np.isfinite(w) and w > 0 for w in record_weights)):
+        raise ParameterError(f"fit: record_weights = {list(record_weights)}; need one "
+                             f"finite weight > 0 per record ({len(records)})")
+    problem = _Problem(models, records, columns, log_mask, signals, weights,
+                       solver or Rodas4(rtol=1e-6), jacobian, base, windows, smooth_input,
+                       record_weights)
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]
@@ -516,8 +630,10 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
          for k, (s0, sol) in enumerate(zip(starts, solutions, strict=True))])
     result = FitResult(est, records, simulated, stats, r, float(best.cost), float(aic),
                        bool(best.success), str(best.message), int(best.nfev),
-                       problem.simulations, 0.0, signals, jac, start_table, {}, base, model,
-                       window, dict(weights))
+                       problem.simulations, 0.0, signals, jac, start_table, {}, base,
+                       models[0], next((w for w in windows if w is not None), None),
+                       dict(weights), models, windows, (lo, hi),
+                       problem.record_weights.copy())
     for name in profile:
         result.profiles[name] = _profile(problem, result, name, plo, phi_, loss, f_scale,
                                          profile_points, progress)

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["noise_level", "piecewise_linear_input"]
+__all__ = ["knot_jacobian", "noise_level", "piecewise_linear_input", "resolution",
+           "sensor_noise"]
 
 #: Beyond this many knots the input is not a bench test of holds, ramps and steps; the
 #: knot times are then kept where the simplification put them.
@@ -27,6 +28,27 @@ def noise_level(values: np.ndarray) -> float:
     difference (insensitive to ramps and to a few steps)."""
     d2 = np.diff(values, 2)
     return float(np.median(np.abs(d2 - np.median(d2))) * 1.4826 / np.sqrt(6.0))
+
+
+def resolution(values: np.ndarray) -> float:
+    """Quantisation step of a signal whose samples lie on a grid (a digital sensor), or
+    0: the smallest non-zero step between samples, if at least 90 % of the steps are
+    whole multiples of it (a smooth signal's steps are not)."""
+    steps = np.abs(np.diff(np.asarray(values, dtype=float)))
+    steps = steps[steps > 0]
+    if steps.size < 10:
+        return 0.0
+    q = float(steps.min())
+    multiples = steps / q
+    on_grid = np.abs(multiples - np.round(multiples)) <= 1e-6 * np.maximum(multiples, 1.0)
+    return q if np.mean(on_grid) >= 0.9 else 0.0
+
+
+def sensor_noise(values: np.ndarray) -> float:
+    """Noise standard deviation of a measured signal: ``noise_level``, but at least the
+    quantisation noise resolution/√12 of a sensor with a finite ``resolution``, which
+    ``noise_level`` misses on a signal that holds still between quantisation steps."""
+    return max(noise_level(values), resolution(values) / np.sqrt(12.0))
 
 
 def _rdp_knots(t: np.ndarray, y: np.ndarray, tolerance: float) -> np.ndarray:
@@ -80,13 +102,41 @@ def piecewise_linear_input(time: np.ndarray, values: np.ndarray,
     return _refine_knot_times(time, values, time[knots], fitted)
 
 
+def _segments_of(time, knot_t):
+    """For each sample: its knot interval, the fraction w along it, and its length."""
+    seg = np.clip(np.searchsorted(knot_t, time, side="right") - 1, 0, knot_t.size - 2)
+    h = knot_t[seg + 1] - knot_t[seg]
+    return seg, (time - knot_t[seg]) / h, h
+
+
+def knot_jacobian(time: np.ndarray, knot_t: np.ndarray, knot_v: np.ndarray):
+    """Sparse ∂(signal at ``time``)/∂(interior knot times, then all knot values) of the
+    piecewise-linear signal through (``knot_t``, ``knot_v``): how the rebuilt input
+    moves when the noise on the measured one moves its knots (see
+    ``identification.uncertainty``), and the Jacobian of the knot refinement."""
+    from scipy.sparse import csr_matrix
+
+    n_knots = knot_t.size
+    n_in = n_knots - 2
+    seg, w, h = _segments_of(time, knot_t)
+    slope = (knot_v[seg + 1] - knot_v[seg]) / h
+    rows = np.arange(time.size)
+    # columns: interior knot times 0..n_in-1 (knot k ↔ column k-1), then values
+    cols = [n_in + seg, n_in + seg + 1, seg - 1, seg]
+    data = [1 - w, w, -slope * (1 - w), -slope * w]
+    keep = [np.ones_like(w, bool), np.ones_like(w, bool), seg >= 1, seg + 1 <= n_in]
+    r = np.concatenate([rows[m] for m in keep])
+    c = np.concatenate([col[m] for col, m in zip(cols, keep, strict=True)])
+    d = np.concatenate([dat[m] for dat, m in zip(data, keep, strict=True)])
+    return csr_matrix((d, (r, c)), shape=(time.size, n_in + n_knots))
+
+
 def _refine_knot_times(time, values, knot_t, knot_v):
     """Move the interior knots in time (between their neighbours' midpoints) and adjust
     all knot values, by nonlinear least squares with the analytic sparse Jacobian: a
     step's corners fall between samples, and a knot on the nearest sample misplaces a
     2 ms step by 10 % of its length."""
     from scipy.optimize import least_squares
-    from scipy.sparse import csr_matrix
 
     n_knots = knot_t.size
     if n_knots <= 2 or n_knots > MAX_REFINED_KNOTS:
@@ -95,33 +145,19 @@ def _refine_knot_times(time, values, knot_t, knot_v):
     mid = 0.5 * (knot_t[1:] + knot_t[:-1])
     lo = np.concatenate([mid[:-1], np.full(n_knots, -np.inf)])
     hi = np.concatenate([mid[1:], np.full(n_knots, np.inf)])
-    rows = np.arange(time.size)
 
     def unpack(x):
-        t = np.concatenate([[knot_t[0]], np.sort(x[:n_in]), [knot_t[-1]]])
-        seg = np.clip(np.searchsorted(t, time, side="right") - 1, 0, n_knots - 2)
-        h = t[seg + 1] - t[seg]
-        w = (time - t[seg]) / h
-        return t, x[n_in:], seg, w, h
+        return np.concatenate([[knot_t[0]], np.sort(x[:n_in]), [knot_t[-1]]]), x[n_in:]
 
     def residual(x):
-        _t, v, seg, w, _ = unpack(x)
+        t, v = unpack(x)
+        seg, w, _ = _segments_of(time, t)
         return v[seg] + (v[seg + 1] - v[seg]) * w - values
 
     def jacobian(x):
-        _t, v, seg, w, h = unpack(x)
-        slope = (v[seg + 1] - v[seg]) / h
-        # columns: interior knot times 0..n_in-1 (knot k ↔ column k-1), then values
-        cols = [n_in + seg, n_in + seg + 1, seg - 1, seg]
-        data = [1 - w, w, -slope * (1 - w), -slope * w]
-        keep = [np.ones_like(w, bool), np.ones_like(w, bool), seg >= 1, seg + 1 <= n_in]
-        r = np.concatenate([rows[m] for m in keep])
-        c = np.concatenate([col[m] for col, m in zip(cols, keep, strict=True)])
-        d = np.concatenate([dat[m] for dat, m in zip(data, keep, strict=True)])
-        return csr_matrix((d, (r, c)), shape=(time.size, n_in + n_knots))
+        return knot_jacobian(time, *unpack(x))
 
     x0 = np.concatenate([knot_t[1:-1], knot_v])
     sol = least_squares(residual, x0, jac=jacobian, bounds=(lo, hi), x_scale="jac",
                         method="trf", tr_solver="lsmr", ftol=1e-6, max_nfev=40)
-    t, v, *_ = unpack(sol.x)
-    return t, v
+    return unpack(sol.x)

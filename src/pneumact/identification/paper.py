@@ -1,47 +1,65 @@
-"""The paper's staged identification (section III.2, eqs. 9-13), in one call.
+"""The paper's identification (section III.2), made to hold on any actuator, in one call.
 
-(a) spring: F0 and k (and the friction level) from the two branches of a quasi-static
-    sweep, by linear least squares of (p_atm − p)·A_d = F0 + k·x + F·sgn(v);
-(b) Fc and σ2 by linear least squares of eq. 13 over steady sliding at |v| ≥
-    ``sliding_speed`` (≫ vs), with an offset and a slope in x that absorb the errors of
-    stage (a) (0.1 % of k is 0.13 N at 10 mm, as much as σ2·v at 30 mm/s);
-(c) Fs and vs (optionally δ) by nonlinear least squares of eq. 12 over the slower steady
-    segments, within Fs ≥ Fc; the uncertainty of the stage-(b) values it holds is
-    propagated into its standard errors (delta method);
-(d) σ0 and σ1 by output-error least squares on the presliding records, with the model
-    in the loop (forward-sensitivity Jacobian), after the approach to the stop.
+``identify_paper(records, prior)`` runs
 
-Each stage reports estimates with standard errors conditional on the earlier stages
-(their errors are not propagated), and its data with the fitted curve for a residual
-plot. The result is a parameter set with per-value provenance that ``load_params``
-reads back.
+1. the paper's four stages (``identification.stages``: spring, eq. 13, eq. 12,
+   presliding output error), every threshold derived from the records or an earlier
+   stage, each stage's findings kept as diagnostics;
+2. a joint refinement of all spring and friction parameters over all records at once
+   (``identification.joint``), started at the staged estimates: its estimates are the
+   result;
+3. intervals that hold: the joint fit's residual (HAC) covariance plus the share of the
+   noise on the measured inputs (``identification.uncertainty``);
+4. checks that the model fits each record (residual RMS against the sensor noise) and
+   that the presliding test stayed in presliding, and a verdict per parameter
+   (``identification.diagnostics``): identified, poorly identified or not identifiable,
+   with the reason and the test that would fix it.
+
+``prior`` gives what a user knows (geometry, gas, valve) and rough starting values of
+the rest. The result's parameter set is written (``identified.toml``) only when every
+parameter is identified, unless a partial result is asked for.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares
 
-from ..errors import DataError
+from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
-from .bench import drive_force, kinematics, steady_segments
-from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
+from .diagnostics import Diagnostic, Verdict, residual_checks, verdicts
+from .estimates import Estimates
+from .fit import FitResult
+from .joint import JOINT_RTOL, SPRING_AND_FRICTION, joint_refinement
+from .stages import (
+    STAGES,
+    StageResult,
+    presliding_range,
+    presliding_window,
+    segments_of,
+    sliding_and_stribeck,
+    stage_presliding,
+    stage_spring,
+)
+from .uncertainty import (
+    INPUT_REPLICATES,
+    InputNoise,
+    input_noise_covariance,
+    prediction_band,
+    with_covariance,
+)
 
-__all__ = ["PaperIdentification", "StageResult", "identify_paper", "record_kind",
+__all__ = ["STAGES", "PaperIdentification", "StageResult", "identify_paper", "record_kind",
            "with_estimates"]
 
-STAGES = {
-    "spring": "(a) spring: F0, k from the quasi-static sweep",
-    "sliding": "(b) sliding friction: Fc, σ2 by eq. 13 (|v| ≫ vs)",
-    "stribeck": "(c) Stribeck: Fs, vs by eq. 12 (lower velocities)",
-    "presliding": "(d) presliding: σ0, σ1 by output error, model in the loop",
-}
+#: The presliding test is presliding while its excursion after the approach stays below
+#: this many static deflections Fs/σ0 (LuGre's presliding creep ends near 3·Fs/σ0).
+PRESLIDING_EXCURSION = 3.0
 
 
 def record_kind(record: Record) -> str:
@@ -59,143 +77,266 @@ def record_kind(record: Record) -> str:
                     f"sweep*, ramp* or presliding* (or set meta['kind'])")
 
 
-@dataclass(eq=False)
-class StageResult:
-    """One stage: estimates, the records used, and data with the fitted curve."""
-
-    name: str
-    estimates: Estimates
-    records: tuple[str, ...]
-    data: pd.DataFrame  # columns x, measured, fitted (+ stage-specific)
-    xlabel: str
-    ylabel: str
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def title(self) -> str:
-        return STAGES[self.name]
-
-    def plot(self):
-        """Data and fitted curve (top), residuals (bottom), against the stage's x."""
-        import matplotlib.pyplot as plt
-
-        if "fit" in self.extra:
-            return self.extra["fit"].plot_fit()
-        fig, (ax, axr) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 5.5),
-                                      gridspec_kw={"height_ratios": [2, 1]})
-        order = np.argsort(self.data["x"].to_numpy())
-        d = self.data.iloc[order]
-        ax.plot(d["x"], d["measured"], "k.", ms=3, label="from the records")
-        ax.plot(d["x"], d["fitted"], "C0-", lw=1.2, label="fitted")
-        axr.plot(d["x"], d["measured"] - d["fitted"], "C3.", ms=3)
-        axr.axhline(0, color="k", lw=0.6)
-        ax.set_ylabel(self.ylabel)
-        axr.set_ylabel("residual")
-        axr.set_xlabel(self.xlabel)
-        ax.set_title(self.title, fontsize=10)
-        ax.legend(fontsize=8)
-        for a in (ax, axr):
-            a.grid(True, alpha=0.3)
-        if self.name == "stribeck":
-            ax.set_xscale("symlog", linthresh=1e-1)
-        fig.tight_layout()
-        return fig
-
-
-def with_estimates(params, stages: Sequence[StageResult], name: str,
-                   provenance: dict[str, str]):
-    """``params`` with each stage's estimates, each value's source naming its stage."""
+def with_estimates(params, estimates: Estimates, sources: dict[str, str], name: str,
+                   provenance: dict[str, str], keep: Sequence[str] | None = None):
+    """``params`` with the ``estimates`` (only those named in ``keep``, default all),
+    each value's source from ``sources`` and its standard error in the note."""
     from ..parameters import ParameterSet
     from ..parameters.parameter_set import ParameterInfo, number_text
 
     values = dict(params.values)
     info = dict(params.info)
-    for stage in stages:
-        for j, pname in enumerate(stage.estimates.names):
-            if pname not in values and pname not in params:
-                continue
-            value = float(stage.estimates.values[j])
-            se = float(stage.estimates.stderr[j])
-            values[pname] = value
-            info[pname] = ParameterInfo(
-                number_text(pname, value), f"identified, stage {stage.title.split()[0]}",
-                f"± {se:.3g} (standard error); records: {', '.join(stage.records)}")
+    for j, pname in enumerate(estimates.names):
+        if pname not in params or (keep is not None and pname not in keep):
+            continue
+        value = float(estimates.values[j])
+        values[pname] = value
+        info[pname] = ParameterInfo(
+            number_text(pname, value), sources[pname],
+            f"± {estimates.stderr[j]:.3g} (standard error, input noise included)")
     return ParameterSet(values, name=name, description=f"identified from {params.name}",
                         provenance={**params.provenance, **provenance}, info=info)
 
 
 @dataclass(eq=False)
 class PaperIdentification:
-    """The four stages and the identified parameter set."""
+    """The stages, the joint refinement, the final estimates with their verdicts, and
+    the identified parameter set (see the module docstring)."""
 
     stages: dict[str, StageResult]
+    joint: FitResult | None
+    estimates: Estimates
+    verdicts: list[Verdict]
+    diagnostics: list[Diagnostic]
+    residuals: pd.DataFrame
     parameters: object
     initial: object
     records: list[Record]
+    input_noise: InputNoise | None = None
+    staged_parameters: object = None
+    extra: dict = field(default_factory=dict)
 
+    # -- the verdict ------------------------------------------------------------------
+    @property
+    def ok(self) -> bool:
+        """Every parameter identified and no error found: the result can be used."""
+        return all(v.identified for v in self.verdicts) and \
+            not any(d.severity == "error" for d in self.diagnostics)
+
+    @property
+    def identified(self) -> list[str]:
+        return [v.parameter for v in self.verdicts if v.identified]
+
+    def summary(self) -> str:
+        """One line: how many parameters are identified, and what failed."""
+        bad = [f"{v.parameter} ({v.verdict})" for v in self.verdicts if not v.identified]
+        errors = [d.line() for d in self.diagnostics if d.severity == "error"]
+        if not bad and not errors:
+            return f"all {len(self.verdicts)} parameters identified"
+        return "; ".join([f"{len(self.verdicts) - len(bad)} of {len(self.verdicts)} "
+                          "parameters identified" + (f"; not: {', '.join(bad)}" if bad
+                                                      else ""), *errors])
+
+    # -- tables ------------------------------------------------------------------------
     def table(self, truth=None) -> pd.DataFrame:
-        """Every estimate: stage, value, standard error, 95 % interval, initial value
-        (and the truth and error in % when ``truth``, a parameter set, is given)."""
-        frames = []
-        for stage in self.stages.values():
-            t = stage.estimates.to_pandas()
-            t.insert(0, "stage", stage.title.split()[0])
-            frames.append(t[[n in self.initial for n in t.index]])
-        table = pd.concat(frames)
-        table["initial"] = [self.initial[n] for n in table.index]
-        if truth is not None:
-            table["truth"] = [truth[n] for n in table.index]
-            table["error_%"] = 100 * (table["value"] - table["truth"]) / table["truth"]
-            table["truth_in_ci95"] = (table["ci95_low"] <= table["truth"]) & \
-                (table["truth"] <= table["ci95_high"])
-        return table
+        """Per parameter: the staged estimate and its (conditional) standard error, the
+        final (joint) estimate, its standard error and 95 % interval, the verdict and its
+        reason (with the truth and the errors in % when ``truth`` is given)."""
+        ci = self.estimates.interval(0.95)
+        rows = []
+        staged = self._staged_values()
+        for j, name in enumerate(self.estimates.names):
+            if "[" in name:
+                continue
+            verdict = next(v for v in self.verdicts if v.parameter == name)
+            stage, s_value, s_err = staged.get(name, ("", np.nan, np.nan))
+            row = {"parameter": name, "unit": self.estimates.units[j], "stage": stage,
+                   "staged": s_value, "staged_stderr": s_err,
+                   "value": self.estimates.values[j], "stderr": self.estimates.stderr[j],
+                   "ci95_low": ci[j, 0], "ci95_high": ci[j, 1],
+                   "initial": self.initial[name], "verdict": verdict.verdict,
+                   "reason": verdict.reason}
+            if truth is not None:
+                row["truth"] = truth[name]
+                row["staged_error_%"] = 100 * (s_value - truth[name]) / truth[name]
+                row["error_%"] = 100 * (row["value"] - truth[name]) / truth[name]
+                row["truth_in_ci95"] = bool(ci[j, 0] <= truth[name] <= ci[j, 1])
+            rows.append(row)
+        return pd.DataFrame(rows).set_index("parameter")
 
-    def writers(self, truth=None, call: str = "") -> dict:
-        """File name -> writer: identified.toml, estimates.csv, stage_*.png, report.md,
-        report.html."""
+    def _staged_values(self) -> dict[str, tuple[str, float, float]]:
+        out = {}
+        for stage in self.stages.values():
+            for j, name in enumerate(stage.estimates.names):
+                out[name] = (stage.title.split()[0], float(stage.estimates.values[j]),
+                             float(stage.estimates.stderr[j]))
+        return out
+
+    def diagnostics_table(self) -> pd.DataFrame:
+        return pd.DataFrame([{"severity": d.severity, "stage": d.stage,
+                              "message": d.message, "remedy": d.remedy}
+                             for d in self.diagnostics],
+                            columns=["severity", "stage", "message", "remedy"])
+
+    def verdicts_table(self) -> pd.DataFrame:
+        return pd.DataFrame([{"parameter": v.parameter, "verdict": v.verdict,
+                              "reason": v.reason, "remedy": v.remedy}
+                             for v in self.verdicts]).set_index("parameter")
+
+    # -- figures -----------------------------------------------------------------------
+    def plot_band(self, record: str | None = None):
+        """The pressure-position loop of a record (default: the first sweep) with the
+        band the parameter uncertainty leaves, and the measurement."""
+        import matplotlib.pyplot as plt
+
+        sweeps = [r for r in self.records if record_kind(r) == "sweep"]
+        chosen = next((r for r in self.records if Path(r.source).name == record),
+                      sweeps[0] if sweeps else self.records[0])
+        band = self.band(chosen)
+        fig, (ax_loop, ax_time) = plt.subplots(1, 2, figsize=(11, 4.2))
+        for run_p, run_x in zip(band.samples["pressure"], band.samples["position"],
+                                strict=True):
+            ax_loop.plot(run_p * 1e-3, run_x * 1e3, color="C0", alpha=0.05, lw=0.8)
+        ax_loop.plot(chosen["pressure"] * 1e-3, chosen["position"] * 1e3, "k.", ms=1,
+                     label="measured")
+        ax_loop.plot(band.nominal["pressure"] * 1e-3, band.nominal["position"] * 1e3, "C3-",
+                     lw=1, label="identified model")
+        ax_loop.set_xlabel("chamber pressure [kPa abs]")
+        ax_loop.set_ylabel("position [mm]")
+        ax_loop.set_title(f"{Path(chosen.source).name}: loop, {len(band.samples['position'])}"
+                          " draws from the estimates' uncertainty", fontsize=9)
+        ax_loop.legend(fontsize=8)
+        ax_time.fill_between(band.time, band.lower["position"] * 1e3,
+                             band.upper["position"] * 1e3, color="C0", alpha=0.3,
+                             label=f"{100 * band.level:.0f} % band")
+        ax_time.plot(chosen.time, chosen["position"] * 1e3, "k-", lw=0.5, label="measured")
+        ax_time.plot(band.time, band.nominal["position"] * 1e3, "C3-", lw=0.8,
+                     label="identified model")
+        ax_time.set_xlabel("time [s]")
+        ax_time.set_ylabel("position [mm]")
+        ax_time.legend(fontsize=8)
+        for a in (ax_loop, ax_time):
+            a.grid(True, alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def band(self, record: Record, draws: int = 60):
+        """``uncertainty.prediction_band`` of the identified model on ``record``."""
+        from ..simulation import Rodas4
+        from .fit import experiment_for
+        from .joint import bench_model
+
+        model = bench_model(record, self.parameters, self.extra.get("friction"),
+                            self.extra.get("chamber"))
+        experiment = experiment_for(model, record, smooth=True)
+        names = [n for n in self.estimates.names if "[" not in n]
+        idx = [self.estimates.names.index(n) for n in names]
+        est = Estimates(tuple(names), self.estimates.values[idx], self.estimates.stderr[idx],
+                        self.estimates.covariance[np.ix_(idx, idx)], self.estimates.dof,
+                        tuple(self.estimates.units[i] for i in idx))
+        return prediction_band(model, experiment, est, draws=draws, t_eval=record.time,
+                               solver=Rodas4(rtol=JOINT_RTOL * 100))
+
+    # -- output ------------------------------------------------------------------------
+    def writers(self, truth=None, call: str = "", partial: bool = False) -> dict:
+        """File name -> writer: estimates.csv, verdicts.csv, diagnostics.csv,
+        residuals.csv, stage_*.png, joint_fit.png, band.png, report.md, report.html, and
+        identified.toml when every parameter is identified (or ``partial``: then only
+        the identified ones replace the prior's values)."""
         from ..parameters import write_params
         from ..plotting import figure_writer
 
-        writers = {"identified.toml": lambda p: write_params(self.parameters, p),
-                   "estimates.csv": lambda p: self.table(truth).to_csv(p)}
+        writers: dict = {}
+        if self.ok or partial:
+            writers["identified.toml"] = lambda p: write_params(self.parameter_set(partial), p)
+        writers["estimates.csv"] = lambda p: self.table(truth).to_csv(p)
+        writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
+        writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
+        writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
         for name, stage in self.stages.items():
             writers[f"stage_{name}.png"] = figure_writer(stage.plot)
+        if self.joint is not None:
+            writers["joint_fit.png"] = figure_writer(self.joint.plot_fit)
+            if np.all(np.isfinite(self.estimates.covariance)):
+                writers["band.png"] = figure_writer(self.plot_band)
         writers["report.md"] = lambda p: Path(p).write_text(self.report(truth),
                                                             encoding="utf-8")
         writers["report.html"] = lambda p: self.html_report(truth, call).write(p)
         return writers
 
+    def parameter_set(self, partial: bool = False):
+        """The identified set; with ``partial`` the parameters that are not identified
+        keep the prior's values (and say so in their source)."""
+        from ..parameters import ParameterSet
+        from ..parameters.parameter_set import ParameterInfo, number_text
+
+        if not (self.ok or partial):
+            raise ParameterError("identification: not every parameter is identified ("
+                                 + self.summary() + "); ask for a partial result "
+                                 "explicitly (partial=True, --partial)")
+        if self.ok:
+            return self.parameters
+        params = self.parameters
+        values, info = dict(params.values), dict(params.info)
+        for v in self.verdicts:
+            if not v.identified:
+                values[v.parameter] = self.initial[v.parameter]
+                info[v.parameter] = ParameterInfo(
+                    number_text(v.parameter, values[v.parameter]),
+                    "prior value: not identified", f"{v.verdict}: {v.reason}")
+        return ParameterSet(values, name=params.name, description=params.description
+                            + " (partial)", provenance=params.provenance, info=info)
+
     def html_report(self, truth=None, call: str = ""):
-        """The estimates, the records and each stage's figure as a self-contained HTML
-        ``Report`` (parameter set: the identified one, with each value's provenance)."""
+        """Verdicts, estimates (staged and joint), diagnostics, residual checks and the
+        figures as a self-contained HTML ``Report``."""
         from ..io.report import Report
 
-        report = Report("Identification of the actuator (paper section III.2)", call=call,
-                        parameters=self.parameters)
+        report = Report("Identification of the actuator (paper section III.2, then a joint "
+                        "refinement)", call=call, parameters=self.parameters)
+        report.text(("Result: " if self.ok else "Result NOT usable as it is: ")
+                    + self.summary())
         report.text("Records: " + ", ".join(Path(r.source).name for r in self.records))
-        report.table(self.table(truth), "Estimates, standard errors and 95 % intervals "
-                     "(SI)" + (", against the true values" if truth is not None else ""))
+        report.table(self.verdicts_table(), "Verdict per parameter")
+        report.table(self.table(truth), "Staged and joint estimates, standard errors and "
+                     "95 % intervals (SI; the joint ones include the input noise)")
+        if len(self.diagnostics):
+            report.table(self.diagnostics_table(), "Diagnostics", index=False)
+        if len(self.residuals):
+            report.table(self.residuals, "Does the model fit each record? (residual RMS "
+                         "against the sensor noise)", index=False)
+        if self.joint is not None and np.all(np.isfinite(self.estimates.covariance)):
+            report.heading("Prediction band")
+            report.figure(self.plot_band(), "The loop and the time series with the band "
+                          "the parameter uncertainty leaves")
+        if self.joint is not None:
+            report.heading("Joint refinement")
+            report.figure(self.joint.plot_fit(), "Measured and fitted position, all records")
         for stage in self.stages.values():
             report.heading(stage.title)
             report.figure(stage.plot(), stage.title)
         return report
 
-    def write(self, out_dir: str | Path, truth=None, call: str = "") -> list[Path]:
+    def write(self, out_dir: str | Path, truth=None, call: str = "",
+              partial: bool = False) -> list[Path]:
         """Write every file of ``writers`` into ``out_dir``, all or none."""
         from ..io.tables import write_files
 
-        return write_files(out_dir, self.writers(truth, call))
+        return write_files(out_dir, self.writers(truth, call, partial))
 
     def report(self, truth=None) -> str:
-        """A short Markdown report: the records, the estimates table, the figures."""
+        """A short Markdown report: the verdict, the estimates table, the figures."""
         table = self.table(truth)
         lines = ["# Identification of the actuator (paper section III.2)", "",
-                 f"Parameter set: `{self.parameters.name}`; "
-                 f"{self.parameters.provenance.get('identified', '')}", "",
+                 ("**Result:** " if self.ok else "**Result NOT usable as it is:** ")
+                 + self.summary(), "",
                  "Records: " + ", ".join(f"`{Path(r.source).name}`" for r in self.records),
                  "", _markdown(table), ""]
-        for name, stage in self.stages.items():
-            lines += [f"## {stage.title}", "", f"![{name}](stage_{name}.png)", ""]
+        if self.diagnostics:
+            lines += ["## Diagnostics", ""] + [f"- {d.line()}" for d in self.diagnostics]
+            lines.append("")
+        for name in self.stages:
+            lines += [f"## {STAGES[name]}", "", f"![{name}](stage_{name}.png)", ""]
         return "\n".join(lines)
 
 
@@ -213,193 +354,193 @@ def _markdown(table: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-# --------------------------------------------------------------------------- stages
-def stage_spring(sweeps: Sequence[Record], params, min_speed=1e-4, margin=0.3e-3,
-                 steady=0.8) -> StageResult:
-    """(a): F0, k and the friction level from the moving parts of quasi-static sweeps:
-    |v| > ``min_speed``, ``margin`` away from the rest stop and the turning point, and on
-    each branch at least ``steady`` × its median speed (the break-away transient at the
-    start of a branch has Stribeck friction, at small x on one branch and large x on the
-    other, which would leak into k)."""
-    xs, fs, signs = [], [], []
-    for rec in sweeps:
-        kin = kinematics(rec, 0.1)
-        moving = (np.abs(kin.velocity) > min_speed) & (kin.position > margin) & \
-            (kin.position < kin.position.max() - margin)
-        speed = np.abs(kin.velocity)
-        keep = np.zeros_like(moving)
-        for sign in (1, -1):
-            branch = moving & (np.sign(kin.velocity) == sign)
-            if branch.any():
-                keep |= branch & (speed >= steady * np.median(speed[branch]))
-        moving = keep
-        force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
-        xs.append(kin.position[moving])
-        fs.append(force[moving])
-        signs.append(np.sign(kin.velocity[moving]))
-    x, f, s = (np.concatenate(a) for a in (xs, fs, signs))
-    if not (np.any(s > 0) and np.any(s < 0)):
-        raise DataError("stage (a): the sweep records need both branches (increasing and "
-                        "decreasing position) off the rest stop")
-    est, res, _ = linear_least_squares(np.column_stack([np.ones_like(x), x, s]), f,
-                                       ["F0", "k", "friction_level"], ["N", "N/m", "N"],
-                                       "stage (a) spring", correlated=True)
-    data = pd.DataFrame({"x": x * 1e3, "measured": f, "fitted": f - res, "branch": s})
-    return StageResult("spring", est, tuple(r.source for r in sweeps), data,
-                       "position [mm]", "drive force (p_atm − p)·A_d − m·a [N]")
-
-
-def _segments(records, params) -> pd.DataFrame:
-    frames = [steady_segments(r, params) for r in records]
-    frames = [f for f in frames if len(f)]
-    if not frames:
-        raise DataError("stages (b, c): no steady sliding segment found in the records; "
-                        "ramps need a steady part of at least 0.2 s")
-    return pd.concat(frames, ignore_index=True)
-
-
-def stage_sliding(segments: pd.DataFrame, sliding_speed: float) -> StageResult:
-    """(b): Fc, σ2 (and an offset) from eq. 13 over |v| ≥ ``sliding_speed``."""
-    fast = segments[np.abs(segments["velocity"]) >= sliding_speed]
-    v, f = fast["velocity"].to_numpy(), fast["friction"].to_numpy()
-    x = fast["position"].to_numpy()
-    if np.sum(v > 0) < 1 or np.sum(v < 0) < 1 or len(v) < 5:
-        raise DataError(f"stage (b): {len(v)} steady segments at |v| >= "
-                        f"{sliding_speed * 1e3:g} mm/s; need at least 5, in both directions")
-    design = np.column_stack([np.sign(v), v, np.ones_like(v), x])
-    est, res, _ = linear_least_squares(design, f, ["Fc", "sigma2", "offset", "spring_error"],
-                                       ["N", "N*s/m", "N", "N/m"], "stage (b) eq. 13")
-    data = pd.DataFrame({"x": v * 1e3, "measured": f, "fitted": f - res,
-                         "record": fast["record"].to_numpy()})
-    return StageResult("sliding", est, tuple(dict.fromkeys(fast["record"])), data,
-                       "velocity [mm/s]", "friction force [N]")
-
-
-def stage_stribeck(segments: pd.DataFrame, sliding: StageResult, params,
-                   sliding_speed: float, fit_delta: bool = False) -> StageResult:
-    """(c): Fs, vs (and δ) by nonlinear least squares of eq. 12 below ``sliding_speed``,
-    with Fc, σ2 and the offset of stage (b) held."""
-    slow = segments[np.abs(segments["velocity"]) < sliding_speed]
-    v, f = slow["velocity"].to_numpy(), slow["friction"].to_numpy()
-    fc, s2, off, dk = (sliding.estimates[n] for n in ("Fc", "sigma2", "offset",
-                                                      "spring_error"))
-    x = slow["position"].to_numpy()
-    n_par = 3 if fit_delta else 2
-    if len(v) <= n_par + 1:
-        raise DataError(f"stage (c): {len(v)} steady segments below "
-                        f"{sliding_speed * 1e3:g} mm/s; need at least {n_par + 2}")
-    y = np.sign(v) * (f - s2 * v - off - dk * x)  # = g(|v|)
-    speed = np.abs(v)
-
-    def model(q):
-        fs, vs = q[0], np.exp(q[1])
-        delta = q[2] if fit_delta else params["delta"]
-        return fc + (fs - fc) * np.exp(-((speed / vs) ** delta))
-
-    q0 = [max(params["Fs"], y.max()), np.log(params["vs"])] + ([params["delta"]]
-                                                                if fit_delta else [])
-    # Fs ≥ Fc (Fc + (Fs − Fc)·e^… ≥ Fc), vs within 1 µm/s … 1 m/s, δ within 0.3 … 5
-    lower = [fc, np.log(1e-6)] + ([0.3] if fit_delta else [])
-    upper = [10 * max(fc, y.max()), 0.0] + ([5.0] if fit_delta else [])
-    q0 = np.clip(q0, np.nextafter(lower, np.inf), np.nextafter(upper, -np.inf))
-    sol = least_squares(lambda q: model(q) - y, q0, bounds=(lower, upper), x_scale="jac")
-    jac = sol.jac.copy()
-    values = sol.x.copy()
-    values[1] = np.exp(values[1])
-    jac[:, 1] /= values[1]  # back from log vs to vs
-    cov, dof = covariance_from_jacobian(jac, sol.fun, n_par, correlated=False)
-    # the estimates of stage (b) are held here: add their uncertainty (delta method)
-    sign = np.sign(v)
-    decay = np.exp(-((speed / values[1]) ** (values[2] if fit_delta else params["delta"])))
-    held = np.column_stack([1 - decay, speed, sign, sign * x])  # ∂r/∂(Fc, σ2, offset, dk)
-    b_idx = [sliding.estimates.names.index(n)
-             for n in ("Fc", "sigma2", "offset", "spring_error")]
-    cov_b = sliding.estimates.covariance[np.ix_(b_idx, b_idx)]
-    gain = -np.linalg.pinv(jac) @ held  # ∂θ_c/∂θ_b at the optimum
-    cov = cov + gain @ cov_b @ gain.T
-    names = ["Fs", "vs"] + (["delta"] if fit_delta else [])
-    est = Estimates(tuple(names), values, np.sqrt(np.diag(cov)), cov, dof,
-                    ("N", "m/s", "")[:n_par])
-    fitted = np.sign(v) * model(sol.x) + s2 * v + off + dk * x
-    data = pd.DataFrame({"x": v * 1e3, "measured": f, "fitted": fitted,
-                         "record": slow["record"].to_numpy()})
-    return StageResult("stribeck", est, tuple(dict.fromkeys(slow["record"])), data,
-                       "velocity [mm/s]", "friction force [N]")
-
-
-def _presliding_window(record: Record, speed: float = 1e-3) -> float:
-    """Start of the presliding part: after the longest run of sliding (the approach)."""
-    kin = kinematics(record, 0.02)
-    moving = np.abs(kin.velocity) > speed
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], moving.astype(np.int8), [0]])))
-    if edges.size == 0:
-        return float(record.time[0])
-    runs = list(zip(edges[::2], edges[1::2], strict=True))
-    _i0, i1 = max(runs, key=lambda r: r[1] - r[0])
-    return float(kin.time[min(i1, kin.time.size - 1)] + 0.05)
-
-
-def stage_presliding(records: Sequence[Record], params, friction=None, solver=None
-                     ) -> StageResult:
-    """(d): σ0, σ1 by output error on the presliding part of each record (a sensor
-    offset per record is fitted too: the stuck position remembers the approach)."""
-    from ..models import Actuator, LuGre, PressureSource
-    from .fit import fit
-
-    model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
-    starts = [_presliding_window(r) for r in records]
-    cropped_end = min(r.time[-1] for r in records)
-    result = fit(model, records, ["sigma0", "sigma1"], offsets=["position"],
-                 window=(max(starts), cropped_end), solver=solver)
-    keep = [n in ("sigma0", "sigma1") for n in result.estimates.names]
-    est = result.estimates
-    idx = np.flatnonzero(keep)
-    sub = Estimates(tuple(est.names[i] for i in idx), est.values[idx], est.stderr[idx],
-                    est.covariance[np.ix_(idx, idx)], est.dof,
-                    tuple(est.units[i] for i in idx))
-    rec, sim = records[0], result.simulated[0]
-    data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
-                         "fitted": sim["position"] * 1e3})
-    return StageResult("presliding", sub, tuple(r.source for r in records), data,
-                       "time [s]", "position [mm]", {"fit": result})
-
-
-def identify_paper(records: Sequence[Record], params, *, sliding_speed: float = 5e-3,
-                   fit_delta: bool = False, name: str | None = None,
-                   progress=None) -> PaperIdentification:
-    """Run stages (a)-(d) on bench ``records`` (sweeps, ramps, presliding tests; see
-    ``record_kind``). ``params`` gives what is not identified (m, A_d, p_atm, δ) and the
-    starting values of stage (d). Returns the stages and the identified parameter set."""
-    records = list(records)
-    kinds = {"sweep": [], "ramp": [], "presliding": []}
+# --------------------------------------------------------------------------- the procedure
+def _kinds(records: Sequence[Record]) -> dict[str, list[Record]]:
+    kinds: dict[str, list[Record]] = {"sweep": [], "ramp": [], "presliding": []}
     for rec in records:
         kinds[record_kind(rec)].append(rec)
     missing = [k for k, v in kinds.items() if not v]
     if missing:
         raise DataError(f"identify_paper: no {', '.join(missing)} record among "
                         f"{', '.join(Path(r.source).name for r in records)}")
-    step = progress or (lambda label: None)
-    step("spring")
-    spring = stage_spring(kinds["sweep"], params)
-    current = params.replace(F0=spring.estimates["F0"], k=spring.estimates["k"])
-    step("sliding")
-    segments = _segments(kinds["sweep"] + kinds["ramp"], current)
-    sliding = stage_sliding(segments, sliding_speed)
-    step("stribeck")
-    stribeck = stage_stribeck(segments, sliding, current, sliding_speed, fit_delta)
-    updates = {"Fc": sliding.estimates["Fc"], "sigma2": sliding.estimates["sigma2"],
-               **stribeck.estimates.as_dict()}
-    current = current.replace(updates)
-    step("presliding")
-    presliding = stage_presliding(kinds["presliding"], current)
-    stages = {"spring": spring, "sliding": sliding, "stribeck": stribeck,
-              "presliding": presliding}
+    return kinds
+
+
+def _staged(kinds, prior, friction, fit_delta, sliding_speed, prior_spread, step):
+    """Stages (a)-(d): (stages, staged parameter set, diagnostics). A stage the records
+    cannot support leaves the prior's values, with a diagnostic."""
+    diagnostics: list[Diagnostic] = []
+    step("spring", 0.0)
+    spring = stage_spring(kinds["sweep"], prior)
+    current = prior.replace(F0=spring.estimates["F0"], k=spring.estimates["k"])
+    stages = {"spring": spring}
+    step("sliding", 0.1)
+    # the slowest creep that is not sliding: the prior's presliding range, at the low end
+    # of the prior's σ0
+    creep = presliding_range(prior) / max(1.0 - prior_spread, 0.1)
+    try:
+        segments = segments_of(kinds["sweep"] + kinds["ramp"], current, creep)
+    except DataError as exc:
+        diagnostics.append(Diagnostic("warning", "(b, c)", str(exc),
+                                      "add ramps at several steady speeds"))
+        segments = None
+    if segments is not None:
+        sliding, stribeck, notes = sliding_and_stribeck(segments, current, fit_delta,
+                                                        sliding_speed)
+        diagnostics += notes
+        if sliding is not None and stribeck is not None:
+            stages.update(sliding=sliding, stribeck=stribeck)
+            current = current.replace({"Fc": sliding.estimates["Fc"],
+                                       "sigma2": sliding.estimates["sigma2"],
+                                       **stribeck.estimates.as_dict()})
+    step("presliding", 0.2)
+    try:
+        presliding = stage_presliding(kinds["presliding"], current, friction)
+        stages["presliding"] = presliding
+        current = current.replace(presliding.estimates.as_dict())
+    except (DataError, SolverError) as exc:
+        diagnostics.append(Diagnostic("warning", "(d)", f"the presliding fit failed: {exc}"))
+    return stages, current, diagnostics
+
+
+def _presliding_check(records, kinds, params) -> list[Diagnostic]:
+    """Did each presliding test stay in presliding (excursion below
+    ``PRESLIDING_EXCURSION``·Fs/σ0 after its approach)?"""
+    out = []
+    deflection = params["Fs"] / params["sigma0"]
+    for record in kinds["presliding"]:
+        start = presliding_window(record, params)
+        x = record["position"][record.time >= start]
+        if x.size < 2:
+            continue
+        excursion = float(np.ptp(x))
+        if excursion > PRESLIDING_EXCURSION * deflection:
+            out.append(Diagnostic(
+                "warning", "presliding", f"{Path(record.source).name} moved {excursion * 1e6:.3g}"
+                f" µm after its approach, more than {PRESLIDING_EXCURSION:g}·Fs/σ0 = "
+                f"{PRESLIDING_EXCURSION * deflection * 1e6:.3g} µm: it slid, so it tells "
+                "σ0 and σ1 apart from sliding friction less well",
+                f"use pressure steps below {params['Fs'] / params['A_d'] * 1e-3:.3g} kPa "
+                "(Fs/A_d) after the stop"))
+    return out
+
+
+def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
+                   fit_delta: bool = False, sliding_speed: float | None = None,
+                   prior_spread: float = 0.5, refine: bool = True,
+                   replicates: int | None = None, seed: int = 0, workers: int | None = None,
+                   name: str | None = None,
+                   progress: Callable[[str, float], None] | None = None
+                   ) -> PaperIdentification:
+    """Identify the actuator from bench ``records`` (sweeps, ramps, presliding tests; see
+    ``record_kind``) and the ``params`` a user knows (see the module docstring).
+
+    ``params`` gives the geometry, gas and valve, and rough starting values of the spring
+    and friction (``prior_spread``: their relative uncertainty, ±50 % by default, sizes
+    the creep a steady segment must exceed). ``friction`` and ``chamber`` are the laws
+    the model uses (LuGre, isothermal by default). ``sliding_speed`` [m/s] fixes the
+    threshold of eq. 13 instead of deriving it from vs (it is then only checked).
+    ``refine=False`` stops after the stages (fast; their intervals are conditional on
+    the earlier stages). ``replicates`` of the input-noise bootstrap (default
+    ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads. ``progress(stage,
+    fraction)`` is called as the work goes on.
+    """
+    from ..parameters import ParameterSet
+    from ..simulation import Rodas4
+
+    if not isinstance(params, ParameterSet):
+        raise ParameterError(f"identify_paper: params must be a ParameterSet (from "
+                             f"pa.load_params), not {type(params).__name__}")
+    if not 0 <= prior_spread < 1:
+        raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
+                             "[0, 1) (the prior's relative uncertainty)")
+    records = list(records)
+    step = progress or (lambda label, fraction: None)
+    kinds = _kinds(records)
+    stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
+                                          prior_spread, step)
+    free = list(SPRING_AND_FRICTION) + (["delta"] if fit_delta else [])
+    record_kinds = [record_kind(r) for r in records]
+    joint = input_noise = None
+    if refine:
+        step("joint refinement", 0.3)
+        joint = joint_refinement(records, record_kinds, staged, friction=friction,
+                                 chamber=chamber, free=free, replicates=replicates,
+                                 seed=seed, workers=workers)
+        step("input noise", 0.7)
+        input_noise = input_noise_covariance(
+            joint, replicates=replicates or INPUT_REPLICATES, seed=seed + 1,
+            workers=workers, solver=Rodas4(rtol=JOINT_RTOL))
+        estimates = with_covariance(joint.estimates,
+                                    joint.estimates.covariance + input_noise.covariance)
+        residuals = residual_checks(joint)
+        misfit = [Path(r).name for r, fits in zip(residuals["record"], residuals["fits"],
+                                                   strict=True) if not fits]
+        lower, upper = joint.bounds
+        values = estimates.values
+        at_bound = (np.isclose(values, lower, rtol=1e-6) | np.isclose(values, upper, rtol=1e-6))
+        if not joint.success:
+            diagnostics.append(Diagnostic("error", "joint", "the joint fit did not converge: "
+                                          + joint.message))
+        for r in residuals.itertuples():
+            if not r.fits:
+                diagnostics.append(Diagnostic(
+                    "error", "joint", f"the model does not fit {Path(r.record).name}: its "
+                    f"residual RMS is {r.ratio:.3g}× the sensor noise ({r.residual_rms:.3g} "
+                    f"against {r.sensor_noise:.3g})", "the model misses something this "
+                    "record shows (a sensor lag, another friction law, the chamber's "
+                    "thermodynamics, the valve): check the residual plot"))
+        final_values = estimates
+    else:
+        estimates = _staged_estimates(stages)
+        residuals = pd.DataFrame()
+        misfit = []
+        at_bound = np.zeros(len(estimates.names), bool)
+        final_values = estimates
+    diagnostics += _presliding_check(records, kinds, staged)
+    ci = final_values.interval(0.95)
+    names = [n for n in final_values.names if "[" not in n]
+    idx = [final_values.names.index(n) for n in names]
+    half = (ci[idx, 1] - ci[idx, 0]) / 2
+    judged = verdicts(names, final_values.values[idx], half, at_bound[idx], misfit)
     when = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     from .. import __version__
 
-    identified = with_estimates(params, list(stages.values()),
-                                name or f"{params.name}-identified",
-                                {"identified": f"pneumact {__version__} identify_paper, "
-                                               f"{when}",
-                                 "records": ", ".join(Path(r.source).name for r in records)})
-    return PaperIdentification(stages, identified, params, records)
+    sources = {n: ("identified, joint refinement" if refine else
+                   f"identified, stage {_stage_of(stages, n)}") for n in names}
+    identified = with_estimates(
+        params, Estimates(tuple(names), final_values.values[idx], final_values.stderr[idx],
+                          final_values.covariance[np.ix_(idx, idx)], final_values.dof,
+                          tuple(final_values.units[i] for i in idx)),
+        sources, name or f"{params.name}-identified",
+        {"identified": f"pneumact {__version__} identify_paper, {when}",
+         "records": ", ".join(Path(r.source).name for r in records)})
+    step("done", 1.0)
+    return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
+                               identified, params, records, input_noise, staged,
+                               {"friction": friction, "chamber": chamber})
+
+
+def _stage_of(stages, name: str) -> str:
+    for stage in stages.values():
+        if name in stage.estimates.names:
+            return stage.title.split()[0]
+    return ""
+
+
+def _staged_estimates(stages) -> Estimates:
+    """The stages' estimates as one (block-diagonal) set."""
+    names, values, errors, units = [], [], [], []
+    for stage in stages.values():
+        for j, n in enumerate(stage.estimates.names):
+            if n in ("offset", "spring_error", "friction_level"):
+                continue
+            names.append(n)
+            values.append(stage.estimates.values[j])
+            errors.append(stage.estimates.stderr[j])
+            units.append(stage.estimates.units[j] if stage.estimates.units else "")
+    errors_a = np.array(errors)
+    cov = np.diag(errors_a**2)
+    dof = min(s.estimates.dof for s in stages.values())
+    return Estimates(tuple(names), np.array(values), errors_a, cov, dof, tuple(units))
+

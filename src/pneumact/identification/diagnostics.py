@@ -1,0 +1,138 @@
+"""How sure an identification is: diagnostics, residual checks and a verdict per parameter.
+
+A wrong number with a tight interval is the worst thing an identification can print, so
+every estimate gets a verdict:
+
+- ``identified``: its 95 % interval is narrower than ±``IDENTIFIED_HALF_WIDTH`` of its
+  value, it is not at a bound, and the model fits every record;
+- ``poorly identified``: the interval is finite but wider (up to
+  ±``POORLY_HALF_WIDTH``), or the model does not fit a record (then no interval holds);
+- ``not identifiable``: the interval is wider still or infinite (the records do not
+  excite the parameter: a rank-deficient Jacobian), or the estimate ended at a bound.
+
+Each verdict carries its reason and the test that would fix it (``REMEDIES``). A
+``Diagnostic`` is one finding of a stage or of the joint fit (a threshold that could not
+be met, too few segments, a record the model does not fit), with its severity.
+
+A model fits a record when the RMS of its residual is at most ``MISFIT_RATIO`` times the
+sensor noise the record itself shows (``inputs.sensor_noise``); measured on campaigns
+made by the identified model itself the ratio is 0.8-1.1, whereas a 5 ms sensor lag, an
+adiabatic chamber identified as isothermal or friction of another law give 3 to 100.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .inputs import sensor_noise
+
+__all__ = ["IDENTIFIED_HALF_WIDTH", "MISFIT_RATIO", "POORLY_HALF_WIDTH", "REMEDIES",
+           "Diagnostic", "Verdict", "residual_checks", "verdicts"]
+
+#: A 95 % interval within ±10 % of the value: the records pin the parameter down.
+IDENTIFIED_HALF_WIDTH = 0.10
+#: Beyond ±50 % the records say little more than the order of magnitude.
+POORLY_HALF_WIDTH = 0.50
+#: Residual RMS above this many sensor-noise standard deviations: the model misses
+#: something the records show (see the module docstring for the measured ratios).
+MISFIT_RATIO = 2.0
+
+IDENTIFIED = "identified"
+POORLY = "poorly identified"
+NOT_IDENTIFIABLE = "not identifiable"
+
+#: What test pins each parameter down (the campaign designer makes them).
+REMEDIES = {
+    "F0": "a quasi-static sweep that leaves the rest stop in both directions",
+    "k": "a quasi-static sweep over most of the stroke",
+    "Fc": "ramps at steady speeds well above vs, in both directions",
+    "sigma2": "ramps at several speeds well above vs (the viscous slope needs a speed "
+              "range, not one speed)",
+    "Fs": "ramps at steady speeds around vs and below, in both directions",
+    "vs": "ramps at steady speeds from about vs/3 to 3·vs",
+    "delta": "ramps at many steady speeds across the Stribeck dip (vs/3 to 3·vs)",
+    "sigma0": "a presliding test: small fast pressure steps below break-away after a stop",
+    "sigma1": "a presliding test with steps fast enough to ring the stuck mode",
+}
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    """One finding: ``severity`` is ``error`` (the result cannot be trusted), ``warning``
+    (it holds with a caveat) or ``note``; ``stage`` says where; ``remedy`` what to do."""
+
+    severity: str
+    stage: str
+    message: str
+    remedy: str = ""
+
+    def line(self) -> str:
+        tail = f" ({self.remedy})" if self.remedy else ""
+        return f"{self.severity}: {self.stage}: {self.message}{tail}"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The verdict on one parameter, why, and what would make it identifiable."""
+
+    parameter: str
+    verdict: str
+    reason: str
+    remedy: str = ""
+
+    @property
+    def identified(self) -> bool:
+        return self.verdict == IDENTIFIED
+
+
+def residual_checks(fit, signal: str = "position") -> pd.DataFrame:
+    """Per record of ``fit`` (a ``FitResult``): residual RMS, the sensor noise the record
+    shows, their ratio, the residual's lag-1 autocorrelation, and whether the model
+    fits (ratio ≤ ``MISFIT_RATIO``)."""
+    rows = []
+    for i, (record, mask) in enumerate(zip(fit.records, fit.masks(), strict=True)):
+        measured = record[signal][mask]
+        residual = fit.fitted(i, signal)[mask] - measured
+        noise = sensor_noise(record[signal])
+        rms = float(np.sqrt(np.mean(residual**2)))
+        centred = residual - residual.mean()
+        denominator = float(centred @ centred)
+        lag1 = float(centred[1:] @ centred[:-1] / denominator) if denominator > 0 else 0.0
+        ratio = rms / noise if noise > 0 else np.inf
+        rows.append({"record": record.source, "signal": signal, "residual_rms": rms,
+                     "sensor_noise": noise, "ratio": ratio, "lag1_autocorrelation": lag1,
+                     "fits": bool(ratio <= MISFIT_RATIO)})
+    return pd.DataFrame(rows)
+
+
+def verdicts(names: Sequence[str], values: np.ndarray, half_widths: np.ndarray,
+             at_bound: Sequence[bool], misfit: Sequence[str] = ()) -> list[Verdict]:
+    """A ``Verdict`` per parameter from its estimate, the half-width of its 95 %
+    interval, whether it ended at a bound, and the records the model does not fit."""
+    out = []
+    for name, value, half, bound in zip(names, values, half_widths, at_bound, strict=True):
+        remedy = REMEDIES.get(name, "")
+        relative = abs(half / value) if value != 0 else np.inf
+        if bound:
+            out.append(Verdict(name, NOT_IDENTIFIABLE, "the estimate ended at a bound of its "
+                               "search range", remedy))
+        elif not np.isfinite(relative):
+            out.append(Verdict(name, NOT_IDENTIFIABLE, "the records do not excite it (its "
+                               "column of the Jacobian depends on the others)", remedy))
+        elif relative > POORLY_HALF_WIDTH:
+            out.append(Verdict(name, NOT_IDENTIFIABLE, f"95 % interval ±{100 * relative:.0f} %"
+                               " of the value", remedy))
+        elif misfit:
+            out.append(Verdict(name, POORLY, "the model does not fit "
+                               + ", ".join(misfit) + ", so no interval holds", ""))
+        elif relative > IDENTIFIED_HALF_WIDTH:
+            out.append(Verdict(name, POORLY, f"95 % interval ±{100 * relative:.0f} % of the "
+                               "value", remedy))
+        else:
+            out.append(Verdict(name, IDENTIFIED, f"95 % interval ±{100 * relative:.2g} % of "
+                               "the value"))
+    return out

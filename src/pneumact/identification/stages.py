@@ -1,0 +1,365 @@
+"""The paper's four identification stages (section III.2, eqs. 9-13).
+
+(a) spring: F0 and k (and the friction level) from the two branches of a quasi-static
+    sweep, by linear least squares of (p_atm − p)·A_d − m·a = F0 + k·x + F·sgn(v);
+(b) Fc and σ2 by linear least squares of eq. 13 over steady sliding fast enough that
+    the Stribeck term is negligible, with an offset and a slope in x that absorb the
+    errors of stage (a) (0.1 % of k is 0.13 N at 10 mm, as much as σ2·v at 30 mm/s);
+(c) Fs and vs (optionally δ) by nonlinear least squares of eq. 12 over the slower steady
+    segments, within Fs ≥ Fc; the uncertainty of the stage-(b) values it holds is
+    propagated into its standard errors (delta method);
+(d) σ0 and σ1 by output-error least squares on the presliding records, with the model
+    in the loop (forward-sensitivity Jacobian), after the approach to the stop.
+
+Eq. 13 holds only where v ≫ vs, and vs is what stage (c) finds, so (b) and (c) are
+iterated (``sliding_and_stribeck``): stage (b) uses the segments at which the Stribeck
+term (Fs − Fc)·exp(−(v/vs)^δ) of the current (c) is below the standard error of Fc, and
+stops when that speed no longer changes. Where the records have too few such segments,
+a diagnostic names the speed they need and eq. 12 is fitted over all segments at once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from ..errors import DataError
+from ..io.records import Record
+from .bench import drive_force, kinematics, moving_threshold, steady_segments
+from .diagnostics import Diagnostic
+from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
+
+__all__ = ["STAGES", "StageResult", "presliding_range", "presliding_window",
+           "segments_of", "sliding_and_stribeck", "stage_presliding", "stage_sliding",
+           "stage_spring", "stage_stribeck"]
+
+STAGES = {
+    "spring": "(a) spring: F0, k from the quasi-static sweep",
+    "sliding": "(b) sliding friction: Fc, σ2 by eq. 13 (|v| ≫ vs)",
+    "stribeck": "(c) Stribeck: Fs, vs by eq. 12 (lower velocities)",
+    "presliding": "(d) presliding: σ0, σ1 by output error, model in the loop",
+}
+#: Fraction of the sweep's travel kept away from the rest stop and the turning point in
+#: stage (a): the spring line is fitted where the diaphragm slides freely.
+SWEEP_MARGIN = 0.02
+#: Stage (a) keeps, of each branch, the samples moving at least this fraction of the
+#: branch's median speed: the break-away transient at the start of a branch has
+#: Stribeck friction, at small x on one branch and large x on the other, which would
+#: leak into k.
+SWEEP_STEADY = 0.8
+#: Iterations of stages (b) and (c) before the sliding threshold must have settled.
+MAX_THRESHOLD_ITERATIONS = 10
+#: Fewest steady segments eq. 13 needs (in both directions together).
+MIN_SLIDING_SEGMENTS = 5
+#: The presliding part of a record starts this many stuck-mode periods
+#: 2π·√(m/(k + σ0)) after the approach (its ringing has decayed to a few per cent).
+SETTLE_PERIODS = 5.0
+#: A presliding record's "approach" is its longest run faster than this fraction of its
+#: fastest motion (scale-free: whatever the actuator's speed).
+APPROACH_FRACTION = 0.1
+
+
+@dataclass(eq=False)
+class StageResult:
+    """One stage: estimates, the records used, data with the fitted curve, and what the
+    stage found worth saying (``diagnostics``)."""
+
+    name: str
+    estimates: Estimates
+    records: tuple[str, ...]
+    data: pd.DataFrame  # columns x, measured, fitted (+ stage-specific)
+    xlabel: str
+    ylabel: str
+    extra: dict = field(default_factory=dict)
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+    @property
+    def title(self) -> str:
+        return STAGES[self.name]
+
+    def plot(self):
+        """Data and fitted curve (top), residuals (bottom), against the stage's x."""
+        import matplotlib.pyplot as plt
+
+        if "fit" in self.extra:
+            return self.extra["fit"].plot_fit()
+        fig, (ax, axr) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 5.5),
+                                      gridspec_kw={"height_ratios": [2, 1]})
+        order = np.argsort(self.data["x"].to_numpy())
+        d = self.data.iloc[order]
+        ax.plot(d["x"], d["measured"], "k.", ms=3, label="from the records")
+        ax.plot(d["x"], d["fitted"], "C0-", lw=1.2, label="fitted")
+        axr.plot(d["x"], d["measured"] - d["fitted"], "C3.", ms=3)
+        axr.axhline(0, color="k", lw=0.6)
+        ax.set_ylabel(self.ylabel)
+        axr.set_ylabel("residual")
+        axr.set_xlabel(self.xlabel)
+        ax.set_title(self.title, fontsize=10)
+        ax.legend(fontsize=8)
+        for a in (ax, axr):
+            a.grid(True, alpha=0.3)
+        if self.name == "stribeck":
+            ax.set_xscale("symlog", linthresh=1e-1)
+        fig.tight_layout()
+        return fig
+
+
+# --------------------------------------------------------------------------- (a)
+def stage_spring(sweeps: Sequence[Record], params) -> StageResult:
+    """(a): F0, k and the friction level from the moving parts of quasi-static sweeps:
+    faster than the velocity noise allows to call "moving", ``SWEEP_MARGIN`` of the
+    travel away from the rest stop and the turning point, and on each branch at least
+    ``SWEEP_STEADY`` × its median speed."""
+    xs, fs, signs = [], [], []
+    for rec in sweeps:
+        kin = kinematics(rec)
+        travel = float(np.ptp(kin.position))
+        margin = SWEEP_MARGIN * travel
+        moving = (np.abs(kin.velocity) > moving_threshold(kin, rec)) & \
+            (kin.position > kin.position.min() + margin) & \
+            (kin.position < kin.position.max() - margin)
+        speed = np.abs(kin.velocity)
+        keep = np.zeros_like(moving)
+        for sign in (1, -1):
+            branch = moving & (np.sign(kin.velocity) == sign)
+            if branch.any():
+                keep |= branch & (speed >= SWEEP_STEADY * np.median(speed[branch]))
+        force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
+        xs.append(kin.position[keep])
+        fs.append(force[keep])
+        signs.append(np.sign(kin.velocity[keep]))
+    x, f, s = (np.concatenate(a) for a in (xs, fs, signs))
+    if not (np.any(s > 0) and np.any(s < 0)):
+        raise DataError("stage (a): the sweep records need both branches (increasing and "
+                        "decreasing position) off the rest stop")
+    est, res, _ = linear_least_squares(np.column_stack([np.ones_like(x), x, s]), f,
+                                       ["F0", "k", "friction_level"], ["N", "N/m", "N"],
+                                       "stage (a) spring", correlated=True)
+    data = pd.DataFrame({"x": x * 1e3, "measured": f, "fitted": f - res, "branch": s})
+    return StageResult("spring", est, tuple(r.source for r in sweeps), data,
+                       "position [mm]", "drive force (p_atm − p)·A_d − m·a [N]")
+
+
+# --------------------------------------------------------------------------- (b), (c)
+def presliding_range(params) -> float:
+    """How far a bristle deflects before gross sliding, 3·Fs/σ0 [m] (LuGre's presliding
+    creep runs to about three times the static deflection Fs/σ0)."""
+    return 3.0 * params["Fs"] / params["sigma0"]
+
+
+def segments_of(records: Sequence[Record], params, presliding: float) -> pd.DataFrame:
+    """Steady sliding segments of all ``records`` (``bench.steady_segments``)."""
+    frames = [steady_segments(r, params, presliding_range=presliding) for r in records]
+    frames = [f for f in frames if len(f)]
+    if not frames:
+        raise DataError("stages (b, c): no steady sliding segment found in the records; "
+                        "ramps need a steady part of several differentiation windows")
+    return pd.concat(frames, ignore_index=True)
+
+
+def stage_sliding(segments: pd.DataFrame, sliding_speed: float) -> StageResult:
+    """(b): Fc, σ2 (and an offset) from eq. 13 over |v| ≥ ``sliding_speed``."""
+    fast = segments[np.abs(segments["velocity"]) >= sliding_speed]
+    v, f = fast["velocity"].to_numpy(), fast["friction"].to_numpy()
+    x = fast["position"].to_numpy()
+    if np.sum(v > 0) < 1 or np.sum(v < 0) < 1 or len(v) < MIN_SLIDING_SEGMENTS:
+        raise DataError(f"stage (b): {len(v)} steady segments at |v| >= "
+                        f"{sliding_speed * 1e3:.3g} mm/s; need at least "
+                        f"{MIN_SLIDING_SEGMENTS}, in both directions")
+    design = np.column_stack([np.sign(v), v, np.ones_like(v), x])
+    est, res, _ = linear_least_squares(design, f, ["Fc", "sigma2", "offset", "spring_error"],
+                                       ["N", "N*s/m", "N", "N/m"], "stage (b) eq. 13")
+    data = pd.DataFrame({"x": v * 1e3, "measured": f, "fitted": f - res,
+                         "record": fast["record"].to_numpy()})
+    return StageResult("sliding", est, tuple(dict.fromkeys(fast["record"])), data,
+                       "velocity [mm/s]", "friction force [N]",
+                       extra={"sliding_speed": sliding_speed})
+
+
+def stage_stribeck(segments: pd.DataFrame, sliding: StageResult, params,
+                   sliding_speed: float, fit_delta: bool = False) -> StageResult:
+    """(c): Fs, vs (and δ) by nonlinear least squares of eq. 12 below ``sliding_speed``,
+    with Fc, σ2 and the offset of stage (b) held."""
+    slow = segments[np.abs(segments["velocity"]) < sliding_speed]
+    v, f = slow["velocity"].to_numpy(), slow["friction"].to_numpy()
+    fc, s2, off, dk = (sliding.estimates[n] for n in ("Fc", "sigma2", "offset",
+                                                      "spring_error"))
+    x = slow["position"].to_numpy()
+    n_par = 3 if fit_delta else 2
+    if len(v) <= n_par + 1:
+        raise DataError(f"stage (c): {len(v)} steady segments below "
+                        f"{sliding_speed * 1e3:.3g} mm/s; need at least {n_par + 2}")
+    y = np.sign(v) * (f - s2 * v - off - dk * x)  # = g(|v|)
+    speed = np.abs(v)
+
+    def model(q):
+        fs, vs = q[0], np.exp(q[1])
+        delta = q[2] if fit_delta else params["delta"]
+        return fc + (fs - fc) * np.exp(-((speed / vs) ** delta))
+
+    q0 = [max(params["Fs"], y.max()), np.log(params["vs"])] + ([params["delta"]]
+                                                                if fit_delta else [])
+    # Fs ≥ Fc (Fc + (Fs − Fc)·e^… ≥ Fc), vs within 1 µm/s … 1 m/s, δ within 0.3 … 5
+    lower = [fc, np.log(1e-6)] + ([0.3] if fit_delta else [])
+    upper = [10 * max(fc, y.max()), 0.0] + ([5.0] if fit_delta else [])
+    q0 = np.clip(q0, np.nextafter(lower, np.inf), np.nextafter(upper, -np.inf))
+    sol = least_squares(lambda q: model(q) - y, q0, bounds=(lower, upper), x_scale="jac")
+    jac = sol.jac.copy()
+    values = sol.x.copy()
+    values[1] = np.exp(values[1])
+    jac[:, 1] /= values[1]  # back from log vs to vs
+    cov, dof = covariance_from_jacobian(jac, sol.fun, n_par, correlated=False)
+    # the estimates of stage (b) are held here: add their uncertainty (delta method)
+    sign = np.sign(v)
+    decay = np.exp(-((speed / values[1]) ** (values[2] if fit_delta else params["delta"])))
+    held = np.column_stack([1 - decay, speed, sign, sign * x])  # ∂r/∂(Fc, σ2, offset, dk)
+    b_idx = [sliding.estimates.names.index(n)
+             for n in ("Fc", "sigma2", "offset", "spring_error")]
+    cov_b = sliding.estimates.covariance[np.ix_(b_idx, b_idx)]
+    gain = -np.linalg.pinv(jac) @ held  # ∂θ_c/∂θ_b at the optimum
+    cov = cov + gain @ cov_b @ gain.T
+    names = ["Fs", "vs"] + (["delta"] if fit_delta else [])
+    est = Estimates(tuple(names), values, np.sqrt(np.diag(cov)), cov, dof,
+                    ("N", "m/s", "")[:n_par])
+    fitted = np.sign(v) * model(sol.x) + s2 * v + off + dk * x
+    data = pd.DataFrame({"x": v * 1e3, "measured": f, "fitted": fitted,
+                         "record": slow["record"].to_numpy()})
+    at_bound = bool(np.any(np.isclose(sol.x, lower, rtol=0, atol=1e-9)) or
+                    np.any(np.isclose(sol.x, upper, rtol=0, atol=1e-9)))
+    return StageResult("stribeck", est, tuple(dict.fromkeys(slow["record"])), data,
+                       "velocity [mm/s]", "friction force [N]", extra={"at_bound": at_bound})
+
+
+def _needed_speed(sliding: StageResult, stribeck: StageResult, delta: float) -> float:
+    """Slowest speed at which the Stribeck term (Fs − Fc)·exp(−(v/vs)^δ) is below the
+    standard error of Fc: there eq. 13 biases Fc by less than its own uncertainty."""
+    fc_se = sliding.estimates.stderr[sliding.estimates.names.index("Fc")]
+    amplitude = stribeck.estimates["Fs"] - sliding.estimates["Fc"]
+    vs = stribeck.estimates["vs"]
+    if "delta" in stribeck.estimates.names:
+        delta = stribeck.estimates["delta"]
+    if not (fc_se > 0 and amplitude > fc_se):
+        return 0.0
+    return float(vs * np.log(amplitude / fc_se) ** (1.0 / delta))
+
+
+def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False,
+                         sliding_speed: float | None = None
+                         ) -> tuple[StageResult | None, StageResult | None, list[Diagnostic]]:
+    """Stages (b) and (c), iterated until the slowest segment of (b) is fast enough for
+    the vs of (c) (see the module docstring); ``sliding_speed`` fixes the threshold
+    instead, and is then only checked. Returns (sliding, stribeck, diagnostics); a stage
+    the segments cannot support is None, with a diagnostic that says why and what test
+    would help (the joint refinement then starts from the prior's values)."""
+    speeds = np.sort(np.abs(segments["velocity"].to_numpy()))
+    min_slow = (3 if fit_delta else 2) + 2
+    notes: list[Diagnostic] = []
+    if sliding_speed is None:
+        if speeds.size < MIN_SLIDING_SEGMENTS + min_slow:
+            notes.append(Diagnostic(
+                "warning", "(b, c)", f"{speeds.size} steady sliding segments in the "
+                f"records; eqs. 13 and 12 need at least {MIN_SLIDING_SEGMENTS + min_slow}",
+                "add ramps at more steady speeds (the diaphragm may stick-slip on the "
+                "slower ones: steady sliding needs σ2 + g'(v) > 0)"))
+            return None, None, notes
+        threshold = float(speeds[-MIN_SLIDING_SEGMENTS:].min()) if \
+            speeds.size < 2 * MIN_SLIDING_SEGMENTS else float(np.median(speeds))
+        threshold = max(threshold, float(speeds[min_slow]))
+    else:
+        threshold = sliding_speed
+    sliding = stribeck = None
+    for _ in range(MAX_THRESHOLD_ITERATIONS):
+        try:
+            new_sliding = stage_sliding(segments, threshold)
+            new_stribeck = stage_stribeck(segments, new_sliding, params, threshold, fit_delta)
+        except DataError as exc:
+            notes.append(Diagnostic("warning", "(b, c)", str(exc)))
+            break
+        sliding, stribeck = new_sliding, new_stribeck
+        needed = _needed_speed(sliding, stribeck, params["delta"])
+        if sliding_speed is not None:
+            if needed > threshold:
+                notes.append(Diagnostic(
+                    "warning", "(b)", f"the given sliding speed {threshold * 1e3:.3g} mm/s "
+                    f"is not well above vs = {stribeck.estimates['vs'] * 1e3:.3g} mm/s: the "
+                    f"Stribeck term there exceeds the Fc standard error, which biases Fc "
+                    f"and σ2", f"use at least {needed * 1e3:.3g} mm/s, or leave the sliding "
+                    "speed to the procedure"))
+            break
+        above = speeds[speeds >= needed]
+        if above.size < MIN_SLIDING_SEGMENTS:
+            notes.append(Diagnostic(
+                "warning", "(b)", f"eq. 13 needs steady sliding at |v| ≥ "
+                f"{needed * 1e3:.3g} mm/s (where the Stribeck term of vs = "
+                f"{stribeck.estimates['vs'] * 1e3:.3g} mm/s is below the Fc standard "
+                f"error); the records have {above.size} such segments "
+                f"(need {MIN_SLIDING_SEGMENTS})",
+                f"add ramps at {needed * 1e3:.3g} to {3 * needed * 1e3:.3g} mm/s in both "
+                "directions; meanwhile eq. 13 is used where it holds least badly and the "
+                "joint refinement fits eq. 12 whole"))
+            break
+        new = float(max(above[0], speeds[min(min_slow, speeds.size - 1)]))
+        if new == threshold:
+            notes.append(Diagnostic(
+                "note", "(b)", f"eq. 13 on {np.sum(speeds >= threshold)} segments at |v| ≥ "
+                f"{threshold * 1e3:.3g} mm/s, where the Stribeck term is below the Fc "
+                f"standard error (vs = {stribeck.estimates['vs'] * 1e3:.3g} mm/s)"))
+            break
+        threshold = new
+    else:
+        notes.append(Diagnostic("warning", "(b, c)", "the sliding threshold did not settle "
+                                f"in {MAX_THRESHOLD_ITERATIONS} iterations"))
+    if stribeck is not None and stribeck.extra.get("at_bound"):
+        notes.append(Diagnostic("warning", "(c)", "Fs or vs ended at a bound of its search "
+                                "range: the slow segments do not show the Stribeck dip",
+                                "add ramps at speeds around the expected vs"))
+    return sliding, stribeck, notes
+
+
+# --------------------------------------------------------------------------- (d)
+def stuck_period(params) -> float:
+    """Period 2π·√(m/(k + σ0)) [s] of the stuck (presliding) mode."""
+    return float(2 * np.pi * np.sqrt(params["m"] / (params["k"] + params["sigma0"])))
+
+
+def presliding_window(record: Record, params) -> float:
+    """Start [s] of the presliding part of ``record``: ``SETTLE_PERIODS`` stuck-mode
+    periods after its approach (its longest run faster than ``APPROACH_FRACTION`` of
+    its fastest motion)."""
+    kin = kinematics(record)
+    speed = np.abs(kin.velocity)
+    moving = speed > APPROACH_FRACTION * speed.max()
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], moving.astype(np.int8), [0]])))
+    if edges.size == 0:
+        return float(record.time[0])
+    runs = list(zip(edges[::2], edges[1::2], strict=True))
+    _i0, i1 = max(runs, key=lambda r: r[1] - r[0])
+    return float(kin.time[min(i1, kin.time.size - 1)] + SETTLE_PERIODS * stuck_period(params))
+
+
+def stage_presliding(records: Sequence[Record], params, friction=None, solver=None
+                     ) -> StageResult:
+    """(d): σ0, σ1 by output error on the presliding part of each record (a sensor
+    offset per record is fitted too: the stuck position remembers the approach)."""
+    from ..models import Actuator, LuGre, PressureSource
+    from .fit import fit
+
+    model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
+    windows = [(presliding_window(r, params), r.time[-1]) for r in records]
+    result = fit(model, records, ["sigma0", "sigma1"], offsets=["position"],
+                 window=windows, solver=solver)
+    keep = [n in ("sigma0", "sigma1") for n in result.estimates.names]
+    est = result.estimates
+    idx = np.flatnonzero(keep)
+    sub = Estimates(tuple(est.names[i] for i in idx), est.values[idx], est.stderr[idx],
+                    est.covariance[np.ix_(idx, idx)], est.dof,
+                    tuple(est.units[i] for i in idx))
+    rec, sim = records[0], result.simulated[0]
+    data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
+                         "fitted": sim["position"] * 1e3})
+    return StageResult("presliding", sub, tuple(r.source for r in records), data,
+                       "time [s]", "position [mm]", {"fit": result})
