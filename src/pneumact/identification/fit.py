@@ -55,6 +55,9 @@ class _Problem:
         self.signals, self.weights, self.solver = tuple(signals), dict(weights), solver
         self.record_weights = (np.ones(len(self.records)) if record_weights is None
                                else np.asarray(record_weights, dtype=float))
+        #: threads that simulate the records of one evaluation (1 inside a multistart,
+        #: whose starts run on threads of their own)
+        self.workers = 1
         self.jacobian = jacobian
         self.base = dict(base_values)
         #: the parameters each record's model reads (a joint fit mixes valves)
@@ -112,44 +115,50 @@ class _Problem:
 
     # -- evaluation
     def evaluate(self, theta: np.ndarray, with_jacobian: bool):
-        """(weighted residuals, Jacobian in θ-space or None, simulated Results)."""
-        from ..simulation import simulate, simulate_sensitivities
-
+        """(weighted residuals, Jacobian in θ-space or None, simulated Results); the
+        records run on ``workers`` threads (the compiled integrators release the GIL)."""
         key = theta.tobytes()
         cached = self._cache.get(key)
         if cached is not None and (cached[1] is not None or not with_jacobian):
             return cached
+        runs = _map(self.workers, lambda i: self._run(theta, i, with_jacobian),
+                    range(len(self.records)))
         rows, blocks, results = [], [], []
-        for i, (model, record, experiment) in enumerate(zip(
-                self.models, self.records, self.experiments, strict=True)):
-            values = self.values_for(theta, i)
-            names = self.free_names(i)
-            try:
-                if with_jacobian and names:
-                    sens = simulate_sensitivities(model, experiment, names, self.solver,
-                                                  t_eval=record.time, values=values)
-                    result = sens.result
-                else:
-                    result = simulate(model, experiment, self.solver, t_eval=record.time,
-                                      values=values)
-            except SolverError as exc:
-                shown = ", ".join(f"{c.label}={v:.6g}" for c, v in zip(self.columns, theta,
-                                                                       strict=True))
-                raise SolverError(f"fit: the simulation of {record.source} failed at {shown}: "
-                                  f"{exc}") from exc
+        for i, (result, sens) in enumerate(runs):
             self.simulations += 1
             results.append(result)
             mask = self.masks[i]
             rows.append(np.concatenate([
-                self.weight(i, s) * (result[s] + self.offset_of(theta, i, s) - record[s])[mask]
+                self.weight(i, s) * (result[s] + self.offset_of(theta, i, s)
+                                     - self.records[i][s])[mask]
                 for s in self.signals]))
             if with_jacobian:
-                blocks.append(self._block(i, sens if names else None, mask))
+                blocks.append(self._block(i, sens, mask))
         out = (np.concatenate(rows), np.vstack(blocks) if with_jacobian else None, results)
         if len(self._cache) > 8:
             self._cache.clear()
         self._cache[key] = out
         return out
+
+    def _run(self, theta: np.ndarray, i: int, with_jacobian: bool):
+        """(Result, SensitivityResult or None) of record ``i`` at ``theta``."""
+        from ..simulation import simulate, simulate_sensitivities
+
+        model, record, experiment = self.models[i], self.records[i], self.experiments[i]
+        values = self.values_for(theta, i)
+        names = self.free_names(i)
+        try:
+            if with_jacobian and names:
+                sens = simulate_sensitivities(model, experiment, names, self.solver,
+                                              t_eval=record.time, values=values)
+                return sens.result, sens
+            return simulate(model, experiment, self.solver, t_eval=record.time,
+                            values=values), None
+        except SolverError as exc:
+            shown = ", ".join(f"{c.label}={v:.6g}" for c, v in zip(self.columns, theta,
+                                                                   strict=True))
+            raise SolverError(f"fit: the simulation of {record.source} failed at {shown}: "
+                              f"{exc}") from exc
 
     def _block(self, i, sens, mask) -> np.ndarray:
         """Rows of record ``i`` in the Jacobian (θ-space)."""
@@ -603,6 +612,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     problem = _Problem(models, records, columns, log_mask, signals, weights,
                        solver or Rodas4(rtol=1e-6), jacobian, base, windows, smooth_input,
                        record_weights)
+    problem.workers = 1 if multistart else max(1, int(workers or os.cpu_count() or 1))
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]
@@ -672,11 +682,22 @@ def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, sched
 
 
 def _own_copy(problem: _Problem) -> _Problem:
-    """A shallow copy with its own cache and counter (one per thread or start)."""
+    """A shallow copy with its own cache and counter (one per thread or start), whose
+    records run one after the other."""
     own = copy.copy(problem)
     own._cache = {}
     own.simulations = 0
+    own.workers = 1
     return own
+
+
+def _map(workers: int, fn, items):
+    """``list(map(fn, items))``, on ``workers`` threads when more than one."""
+    items = list(items)
+    if workers <= 1 or len(items) <= 1:
+        return [fn(item) for item in items]
+    with ThreadPoolExecutor(max_workers=min(workers, len(items))) as pool:
+        return list(pool.map(fn, items))
 
 
 def _solve_copy(problem, phi0, options):

@@ -27,7 +27,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -52,6 +52,8 @@ class InputNoise:
     covariance: np.ndarray
     noise: dict[str, float]  # record -> input noise standard deviation (SI)
     replicates: int
+    #: record index -> (replicates × samples) changes of the fitted signal
+    moves: dict[int, np.ndarray] = field(default_factory=dict)
 
     def to_pandas(self) -> pd.DataFrame:
         return pd.DataFrame({"record": list(self.noise), "input_noise": list(self.noise.values())})
@@ -166,7 +168,7 @@ def input_noise_covariance(fit: FitResult, replicates: int = INPUT_REPLICATES,
     for i, delta in moves.items():  # independent noise on each input: the shares add
         shifts = (fit.weight(i, fit.signals[0]) * delta) @ pinv[:, offsets[i]:offsets[i + 1]].T
         covariance += shifts.T @ shifts / len(shifts)
-    return InputNoise(covariance, noise, replicates)
+    return InputNoise(covariance, noise, replicates, moves)
 
 
 def _knot_projector(time, knot_t, knot_v, sigma: float) -> np.ndarray:
