@@ -108,7 +108,7 @@ BAD_TOML = {
     "misspelled": (("Fc = {", "Fcc = {"), "unknown parameter 'Fcc'"),
     "unknown unit": (('"0.63 kg"', '"0.63 kgg"'), "unknown unit 'kgg'"),
     "Fs below Fc": (('"3.2 N"', '"2.0 N"'), "Fs = 2 N: must be >= Fc"),
-    "negative mass": (('"0.63 kg"', '"-0.63 kg"'), "m = -0.63 kg: must be > 0"),
+    "negative mass": (('"0.63 kg"', '"-0.63 kg"'), "m = -0.63 kg: must be >= 1e-09 kg"),
 }
 
 BAD_CSV = {

@@ -16,11 +16,16 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from pneumact.errors import ParameterError
+from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
 from pneumact.parameters.units import parse_value
-from pneumact.parameters.validation import message, unknown_name, warn_passivity
+from pneumact.parameters.validation import (
+    message,
+    unknown_name,
+    warn_implausible,
+    warn_passivity,
+)
 
 __all__ = ["available_params", "load_params", "params_to_toml", "write_params"]
 
@@ -147,10 +152,21 @@ def load_params(name_or_path: str | Path) -> ParameterSet:
     """Load a shipped set by name ("vgt-paper") or a TOML file by path, in SI, validated.
 
     Raises ParameterError for an unknown set, a malformed file, an unknown parameter, a
-    bad unit or an inconsistent set; warns (PassivityWarning, once) if the LuGre
-    parameters break the passivity condition.
+    bad unit, an impossible value or an inconsistent set; warns (PlausibilityWarning)
+    about a legal value outside the range real actuators have (often a unit typed
+    wrong), and (PassivityWarning, once per process) if the LuGre parameters break the
+    passivity condition. A ParameterSet is returned as it is.
     """
+    if isinstance(name_or_path, ParameterSet):
+        return name_or_path
+    if not isinstance(name_or_path, (str, os.PathLike)) or isinstance(name_or_path, bytes):
+        raise ArgumentTypeError(
+            f"load_params: name_or_path = {name_or_path!r}: must be a shipped set name "
+            f"({', '.join(_shipped())}) or the path of a .toml file, not "
+            f"{type(name_or_path).__name__}")
     ps = _load(name_or_path)
+    warn_implausible(ps.values, ps.name, stacklevel=2,
+                     given={n: i.given for n, i in ps.info.items()})
     warn_passivity(ps.values, ps.name, stacklevel=2)
     return ps
 
