@@ -93,11 +93,18 @@ def _inside_open_stage(path: Path) -> bool:
         return any(resolved == s or s in resolved.parents for s in _OPEN_STAGES)
 
 
+def _listing(folder: Path) -> dict:
+    try:
+        listing = json.loads((folder / RUN_LISTING).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return listing if isinstance(listing, dict) else {}
+
+
 def _listed(folder: Path) -> list[str]:
     """The entries the run that wrote ``folder`` listed (plain names only)."""
-    try:
-        names = json.loads((folder / RUN_LISTING).read_text(encoding="utf-8"))["files"]
-    except (OSError, ValueError, KeyError, TypeError):
+    names = _listing(folder).get("files")
+    if not isinstance(names, list):
         return []
     return [n for n in names if isinstance(n, str) and n and n not in (".", "..")
             and "/" not in n and os.sep not in n]
@@ -130,7 +137,7 @@ def _seed(stage: Path, out: Path) -> None:
             _link_or_copy(str(src), str(stage / name))
 
 
-def _commit(stage: Path, out: Path, replace: bool) -> list[str]:
+def _commit(stage: Path, out: Path, replace: bool, resumable: bool = False) -> list[str]:
     """Move the stage's entries into ``out``: the whole stage becomes ``out`` when it did
     not exist; else the previous run's entries are moved aside first (and restored if a
     move fails), then removed. With ``replace`` False the entries are only added."""
@@ -140,7 +147,7 @@ def _commit(stage: Path, out: Path, replace: bool) -> list[str]:
 
         from pneumact import __version__
 
-        listing = {"files": entries, "pneumact": __version__,
+        listing = {"files": entries, "pneumact": __version__, "resumable": resumable,
                    "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         (stage / RUN_LISTING).write_text(json.dumps(listing, indent=1), encoding="utf-8")
     if replace and not out.exists():
@@ -195,7 +202,8 @@ def staged_folder(out_dir: PathLike, *, resumable: bool = False, resume: bool = 
     from pneumact.checks import check_out_dir
     from pneumact.errors import ArgumentError, PneumactError
 
-    out = check_out_dir("out_dir", out_dir).resolve()  # "." has a parent to stage in
+    display = check_out_dir("out_dir", out_dir)
+    out = display.resolve()  # "." has a parent to stage in
     out.parent.mkdir(parents=True, exist_ok=True)
     nested = not resumable and _inside_open_stage(out)
     existed = False
@@ -207,9 +215,15 @@ def staged_folder(out_dir: PathLike, *, resumable: bool = False, resume: bool = 
             existed = False
         elif existed and not resume:
             raise ArgumentError(
-                f"{out}: the interrupted run kept in {stage} would be lost",
+                f"{display}: the interrupted run kept in {stage.name} beside it would be "
+                "lost",
                 api_hint="continue it (resume=True) or start again (overwrite=True)",
                 cli_hint="continue it (--resume) or start again (--overwrite)")
+        if not existed and not (resume or overwrite) and _listing(out).get("resumable"):
+            raise ArgumentError(
+                f"{display} holds the kept runs of an earlier run",
+                api_hint="continue them (resume=True) or start again (overwrite=True)",
+                cli_hint="continue them (--resume) or start again (--overwrite)")
         if not existed:
             stage.mkdir()
             if resume and out.is_dir():
@@ -233,7 +247,7 @@ def staged_folder(out_dir: PathLike, *, resumable: bool = False, resume: bool = 
         with _STAGES_LOCK:
             _OPEN_STAGES.discard(key)
     try:
-        _commit(stage, out, replace=not nested)
+        _commit(stage, out, replace=not nested, resumable=resumable)
     except BaseException:
         if not resumable:
             shutil.rmtree(stage, ignore_errors=True)

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from ..checks import check_int
 from ..errors import ParameterError
 from .methods import (
     Evaluate,
@@ -22,6 +23,7 @@ from .methods import (
     StudyResult,
     batch_evaluate,
     bootstrap_seed,
+    check_sobol_n,
     sobol,
 )
 from .problem import Problem
@@ -80,9 +82,8 @@ def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
     wider than ``target_width`` (CI widths shrink as 1/√n)."""
     from SALib.analyze import sobol as analyze
 
-    if n_min < 1 or n_max < n_min:
-        raise ParameterError(f"sobol_convergence: need 1 <= n_min <= n_max, got {n_min}, "
-                             f"{n_max}")
+    n_min = check_sobol_n(n_min, where="sobol_convergence", name="n_min")
+    n_max = check_int("n_max", n_max, minimum=n_min, where="sobol_convergence")
     sizes = [n_min * 2**s for s in range(int(np.log2(n_max / n_min)) + 1)]
     salib = problem.to_salib()
     final = sobol(problem, evaluate, sizes[-1], seed=seed)  # the largest sample, once

@@ -49,7 +49,7 @@ from .spec import (
     table_hash,
 )
 
-__all__ = ["BatchResult", "simulate_batch"]
+__all__ = ["BatchResult", "check_outputs", "signal_names", "simulate_batch"]
 
 MANIFEST_FORMAT = "pneumact-batch/2"
 MAX_DEFAULT_CHUNK = 250  # rows; keeps progress and checkpoints frequent on big batches
@@ -85,6 +85,31 @@ class BatchResult:
 
 
 # --------------------------------------------------------------------------- planning
+def signal_names(model, experiment) -> list[str]:
+    """The signals a batch of ``model`` under ``experiment`` can keep: its states, then
+    its derived outputs (the drive named after the experiment's quantity)."""
+    assembly = assemble(model)
+    return [*assembly.state_names,
+            *(f"drive_{experiment.quantity}" if n == "drive" else n
+              for n in assembly.output_names if n not in assembly.state_names)]
+
+
+def check_outputs(model, experiment, features=(), signals=(), *, reference: bool = False,
+                  cli: bool = False) -> None:
+    """Refuse unknown feature or signal names (and pressure features of a model without a
+    pressure) before anything runs; ``cli`` names them as the command line's options."""
+    assembly = assemble(model)
+    has_pressure = assembly.signal_source("pressure") is not None
+    try:
+        check_features(features, has_pressure, reference, type(model).__name__)
+        check_names("signal", signals, signal_names(model, experiment))
+    except PneumactError as exc:
+        if cli:
+            raise ArgumentError(f"{'--features' if 'feature' in exc.message else '--signals'}"
+                                f": {exc.message}") from None
+        raise
+
+
 def _plan(model, experiment, table, features, signals, t_eval, solver, reference, y0):
     """(spec, values, runner): the checked batch and its prepared kernel."""
     assembly = assemble(model)
@@ -99,10 +124,8 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
     y0 = None if y0 is None else np.asarray(y0, dtype=float)
     spec = BatchSpec(model, experiment, solver, columns, features, (), t_eval, reference, y0)
     runner = ChunkRunner(spec)  # prepares the kernel (and checks the experiment) up front
-    names = [*assembly.state_names,
-             *(f"drive_{experiment.quantity}" if n == "drive" else n
-               for n in assembly.output_names if n not in assembly.state_names)]
-    spec = replace(spec, signals=check_names("signal", signals or (), names))
+    spec = replace(spec, signals=check_names("signal", signals or (),
+                                             signal_names(model, experiment)))
     runner.spec = spec
     runner.signal_sources = np.array([runner.source_of(n) for n in spec.signals],
                                      dtype=np.int64).reshape(len(spec.signals), 2)
