@@ -12,10 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from pneumact.cli import app
+from pneumact.io.tables import RUN_LISTING
 
 # --- reference values (one block) ----------------------------------------------------
 EXIT_USER_ERROR = 2
-EXIT_CHECK_FAILED = 1
+EXIT_CHECK_FAILED = 2  # the README promises 2 for every user error
 SIM_COLUMNS = ("time [s]", "pressure [Pa]", "position [m]", "velocity [m/s]", "friction [N]")
 RIG_COLUMNS = ("time [s]", "position [m]", "velocity [m/s]", "friction [N]")
 SHORT_T_END = "5"  # s: keeps each run short
@@ -50,7 +51,9 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert (out / "hysteresis.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "loop width" in result.stdout
     assert "kPa of vacuum" in result.stdout
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
+    hidden = [p.name for p in out.iterdir() if p.name.startswith(".")]
+    assert hidden == [RUN_LISTING]  # the list of what the run wrote; no temporary left
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
 def test_command_valve_runs(tmp_path):

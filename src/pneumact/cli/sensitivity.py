@@ -168,9 +168,6 @@ def check_sample_size(method: Method, n: int, k: int, convergence: bool) -> None
     option = "--n"
     if method is Method.sobol:
         methods.check_sobol_n(n, where="", name=option)
-        if convergence and n < 16 * methods.MIN_SOBOL_N:
-            raise ArgumentError(f"--n = {n}: --convergence analyses n/16 ... n, so n must be "
-                                f">= {16 * methods.MIN_SOBOL_N}")
     elif method is Method.morris:
         check_int(option, n, minimum=methods.MIN_MORRIS_TRAJECTORIES)
     elif method is Method.src:
@@ -204,7 +201,7 @@ class Study:
 
         problem, n, seed = self.problem(), self.n, self.seed
         if convergence:
-            return sa.sobol_convergence(problem, evaluate, n_max=n, n_min=n // 16,
+            return sa.sobol_convergence(problem, evaluate, n_max=n, n_min=max(1, n // 16),
                                         seed=seed, target_width=None)
         run = {Method.sobol: lambda: sa.sobol(problem, evaluate, n, self.second_order, seed),
                Method.morris: lambda: sa.morris(problem, evaluate, n, seed=seed),

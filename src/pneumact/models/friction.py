@@ -546,6 +546,11 @@ class LuGre(FrictionModel):
     scales: ClassVar[str] = "lugre_scales"
     bound: ClassVar[str] = "lugre_bound"
 
+    def __post_init__(self):
+        from ..checks import check_bool
+
+        check_bool("decaying_damping", self.decaying_damping, where="LuGre")
+
     @property
     def law(self) -> str:  # type: ignore[override]
         return "lugre_decaying" if self.decaying_damping else "lugre"

@@ -34,7 +34,7 @@ declare(
     P("V0", "m^3", "chamber volume at the rest stop (x = 0)", None, 0.0, True, 10.0,
       group="pneumatics", plausible=(1e-8, 0.1)),
     P("p_res", "Pa", "vacuum reservoir pressure (absolute), below p_atm", None, 0.0, False,
-      1e7, group="pneumatics", plausible=(500.0, 2e6)),
+      1e7, group="pneumatics", plausible=(1e3, 2e6)),
     P("gamma", "", "ratio of specific heats of the gas (ideal gases: 1 < gamma <= 5/3)", 1.4,
       1.0, True, 5.0 / 3.0, group="pneumatics"),
     P("R", "J/(kg*K)", "specific gas constant of air", 287.0, 0.0, True, 1e5,
@@ -271,8 +271,10 @@ class Polytropic(ChamberLaw):
     n: float = 1.2
 
     def __post_init__(self):
-        if not (np.isfinite(self.n) and self.n >= 1.0):
-            raise ParameterError(f"Polytropic: n = {self.n}, must be >= 1")
+        from ..checks import check_range
+
+        check_range("n", self.n, 1.0, 5.0 / 3.0, where="Polytropic", error=ParameterError,
+                    hint="1 isothermal, γ adiabatic; γ <= 5/3 for any ideal gas")
 
     def settings(self) -> dict[str, float]:
         return {"chamber_n_offset": float(self.n), "chamber_n_gamma": 0.0}

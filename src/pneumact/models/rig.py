@@ -119,9 +119,16 @@ class FrictionRig:
     template: ClassVar[str] = "pneumact.simulation.templates.rig"
 
     def __post_init__(self):
+        from ..checks import as_instance
         from ..errors import ExperimentError
+        from ..parameters.files import as_parameter_set
 
-        if self.drive not in DRIVES:
+        object.__setattr__(self, "params", as_parameter_set(self.params, "FrictionRig"))
+        object.__setattr__(self, "friction", as_instance(
+            "friction", self.friction, FrictionModel, where="FrictionRig",
+            examples="pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
+                     "pa.StribeckMap()"))
+        if not isinstance(self.drive, str) or self.drive not in DRIVES:
             raise ExperimentError(
                 f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}")
         self.params.require(self.required, "FrictionRig")

@@ -27,7 +27,8 @@ from pneumact.parameters.validation import (
     warn_passivity,
 )
 
-__all__ = ["available_params", "load_params", "params_to_toml", "write_params"]
+__all__ = ["as_parameter_set", "available_params", "load_params", "params_to_toml",
+           "write_params"]
 
 _TOP_KEYS = ("name", "description", "provenance", "parameters")
 _ENTRY_KEYS = ("value", "source", "note")
@@ -169,6 +170,21 @@ def load_params(name_or_path: str | Path) -> ParameterSet:
                      given={n: i.given for n, i in ps.info.items()})
     warn_passivity(ps.values, ps.name, stacklevel=2)
     return ps
+
+
+def as_parameter_set(value, where: str) -> ParameterSet:
+    """A ParameterSet from what a function was given: a set as it is, a shipped set's
+    name or a .toml path loaded (``Actuator("vgt-paper")`` reads as
+    ``Actuator(load_params("vgt-paper"))``); anything else is refused, naming the type."""
+    if isinstance(value, ParameterSet):
+        return value
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        return load_params(value)
+    hint = (" (from a dict: ParameterSet.from_dict(values))"
+            if isinstance(value, Mapping) else "")
+    raise ArgumentTypeError(f"{where}: params = {value!r:.60}: must be a ParameterSet, "
+                            "e.g. pa.load_params('vgt-paper'), or a set name or .toml path, "
+                            f"not {type(value).__name__}{hint}")
 
 
 def available_params() -> list[tuple[str, str]]:

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..checks import check_int
-from ..errors import ParameterError
+from ..errors import ArgumentError, ParameterError
 from .methods import (
     Evaluate,
     SensitivityWarning,
@@ -82,8 +82,13 @@ def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
     wider than ``target_width`` (CI widths shrink as 1/√n)."""
     from SALib.analyze import sobol as analyze
 
-    n_min = check_sobol_n(n_min, where="sobol_convergence", name="n_min")
+    n_min = check_int("n_min", n_min, minimum=1, where="sobol_convergence")
+    if n_min & (n_min - 1):
+        raise ArgumentError(f"sobol_convergence: n_min = {n_min}: must be a power of two "
+                            "(the prefixes of a Sobol sequence are balanced only then)")
     n_max = check_int("n_max", n_max, minimum=n_min, where="sobol_convergence")
+    check_sobol_n(n_min * 2 ** int(np.log2(n_max / n_min)), where="sobol_convergence",
+                  name="the largest sample n_max")
     sizes = [n_min * 2**s for s in range(int(np.log2(n_max / n_min)) + 1)]
     salib = problem.to_salib()
     final = sobol(problem, evaluate, sizes[-1], seed=seed)  # the largest sample, once

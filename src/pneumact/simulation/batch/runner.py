@@ -122,7 +122,7 @@ class ChunkRunner:
         prep.kernel.run_rows(prep.vector, self.slot_ptr, self.slot_idx, values, valid,
                              self.y0_given, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
                              True if solver.explicit else None, solver.rtol, self.atol_given,
-                             solver.h_init, solver.h_max, solver.max_steps, self.sources,
+                             solver.h_init, solver.h_max, prep.max_steps, self.sources,
                              self.ref_t, self.ref_x, len(spec.features) > 0, features,
                              self.signal_sources, signals, info)
 
