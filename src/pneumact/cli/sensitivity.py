@@ -42,7 +42,6 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import ArgumentError, ParameterError
-from pneumact.io.tables import staged_folder
 
 
 class Method(StrEnum):
@@ -128,6 +127,8 @@ def sensitivity(
                            overwrite=overwrite))
         if method is not Method.oat:
             check_sample_size(method, study.n, len(study.problem().names), convergence)
+        from pneumact.io.tables import staged_folder
+
         with staged_folder(out, resumable=method is not Method.oat, resume=resume,
                            overwrite=overwrite) as stage:
             writers = study.features(feature_names, stage, convergence)

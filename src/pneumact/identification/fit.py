@@ -30,6 +30,7 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
 __all__ = ["FitResult", "Profile", "fit"]
@@ -441,19 +442,25 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     ``multistart`` adds that many Latin-hypercube starts inside the bounds, run on
     ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
     profile likelihood is computed. ``offsets`` names signals that get a free additive
-    sensor offset per record; ``window`` = (t0, t1) restricts the residuals to that time
-    span (the simulation still starts at each record's start). ``smooth_input`` rebuilds
+    sensor offset per record; ``window`` = (t0, t1) crops the records to that time span,
+    so only it is simulated (each run starts at rest at t0 under the input there, as at
+    a record's start). ``smooth_input`` rebuilds
     a noisy measured input as piecewise linear before it drives the model (see
     ``identification.inputs``: noise on the input dithers LuGre bristles and biases the
     estimates). ``covariance`` is "hac" (residuals correlated in time, the default) or
     "iid" (see ``estimates.covariance_from_jacobian``).
     """
-    records = [records] if isinstance(records, Record) else list(records)
-    if not records:
-        raise DataError("fit: give at least one record")
-    free = list(dict.fromkeys(free))
-    if not free:
-        raise ParameterError("fit: give at least one free parameter")
+    records = fit_records(records)
+    window = check_window(window)
+    if window is not None:
+        records = [r.crop(*window) for r in records]
+    checked = check_fit_arguments(
+        model, records, free, per_record=per_record, start=start, bounds=bounds, log=log,
+        signals=signals, weights=weights, loss=loss, f_scale=f_scale, solver=solver,
+        multistart=multistart, seed=seed, workers=workers, profile=profile,
+        profile_points=profile_points, max_nfev=max_nfev, offsets=offsets,
+        smooth_input=smooth_input, progress=progress)
+    free, solver = checked["free"], checked["solver"]
     if covariance not in ("hac", "iid"):
         raise ParameterError(f"fit: covariance = {covariance!r}; allowed: hac, iid")
     if jacobian not in ("sensitivities", "2-point", "3-point"):
@@ -492,8 +499,10 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]
-    if multistart:
-        starts += list(_starts(multistart, plo, phi_, seed))
+    if multistart:  # an offset has no bounds: each start begins it where the fit does
+        offset = np.array([c.offset for c in columns])
+        starts += [np.where(offset, starts[0], s) for s in _starts(
+            multistart, np.where(offset, 0.0, plo), np.where(offset, 1.0, phi_), seed)]
     solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
                             scheduler, progress)
     best = min(solutions, key=lambda s: s.cost)

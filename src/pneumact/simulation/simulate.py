@@ -25,7 +25,7 @@ from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
 
 __all__ = ["Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
-           "prepare", "run_kernel", "simulate"]
+           "model_stroke", "prepare", "run_kernel", "simulate"]
 
 
 def check_model(model, where: str = "simulate") -> None:
@@ -66,7 +66,7 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
                               "command must stay within [0, 1] (0 vents the chamber, 1 "
                               "opens it to the reservoir)")
     elif expected == "position":
-        stroke = _stroke(model)
+        stroke = model_stroke(model)
         if stroke is not None and (low < 0.0 or high > stroke):
             raise ExperimentError(
                 f"{what}: its set-point spans {low * 1e3:g} to {high * 1e3:g} mm; the "
@@ -74,7 +74,7 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
                 "4 mm is 0.004)")
 
 
-def _stroke(model) -> float | None:
+def model_stroke(model) -> float | None:
     """x_max of a model whose plant is an actuator (set-points beyond it are impossible)."""
     plant = getattr(model, "plant", model)
     if not hasattr(plant, "valve"):
