@@ -104,9 +104,13 @@ def check_type(name: str, value: Any, expected: type | tuple[type, ...], *, wher
 def _real(name: str, value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         if isinstance(value, str):
+            try:
+                float(value)
+                fix = f" (write {name}={value.strip()} without quotes, in SI units)"
+            except ValueError:
+                fix = ""
             raise ArgumentTypeError(
-                f"{_prefix(where)}{name} = {value!r}: must be a number, not a string "
-                f"(write {name}={value.strip()} without quotes, in SI units)")
+                f"{_prefix(where)}{name} = {value!r}: must be a number, not a string{fix}")
         raise ArgumentTypeError(f"{_prefix(where)}{name} = {shown(value)}: must be a number, "
                                 f"not {type(value).__name__}")
     return float(value)

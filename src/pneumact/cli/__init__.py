@@ -73,4 +73,41 @@ app.command("validate")(validate_command)
 app.command("reproduce")(reproduce_command)
 app.add_typer(control_app, name="control")
 
+
+def escape_help_markup(typer_app: typer.Typer, done: set[int] | None = None) -> None:
+    """Rich reads '[kPa]' in a help text as markup and drops it: escape every option's
+    and command's help once, so that the units show in --help."""
+    import inspect
+    import typing
+
+    from rich.markup import escape
+
+    done = set() if done is None else done
+    for info in typer_app.registered_commands:
+        if info.help and id(info) not in done:
+            info.help = escape(info.help)
+        done.add(id(info))
+        callback = info.callback
+        if callback is None:
+            continue
+        if callback.__doc__ and id(callback) not in done:
+            callback.__doc__ = escape(inspect.cleandoc(callback.__doc__))
+            done.add(id(callback))
+        # typer evaluates string annotations anew (new option objects) each time it
+        # builds the command: keep the evaluated ones, whose help is escaped here
+        annotations = inspect.get_annotations(callback, eval_str=True)
+        callback.__annotations__ = annotations
+        for annotation in annotations.values():
+            if typing.get_origin(annotation) is not typing.Annotated:
+                continue
+            for option in typing.get_args(annotation)[1:]:
+                if getattr(option, "help", None) and id(option) not in done:
+                    option.help = escape(option.help)
+                    done.add(id(option))
+    for group in typer_app.registered_groups:
+        escape_help_markup(group.typer_instance, done)
+
+
+escape_help_markup(app)
+
 __all__ = ["app"]

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.markup import escape
 from rich.table import Table
 
 from pneumact.checks import check_out_dir
@@ -52,7 +51,7 @@ def _is_sequence(annotation) -> bool:
 
 def _parameter(field, annotation) -> inspect.Parameter:
     """The typer option of one setting: numbers as they are, sequences comma-separated."""
-    help_text = escape(field.metadata.get("help", ""))
+    help_text = field.metadata.get("help", "")
     if _is_sequence(annotation):
         shown = ",".join(f"{v:g}" for v in field.default)
         kind: Any = Annotated[str | None, typer.Option(

@@ -98,7 +98,8 @@ def CommandCycle(low: float = 0.0, high: float = 1.0, period: float = 20.0, cycl
     """Slow triangular valve command cycle ``low`` → ``high`` → ``low`` (u ∈ [0, 1])."""
     for label, value in (("low", low), ("high", high)):
         check_range(label, value, 0.0, 1.0, where="CommandCycle", error=ExperimentError,
-                    hint="a valve command is a fraction, 0 closed to the reservoir, 1 open")
+                    hint="a valve command is a fraction: 0 vents the chamber, 1 opens it to "
+                         "the reservoir")
     if not low < high:
         raise ExperimentError(f"CommandCycle: need low < high, got low = {low:g}, "
                               f"high = {high:g}")

@@ -370,10 +370,11 @@ def identify_paper(records: Sequence[Record], params, *, sliding_speed: float = 
     """Run stages (a)-(d) on bench ``records`` (sweeps, ramps, presliding tests; see
     ``record_kind``). ``params`` gives what is not identified (m, A_d, p_atm, δ) and the
     starting values of stage (d). Returns the stages and the identified parameter set."""
+    from ..io.records import as_records
     from ..parameters import as_parameter_set
-    from .arguments import fit_records
 
-    records, params = fit_records(records), as_parameter_set(params, "identify_paper")
+    records = as_records(records, "identify_paper")
+    params = as_parameter_set(params, "identify_paper")
     kinds = {"sweep": [], "ramp": [], "presliding": []}
     for rec in records:
         kinds[record_kind(rec)].append(rec)

@@ -256,6 +256,11 @@ def _first(mask: np.ndarray) -> int:
     return int(np.flatnonzero(mask)[0])
 
 
+def _rows(mask: np.ndarray) -> str:
+    n = int(mask.sum())
+    return f"{n} such row{'s' * (n != 1)}"
+
+
 def check_physics(source, name: str, values: np.ndarray, label: str | None = None) -> None:
     """What the physics allows of a known signal in SI: an absolute pressure (or pressure
     set-point) > 0 and <= MAX_ABSOLUTE_PRESSURE, not all below 1 kPa (kPa read as Pa); a
@@ -276,10 +281,11 @@ def check_physics(source, name: str, values: np.ndarray, label: str | None = Non
                     if values[i] > 0 else "")
             raise DataError(
                 f"{source}: {label} = {values[i]:.6g} Pa at data row {i + 1} "
-                f"({int(bad.sum())} such rows): an absolute pressure must be in (0, "
+                f"({_rows(bad)}): an absolute pressure must be in (0, "
                 f"{MAX_ABSOLUTE_PRESSURE:g}] Pa" + (f" ({hint})" if hint else "")
-                + ("; a gauge pressure goes in a column 'pressure_gauge' [with its unit], "
-                   "read with p_atm" if values[i] <= 0 else ""))
+                + ("; a gauge pressure (relative to the atmosphere) goes in a column "
+                   "named 'pressure_gauge', e.g. 'pressure_gauge [kPa]'" if values[i] <= 0
+                   else ""))
         top = float(np.max(values))
         if top < 1e3:
             hint = pressure_hint(top, (1e3, MAX_ABSOLUTE_PRESSURE))
@@ -292,7 +298,7 @@ def check_physics(source, name: str, values: np.ndarray, label: str | None = Non
         if bad.any():
             i = _first(bad)
             raise DataError(f"{source}: {label} = {values[i]:.6g} at data row {i + 1} "
-                            f"({int(bad.sum())} such rows): a valve command is within "
+                            f"({_rows(bad)}): a valve command is within "
                             "[0, 1] (a percentage needs the unit '%' in the header)")
 
 

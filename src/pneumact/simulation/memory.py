@@ -70,5 +70,7 @@ def check_memory(needed: int, what: str) -> None:
         return
     raise ResourceError(
         f"{what} would need about {_size(needed)} of memory; {_size(available)} are "
-        "available: keep fewer output points (a shorter run, n_points or t_eval), fewer "
-        "signals or fewer sets per run")
+        "available", api_hint="keep fewer output points (a shorter run, n_points or t_eval), "
+                              "fewer signals or fewer sets per run",
+        cli_hint="keep fewer output points (a shorter --t-end, fewer samples per second or "
+                 "--times), fewer --signals or fewer sets")
