@@ -77,7 +77,8 @@ def test_mistakes_are_one_line_and_leave_nothing(tmp_path):
     assert not out.exists()
     result = invoke("control", "step", "--plant", "command", "--start", "40",
                     "--out", str(out))
-    assert result.exit_code == 2 and "out of reach" in result.output
+    assert result.exit_code == 2 and "--start = 40 mm" in result.output
+    assert "x_max = 20 mm" in result.output  # beyond the stroke
     assert not out.exists()
     profile = tmp_path / "p.csv"
     profile.write_text("time [s],speed [m/s]\n0,1\n1,2\n", encoding="utf-8")

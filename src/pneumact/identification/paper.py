@@ -357,7 +357,7 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     sub = Estimates(tuple(est.names[i] for i in idx), est.values[idx], est.stderr[idx],
                     est.covariance[np.ix_(idx, idx)], est.dof,
                     tuple(est.units[i] for i in idx))
-    rec, sim = records[0], result.simulated[0]
+    rec, sim = result.records[0], result.simulated[0]  # the fitted window
     data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
                          "fitted": sim["position"] * 1e3})
     return StageResult("presliding", sub, tuple(r.source for r in records), data,
