@@ -74,9 +74,23 @@ app.command("reproduce")(reproduce_command)
 app.add_typer(control_app, name="control")
 
 
+def finite_float(text: str) -> float:
+    """A number option's value: NaN and infinities are never a setting."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise typer.BadParameter(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise typer.BadParameter(f"{text} is not a finite number")
+    return value
+
+
 def escape_help_markup(typer_app: typer.Typer, done: set[int] | None = None) -> None:
     """Rich reads '[kPa]' in a help text as markup and drops it: escape every option's
-    and command's help once, so that the units show in --help."""
+    and command's help once, so that the units show in --help; and make every number
+    option refuse NaN and infinities."""
     import inspect
     import typing
 
@@ -100,10 +114,16 @@ def escape_help_markup(typer_app: typer.Typer, done: set[int] | None = None) -> 
         for annotation in annotations.values():
             if typing.get_origin(annotation) is not typing.Annotated:
                 continue
-            for option in typing.get_args(annotation)[1:]:
-                if getattr(option, "help", None) and id(option) not in done:
+            base, *options = typing.get_args(annotation)
+            for option in options:
+                if id(option) in done:
+                    continue
+                done.add(id(option))
+                if getattr(option, "help", None):
                     option.help = escape(option.help)
-                    done.add(id(option))
+                if base in (float, float | None) and hasattr(option, "parser") and \
+                        option.parser is None and getattr(option, "click_type", None) is None:
+                    option.parser = finite_float
     for group in typer_app.registered_groups:
         escape_help_markup(group.typer_instance, done)
 

@@ -206,7 +206,7 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
     for ``params show/check``); a pneumact error or a bad path -> one red line, exit
     ``code``; Ctrl-C -> one line, exit 130; anything else is pneumact's own failure: one
     line saying so, exit 1 (the traceback with PNEUMACT_TRACEBACK=1)."""
-    import click
+    passthrough = (typer.Exit, typer.Abort, typer.TyperException)
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -214,7 +214,7 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             warnings.simplefilter("ignore", PassivityWarning)
         try:
             yield
-        except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
+        except passthrough:  # typer's own exits and usage errors
             raise
         except PneumactError as exc:
             _flush_warnings(caught)

@@ -226,7 +226,32 @@ def _options(ctx: typer.Context) -> ControllerOptions:
     given = {"structure": ctx.params["controller"]}
     given.update({f.name: ctx.params[f.name] for f in fields(ControllerOptions)
                   if f.name != "structure"})
+    _refuse_unused(ctx, given["structure"], given)
     return ControllerOptions(**given)
+
+
+#: options that only one controller structure reads
+PID_ONLY = ("kp", "kd", "derivative", "filter_time")
+CASCADE_ONLY = ("kx", "kv")
+
+
+def _refuse_unused(ctx: typer.Context, structure: Structure, given: dict) -> None:
+    """Options given on the command line that the chosen controller would ignore."""
+    def on_command_line(name: str) -> bool:
+        return ctx.get_parameter_source(name).name != "DEFAULT"
+
+    flag = {name: "--" + name.replace("_", "-") for name in given}
+    ignored = PID_ONLY if structure is Structure.cascade else CASCADE_ONLY
+    unused = [flag[n] for n in ignored if on_command_line(n)]
+    if unused:
+        raise ParameterError(f"{', '.join(unused)}: not read by --controller "
+                             f"{structure.value}")
+    if on_command_line("observer_gain") and not given["observer"]:
+        raise ParameterError("--observer-gain is the gain of the LuGre observer: give "
+                             "--observer too")
+    if on_command_line("tracking_time") and given["anti_windup"] != "back-calculation":
+        raise ParameterError(f"--tracking-time belongs to back-calculation anti-windup, not "
+                             f"--anti-windup {given['anti_windup']}")
 
 
 @control_app.command("step")
