@@ -53,6 +53,11 @@ def read_parameter_table(path: Path):
 
     specs = catalogue()
     frame, units = read_table(path)
+    for name in frame.columns:
+        if name not in specs:
+            from pneumact.parameters.validation import unknown_name
+
+            raise DataError(f"{path}: column {unknown_name(name, '')}")
     table = pd.DataFrame(index=frame.index)
     for name in frame.columns:
         values = pd.to_numeric(frame[name], errors="coerce")

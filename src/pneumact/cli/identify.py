@@ -88,6 +88,7 @@ def campaign(
                              ("--position-noise", position_noise),
                              ("--resolution", resolution)):
             check_positive(label, value, strict=False)
+        out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
         with _status("simulating the bench campaign"):
@@ -122,6 +123,8 @@ def identify_paper_command(
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
 
+        check_positive("--sliding-speed", sliding_speed)
+        out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
@@ -186,6 +189,9 @@ def identify_friction_command(
     with user_errors():
         from pneumact.identification import inverse_friction
 
+        out = check_out_dir("--out", out)
+        if cutoff is not None:
+            check_positive("--cutoff", cutoff)
         rec = _read_any(record, data_format)
         force_name = force or ("friction" if "friction" in rec and not mass else "force")
         if data_format is DataFormat.tudelft and force is None:

@@ -125,8 +125,12 @@ def sensitivity(
                       DEFAULT_N if n is None else n, second_order, seed,
                       dict(scheduler=scheduler, workers=workers, resume=resume,
                            overwrite=overwrite))
+        try:
+            factors = study.problem().names
+        except ParameterError as exc:
+            raise ParameterError(f"--vary: {exc.message}") from None
         if method is not Method.oat:
-            check_sample_size(method, study.n, len(study.problem().names), convergence)
+            check_sample_size(method, study.n, len(factors), convergence)
         from pneumact.io.tables import staged_folder
 
         with staged_folder(out, resumable=method is not Method.oat, resume=resume,

@@ -107,6 +107,9 @@ class StaticCompensation(Compensation):
 
     def __post_init__(self):
         _finite("StaticCompensation", Fc=self.Fc)
+        if self.Fc < 0 or (self.Fs is not None and not self.Fs >= self.Fc):
+            raise ParameterError(f"StaticCompensation: Fc = {self.Fc!r}, Fs = {self.Fs!r}; "
+                                 "need 0 <= Fc <= Fs (friction opposes the motion)")
         _positive("StaticCompensation", vs=self.vs, delta=self.delta, v_smooth=self.v_smooth)
 
     def settings(self) -> dict[str, float]:
