@@ -75,7 +75,7 @@ def test_pressure_input_csv(tmp_path):
 
 
 def test_friction_test_stick_slip(tmp_path):
-    result = invoke("friction-test", "stick-slip", "--duration", SHORT_T_END,
+    result = invoke("friction-test", "stick-slip", "--t-end", SHORT_T_END,
                     "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     assert set(RIG_COLUMNS) <= set(header(tmp_path / "friction_test.csv"))
@@ -246,7 +246,7 @@ def test_friction_test_options_reach_the_api(tmp_path):
     from pneumact.analysis.friction_tests import run_friction_test
     from pneumact.experiments.friction import Presliding
 
-    result = invoke("friction-test", "presliding", "--amplitude", "0.5", "--duration", "1",
+    result = invoke("friction-test", "presliding", "--amplitude", "0.5", "--t-end", "1",
                     "--n-points", "101", "--rtol", "1e-6", "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     frame = pd.read_csv(tmp_path / "friction_test.csv")

@@ -2,7 +2,7 @@
 
     pneumact simulate                         # vgt-paper, slow pressure cycle -> pneumact-out/
     pneumact simulate --valve command --t-end 10 --out run1
-    pneumact friction-test stick-slip --duration 5
+    pneumact friction-test stick-slip --t-end 5
     pneumact batch table.csv --out batch1
     pneumact params list | show NAME|FILE | check FILE
     pneumact campaign --out bench                # synthetic bench records (CSV)
