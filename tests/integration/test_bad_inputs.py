@@ -355,6 +355,20 @@ def test_passivity_is_said_by_params_not_by_every_command(workdir):
     assert "Passivity" not in result.output
 
 
+def test_a_failure_of_pneumact_s_own_is_one_line_without_traceback(workdir, monkeypatch):
+    import pneumact.cli.simulate as command
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(command, "build_experiment", broken)
+    result = _invoke(["simulate", "--out", "OUT"], workdir)
+    assert result.exit_code == 1
+    assert result.stderr.startswith("internal error: RuntimeError: a bug")
+    assert "Traceback" not in result.output and "report it" in result.stderr
+    assert not any(workdir.iterdir())
+
+
 def test_errors_speak_the_command_line(workdir):
     headless = _invoke(["fit", str(BAD / "no_header.csv"), "--free", "Fc", "--out", "OUT"],
                        workdir)

@@ -67,6 +67,9 @@ def test_profile_command_follows_a_csv_profile(tmp_path):
     signals = pd.read_csv(out / "signals.csv")
     assert np.allclose(signals["setpoint [m]"].iloc[0], 0.004)
     assert abs(signals["position [m]"].iloc[-1] - 0.005) < ref.CLI_STEP_FINAL_ERROR
+    metrics = pd.read_csv(out / "metrics.csv")["metric"].tolist()  # a profile, not a step:
+    assert "rms_tracking_error" in metrics and "overshoot" not in metrics  # no step metrics
+    assert "overshoot" not in result.stdout and "rms_tracking_error" in result.stdout
 
 
 def test_mistakes_are_one_line_and_leave_nothing(tmp_path):

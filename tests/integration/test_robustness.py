@@ -164,3 +164,22 @@ def test_fit_without_multistart_removes_the_previous_starts(tmp_path):
     names = {p.name for p in out.iterdir()}
     assert "starts.csv" not in names and "waterfall.png" not in names
     assert {"estimates.csv", "report.html", "fit.png"} <= names
+
+
+def test_offsets_with_multistart_fit(vgt):
+    """A sensor offset has no bounds: each extra start begins it where the fit does,
+    instead of refusing the multistart."""
+    record = pa.read_record(DATA / "good" / "record.csv")
+    result = pa.fit(pa.Actuator(vgt), record, ["Fc"], offsets=["position"], multistart=1,
+                    workers=1)
+    assert len(result.starts) == 2 and result.success
+    assert set(result.starts["offset_position[0]_start"]) == {0.0}
+
+
+def test_step_limit_follows_the_input():
+    from pneumact.simulation.solvers import DEFAULT_MAX_STEPS, STEPS_PER_SEGMENT
+
+    assert pa.Rodas4().step_limit(10) == DEFAULT_MAX_STEPS
+    two_hours_at_1khz = 7_200_000
+    assert pa.Rodas4().step_limit(two_hours_at_1khz) == STEPS_PER_SEGMENT * two_hours_at_1khz
+    assert pa.Rodas4(max_steps=1000).step_limit(two_hours_at_1khz) == 1000
