@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 import pneumact as pa
 from pneumact.cli import app
-from pneumact.errors import DataError, PassivityWarning
+from pneumact.errors import DataError, PassivityWarning, PneumactError
 from pneumact.io.tables import partial_folder
 from pneumact.simulation.batch import runner as batch_runner
 from reference import FRICTIONLESS_FORCE_ATOL
@@ -183,3 +183,16 @@ def test_step_limit_follows_the_input():
     two_hours_at_1khz = 7_200_000
     assert pa.Rodas4().step_limit(two_hours_at_1khz) == STEPS_PER_SEGMENT * two_hours_at_1khz
     assert pa.Rodas4(max_steps=1000).step_limit(two_hours_at_1khz) == 1000
+
+
+def test_friction_experiments_on_a_frictionless_rig(canudas):
+    """Stick-slip runs without friction (the spring just pulls the mass); the tests that
+    measure friction refuse a set that has none, saying so."""
+    from pneumact.analysis.friction_tests import run_friction_test
+    from pneumact.experiments.friction import Presliding, StickSlip
+
+    params = canudas.replace(Fc=0.0, Fs=0.0)
+    run = run_friction_test(StickSlip(duration=2.0, samples_per_second=100), params)
+    assert np.all(np.isfinite(run.result["position"]))
+    with pytest.raises(PneumactError, match="measures friction"):
+        run_friction_test(Presliding(duration=1.0), params)

@@ -130,7 +130,7 @@ def sensitivity(
         except ParameterError as exc:
             raise ParameterError(f"--vary: {exc.message}") from None
         if method is not Method.oat:
-            check_sample_size(method, study.n, len(factors), convergence)
+            check_sample_size(method, study.n, len(factors))
         from pneumact.io.tables import staged_folder
 
         with staged_folder(out, resumable=method is not Method.oat, resume=resume,
@@ -166,7 +166,7 @@ def _check_method_options(method: Method, n, second_order: bool, convergence: bo
                             "--second-order separately")
 
 
-def check_sample_size(method: Method, n: int, k: int, convergence: bool) -> None:
+def check_sample_size(method: Method, n: int, k: int) -> None:
     """--n checked against what the method needs, before any run."""
     from pneumact.sensitivity import methods
 
