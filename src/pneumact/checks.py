@@ -219,7 +219,7 @@ def check_names(name: str, values: Any, *, known: Sequence[str] | None = None,
                                     "(a non-empty string)")
     twice = sorted({n for n in items if items.count(n) > 1})
     if twice:
-        raise error(f"{_prefix(where)}{name} names {', '.join(twice)} more than once; name "
+        raise error(f"{_prefix(where)}{name} names {', '.join(twice)} more than once; give "
                     f"each {what} once")
     if not items and not allow_empty:
         raise error(f"{_prefix(where)}{name} is empty; give at least one {what}")

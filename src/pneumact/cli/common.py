@@ -397,7 +397,7 @@ def check_batch_flags(resume: bool, overwrite: bool, scheduler: str | None) -> N
     if scheduler is not None:
         from pneumact.simulation.batch.engine import check_scheduler_address
 
-        check_scheduler_address(scheduler)
+        check_scheduler_address(scheduler, "--scheduler")
 
 
 def shown_path(path: Path, stage: Path, out: Path) -> Path:

@@ -155,7 +155,7 @@ def _client_for(scheduler):
 SCHEDULER_PROTOCOLS = ("tcp", "tls", "ucx", "ws", "wss", "inproc")
 
 
-def check_scheduler_address(address: str) -> str:
+def check_scheduler_address(address: str, name: str = "scheduler") -> str:
     """A Dask scheduler address 'tcp://host:port' (or 'host:port'), checked before any
     connection is tried: what is not an address is refused at once, not after a timeout."""
     import re
@@ -168,7 +168,7 @@ def check_scheduler_address(address: str) -> str:
     if protocol not in SCHEDULER_PROTOCOLS or (protocol != "inproc" and (
             match is None or not 0 < int(match[2]) < 65536)):
         raise ArgumentError(
-            f"scheduler = {address!r}: not a Dask scheduler address; write "
+            f"{name} = {address!r}: not a Dask scheduler address; write "
             "'tcp://HOST:PORT' (e.g. 'tcp://127.0.0.1:8786', as printed by dask-scheduler)")
     return f"{protocol}://{rest}"
 
