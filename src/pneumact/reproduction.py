@@ -108,6 +108,15 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     """Reproduce the paper into ``out_dir`` (index.html, CSV tables, PNG figures)."""
     import matplotlib
 
+    from .checks import check_bool, check_out_dir, check_seed
+    from .errors import ArgumentTypeError
+
+    check_out_dir("out_dir", out_dir, where="reproduce")
+    check_bool("quick", quick, where="reproduce")
+    check_seed("seed", seed, where="reproduce")
+    if progress is not None and not callable(progress):
+        raise ArgumentTypeError(f"reproduce: progress = {progress!r}: must be a function "
+                                "progress(label)")
     from .errors import PassivityWarning
     from .io.report import Report
     from .io.tables import write_files

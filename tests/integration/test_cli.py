@@ -12,10 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from pneumact.cli import app
+from pneumact.io.tables import RUN_LISTING
 
 # --- reference values (one block) ----------------------------------------------------
 EXIT_USER_ERROR = 2
-EXIT_CHECK_FAILED = 1
+EXIT_CHECK_FAILED = 2  # the README promises 2 for every user error
 SIM_COLUMNS = ("time [s]", "pressure [Pa]", "position [m]", "velocity [m/s]", "friction [N]")
 RIG_COLUMNS = ("time [s]", "position [m]", "velocity [m/s]", "friction [N]")
 SHORT_T_END = "5"  # s: keeps each run short
@@ -50,7 +51,9 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert (out / "hysteresis.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "loop width" in result.stdout
     assert "kPa of vacuum" in result.stdout
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
+    hidden = [p.name for p in out.iterdir() if p.name.startswith(".")]
+    assert hidden == [RUN_LISTING]  # the list of what the run wrote; no temporary left
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
 def test_command_valve_runs(tmp_path):
@@ -72,7 +75,7 @@ def test_pressure_input_csv(tmp_path):
 
 
 def test_friction_test_stick_slip(tmp_path):
-    result = invoke("friction-test", "stick-slip", "--duration", SHORT_T_END,
+    result = invoke("friction-test", "stick-slip", "--t-end", SHORT_T_END,
                     "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     assert set(RIG_COLUMNS) <= set(header(tmp_path / "friction_test.csv"))
@@ -108,7 +111,7 @@ BAD_TOML = {
     "misspelled": (("Fc = {", "Fcc = {"), "unknown parameter 'Fcc'"),
     "unknown unit": (('"0.63 kg"', '"0.63 kgg"'), "unknown unit 'kgg'"),
     "Fs below Fc": (('"3.2 N"', '"2.0 N"'), "Fs = 2 N: must be >= Fc"),
-    "negative mass": (('"0.63 kg"', '"-0.63 kg"'), "m = -0.63 kg: must be > 0"),
+    "negative mass": (('"0.63 kg"', '"-0.63 kg"'), "m = -0.63 kg: must be >= 1e-09 kg"),
 }
 
 BAD_CSV = {
@@ -243,7 +246,7 @@ def test_friction_test_options_reach_the_api(tmp_path):
     from pneumact.analysis.friction_tests import run_friction_test
     from pneumact.experiments.friction import Presliding
 
-    result = invoke("friction-test", "presliding", "--amplitude", "0.5", "--duration", "1",
+    result = invoke("friction-test", "presliding", "--amplitude", "0.5", "--t-end", "1",
                     "--n-points", "101", "--rtol", "1e-6", "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     frame = pd.read_csv(tmp_path / "friction_test.csv")

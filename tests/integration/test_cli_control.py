@@ -67,6 +67,9 @@ def test_profile_command_follows_a_csv_profile(tmp_path):
     signals = pd.read_csv(out / "signals.csv")
     assert np.allclose(signals["setpoint [m]"].iloc[0], 0.004)
     assert abs(signals["position [m]"].iloc[-1] - 0.005) < ref.CLI_STEP_FINAL_ERROR
+    metrics = pd.read_csv(out / "metrics.csv")["metric"].tolist()  # a profile, not a step:
+    assert "rms_tracking_error" in metrics and "overshoot" not in metrics  # no step metrics
+    assert "overshoot" not in result.stdout and "rms_tracking_error" in result.stdout
 
 
 def test_mistakes_are_one_line_and_leave_nothing(tmp_path):
@@ -77,7 +80,8 @@ def test_mistakes_are_one_line_and_leave_nothing(tmp_path):
     assert not out.exists()
     result = invoke("control", "step", "--plant", "command", "--start", "40",
                     "--out", str(out))
-    assert result.exit_code == 2 and "out of reach" in result.output
+    assert result.exit_code == 2 and "--start = 40 mm" in result.output
+    assert "x_max = 20 mm" in result.output  # beyond the stroke
     assert not out.exists()
     profile = tmp_path / "p.csv"
     profile.write_text("time [s],speed [m/s]\n0,1\n1,2\n", encoding="utf-8")

@@ -165,9 +165,12 @@ def test_record_converts_kpa_mm_ms_to_si(tmp_path):
 
 @pytest.mark.parametrize("bar_unit", ["bar", "mbar", "psi", "Pa"])
 def test_pressure_units_are_read_as_absolute(tmp_path, bar_unit):
-    path = _write(tmp_path / "p.csv", f"time [s],pressure [{bar_unit}]\n0,1\n1,2\n")
+    value = {"bar": 1.0, "mbar": 500.0, "psi": 2.0, "Pa": 5e4}[bar_unit]  # 0.5 to 2 bar
+    path = _write(tmp_path / "p.csv",
+                  f"time [s],pressure [{bar_unit}]\n0,{value}\n1,{2 * value}\n")
     factor = {"bar": 1e5, "mbar": 100.0, "psi": 6894.757293168361, "Pa": 1.0}[bar_unit]
-    np.testing.assert_allclose(read_record(path)["pressure"], [factor, 2 * factor])
+    np.testing.assert_allclose(read_record(path)["pressure"],
+                               [value * factor, 2 * value * factor])
 
 
 def test_whitespace_file_with_mapping_and_units_argument(tmp_path):
@@ -301,8 +304,10 @@ def test_read_signal_csv(tmp_path):
     [("time [s],temp [K]", "no input signal"), ("time [s],pressure [Pa],command", "2 input")],
 )
 def test_read_signal_csv_needs_exactly_one_signal(tmp_path, header, expected):
-    cells = len(header.split(","))
-    rows = "\n".join(",".join([str(i)] * cells) for i in range(2))
+    plausible = {"pressure [Pa]": "5e4", "command": "0.5"}  # values the physics allows
+    cells = header.split(",")[1:]
+    rows = "\n".join(",".join([str(i), *(plausible.get(c, "1") for c in cells)])
+                     for i in range(2))
     path = _write(tmp_path / "in.csv", f"{header}\n{rows}\n")
     with pytest.raises(DataError, match=expected):
         read_signal_csv(path)

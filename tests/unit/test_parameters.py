@@ -188,7 +188,7 @@ def test_misspelled_name_message_format(tmp_path: Path) -> None:
     ("entry", "must_contain"),
     [
         ({"Fs": '"0.5 N"'}, ["Fs = 0.5 N", "Fc = 1 N"]),  # Fs < Fc
-        ({"m": '"-1 kg"'}, ["m = -1 kg: must be > 0"]),  # negative mass
+        ({"m": '"-1 kg"'}, ["m = -1 kg: must be >= 1e-09 kg"]),  # negative mass
         ({"p_atm": '"100 kPa"', "p_res": '"100 kPa"'}, ["p_res = 100000 Pa", "p_atm"]),
         ({"bw_gamma": '"0.8"'}, ["bw_gamma = 0.8", "[-0.5, 0.5]"]),
         (
@@ -261,7 +261,7 @@ def test_replace_validates_and_copies() -> None:
     assert heavier["m"] == 0.7 and heavier["x_max"] == 0.015
     assert ps["m"] == 0.63  # original unchanged
     assert heavier.info["m"].source == "replace()"
-    with pytest.raises(ParameterError, match=r"m = -1 kg: must be > 0"):
+    with pytest.raises(ParameterError, match=r"m = -1 kg: must be >= 1e-09 kg"):
         ps.replace(m=-1.0)
     with pytest.raises(ParameterError, match=r"Fs = 2 N.*Fc"):
         ps.replace({"Fs": 2.0})
@@ -337,7 +337,7 @@ def test_row_problems_check_ranges_and_relations_by_column() -> None:
     found = row_problems(base, ("Fc", "Fs"), values)
     assert found[0] is None
     assert "Fs = 1 N: must be >= Fc = 2 N" in found[1]
-    assert "Fc = -1 N: must be >= 0" in found[2]
+    assert "Fc = -1 N: must be >= 0 N" in found[2]
     assert "Fc = nan N: must be a finite number" in found[3]
 
 

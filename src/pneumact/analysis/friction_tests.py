@@ -60,8 +60,9 @@ def solver_for(test: FrictionTest, params) -> Rodas4:
     The rig has no natural state scales, so atol is ``atol_factor`` × Fs/sigma0 (bristle
     and position) and × Fs/sqrt(sigma0·m) (velocity, the presliding oscillation).
     """
-    z_scale = params["Fs"] / params["sigma0"]
-    v_scale = params["Fs"] / math.sqrt(params["sigma0"] * params["m"])
+    level = max(params["Fs"], params["Fc"]) or 1.0  # frictionless: the 1 N deflection
+    z_scale = level / params["sigma0"]
+    v_scale = level / math.sqrt(params["sigma0"] * params["m"])
     f = test.atol_factor
     return Rodas4(rtol=test.rtol, atol={"position": f * z_scale, "velocity": f * v_scale,
                                         "bristle": f * z_scale})
@@ -193,6 +194,10 @@ def run_friction_test(test: FrictionTest | str, params, friction: FrictionModel 
         raise ExperimentError(f"{test.kind}: give settings either in the test object or as "
                               f"keywords, not both ({', '.join(settings)})")
     friction = LuGre() if friction is None else friction
+    if test.kind != "stick-slip" and not max(params["Fs"], params["Fc"]) > 0:
+        raise ExperimentError(f"{test.kind}: the test measures friction, but parameter set "
+                              f"'{getattr(params, 'name', 'custom')}' has none (Fc = Fs = "
+                              "0); give a set with friction (stick-slip runs without)")
     solver = solver_for(test, params) if solver is None else solver
     runs = [(setup, _run(setup, params, friction, solver))
             for setup in test.setups(params, friction)]

@@ -2,7 +2,7 @@
 
     pneumact simulate                         # vgt-paper, slow pressure cycle -> pneumact-out/
     pneumact simulate --valve command --t-end 10 --out run1
-    pneumact friction-test stick-slip --duration 5
+    pneumact friction-test stick-slip --t-end 5
     pneumact batch table.csv --out batch1
     pneumact params list | show NAME|FILE | check FILE
     pneumact campaign --out bench                # synthetic bench records (CSV)
@@ -72,5 +72,62 @@ app.command("sensitivity")(sensitivity)
 app.command("validate")(validate_command)
 app.command("reproduce")(reproduce_command)
 app.add_typer(control_app, name="control")
+
+
+def finite_float(text: str) -> float:
+    """A number option's value: NaN and infinities are never a setting."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise typer.BadParameter(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise typer.BadParameter(f"{text} is not a finite number")
+    return value
+
+
+def escape_help_markup(typer_app: typer.Typer, done: set[int] | None = None) -> None:
+    """Rich reads '[kPa]' in a help text as markup and drops it: escape every option's
+    and command's help once, so that the units show in --help; and make every number
+    option refuse NaN and infinities."""
+    import inspect
+    import typing
+
+    from rich.markup import escape
+
+    done = set() if done is None else done
+    for info in typer_app.registered_commands:
+        if info.help and id(info) not in done:
+            info.help = escape(info.help)
+        done.add(id(info))
+        callback = info.callback
+        if callback is None:
+            continue
+        if callback.__doc__ and id(callback) not in done:
+            callback.__doc__ = escape(inspect.cleandoc(callback.__doc__))
+            done.add(id(callback))
+        # typer evaluates string annotations anew (new option objects) each time it
+        # builds the command: keep the evaluated ones, whose help is escaped here
+        annotations = inspect.get_annotations(callback, eval_str=True)
+        callback.__annotations__ = annotations
+        for annotation in annotations.values():
+            if typing.get_origin(annotation) is not typing.Annotated:
+                continue
+            base, *options = typing.get_args(annotation)
+            for option in options:
+                if id(option) in done:
+                    continue
+                done.add(id(option))
+                if getattr(option, "help", None):
+                    option.help = escape(option.help)
+                if base in (float, float | None) and hasattr(option, "parser") and \
+                        option.parser is None and getattr(option, "click_type", None) is None:
+                    option.parser = finite_float
+    for group in typer_app.registered_groups:
+        escape_help_markup(group.typer_instance, done)
+
+
+escape_help_markup(app)
 
 __all__ = ["app"]

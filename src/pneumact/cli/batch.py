@@ -13,6 +13,7 @@ from typing import Annotated
 
 import typer
 
+from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -33,6 +34,8 @@ from pneumact.cli.common import (
     batch_progress,
     build_experiment,
     build_model,
+    check_batch_flags,
+    check_workers,
     err_console,
     names,
     user_errors,
@@ -50,6 +53,11 @@ def read_parameter_table(path: Path):
 
     specs = catalogue()
     frame, units = read_table(path)
+    for name in frame.columns:
+        if name not in specs:
+            from pneumact.parameters.validation import unknown_name
+
+            raise DataError(f"{path}: column {unknown_name(name, '')}")
     table = pd.DataFrame(index=frame.index)
     for name in frame.columns:
         values = pd.to_numeric(frame[name], errors="coerce")
@@ -81,7 +89,7 @@ def batch(
     friction: FrictionOption = Friction.lugre,
     chamber: ChamberOption = Chamber.isothermal,
     t_end: TEndOption = None,
-    low: LowOption = 20.0,
+    low: LowOption = None,
     input_csv: InputOption = None,
     rtol: RtolOption = 1e-6,
     features: Annotated[str | None, typer.Option(help="comma-separated feature names")]
@@ -96,13 +104,18 @@ def batch(
     with user_errors():
         import pneumact as pa
 
+        check_batch_flags(resume, overwrite, scheduler)
+        check_workers(workers)
+        out = check_out_dir("--out", out)
         table = read_parameter_table(params_csv)
         options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
         parameter_set, model = build_model(options)
         experiment = build_experiment(options, parameter_set)
         with batch_progress() as progress:
-            result = pa.simulate_batch(model, experiment, table, features=names(features),
-                                       signals=names(signals), solver=pa.Rodas4(rtol=rtol),
+            result = pa.simulate_batch(model, experiment, table,
+                                       features=names(features, "--features"),
+                                       signals=names(signals, "--signals"),
+                                       solver=pa.Rodas4(rtol=rtol),
                                        scheduler=scheduler, out_dir=out, resume=resume,
                                        overwrite=overwrite, workers=workers,
                                        progress=progress)

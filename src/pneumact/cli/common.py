@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -23,12 +24,18 @@ import typer
 from rich.console import Console
 from rich.text import Text
 
-from pneumact.errors import ExperimentError, PneumactError
+from pneumact.checks import check_int, check_names, check_range
+from pneumact.errors import ArgumentError, ExperimentError, PassivityWarning, PneumactError
 
-#: Exit code of a user's mistake (bad option, bad file, invalid parameters).
+#: Exit code of a user's mistake (bad option, bad file, invalid parameters); also that of
+#: ``params check`` when the file is not valid.
 EXIT_USER_ERROR = 2
-#: Exit code of ``params check`` when the file is not valid.
-EXIT_CHECK_FAILED = 1
+EXIT_CHECK_FAILED = EXIT_USER_ERROR
+#: Exit code of a failure that is pneumact's own (a bug): one line, no traceback unless
+#: PNEUMACT_TRACEBACK=1.
+EXIT_INTERNAL_ERROR = 1
+#: Exit code after Ctrl-C (128 + SIGINT).
+EXIT_INTERRUPTED = 130
 #: Default experiment: the slow triangular cycle of the paper's Figs. 5-6, from the set's
 #: p_atm down to this pressure [Pa abs] and back in this period [s] (or 0 → 1 → 0 for a
 #: command valve).
@@ -68,16 +75,18 @@ ValveOption = Annotated[Valve, typer.Option(
 FrictionOption = Annotated[Friction, typer.Option(help="Friction model.")]
 ChamberOption = Annotated[Chamber, typer.Option(help="Chamber gas law (behind a valve).")]
 TEndOption = Annotated[float | None, typer.Option(
-    "--t-end", help="Duration [s]: the period of the default cycle, or where to stop the "
-                    "input.")]
-LowOption = Annotated[float, typer.Option(
-    "--low", help="Lowest pressure of the default cycle [kPa abs].")]
+    "--t-end", help="Duration [s]: the period of the default cycle (default 20), or where "
+                    "to stop the input.")]
+LowOption = Annotated[float | None, typer.Option(
+    "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
+                  "not with --valve command or --input).")]
 InputOption = Annotated[Path | None, typer.Option(
     "--input", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
 # the batch engine's options, shared by every command that runs batches
 SchedulerOption = Annotated[str | None, typer.Option(help="Dask scheduler address.")]
-WorkersOption = Annotated[int | None, typer.Option(help="Local threads (default all cores).")]
+WorkersOption = Annotated[int | None, typer.Option(
+    help="Local threads, >= 1 (default all cores).")]
 ResumeOption = Annotated[bool, typer.Option(
     "--resume", help="Continue the runs kept in the output directory after an interruption.")]
 OverwriteOption = Annotated[bool, typer.Option(
@@ -93,16 +102,37 @@ class ModelOptions:
     friction: str = "lugre"
     chamber: Chamber = Chamber.isothermal
     t_end: float | None = None
-    low_kpa: float = DEFAULT_LOW_PRESSURE * 1e-3
+    low_kpa: float | None = None
     input_csv: Path | None = None
     rtol: float = 1e-6
 
 
 def load_quietly(name: str):
-    """A parameter set; a passivity warning is shown once by ``user_errors``."""
+    """A parameter set (its passivity warning belongs to ``params show/check`` and the
+    reports: ``user_errors`` hides it from the other commands)."""
     import pneumact as pa
 
     return pa.load_params(name)
+
+
+def check_model_options(options: ModelOptions) -> None:
+    """Refuse options that would do nothing with the others given."""
+    if options.chamber is Chamber.adiabatic and options.valve is Valve.source:
+        raise ArgumentError(
+            "--chamber adiabatic has no effect with --valve source: the pressure is "
+            "prescribed, so the chamber's gas law never enters; drop --chamber, or drive "
+            "a valve (--valve command or regulator)")
+    if options.low_kpa is not None:
+        if options.input_csv is not None:
+            raise ArgumentError("--low sets the default pressure cycle, which --input "
+                                "replaces; drop one of them")
+        if options.valve is Valve.command:
+            raise ArgumentError("--low sets the lowest pressure of the default pressure "
+                                "cycle; with --valve command the default cycle is the "
+                                "command 0 -> 1 -> 0, which has no pressure to set")
+    if options.t_end is not None:
+        check_range("--t-end", options.t_end, 0.0, unit="s", low_open=True)
+    check_range("--rtol", options.rtol, 1e-14, 1.0, high_open=True)
 
 
 def build_model(options: ModelOptions, params=None):
@@ -115,6 +145,7 @@ def build_model(options: ModelOptions, params=None):
         friction_models,
     )
 
+    check_model_options(options)
     params = load_quietly(options.params) if params is None else params
     friction = friction_models()[str(options.friction)]()
     chamber = Adiabatic() if options.chamber is Chamber.adiabatic else Isothermal()
@@ -137,16 +168,21 @@ def build_experiment(options: ModelOptions, params):
             experiment = experiment.with_duration(options.t_end)
         return experiment
     period = DEFAULT_PERIOD if options.t_end is None else options.t_end
-    if not (math.isfinite(period) and period > 0):
-        raise ExperimentError(f"--t-end = {period:g} s; must be a duration > 0")
     if options.valve is Valve.command:
         return pa.CommandCycle(0.0, 1.0, period=period)
-    return pa.PressureCycle(high=params["p_atm"], low=options.low_kpa * 1e3, period=period)
+    p_atm_kpa = params["p_atm"] * 1e-3
+    low = DEFAULT_LOW_PRESSURE * 1e-3 if options.low_kpa is None else options.low_kpa
+    looks_pa = math.isfinite(low) and 0.0 < low * 1e-3 < p_atm_kpa <= low
+    hint = (f"{low:g} looks like Pa; the option is in kPa: --low {low * 1e-3:g}" if looks_pa
+            else f"absolute, below the set's p_atm = {p_atm_kpa:g} kPa")
+    check_range("--low", low, 0.0, p_atm_kpa, unit="kPa", low_open=True, high_open=True,
+                hint=hint)
+    return pa.PressureCycle(high=params["p_atm"], low=low * 1e3, period=period)
 
 
 # --------------------------------------------------------------------------- plumbing
-def print_error(message: str) -> None:
-    err_console.print(Text(f"error: {message}", style="red"), soft_wrap=True)
+def print_error(message: str, prefix: str = "error") -> None:
+    err_console.print(Text(f"{prefix}: {message}", style="red"), soft_wrap=True)
 
 
 def _print_warning(message: warnings.WarningMessage) -> None:
@@ -165,20 +201,48 @@ def _flush_warnings(caught: list[warnings.WarningMessage]) -> None:
 
 
 @contextlib.contextmanager
-def user_errors(code: int = EXIT_USER_ERROR) -> Iterator[None]:
-    """Warnings -> yellow lines; a pneumact error or a bad path -> one red line, exit."""
+def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iterator[None]:
+    """Warnings -> yellow lines (the passivity of a set only with ``passivity``: that is
+    for ``params show/check``); a pneumact error or a bad path -> one red line, exit
+    ``code``; Ctrl-C -> one line, exit 130; anything else is pneumact's own failure: one
+    line saying so, exit 1 (the traceback with PNEUMACT_TRACEBACK=1)."""
+    passthrough = (typer.Exit, typer.Abort, typer.TyperException)
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        if not passivity:
+            warnings.simplefilter("ignore", PassivityWarning)
         try:
             yield
+        except passthrough:  # typer's own exits and usage errors
+            raise
         except PneumactError as exc:
             _flush_warnings(caught)
-            print_error(str(exc))
+            print_error(exc.for_cli())
             raise typer.Exit(code) from None
         except OSError as exc:  # missing input file, output directory not writable, ...
             _flush_warnings(caught)
             print_error(str(exc))
             raise typer.Exit(code) from None
+        except MemoryError as exc:
+            _flush_warnings(caught)
+            print_error(f"not enough memory ({exc or 'the run is too large'}); keep fewer "
+                        "output points or a shorter run")
+            raise typer.Exit(code) from None
+        except KeyboardInterrupt:
+            _flush_warnings(caught)
+            print_error("interrupted; a resumable run (batch, sensitivity) is kept for "
+                        "--resume", prefix="stopped")
+            raise typer.Exit(EXIT_INTERRUPTED) from None
+        except Exception as exc:
+            _flush_warnings(caught)
+            if os.environ.get("PNEUMACT_TRACEBACK"):
+                raise
+            print_error(f"{type(exc).__name__}: {exc} (this is a bug in pneumact, not a "
+                        "mistake of yours: please report it with the command; "
+                        "PNEUMACT_TRACEBACK=1 shows where it happened)",
+                        prefix="internal error")
+            raise typer.Exit(EXIT_INTERNAL_ERROR) from None
     _flush_warnings(caught)
 
 
@@ -305,8 +369,40 @@ def fmt(value: float | None, digits: int = 4) -> str:
     return "n/a" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
 
 
-def names(text: str | None) -> list[str] | None:
-    """A comma-separated list option as names (None if not given)."""
+def names(text: str | None, option: str = "") -> list[str] | None:
+    """A comma-separated list option as names (None if not given); a name given twice,
+    or an option given as an empty list, is refused."""
     if text is None:
         return None
-    return [n.strip() for n in text.split(",") if n.strip()]
+    items = [n.strip() for n in text.split(",") if n.strip()]
+    if option:
+        if not items:
+            raise ArgumentError(f"{option} = {text!r}: give one or more names separated by "
+                                "commas")
+        check_names(option, items)
+    return items
+
+
+def check_workers(workers: int | None) -> None:
+    if workers is not None:
+        check_int("--workers", workers, minimum=1)
+
+
+def check_batch_flags(resume: bool, overwrite: bool, scheduler: str | None) -> None:
+    """--resume and --overwrite exclude each other; a scheduler address is checked
+    before anything runs."""
+    if resume and overwrite:
+        raise ArgumentError("--resume and --overwrite contradict each other: continue the "
+                            "kept runs, or start them again; give one")
+    if scheduler is not None:
+        from pneumact.simulation.batch.engine import check_scheduler_address
+
+        check_scheduler_address(scheduler, "--scheduler")
+
+
+def shown_path(path: Path, stage: Path, out: Path) -> Path:
+    """Where a file written into ``stage`` ends up once the run is swapped into ``out``."""
+    try:
+        return out / Path(path).relative_to(stage)
+    except ValueError:
+        return Path(path)

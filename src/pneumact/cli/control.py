@@ -17,6 +17,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_out_dir, check_range
 from pneumact.cli.common import (
     Friction,
     FrictionOption,
@@ -130,9 +131,12 @@ def _compensation(options: ControllerOptions, params) -> tuple:
         terms.append(StaticCompensation(options.coulomb_ff))
     if options.dither:
         parts = [p for p in options.dither.split(",") if p.strip()]
-        if len(parts) != 2:
-            raise ParameterError(f"--dither = {options.dither!r}; give AMPLITUDE,FREQUENCY")
-        terms.append(Dither(float(parts[0]), float(parts[1])))
+        try:
+            amplitude, frequency = (float(p) for p in parts)
+        except ValueError:
+            raise ParameterError(f"--dither = {options.dither!r}; give AMPLITUDE,FREQUENCY "
+                                 "(two numbers, controller units and Hz)") from None
+        terms.append(Dither(amplitude, frequency))
     if options.observer:
         terms.append(LuGreObserver.from_parameters(params, gain=options.observer_gain))
     return tuple(terms)
@@ -174,15 +178,29 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
     return params, ClosedLoop(model, controller, bias=bias)
 
 
-def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str) -> None:
+def _check_setpoints(plant: Plant, params_name: str, **positions_mm: float) -> None:
+    """Set-points [mm] within the actuator's stroke (before the loop is built)."""
+    if plant is Plant.rig:
+        return
+    x_max = load_quietly(params_name)["x_max"] * 1e3
+    for label, value in positions_mm.items():
+        check_range(label, value, 0.0, x_max, unit="mm",
+                    hint=f"the stroke of '{params_name}' is 0 to x_max = {x_max:g} mm")
+
+
+def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
+                   tracking: bool = False) -> None:
     import pneumact as pa
     from pneumact.control.study import run_loop
+    from pneumact.simulation.simulate import check_drive
 
+    check_drive(loop, experiment)  # before the progress display
     study = run_with_progress(lambda report: run_loop(
-        loop, experiment, solver=pa.Rodas4(rtol=rtol), progress=report, title=title))
+        loop, experiment, solver=pa.Rodas4(rtol=rtol), progress=report, title=title,
+        tracking=tracking))
     use_agg()
     written = study.write(out, call=the_call(ctx))
-    _print_metrics(study.metrics.to_pandas())
+    _print_metrics(study.metrics_table())
     for path in written:
         out_console.print(f"wrote {path}")
 
@@ -208,7 +226,32 @@ def _options(ctx: typer.Context) -> ControllerOptions:
     given = {"structure": ctx.params["controller"]}
     given.update({f.name: ctx.params[f.name] for f in fields(ControllerOptions)
                   if f.name != "structure"})
+    _refuse_unused(ctx, given["structure"], given)
     return ControllerOptions(**given)
+
+
+#: options that only one controller structure reads
+PID_ONLY = ("kp", "kd", "derivative", "filter_time")
+CASCADE_ONLY = ("kx", "kv")
+
+
+def _refuse_unused(ctx: typer.Context, structure: Structure, given: dict) -> None:
+    """Options given on the command line that the chosen controller would ignore."""
+    def on_command_line(name: str) -> bool:
+        return ctx.get_parameter_source(name).name != "DEFAULT"
+
+    flag = {name: "--" + name.replace("_", "-") for name in given}
+    ignored = PID_ONLY if structure is Structure.cascade else CASCADE_ONLY
+    unused = [flag[n] for n in ignored if on_command_line(n)]
+    if unused:
+        raise ParameterError(f"{', '.join(unused)}: not read by --controller "
+                             f"{structure.value}")
+    if on_command_line("observer_gain") and not given["observer"]:
+        raise ParameterError("--observer-gain is the gain of the LuGre observer: give "
+                             "--observer too")
+    if on_command_line("tracking_time") and given["anti_windup"] != "back-calculation":
+        raise ParameterError(f"--tracking-time belongs to back-calculation anti-windup, not "
+                             f"--anti-windup {given['anti_windup']}")
 
 
 @control_app.command("step")
@@ -238,8 +281,10 @@ def step_command(
     with user_errors():
         from pneumact.experiments import SetpointStep
 
+        out = check_out_dir("--out", out)
         options = _options(ctx)
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
+        _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
         _, loop = build_loop(plant, params, friction, options, start * 1e-3)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position step {start:g} → {stop:g} mm ({plant.value})")
@@ -271,6 +316,8 @@ def profile_command(
     """Follow a measured or designed position profile (piecewise linear between its
     samples)."""
     with user_errors():
+        import numpy as np
+
         from pneumact.errors import DataError
         from pneumact.experiments import SetpointProfile
         from pneumact.io import read_record
@@ -284,12 +331,16 @@ def profile_command(
             raise DataError(f"{profile}: column '{name}' has unit "
                             f"'{record.units.get(name)}'; give it a length unit in the "
                             f"header, e.g. '{name} [mm]'")
+        out = check_out_dir("--out", out)
         positions = record[name]
         experiment = SetpointProfile(record.time, positions, name=profile.name)
+        _check_setpoints(plant, params, **{
+            f"{profile.name}: lowest set-point": float(np.min(positions)) * 1e3,
+            f"{profile.name}: highest set-point": float(np.max(positions)) * 1e3})
         options = _options(ctx)
         _, loop = build_loop(plant, params, friction, options, float(positions[0]))
         _run_and_write(ctx, loop, experiment, out, rtol,
-                       f"Position profile {profile.name} ({plant.value})")
+                       f"Position profile {profile.name} ({plant.value})", tracking=True)
 
 
 @control_app.command("hunting")
@@ -310,6 +361,7 @@ def hunting_command(
     with user_errors():
         from pneumact.control.study import canudas_hunting
 
+        out = check_out_dir("--out", out)
         loop, experiment = canudas_hunting(load_quietly(params), kp=kp, ki=ki, kv=kv,
                                            setpoint=setpoint, t_end=t_end,
                                            sample_time=sample_time)

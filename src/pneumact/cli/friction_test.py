@@ -16,6 +16,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
     Friction,
     FrictionOption,
@@ -34,8 +35,14 @@ friction_test_app = typer.Typer(help="Run a classic friction experiment (Canudas
                                 no_args_is_help=True)
 
 
+#: settings whose option has the name every other command uses for the same thing
+OPTION_NAMES = {"duration": "--t-end"}
+#: old option names still accepted (hidden from --help), with the name to use instead
+DEPRECATED = {"duration": "--duration"}
+
+
 def option_name(field_name: str) -> str:
-    return "--" + field_name.replace("_", "-")
+    return OPTION_NAMES.get(field_name, "--" + field_name.replace("_", "-"))
 
 
 def _is_sequence(annotation) -> bool:
@@ -91,18 +98,43 @@ def _command(cls: type[FrictionTest]):
                                    "friction_test_curve.csv, friction_test.png).")]),
     ]
     settings = [_parameter(f, hints[f.name]) for f in fields(cls)]
+    aliases = [inspect.Parameter(f"{f.name}_deprecated", inspect.Parameter.KEYWORD_ONLY,
+                                 default=None, annotation=Annotated[float | None, typer.Option(
+                                     DEPRECATED[f.name], hidden=True,
+                                     help=f"Old name of {option_name(f.name)}.")])
+               for f in fields(cls) if f.name in DEPRECATED]
 
     def command(**given) -> None:
         params, friction, out = given.pop("params"), given.pop("friction"), given.pop("out")
         with user_errors():
+            _take_deprecated(cls, given)
+            out = check_out_dir("--out", out)
             test = cls(**_settings(cls, given))
             _run(test, params, friction, out)
 
-    command.__signature__ = inspect.Signature([*common, *settings])
-    command.__annotations__ = {p.name: p.annotation for p in (*common, *settings)}
+    command.__signature__ = inspect.Signature([*common, *settings, *aliases])
+    command.__annotations__ = {p.name: p.annotation for p in (*common, *settings, *aliases)}
     command.__doc__ = f"{cls.help[0].upper()}{cls.help[1:]}."
     command.__name__ = cls.kind.replace("-", "_")
     return command
+
+
+def _take_deprecated(cls: type[FrictionTest], given: dict[str, Any]) -> None:
+    """An old option name (``--duration``) sets its setting, with a warning; given with the
+    new name too, it is refused."""
+    import warnings
+
+    defaults = {f.name: f.default for f in fields(cls)}
+    for name, old in DEPRECATED.items():
+        value = given.pop(f"{name}_deprecated", None)
+        if value is None or name not in given:
+            continue
+        if given[name] != defaults[name]:
+            raise ExperimentError(f"{old} is the old name of {option_name(name)}; give only "
+                                  f"{option_name(name)}")
+        warnings.warn(f"{old} is deprecated: use {option_name(name)}", FutureWarning,
+                      stacklevel=2)
+        given[name] = value
 
 
 def _run(test: FrictionTest, params_name: str, friction_name: str, out: Path) -> None:

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_int, check_out_dir, check_positive, check_seed
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -51,6 +52,16 @@ def _estimates_table(title: str, table) -> Table:
     return out
 
 
+class Loss(StrEnum):
+    """The losses of ``fit``: scipy least_squares' (robust ones damp outliers)."""
+
+    linear = "linear"
+    soft_l1 = "soft_l1"
+    huber = "huber"
+    cauchy = "cauchy"
+    arctan = "arctan"
+
+
 def _status(what: str):
     return err_console.status(what, spinner="dots")
 
@@ -60,7 +71,7 @@ def campaign(
     params: ParamsOption = "vgt-paper",
     out: Annotated[Path, typer.Option(help="Output directory for the records.")] = Path(
         "pneumact-campaign"),
-    seed: Annotated[int, typer.Option(help="Seed of the measurement noise.")] = 0,
+    seed: Annotated[int, typer.Option(help="Seed of the measurement noise (>= 0).")] = 0,
     pressure_noise: Annotated[float, typer.Option(
         "--pressure-noise", help="Pressure sensor noise, standard deviation [kPa].")] = 0.02,
     position_noise: Annotated[float, typer.Option(
@@ -72,11 +83,12 @@ def campaign(
     with user_errors():
         from pneumact.identification import Noise, synthetic_campaign
 
+        check_seed("--seed", seed)
         for label, value in (("--pressure-noise", pressure_noise),
                              ("--position-noise", position_noise),
                              ("--resolution", resolution)):
-            if not value >= 0:
-                raise ParameterError(f"{label} = {value}; must be >= 0")
+            check_positive(label, value, strict=False)
+        out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
         with _status("simulating the bench campaign"):
@@ -111,6 +123,8 @@ def identify_paper_command(
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
 
+        check_positive("--sliding-speed", sliding_speed)
+        out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
@@ -175,6 +189,9 @@ def identify_friction_command(
     with user_errors():
         from pneumact.identification import inverse_friction
 
+        out = check_out_dir("--out", out)
+        if cutoff is not None:
+            check_positive("--cutoff", cutoff)
         rec = _read_any(record, data_format)
         force_name = force or ("friction" if "friction" in rec and not mass else "force")
         if data_format is DataFormat.tudelft and force is None:
@@ -244,12 +261,12 @@ def fit_command(
         help="Signals with a free sensor offset per record.")] = None,
     window: Annotated[str | None, typer.Option(
         help="'t0,t1' [s]: match only this time span.")] = None,
-    multistart: Annotated[int, typer.Option(help="Extra space-filling starts.")] = 0,
+    multistart: Annotated[int, typer.Option(help="Extra space-filling starts (>= 0).")] = 0,
     profile: Annotated[str | None, typer.Option(
         help="Parameters whose profile likelihood to compute.")] = None,
-    loss: Annotated[str, typer.Option(
-        help="linear, soft_l1, huber, cauchy or arctan (robust losses).")] = "linear",
-    seed: Annotated[int, typer.Option(help="Seed of the multistart points.")] = 0,
+    loss: Annotated[Loss, typer.Option(
+        help="linear, or a robust loss: soft_l1, huber, cauchy, arctan.")] = Loss.linear,
+    seed: Annotated[int, typer.Option(help="Seed of the multistart points (>= 0).")] = 0,
     rtol: Annotated[float, typer.Option(help="Relative tolerance of the solver.")] = 1e-6,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-fit"),
 ) -> None:
@@ -259,8 +276,10 @@ def fit_command(
         from pneumact.identification import fit
         from pneumact.io import read_records
 
-        parameter_set, actuator = build_model(ModelOptions(params, valve, friction, chamber,
-                                                           rtol=rtol))
+        out = check_out_dir("--out", out)
+        check_int("--multistart", multistart, minimum=0)
+        check_seed("--seed", seed)
+        free_names = names(free, "--free")
         span = None
         if window is not None:
             try:
@@ -269,12 +288,18 @@ def fit_command(
                 span = ()
             if len(span) != 2:
                 raise DataError(f"--window = {window!r}; give 't0,t1' in seconds")
+            from pneumact.identification.arguments import check_window
+
+            check_window(span, where="--window")
+        parameter_set, actuator = build_model(ModelOptions(params, valve, friction, chamber,
+                                                           rtol=rtol))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
-            actuator, recs, names(free) or [], per_record=names(per_record) or (),
-            signals=names(signals) or ("position",), offsets=names(offsets) or (),
-            window=span, multistart=multistart, profile=names(profile) or (), loss=loss,
-            seed=seed, solver=pa.Rodas4(rtol=rtol), progress=report))
+            actuator, recs, free_names, per_record=names(per_record, "--per-record") or (),
+            signals=names(signals, "--signals") or ("position",),
+            offsets=names(offsets, "--offsets") or (), window=span, multistart=multistart,
+            profile=names(profile, "--profile") or (), loss=loss.value, seed=seed,
+            solver=pa.Rodas4(rtol=rtol), progress=report))
         use_agg()
         writers = {"estimates.csv": lambda p: result.table().to_csv(p),
                    "statistics.csv": lambda p: result.statistics.to_csv(p, index=False),

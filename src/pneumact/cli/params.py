@@ -8,7 +8,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
-from pneumact.cli.common import EXIT_CHECK_FAILED, out_console, user_errors
+from pneumact.cli.common import EXIT_CHECK_FAILED, err_console, out_console, user_errors
 
 params_app = typer.Typer(help="List, show and check parameter sets.", no_args_is_help=True)
 
@@ -44,16 +44,29 @@ def params_show(
             si = f"{row.value:.6g} {row.unit}".rstrip()
             table.add_row(row.name, row.given or "", si, row.source, row.description)
         out_console.print(table)
+        _print_passivity(parameter_set)
 
 
 @params_app.command("check")
 def params_check(
     file: Annotated[str, typer.Argument(help="A .toml parameter file (or a shipped name).")],
 ) -> None:
-    """Load and validate a parameter file: prints OK or the error (exit code 1)."""
+    """Load and validate a parameter file: prints OK (with warnings about values that are
+    legal but odd, and about LuGre passivity) or the error (exit code 2)."""
     with user_errors(code=EXIT_CHECK_FAILED):
         from pneumact.parameters import load_params
 
         parameter_set = load_params(file)
         out_console.print(Text(f"OK: {parameter_set.name} ({len(parameter_set)} parameters "
                                "given)", style="green"))
+        _print_passivity(parameter_set)
+
+
+def _print_passivity(parameter_set) -> None:
+    """The set's passivity warning, always (the other commands leave it to here)."""
+    from pneumact.parameters.validation import passivity_note
+
+    note = passivity_note(parameter_set.values, parameter_set.name)
+    if note:
+        err_console.print(Text(f"warning: PassivityWarning: {note}", style="yellow"),
+                          soft_wrap=True)

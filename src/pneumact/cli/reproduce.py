@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from pneumact.checks import check_out_dir, check_seed
 from pneumact.cli.common import ParamsOption, err_console, out_console, the_call, user_errors
 
 
@@ -15,7 +16,8 @@ def reproduce_command(
     params: ParamsOption = "vgt-paper",
     quick: Annotated[bool, typer.Option("--quick", help="Small campaign and samples (for "
                                                         "tests); rough numbers.")] = False,
-    seed: Annotated[int, typer.Option(help="Seed of the synthetic noise and samples.")] = 0,
+    seed: Annotated[int, typer.Option(help="Seed of the synthetic noise and samples "
+                                             "(>= 0).")] = 0,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-paper"),
 ) -> None:
     """Reproduce the paper: Table I, Figs. 2, 3, 5 and 6, the identification on a
@@ -25,6 +27,8 @@ def reproduce_command(
         from pneumact.cli.common import load_quietly
         from pneumact.reproduction import reproduce
 
+        check_seed("--seed", seed)
+        out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         with err_console.status("reproducing") as status:
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,

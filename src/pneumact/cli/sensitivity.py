@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import shutil
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -12,6 +10,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_int, check_out_dir, check_seed
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -29,17 +28,20 @@ from pneumact.cli.common import (
     batch_progress,
     build_experiment,
     build_model,
+    check_batch_flags,
+    check_workers,
     err_console,
     figure_writer,
     fmt,
     names,
     out_console,
+    shown_path,
     the_call,
     use_agg,
     user_errors,
     write_outputs,
 )
-from pneumact.errors import ParameterError, PneumactError
+from pneumact.errors import ArgumentError, ParameterError
 
 
 class Method(StrEnum):
@@ -81,14 +83,16 @@ def sensitivity(
         help="Signals to analyse along time (e.g. position): indices against time and along "
              "the loop, and local normalised sensitivities.")] = None,
     times: Annotated[int, typer.Option(help="Points of the time grid of --signals.")] = 41,
-    n: Annotated[int, typer.Option("--n", help="Base sample size (sobol, src, fast) or "
-                                               "trajectories (morris).")] = 256,
+    n: Annotated[int | None, typer.Option("--n", help=(
+        "Base sample size: sobol a power of two >= 8 (default 256), src >= 2·(k + 1) for k "
+        "parameters, fast >= 40, or trajectories (morris, >= 2); not for oat."),
+        show_default=False)] = None,
     second_order: Annotated[bool, typer.Option("--second-order",
                                                help="Sobol second-order indices.")] = False,
     convergence: Annotated[bool, typer.Option(
         "--convergence", help="Sobol: indices and CI widths at n/16, n/8, ... n from the "
                               "same sample.")] = False,
-    seed: Annotated[int, typer.Option(help="Seed of the sample.")] = 0,
+    seed: Annotated[int, typer.Option(help="Seed of the sample (>= 0).")] = 0,
     scheduler: SchedulerOption = None,
     workers: WorkersOption = None,
     resume: ResumeOption = False,
@@ -100,48 +104,81 @@ def sensitivity(
     with user_errors():
         import numpy as np
 
+        check_batch_flags(resume, overwrite, scheduler)
+        check_workers(workers)
+        check_seed("--seed", seed)
+        check_int("--times", times, minimum=2)
+        out = check_out_dir("--out", out)
+        _check_method_options(method, n, second_order, convergence,
+                              resume=resume, overwrite=overwrite,
+                              scheduler=scheduler is not None, workers=workers is not None)
         options = ModelOptions(params, valve, friction, chamber, t_end)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
-        feature_names = names(features) or []
-        signal_names = names(signals) or []
-        for name, value, low in (("--n", n, 1), ("--times", times, 2)):
-            if value < low:
-                raise ParameterError(f"{name} = {value}; must be >= {low}")
-        if convergence and method is not Method.sobol:
-            raise ParameterError(f"--convergence is for sobol, not {method.value}")
-        if convergence and second_order:
-            raise ParameterError("--convergence follows first and total indices; run "
-                                 "--second-order separately")
+        feature_names = names(features, "--features") or []
+        signal_names = names(signals, "--signals") or []
+        from pneumact.simulation.batch import check_outputs
+
+        check_outputs(actuator, experiment, feature_names, signal_names, cli=True)
         use_agg()
-        study = Study(method, actuator, experiment, parameter_set, vary, n, second_order, seed,
+        study = Study(method, actuator, experiment, parameter_set, vary,
+                      DEFAULT_N if n is None else n, second_order, seed,
                       dict(scheduler=scheduler, workers=workers, resume=resume,
                            overwrite=overwrite))
-        with _runs_kept_for_resume_only(out):
-            writers = study.features(feature_names, out, convergence)
+        try:
+            factors = study.problem().names
+        except ParameterError as exc:
+            raise ParameterError(f"--vary: {exc.message}") from None
+        if method is not Method.oat:
+            check_sample_size(method, study.n, len(factors))
+        from pneumact.io.tables import staged_folder
+
+        with staged_folder(out, resumable=method is not Method.oat, resume=resume,
+                           overwrite=overwrite) as stage:
+            writers = study.features(feature_names, stage, convergence)
             grid = np.linspace(experiment.t_start, experiment.t_end, times)
             for signal in signal_names:
-                writers.update(study.signal(signal, grid, out))
-        writers["report.html"] = _report_writer(study, the_call(ctx), list(writers))
-        for path in write_outputs(out, writers):
-            out_console.print(f"wrote {path}")
+                writers.update(study.signal(signal, grid, stage))
+            writers["report.html"] = _report_writer(study, the_call(ctx), list(writers))
+            written = write_outputs(stage, writers)
+        for path in written:
+            out_console.print(f"wrote {shown_path(path, stage, out)}")
 
 
-@contextlib.contextmanager
-def _runs_kept_for_resume_only(out: Path):
-    """Runs written under ``out`` by this command are kept if it is interrupted (so that
-    --resume continues them) but removed if it fails on an error, which a rerun with other
-    options would otherwise meet as "a different batch"."""
-    existed = out.exists()
-    before = set(out.glob("runs*")) if existed else set()
-    try:
-        yield
-    except PneumactError:
-        for path in set(out.glob("runs*")) - before:
-            shutil.rmtree(path, ignore_errors=True)
-        if not existed and out.exists() and not any(out.iterdir()):
-            out.rmdir()
-        raise
+#: default --n of the sample-based methods
+DEFAULT_N = 256
+
+
+def _check_method_options(method: Method, n, second_order: bool, convergence: bool,
+                          **batch: bool) -> None:
+    """Refuse the options the method would ignore."""
+    if method is Method.oat:
+        given = [f"--{name}" for name, on in {"n": n is not None, **batch}.items() if on]
+        given += ["--second-order"] if second_order else []
+        if given:
+            raise ArgumentError(f"{', '.join(given)}: not for oat, which varies one "
+                                "parameter at a time, without a sample or kept runs")
+    for flag, on in (("--convergence", convergence), ("--second-order", second_order)):
+        if on and method is not Method.sobol:
+            raise ArgumentError(f"{flag} is for sobol, not {method.value}")
+    if convergence and second_order:
+        raise ArgumentError("--convergence follows first and total indices; run "
+                            "--second-order separately")
+
+
+def check_sample_size(method: Method, n: int, k: int) -> None:
+    """--n checked against what the method needs, before any run."""
+    from pneumact.sensitivity import methods
+
+    option = "--n"
+    if method is Method.sobol:
+        methods.check_sobol_n(n, where="", name=option)
+    elif method is Method.morris:
+        check_int(option, n, minimum=methods.MIN_MORRIS_TRAJECTORIES)
+    elif method is Method.src:
+        methods.check_src_n(n, k, where="", name=option)
+    else:
+        check_int(option, n, minimum=methods.MIN_RBD_FAST_N)
 
 
 @dataclass

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -41,7 +42,7 @@ def simulate(
     friction: FrictionOption = Friction.lugre,
     chamber: ChamberOption = Chamber.isothermal,
     t_end: TEndOption = None,
-    low: LowOption = 20.0,
+    low: LowOption = None,
     rtol: RtolOption = 1e-6,
 ) -> None:
     """Simulate the actuator; write simulation.csv (SI) and hysteresis.png."""
@@ -49,6 +50,7 @@ def simulate(
         import pneumact as pa
         from pneumact.simulation.simulate import check_drive
 
+        out = check_out_dir("--out", out)
         options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)

@@ -12,6 +12,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -60,9 +61,11 @@ def validate_command(
         from pneumact.io import read_records
         from pneumact.validation import train_test, validate
 
+        out = check_out_dir("--out", out)
+        wanted = tuple(names(signals, "--signals") or ("position",))
+        free_names = names(free, "--free")
         parameter_set, model = build_model(ModelOptions(params, valve, friction, chamber,
                                                         rtol=rtol))
-        wanted = tuple(names(signals) or ("position",))
         test = read_records(records, p_atm=parameter_set["p_atm"])
         solver = pa.Rodas4(rtol=rtol)
         use_agg()
@@ -72,7 +75,7 @@ def validate_command(
         if train:
             training = read_records(train, p_atm=parameter_set["p_atm"])
             result = fit_with_progress(lambda report: train_test(
-                model, training, test, names(free) or [], signals=wanted,
+                model, training, test, free_names or [], signals=wanted,
                 smooth_input=smooth_input, solver=solver, progress=report))
             written = result.write(out, call=the_call(ctx))
             _print_metrics(result.metrics())

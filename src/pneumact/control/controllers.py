@@ -56,8 +56,20 @@ VELOCITY_ESTIMATES = ("measured", "difference")
 
 def _finite(owner: str, **values: float) -> None:
     for name, value in values.items():
-        if not (isinstance(value, int | float) and math.isfinite(value)):
+        if isinstance(value, bool) or not (isinstance(value, int | float)
+                                           and math.isfinite(value)):
             raise ParameterError(f"{owner}: {name} = {value!r}; must be a finite number")
+
+
+def _gains(owner: str, **gains: float) -> None:
+    """Gains >= 0: the loop applies the plant's direction (a pressure that falls as the
+    position rises) itself, so a negative gain is positive feedback."""
+    _finite(owner, **gains)
+    for name, value in gains.items():
+        if value < 0:
+            raise ParameterError(f"{owner}: {name} = {value!r}; must be >= 0 (the loop "
+                                 "applies the plant's direction itself; a negative gain "
+                                 "would be positive feedback)")
 
 
 def _positive(owner: str, **values: float) -> None:
@@ -95,6 +107,9 @@ class StaticCompensation(Compensation):
 
     def __post_init__(self):
         _finite("StaticCompensation", Fc=self.Fc)
+        if self.Fc < 0 or (self.Fs is not None and not self.Fs >= self.Fc):
+            raise ParameterError(f"StaticCompensation: Fc = {self.Fc!r}, Fs = {self.Fs!r}; "
+                                 "need 0 <= Fc <= Fs (friction opposes the motion)")
         _positive("StaticCompensation", vs=self.vs, delta=self.delta, v_smooth=self.v_smooth)
 
     def settings(self) -> dict[str, float]:
@@ -294,6 +309,7 @@ class PID(Controller):
 
     def __post_init__(self):
         super().__post_init__()
+        _gains("PID", kp=self.kp, ki=self.ki, kd=self.kd)
         _choice("PID", "derivative", self.derivative, DERIVATIVES)
         _positive("PID", filter_time=self.filter_time)
         if self.kd == 0.0 and self.derivative != "none":
@@ -316,6 +332,10 @@ class Cascade(Controller):
     kv: float
     ki: float = 0.0
     cascade: ClassVar[bool] = True
+
+    def __post_init__(self):
+        super().__post_init__()
+        _gains("Cascade", kx=self.kx, kv=self.kv, ki=self.ki)
 
     def gain_settings(self) -> dict[str, float]:
         ti = self.kv / self.ki if self.ki and self.kv else 0.0

@@ -20,7 +20,11 @@ from ..experiments.signals import Constant
 from .controllers import PID
 from .loop import ClosedLoop
 
-__all__ = ["LoopStudy", "canudas_hunting", "run_loop"]
+__all__ = ["TRACKING_METRICS", "LoopStudy", "canudas_hunting", "run_loop"]
+
+#: the metrics of a tracked profile (a step's others need one step to mean anything)
+TRACKING_METRICS = ("iae", "ise", "control_effort", "command_variation", "stick_time",
+                    "stick_count", "mean_stick_duration", "stick_speed", "min_stick")
 
 
 @dataclass(eq=False)
@@ -32,6 +36,28 @@ class LoopStudy:
     result: object
     metrics: object
     title: str = "Closed-loop position control"
+    #: a profile to follow, not a step: the step metrics (rise, settling, overshoot)
+    #: mean nothing and are left out; the tracking error is given instead
+    tracking: bool = False
+
+    def metrics_table(self) -> pd.DataFrame:
+        """The metrics as a table (metric, value, unit, description): a step's all of
+        them, a tracked profile's the error, effort and stick ones plus the RMS and
+        largest tracking error."""
+        frame = self.metrics.to_pandas()
+        if not self.tracking:
+            return frame
+        import numpy as np
+
+        error = np.asarray(self.result["setpoint"]) - np.asarray(self.result["position"])
+        unit = self.metrics.position_unit
+        extra = pd.DataFrame(
+            [("rms_tracking_error", float(np.sqrt(np.mean(error ** 2))), unit,
+              "RMS of set-point − position over the run"),
+             ("max_tracking_error", float(np.max(np.abs(error))), unit,
+              "largest |set-point − position|")], columns=frame.columns)
+        keep = frame[frame["metric"].isin(TRACKING_METRICS)]
+        return pd.concat([extra, keep], ignore_index=True)
 
     def to_pandas(self) -> pd.DataFrame:
         return self.result.to_pandas()
@@ -55,7 +81,7 @@ class LoopStudy:
         from ..plotting import PNG_DPI
 
         png = figure_png(self.figure(), dpi=PNG_DPI)
-        metrics = self.metrics.to_pandas()
+        metrics = self.metrics_table()
         report = Report(self.title, call=call, parameters=self.loop.params)
         report.text(f"Model: {self.loop.describe()}. Experiment: {self.experiment.name}, "
                     f"{self.experiment.t_start:g} to {self.experiment.t_end:g} s. "
@@ -77,16 +103,21 @@ class LoopStudy:
 
 def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
              progress: Callable[[float], None] | None = None, title: str | None = None,
-             **metric_options) -> LoopStudy:
+             tracking: bool = False, **metric_options) -> LoopStudy:
     """Simulate ``loop`` under the set-point ``experiment`` and measure it
-    (``metric_options`` go to ``loop_metrics``)."""
+    (``metric_options`` go to ``loop_metrics``); ``tracking``: the set-point is a profile
+    to follow, not a step (no step metrics)."""
+    from ..checks import check_bool, check_type
+
+    check_type("loop", loop, ClosedLoop, where="run_loop", what="a control.ClosedLoop")
+    check_bool("tracking", tracking, where="run_loop")
     from ..simulation import simulate
     from .metrics import loop_metrics
 
     result = simulate(loop, experiment, solver, progress=progress)
     metrics = loop_metrics(result, **metric_options)
     return LoopStudy(loop, experiment, result, metrics,
-                     title or f"Closed-loop position control: {experiment.name}")
+                     title or f"Closed-loop position control: {experiment.name}", tracking)
 
 
 def canudas_hunting(params=None, *, kp: float = 3.0, ki: float = 4.0, kv: float = 6.0,

@@ -8,6 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import (
+    check_absolute_pressure,
+    check_choice,
+    check_finite,
+    check_int,
+    check_positive,
+    check_range,
+    check_type,
+)
 from ..errors import ExperimentError
 from .signals import PiecewiseLinear, Signal, Triangle
 
@@ -34,17 +43,20 @@ class Experiment:
     extra_breakpoints: tuple[float, ...] = field(default=())
 
     def __post_init__(self):
-        if self.quantity not in QUANTITIES:
-            raise ExperimentError(
-                f"{self.name}: quantity = {self.quantity!r}; allowed: {', '.join(QUANTITIES)}"
-            )
-        if not (np.isfinite(self.t_end) and self.t_end > self.t_start):
-            raise ExperimentError(
-                f"{self.name}: t_end = {self.t_end} s must be finite and > t_start = "
-                f"{self.t_start} s"
-            )
-        if int(self.n_points) < 2:
-            raise ExperimentError(f"{self.name}: n_points = {self.n_points}, must be >= 2")
+        name = str(self.name)
+        check_type("drive", self.drive, Signal, where=name,
+                   what="a Signal (Ramp, Step, Triangle, Sine, PiecewiseLinear, ...)")
+        check_choice("quantity", self.quantity, QUANTITIES, where=name, error=ExperimentError)
+        t_start = check_finite("t_start", self.t_start, where=name, error=ExperimentError)
+        if t_start < 0:
+            raise ExperimentError(f"{name}: t_start = {t_start:g} s: must be >= 0 (a run "
+                                  "starts at t = 0 or later; shift a record's time axis, "
+                                  "e.g. time - time[0])")
+        t_end = check_finite("t_end", self.t_end, where=name, error=ExperimentError)
+        if not t_end > t_start:
+            raise ExperimentError(f"{name}: t_end = {t_end:g} s: must be > t_start = "
+                                  f"{t_start:g} s")
+        check_int("n_points", self.n_points, minimum=2, where=name, error=ExperimentError)
 
     @property
     def unit(self) -> str:
@@ -70,9 +82,13 @@ def PressureCycle(high: float = 100e3, low: float = 20e3, period: float = 20.0,
                   cycles: int = 1, n_points: int = 4001) -> Experiment:
     """Slow triangular pressure cycle, ``high`` → ``low`` → ``high`` [Pa absolute]: the
     quasi-static hysteresis test of the paper's Figs. 5-6."""
-    if not (low > 0 and high > low):
-        raise ExperimentError(f"PressureCycle: need 0 < low < high, got low = {low} Pa, "
-                              f"high = {high} Pa")
+    for label, value in (("high", high), ("low", low)):
+        check_absolute_pressure(label, value, where="PressureCycle", error=ExperimentError)
+    if not high > low:
+        raise ExperimentError(f"PressureCycle: need low < high, got low = {low:g} Pa, "
+                              f"high = {high:g} Pa")
+    check_positive("period", period, unit="s", where="PressureCycle", error=ExperimentError)
+    check_int("cycles", cycles, minimum=1, where="PressureCycle", error=ExperimentError)
     return Experiment(Triangle(high, low, period, cycles), "pressure", period * cycles,
                       n_points=n_points, name="PressureCycle")
 
@@ -80,8 +96,15 @@ def PressureCycle(high: float = 100e3, low: float = 20e3, period: float = 20.0,
 def CommandCycle(low: float = 0.0, high: float = 1.0, period: float = 20.0, cycles: int = 1,
                  n_points: int = 4001) -> Experiment:
     """Slow triangular valve command cycle ``low`` → ``high`` → ``low`` (u ∈ [0, 1])."""
-    if not (0.0 <= low < high <= 1.0):
-        raise ExperimentError(f"CommandCycle: need 0 <= low < high <= 1, got {low}, {high}")
+    for label, value in (("low", low), ("high", high)):
+        check_range(label, value, 0.0, 1.0, where="CommandCycle", error=ExperimentError,
+                    hint="a valve command is a fraction: 0 vents the chamber, 1 opens it to "
+                         "the reservoir")
+    if not low < high:
+        raise ExperimentError(f"CommandCycle: need low < high, got low = {low:g}, "
+                              f"high = {high:g}")
+    check_positive("period", period, unit="s", where="CommandCycle", error=ExperimentError)
+    check_int("cycles", cycles, minimum=1, where="CommandCycle", error=ExperimentError)
     return Experiment(Triangle(low, high, period, cycles), "command", period * cycles,
                       n_points=n_points, name="CommandCycle")
 

@@ -265,6 +265,11 @@ class StickSlip(FrictionTest):
         _positive(self.kind, duration=self.duration)
         if self.v_drive is not None:
             _positive(self.kind, v_drive=self.v_drive)
+            from ..parameters import catalogue
+
+            broken = catalogue()["v_drive"].violation(float(self.v_drive))
+            if broken:
+                raise ExperimentError(f"{self.kind}: v_drive = {self.v_drive:g} m/s: {broken}")
         _check_points(self.kind, self.samples_per_second)
 
     def setups(self, params, friction) -> list[RigSetup]:

@@ -132,6 +132,20 @@ class Signal:
             return value[0], slope[0]
         return value, slope
 
+    def extremes(self, t0: float, t1: float) -> tuple[float, float]:
+        """(lowest, highest) value over [t0, t1]: exact at the corners of a piecewise
+        linear signal (where its extremes lie, both sides of a jump), a fine grid in
+        between for sines and sums."""
+        points = [np.array([t0, t1], dtype=float)]
+        bp = self.breakpoints()
+        bp = bp[(bp >= t0) & (bp <= t1)]
+        points += [bp, np.nextafter(bp, -np.inf)]
+        if any(int(term[0]) != KIND_PWL for term in self._terms):
+            points.append(np.linspace(t0, t1, 20001))
+        grid = np.concatenate(points)
+        values = self.evaluate(grid[(grid >= t0) & (grid <= t1)])[0]
+        return float(np.min(values)), float(np.max(values))
+
     # -- algebra -------------------------------------------------------------------
     def __add__(self, other: Signal | float) -> Signal:
         if isinstance(other, (int, float)):

@@ -30,6 +30,7 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
 __all__ = ["FitResult", "Profile", "fit"]
@@ -552,8 +553,11 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
     profile likelihood is computed. ``offsets`` names signals that get a free additive
     sensor offset per record; ``window`` = (t0, t1) restricts the residuals to that time
-    span (the simulation still starts at each record's start), or gives one such window
-    (or None) per record. ``smooth_input`` rebuilds
+    span and ends each simulation at t1, or gives one such window (or None) per record;
+    each simulation still starts at the record's start, because friction remembers the
+    approach (started at rest at t0 instead, the presliding stage of the paper's
+    procedure finds σ0 53 % low): crop a record whose actuator rests at t0 with
+    ``record.crop(t0, t1)`` to simulate less. ``smooth_input`` rebuilds
     a noisy measured input as piecewise linear before it drives the model (see
     ``identification.inputs``: noise on the input dithers LuGre bristles and biases the
     estimates). ``covariance`` is "hac" (residuals correlated in time, the default) or
@@ -562,14 +566,23 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     multiply each record's residuals (default 1): records whose measurement carries
     more noise than others (a noisy measured input) count for less.
     """
-    records = [records] if isinstance(records, Record) else list(records)
-    if not records:
-        raise DataError("fit: give at least one record")
+    records = fit_records(records)
     models = _models_per_record(model, len(records))
-    windows = _windows_per_record(window, len(records))
-    free = list(dict.fromkeys(free))
-    if not free:
-        raise ParameterError("fit: give at least one free parameter")
+    windows = [check_window(w) for w in _windows_per_record(window, len(records))]
+    # nothing after t1 is simulated; before t0 is (friction remembers the approach)
+    records = [r if w is None else r.crop(None, w[1]) for r, w in zip(records, windows,
+                                                                       strict=True)]
+    checked = check_fit_arguments(
+        models[0], records, free, per_record=per_record, start=start, bounds=bounds,
+        log=log, signals=signals, weights=weights, loss=loss, f_scale=f_scale,
+        solver=solver, multistart=multistart, seed=seed, workers=workers, profile=profile,
+        profile_points=profile_points, max_nfev=max_nfev, offsets=offsets,
+        smooth_input=smooth_input, progress=progress)
+    from ..simulation.simulate import check_model
+
+    for other in dict.fromkeys(models[1:]):
+        check_model(other, "fit")
+    free, solver = checked["free"], checked["solver"]
     if covariance not in ("hac", "iid"):
         raise ParameterError(f"fit: covariance = {covariance!r}; allowed: hac, iid")
     if jacobian not in ("sensitivities", "2-point", "3-point"):
@@ -616,8 +629,10 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     starts = [problem.phi(theta0)]
-    if multistart:
-        starts += list(_starts(multistart, plo, phi_, seed))
+    if multistart:  # an offset has no bounds: each start begins it where the fit does
+        offset = np.array([c.offset for c in columns])
+        starts += [np.where(offset, starts[0], s) for s in _starts(
+            multistart, np.where(offset, 0.0, plo), np.where(offset, 1.0, phi_), seed)]
     solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
                             scheduler, progress)
     best = min(solutions, key=lambda s: s.cost)

@@ -505,15 +505,14 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads. ``progress(stage,
     fraction)`` is called as the work goes on.
     """
-    from ..parameters import ParameterSet
+    from ..io.records import as_records
+    from ..parameters import as_parameter_set
 
-    if not isinstance(params, ParameterSet):
-        raise ParameterError(f"identify_paper: params must be a ParameterSet (from "
-                             f"pa.load_params), not {type(params).__name__}")
+    records = as_records(records, "identify_paper")
+    params = as_parameter_set(params, "identify_paper")
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")
-    records = list(records)
     step = progress or (lambda label, fraction: None)
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,

@@ -7,14 +7,16 @@
     out_dir/chunks/chunk-00012.signals.parquet   its signals, long form (written first)
     out_dir/results.parquet, summary.csv, signals.parquet   the assembled batch
 
-Every file is written atomically. A directory holding a different batch is never
-mixed into; one holding the same batch is continued only when asked to resume.
+Every file is written atomically. The batch engine builds this folder in a staging
+sibling (``pneumact.io.tables.staged_folder``): an interrupted batch is kept there and
+resumed from there, and the folder is replaced only by a complete batch. A directory
+holding a different batch is never mixed into; one holding the same batch is continued
+only when asked to resume.
 """
 
 from __future__ import annotations
 
 import json
-import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +27,10 @@ from pneumact.errors import DataError
 from pneumact.io.tables import atomic_write, write_table
 
 __all__ = ["ChunkOutput", "ChunkStore"]
+
+
+def _differences(old: dict, new: dict) -> list[str]:
+    return sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
 
 MANIFEST = "manifest.json"
 
@@ -58,38 +64,52 @@ class ChunkStore:
         except (OSError, ValueError, KeyError, TypeError):
             return None
 
-    def open(self, manifest: dict, resume: bool, overwrite: bool) -> bool:
-        """Write the manifest, or check an existing one; True if finished chunks may be
-        reused. An existing batch is continued only with ``resume``, replaced only with
-        ``overwrite``; a different batch is never mixed with this one."""
+    def manifest(self) -> dict | None:
+        """The manifest of the batch held here, or None."""
         path = self.root / MANIFEST
-        if path.exists() and overwrite:
-            self._clear()
-        elif path.exists():
-            try:
-                old = json.loads(path.read_text(encoding="utf-8"))
-            except ValueError as exc:
-                raise DataError(f"{path}: is not a readable batch manifest ({exc})") from exc
-            differs = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))
+        if not path.exists():
+            return None
+        try:
+            return json.loads(path.read_text(encoding="utf-8"))
+        except ValueError as exc:
+            raise DataError(f"{path}: is not a readable batch manifest ({exc})") from exc
+
+    def check_previous(self, manifest: dict, resume: bool, overwrite: bool) -> None:
+        """Whether the batch already in this folder may be continued (``resume``: the same
+        batch only) or replaced (``overwrite``); a different batch is never mixed in."""
+        old = self.manifest()
+        if old is None or overwrite:
+            return
+        differs = _differences(old, manifest)
+        if differs:
+            raise DataError(
+                f"{self.root} holds a different batch (its manifest differs in: "
+                f"{', '.join(differs)}); use another directory, or overwrite it",
+                api_hint="overwrite=True", cli_hint="--overwrite")
+        if not resume:
+            raise DataError(f"{self.root} already holds this batch",
+                            api_hint="resume it (resume=True) or start it again "
+                                     "(overwrite=True)",
+                            cli_hint="resume it (--resume) or start it again (--overwrite)")
+
+    def open(self, manifest: dict) -> bool:
+        """Write the manifest into this (staging) folder, or check the one a kept or
+        seeded run left there; True if its finished chunks may be reused."""
+        old = self.manifest()
+        if old is not None:
+            differs = _differences(old, manifest)
             if differs:
                 raise DataError(
-                    f"{self.root} holds a different batch (its manifest differs in: "
-                    f"{', '.join(differs)}); use another directory, or overwrite it")
-            if not resume:
-                raise DataError(
-                    f"{self.root} already holds this batch; resume it (resume=True, "
-                    "--resume) or start it again (overwrite=True, --overwrite)")
+                    f"{self.root} holds an interrupted run of a different batch (its "
+                    f"manifest differs in: {', '.join(differs)})",
+                    api_hint="start again with overwrite=True",
+                    cli_hint="start again with --overwrite")
             for stale in (self.root / "chunks").glob(".chunk-*.tmp-*"):  # a killed run's
                 stale.unlink(missing_ok=True)
             return True
-        with atomic_write(path) as tmp:
+        with atomic_write(self.root / MANIFEST) as tmp:
             tmp.write_text(json.dumps(manifest, indent=1, sort_keys=True), encoding="utf-8")
         return False
-
-    def _clear(self) -> None:
-        shutil.rmtree(self.root / "chunks", ignore_errors=True)
-        for name in (MANIFEST, "results.parquet", "summary.csv", "signals.parquet"):
-            (self.root / name).unlink(missing_ok=True)
 
     # -- chunks --------------------------------------------------------------------------
     def _chunk_path(self, index: int, signals: bool = False) -> Path:

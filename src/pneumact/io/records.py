@@ -10,6 +10,7 @@ column, the data row (1-based) and what is allowed.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +18,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pneumact.errors import DataError
+from pneumact.checks import check_atmosphere, check_names, check_path
+from pneumact.errors import ArgumentTypeError, DataError
 from pneumact.io.tables import (
     PathLike,
     check_unique,
@@ -28,7 +30,7 @@ from pneumact.io.tables import (
 )
 from pneumact.io.units import KNOWN, convert_column, same_unit
 
-__all__ = ["Record", "read_record", "read_records", "read_signal_csv"]
+__all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv"]
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
 INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
@@ -73,6 +75,8 @@ class Record:
                 raise DataError(f"{source}: signal {name!r} has {bad.size} NaN or infinite "
                                 f"value(s), the first at sample {bad[0] + 1}")
         _check_time(Path(source), "time", time, " s")
+        for name, values in arrays.items():
+            check_physics(source, name, values, f"signal {name!r}")
         units = {n: (units or {}).get(n, KNOWN_SIGNALS.get(n, "")) for n in signals}
         for values in arrays.values():
             values.setflags(write=False)
@@ -118,6 +122,21 @@ class Record:
         if missing:
             raise DataError(f"{self.source}: {use} needs signal(s) {', '.join(missing)}; the "
                             f"record has: time, {', '.join(self.signals) or '(nothing)'}")
+
+    def check_within_stroke(self, x_max: float, use: str) -> None:
+        """A measured position must lie near the stroke [0, x_max] of the model it is
+        compared with (a sensor offset of half a stroke is allowed); far outside, it is
+        a unit mistake (mm read as m) or another actuator's record."""
+        if "position" not in self.signals:
+            return
+        x = self.signals["position"]
+        low, high = float(np.min(x)), float(np.max(x))
+        margin = 0.5 * x_max
+        if low < -margin or high > x_max + margin:
+            raise DataError(
+                f"{self.source}: position spans {low * 1e3:.6g} to {high * 1e3:.6g} mm, "
+                f"which {use} compares with an actuator of stroke 0 to {x_max * 1e3:g} mm; "
+                "check the position unit in the header (e.g. 'position [mm]')")
 
     def to_experiment(self, quantity: str, n_points: int | None = None,
                       signal: str | None = None):
@@ -233,6 +252,56 @@ def _match_column(names: Sequence[str], cells: Sequence[str], wanted: str) -> in
     return folded[0] if len(folded) == 1 else None
 
 
+def _first(mask: np.ndarray) -> int:
+    return int(np.flatnonzero(mask)[0])
+
+
+def _rows(mask: np.ndarray) -> str:
+    n = int(mask.sum())
+    return f"{n} such row{'s' * (n != 1)}"
+
+
+def check_physics(source, name: str, values: np.ndarray, label: str | None = None) -> None:
+    """What the physics allows of a known signal in SI: an absolute pressure (or pressure
+    set-point) > 0 and <= MAX_ABSOLUTE_PRESSURE, not all below 1 kPa (kPa read as Pa); a
+    valve command within [0, 1]; a time >= 0. One DataError naming the first bad row."""
+    from pneumact.checks import MAX_ABSOLUTE_PRESSURE, pressure_hint
+
+    label = label or f"column {name!r}"
+    if values.size == 0:
+        return
+    if name == "time" and values[0] < 0:
+        raise DataError(f"{source}: {label} starts at {values[0]:.6g} s; times must be >= 0 "
+                        "(shift the record's time axis so that it starts at 0)")
+    if name in ("pressure", "setpoint"):
+        bad = (values <= 0) | (values > MAX_ABSOLUTE_PRESSURE)
+        if bad.any():
+            i = _first(bad)
+            hint = (pressure_hint(float(values[i]), (1e3, MAX_ABSOLUTE_PRESSURE))
+                    if values[i] > 0 else "")
+            raise DataError(
+                f"{source}: {label} = {values[i]:.6g} Pa at data row {i + 1} "
+                f"({_rows(bad)}): an absolute pressure must be in (0, "
+                f"{MAX_ABSOLUTE_PRESSURE:g}] Pa" + (f" ({hint})" if hint else "")
+                + ("; a gauge pressure (relative to the atmosphere) goes in a column "
+                   "named 'pressure_gauge', e.g. 'pressure_gauge [kPa]'" if values[i] <= 0
+                   else ""))
+        top = float(np.max(values))
+        if top < 1e3:
+            hint = pressure_hint(top, (1e3, MAX_ABSOLUTE_PRESSURE))
+            raise DataError(f"{source}: {label} never exceeds {top:.6g} Pa: no absolute "
+                            "pressure of a pneumatic actuator stays below 1 kPa"
+                            + (f" ({hint}; give the unit in the header, e.g. "
+                               f"'{name} [kPa]')" if hint else ""))
+    if name == "command":
+        bad = (values < 0.0) | (values > 1.0)
+        if bad.any():
+            i = _first(bad)
+            raise DataError(f"{source}: {label} = {values[i]:.6g} at data row {i + 1} "
+                            f"({_rows(bad)}): a valve command is within "
+                            "[0, 1] (a percentage needs the unit '%' in the header)")
+
+
 def _check_time(path: Path, label: str, raw: np.ndarray, unit: str) -> None:
     """Time must be strictly increasing; report the first offending row (1-based)."""
     steps = np.diff(raw)
@@ -322,25 +391,41 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
       needs ``p_atm`` [Pa]: it becomes the absolute ``pressure``.
     - ``time`` is always required, plus ``required``.
     """
-    source = Path(path)
+    source = check_path("path", path, where="read_record")
+    _check_mappings(columns=columns, units=units)
+    required = check_names("required", required, where="read_record", what="signal name")
+    if names is not None:
+        names = check_names("names", names, where="read_record", what="column name",
+                            allow_empty=False, error=DataError)
+    if p_atm is not None:
+        p_atm = check_atmosphere("p_atm", p_atm, where="read_record", error=DataError)
     require_file(source)
     frame, cells, parsed = _load(source, names)
     file_names = [n for n, _ in parsed]
     check_unique(source, file_names)
     listing = ", ".join(cells) or "(none)"
-    hint = ""
-    if names is None and cells and all(_is_number(c) for c in cells):
-        hint = "; the file seems to have no header: pass names=[...]"
-    final = _our_names(source, file_names, cells, columns, listing, hint)
+    headless = names is None and cells and all(_is_number(c) for c in cells)
+    final = _our_names(source, file_names, cells, columns, listing,
+                       "; the file seems to have no header" if headless else "")
     gauge = "pressure_gauge" in final
-    hint = hint or "; map a differently named column with columns={...}"
     for name in ("time", *required):
         if not (name in final or (name == "pressure" and gauge)):
-            raise DataError(f"{source}: required column {name!r} is missing; the file has: "
-                            f"{listing}{hint}")
+            if headless:
+                raise DataError(
+                    f"{source}: required column {name!r} is missing; the file seems to have "
+                    "no header (its first line is numbers: "
+                    f"{listing}): add one, e.g. 'time [s],pressure [kPa],position [mm]'",
+                    api_hint="or pass names=[...]")
+            raise DataError(
+                f"{source}: required column {name!r} is missing; the file has: {listing}",
+                api_hint="map a differently named column with columns={...}",
+                cli_hint=f"rename the file's column to '{name}' (with its unit, e.g. "
+                         f"'{name} [{KNOWN[name][0] if name in KNOWN else 'unit'}]')")
     if gauge and p_atm is None:
-        raise DataError(f"{source}: column 'pressure_gauge' is relative to atmosphere; give "
-                        "p_atm [Pa] (e.g. p_atm=101325) to read it as absolute pressure")
+        raise DataError(f"{source}: column 'pressure_gauge' is relative to atmosphere: an "
+                        "atmospheric pressure is needed to read it as absolute pressure",
+                        api_hint="give p_atm [Pa], e.g. p_atm=101325",
+                        cli_hint="the parameter set's p_atm is used; give --params")
     resolved = _units_of(source, final, file_names, cells, [u for _, u in parsed], units,
                          listing)
     if len(frame) < 2:
@@ -356,18 +441,33 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
         values = np.ascontiguousarray(values, dtype=np.float64)
         if name == "time":
             _check_time(source, label, raw, f" {resolved[i]}" if resolved[i] else "")
+            check_physics(source, name, values, label)
             time = values
         elif name == "pressure_gauge":
             if "pressure" in final:
                 raise DataError(f"{source}: has both 'pressure' and 'pressure_gauge'; keep one")
             signals["pressure"] = values + float(p_atm)
             signal_units["pressure"] = "Pa"
+            check_physics(source, "pressure", signals["pressure"],
+                          f"{label} + p_atm = {p_atm:g} Pa")
         else:
+            check_physics(source, name, values, label)
             signals[name] = values
             signal_units[name] = si
     for array in (time, *signals.values()):
         array.setflags(write=False)
     return Record(time=time, signals=signals, units=signal_units, source=str(source))
+
+
+def _check_mappings(**given) -> None:
+    for name, value in given.items():
+        if value is None:
+            continue
+        if not isinstance(value, Mapping) or not all(
+                isinstance(k, str) and isinstance(v, str) for k, v in value.items()):
+            raise ArgumentTypeError(f"read_record: {name} = {value!r:.60}: must be a dict of "
+                                    "column name -> " + ("file column name" if name == "columns"
+                                                         else "unit") + " (strings)")
 
 
 def read_signal_csv(path: PathLike, *, columns: Mapping[str, str] | None = None,
@@ -391,13 +491,42 @@ def read_signal_csv(path: PathLike, *, columns: Mapping[str, str] | None = None,
     return name, record.time, record.signals[name]
 
 
+def as_records(records, where: str) -> list[Record]:
+    """Records as a list, from what a function was given: one Record, a list of them, or
+    paths of files or folders (read with ``read_records``' defaults)."""
+    if isinstance(records, Record):
+        return [records]
+    if isinstance(records, (str, os.PathLike)):
+        return read_records(records)
+    if not isinstance(records, Sequence) or isinstance(records, bytes):
+        raise ArgumentTypeError(f"{where}: records = {records!r:.60}: must be a Record, a list "
+                                "of Records (pa.read_records(...)) or paths, not "
+                                f"{type(records).__name__}")
+    out: list[Record] = []
+    for item in records:
+        if isinstance(item, Record):
+            out.append(item)
+        elif isinstance(item, (str, os.PathLike)):
+            out.extend(read_records(item))
+        else:
+            raise ArgumentTypeError(f"{where}: records holds {item!r:.60}: every item must be "
+                                    f"a Record or a path, not {type(item).__name__}")
+    if not out:
+        raise DataError(f"{where}: give at least one record")
+    return out
+
+
 def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]:
     """Several records at once: a list of files, or a folder (its ``*.csv`` and
     ``*.parquet`` files in name order); ``kwargs`` go to :func:`read_record`."""
-    if isinstance(paths, (str, Path)):
+    if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
+    if not isinstance(paths, Sequence) or isinstance(paths, bytes):
+        raise ArgumentTypeError(f"read_records: paths = {paths!r:.60}: must be a path (a "
+                                "file or a folder) or a list of paths, not "
+                                f"{type(paths).__name__}")
     files: list[Path] = []
-    for entry in map(Path, paths):
+    for entry in (check_path("paths", p, where="read_records") for p in paths):
         if entry.is_dir():
             found = sorted(p for p in entry.iterdir()
                            if p.suffix.lower() in (".csv", ".parquet") and p.is_file())

@@ -32,6 +32,20 @@ class Block:
     anchor: str = ""
 
 
+def parameter_notes(params) -> list[str]:
+    """What a report says about its parameter set besides the values: the LuGre passivity
+    condition it breaks, values outside the plausible ranges (warnings of their own
+    otherwise shown once per process)."""
+    from ..parameters.validation import implausible, passivity_note
+
+    values = getattr(params, "values", None)
+    if values is None:
+        return []
+    notes = [passivity_note(values, getattr(params, "name", "custom"))]
+    notes += [f"{line} (PlausibilityWarning)" for line in implausible(values)]
+    return [n for n in notes if n]
+
+
 def figure_png(fig, dpi: int = 110) -> bytes:
     """A matplotlib figure as PNG bytes (the figure is closed)."""
     import matplotlib.pyplot as plt
@@ -91,11 +105,14 @@ class Report:
         env = jinja2.Environment(loader=jinja2.PackageLoader("pneumact.io", "templates"),
                                  autoescape=jinja2.select_autoescape(["html", "j2"]))
         parameters = None
+        notes: list[str] = []
         if self.parameters is not None:
             parameters = self.parameters.to_frame().to_html(index=False, border=0,
                                                             classes="data", na_rep="")
+            notes = parameter_notes(self.parameters)
         return env.get_template("report.html.j2").render(
             title=self.title, blocks=self.blocks, call=self.call, parameters=parameters,
+            parameter_notes=notes,
             parameter_set=getattr(self.parameters, "name", ""), version=__version__,
             python=platform.python_version(),
             created=_dt.datetime.now().astimezone().isoformat(timespec="seconds"))

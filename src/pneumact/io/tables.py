@@ -15,6 +15,9 @@ import json
 import os
 import re
 import secrets
+import shutil
+import tempfile
+import threading
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -23,8 +26,8 @@ import pandas as pd
 
 from pneumact.errors import DataError
 
-__all__ = ["UNITS_METADATA_KEY", "atomic_write", "parse_cell", "read_table", "write_files",
-           "write_table"]
+__all__ = ["RUN_LISTING", "UNITS_METADATA_KEY", "atomic_write", "parse_cell", "partial_folder",
+           "read_table", "staged_folder", "write_files", "write_table"]
 
 PathLike = str | os.PathLike[str]
 
@@ -69,38 +72,204 @@ def atomic_write(path: PathLike) -> Iterator[Path]:
         raise
 
 
-def write_files(out_dir: PathLike, writers: Mapping[str, Any]) -> list[Path]:
-    """Write a set of files together: ``writers`` maps each file name to a function that
-    writes it to a given path. Everything is written into a private staging directory
-    first, then moved into ``out_dir`` file by file atomically; on any failure what was
-    already moved is removed (and ``out_dir`` if this call created it), so no partial
-    set of outputs is left. Writers run in order in one staging folder, so a later one
-    may read the files of earlier ones beside its path (a report embedding them)."""
-    import shutil
-    import tempfile
+#: The list of what the last run wrote into an output folder (hidden, JSON), so that the
+#: next run into that folder replaces exactly those files and leaves any other alone.
+RUN_LISTING = ".pneumact-run.json"
+PARTIAL_SUFFIX = ".pneumact-partial"
 
-    out = Path(out_dir)
-    created_dir = not out.exists()
-    staging = Path(tempfile.mkdtemp(prefix="pneumact-"))
-    written: list[Path] = []
+_OPEN_STAGES: set[Path] = set()
+_STAGES_LOCK = threading.Lock()
+
+
+def partial_folder(out_dir: PathLike) -> Path:
+    """Where an interrupted resumable run into ``out_dir`` is kept: a hidden sibling."""
+    out = Path(out_dir).resolve()
+    return out.parent / f".{out.name}{PARTIAL_SUFFIX}"
+
+
+def _inside_open_stage(path: Path) -> bool:
+    resolved = path.resolve()
+    with _STAGES_LOCK:
+        return any(resolved == s or s in resolved.parents for s in _OPEN_STAGES)
+
+
+def _listing(folder: Path) -> dict:
     try:
-        for name, write in writers.items():
-            write(staging / name)
-        for name in writers:
-            target = out / name
-            with atomic_write(target) as tmp:
-                shutil.copyfile(staging / name, tmp)
-            written.append(target)
+        listing = json.loads((folder / RUN_LISTING).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return listing if isinstance(listing, dict) else {}
+
+
+def _listed(folder: Path) -> list[str]:
+    """The entries the run that wrote ``folder`` listed (plain names only)."""
+    names = _listing(folder).get("files")
+    if not isinstance(names, list):
+        return []
+    return [n for n in names if isinstance(n, str) and n and n not in (".", "..")
+            and "/" not in n and os.sep not in n]
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(OSError):
+            path.unlink()
+
+
+def _link_or_copy(src: str, dst: str) -> None:
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
+def _seed(stage: Path, out: Path) -> None:
+    """The previous run's files, hard-linked into a fresh stage (files pneumact writes are
+    replaced, never changed in place, so sharing them is safe): what a resume reuses."""
+    names = _listed(out) or [p.name for p in out.iterdir() if not p.name.startswith(".")]
+    for name in names:
+        src = out / name
+        if src.is_dir():
+            shutil.copytree(src, stage / name, copy_function=_link_or_copy)
+        elif src.is_file():
+            _link_or_copy(str(src), str(stage / name))
+
+
+def _commit(stage: Path, out: Path, replace: bool, resumable: bool = False) -> list[str]:
+    """Move the stage's entries into ``out``: the whole stage becomes ``out`` when it did
+    not exist; else the previous run's entries are moved aside first (and restored if a
+    move fails), then removed. With ``replace`` False the entries are only added."""
+    entries = sorted(p.name for p in stage.iterdir() if p.name != RUN_LISTING)
+    if replace:
+        import time
+
+        from pneumact import __version__
+
+        listing = {"files": entries, "pneumact": __version__, "resumable": resumable,
+                   "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        (stage / RUN_LISTING).write_text(json.dumps(listing, indent=1), encoding="utf-8")
+    if replace and not out.exists():
+        os.rename(stage, out)
+        return entries
+    out.mkdir(parents=True, exist_ok=True)
+    incoming = [*entries, RUN_LISTING] if replace else entries
+    outgoing = sorted(set(_listed(out) if replace else []) | set(incoming))
+    backup = Path(tempfile.mkdtemp(prefix=f".{out.name}.pneumact-old-", dir=out.parent))
+    moved_out: list[str] = []
+    moved_in: list[str] = []
+    try:
+        for name in outgoing:
+            if (out / name).exists() or (out / name).is_symlink():
+                os.rename(out / name, backup / name)
+                moved_out.append(name)
+        for name in incoming:
+            os.rename(stage / name, out / name)
+            moved_in.append(name)
     except BaseException:
-        for path in written:
-            path.unlink(missing_ok=True)
-        if created_dir:
+        for name in moved_in:
             with contextlib.suppress(OSError):
-                out.rmdir()
+                os.rename(out / name, stage / name)
+        for name in moved_out:
+            with contextlib.suppress(OSError):
+                os.rename(backup / name, out / name)
         raise
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return written
+        shutil.rmtree(backup, ignore_errors=True)
+    shutil.rmtree(stage, ignore_errors=True)
+    return entries
+
+
+@contextlib.contextmanager
+def staged_folder(out_dir: PathLike, *, resumable: bool = False, resume: bool = False,
+                  overwrite: bool = False) -> Iterator[Path]:
+    """Build a run's outputs in a sibling folder, then swap them into ``out_dir``.
+
+    Yields the staging folder (in the same parent directory, so every move is a rename).
+    On success its entries replace the previous run's in ``out_dir``: the files that run
+    listed are removed even where the new run does not write them, and files no pneumact
+    run wrote are left alone. On failure ``out_dir`` is left exactly as it was.
+
+    A ``resumable`` run stages in a fixed hidden sibling (``.NAME.pneumact-partial``),
+    kept when the run is interrupted (Ctrl-C, a kill, a crash) so that ``resume``
+    continues it, and removed when it stops on a user's mistake (a pneumact error)
+    unless it was already there. ``resume`` seeds a fresh stage with the previous
+    complete run (hard links); ``overwrite`` discards a kept interrupted run. Inside
+    another run's stage (a command writing several parts) a non-resumable stage only
+    adds its files.
+    """
+    from pneumact.checks import check_out_dir
+    from pneumact.errors import ArgumentError, PneumactError
+
+    display = check_out_dir("out_dir", out_dir)
+    out = display.resolve()  # "." has a parent to stage in
+    out.parent.mkdir(parents=True, exist_ok=True)
+    nested = not resumable and _inside_open_stage(out)
+    existed = False
+    if resumable:
+        stage = partial_folder(out)
+        existed = stage.exists()
+        if existed and overwrite:
+            shutil.rmtree(stage)
+            existed = False
+        elif existed and not resume:
+            raise ArgumentError(
+                f"{display}: the interrupted run kept in {stage.name} beside it would be "
+                "lost",
+                api_hint="continue it (resume=True) or start again (overwrite=True)",
+                cli_hint="continue it (--resume) or start again (--overwrite)")
+        if not existed and not (resume or overwrite) and _listing(out).get("resumable"):
+            raise ArgumentError(
+                f"{display} holds the kept runs of an earlier run",
+                api_hint="continue them (resume=True) or start again (overwrite=True)",
+                cli_hint="continue them (--resume) or start again (--overwrite)")
+        if not existed:
+            stage.mkdir()
+            if resume and out.is_dir():
+                _seed(stage, out)
+    else:
+        stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.pneumact-stage-", dir=out.parent))
+    key = stage.resolve()
+    with _STAGES_LOCK:
+        _OPEN_STAGES.add(key)
+    try:
+        yield stage
+    except PneumactError:
+        if not existed:
+            shutil.rmtree(stage, ignore_errors=True)
+        raise
+    except BaseException:
+        if not resumable:
+            shutil.rmtree(stage, ignore_errors=True)
+        raise
+    finally:
+        with _STAGES_LOCK:
+            _OPEN_STAGES.discard(key)
+    try:
+        _commit(stage, out, replace=not nested, resumable=resumable)
+    except BaseException:
+        if not resumable:
+            shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
+def write_files(out_dir: PathLike, writers: Mapping[str, Any]) -> list[Path]:
+    """Write a set of files together: ``writers`` maps each file name to a function that
+    writes it to a given path. They run in order in one staging folder beside
+    ``out_dir`` (so a later one may read the files of earlier ones beside its path, a
+    report embedding them), and the set replaces the previous run's files in
+    ``out_dir`` only when all are written (``staged_folder``): no partial set of
+    outputs, no stale file of the run before."""
+    for name in writers:
+        if not name or Path(name).name != name:
+            raise ValueError(f"write_files: {name!r} is not a plain file name")
+    with staged_folder(out_dir) as stage:
+        for name, write in writers.items():
+            write(stage / name)
+            if not (stage / name).exists():
+                raise FileNotFoundError(f"write_files: nothing was written to {name}")
+    return [Path(out_dir) / name for name in writers]
 
 
 def _check_suffix(path: Path) -> str:

@@ -104,9 +104,8 @@ def convert_column(path: Path, label: str, name: str, unit: str | None, raw: np.
         if name == "command":
             return raw, "1"
         raise DataError(
-            f"{path}: {label} has no unit; write the header as '{name} [unit]' or pass "
-            f"units={{{name!r}: ...}}; allowed: {known[2]}"
-        )
+            f"{path}: {label} has no unit; write the header as '{name} [unit]' with "
+            f"{known[2]}", api_hint=f"or pass units={{{name!r}: ...}}")
     parsed = parse_unit(path, label, unit)
     if known is not None:
         si_label, target, allowed = known

@@ -5,7 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from ..checks import as_instance, check_type
+from ..errors import ArgumentError
 from ..experiments.signals import Signal
+from ..parameters.files import as_parameter_set
 from .component import Part, StateSpec
 from .friction import FrictionModel, LuGre
 from .mechanics import MECHANICS_BLOCK
@@ -32,6 +35,29 @@ class Actuator:
     template: ClassVar[str] = "pneumact.simulation.templates.actuator"
 
     def __post_init__(self):
+        set_ = object.__setattr__
+        set_(self, "params", as_parameter_set(self.params, "Actuator"))
+        set_(self, "friction", as_instance(
+            "friction", self.friction, FrictionModel, where="Actuator",
+            examples="pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
+                     "pa.StribeckMap()"))
+        set_(self, "valve", as_instance(
+            "valve", self.valve, Valve, where="Actuator",
+            examples="pa.PressureSource(), pa.CommandValve() or pa.PressureRegulator()"))
+        set_(self, "chamber", as_instance(
+            "chamber", self.chamber, ChamberLaw, where="Actuator",
+            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(n)"))
+        for name in ("load", "load_map"):
+            value = getattr(self, name)
+            if value is not None:
+                check_type(name, value, Signal, where="Actuator",
+                           what="a Signal (e.g. pa.experiments.Ramp(...)) or None")
+        if isinstance(self.valve, PressureSource) and not isinstance(self.chamber, Isothermal):
+            raise ArgumentError(
+                f"Actuator: chamber = {type(self.chamber).__name__}() has no effect with "
+                "PressureSource(): the pressure is prescribed, so the chamber's gas law "
+                "never enters; drop chamber=, or drive a valve (CommandValve, "
+                "PressureRegulator)")
         self.params.require(self.required, "Actuator")
 
     @property

@@ -34,28 +34,40 @@ from .component import Block, Part, StateSpec
 
 P = ParameterSpec
 declare(
-    P("sigma0", "N/m", "bristle stiffness", None, 0.0, True, group="friction"),
-    P("sigma1", "N*s/m", "bristle (micro-)damping", 0.0, 0.0, group="friction"),
+    P("sigma0", "N/m", "bristle stiffness", None, 0.0, True, 1e12, group="friction",
+      plausible=(10.0, 1e10)),
+    P("sigma1", "N*s/m", "bristle (micro-)damping", 0.0, 0.0, False, 1e8, group="friction",
+      plausible=(0.0, 1e6)),
     P("sigma2", "N*s/m", "viscous friction coefficient (the only viscous term)", 0.0, 0.0,
-      group="friction"),
-    P("Fc", "N", "Coulomb friction force", None, 0.0, group="friction"),
-    P("Fs", "N", "static (break-away) friction force, Fs >= Fc", None, 0.0, group="friction"),
-    P("vs", "m/s", "Stribeck velocity", None, 0.0, True, group="friction"),
+      False, 1e8, group="friction", plausible=(0.0, 1e6)),
+    P("Fc", "N", "Coulomb friction force (0: frictionless)", None, 0.0, False, 1e7,
+      group="friction", plausible=(0.0, 1e5)),
+    P("Fs", "N", "static (break-away) friction force, Fs >= Fc", None, 0.0, False, 1e7,
+      group="friction", plausible=(0.0, 1e5)),
+    P("vs", "m/s", "Stribeck velocity", None, 0.0, True, 100.0, group="friction",
+      plausible=(1e-7, 1.0)),
     P("delta", "", "Stribeck exponent (paper eq. 8: 1; usual LuGre: 2)", 2.0, 0.0, True,
-      group="friction"),
+      100.0, group="friction", plausible=(0.2, 5.0)),
     P("v_reg", "m/s", "sign regularisation velocity of the static friction maps", 1e-4, 0.0,
-      True, group="friction"),
-    P("dahl_alpha", "", "Dahl shape exponent", 1.0, 0.0, True, group="friction"),
-    P("bw_beta", "", "Bouc-Wen shape parameter beta", 0.5, 0.0, True, group="friction"),
-    P("bw_gamma", "", "Bouc-Wen shape parameter gamma (-beta <= gamma <= beta)", 0.5,
+      True, 10.0, group="friction", plausible=(1e-9, 0.1)),
+    P("dahl_alpha", "", "Dahl shape exponent", 1.0, 0.0, True, 100.0, group="friction",
+      plausible=(0.1, 10.0)),
+    P("bw_beta", "", "Bouc-Wen shape parameter beta", 0.5, 0.0, True, 1e3,
       group="friction"),
-    P("bw_n", "", "Bouc-Wen exponent n", 1.0, 0.0, True, group="friction"),
+    P("bw_gamma", "", "Bouc-Wen shape parameter gamma (-beta <= gamma <= beta)", 0.5,
+      -1e3, False, 1e3, group="friction"),
+    P("bw_n", "", "Bouc-Wen exponent n", 1.0, 0.0, True, 100.0, group="friction",
+      plausible=(0.1, 10.0)),
 )
 declare_relation(("Fs", "Fc"), lambda fs, fc: fs >= fc,
                  lambda fs, fc: f"must be >= Fc = {fc:g} N (static friction is at least "
                                 "the Coulomb friction)")
 declare_relation(("bw_gamma", "bw_beta"), lambda g, b: abs(g) <= b,
                  lambda g, b: f"must be within [-bw_beta, bw_beta] = [{-b:g}, {b:g}]")
+
+#: Friction level g(v) below this fraction of Fs counts as none: the bristles then relax
+#: within g/(σ0·|v|), attoseconds, far below any step, and the law takes its limit.
+RELAXED_LEVEL = 1e-12
 
 LUGRE_BLOCK = Block.of("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs", "delta")
 LG_SIGMA0 = LUGRE_BLOCK.index("sigma0")
@@ -142,8 +154,16 @@ def stribeck_curve_params(v, fc, fs, vs, delta):  # pragma: no cover - compiled
 # --------------------------------------------------------------------------- LuGre
 @njit(cache=True)
 def lugre_law(v, z, s0, s1, ds1_dv, s2, fc, fs, vs, delta):  # pragma: no cover - compiled
-    """LuGre with micro-damping s1 (and its derivative ds1_dv along v)."""
+    """LuGre with micro-damping s1 (and its derivative ds1_dv along v).
+
+    Where the friction level g(v) vanishes (Fc = Fs = 0, a frictionless actuator; or
+    Fc = 0 far above vs, where exp(−(|v|/vs)^δ) underflows) the law is its limit: the
+    bristles relax at the rate σ0·|v|/g → ∞ to z = sgn(v)·g/σ0 → 0 and carry no force,
+    so dz/dt = 0 and F = σ2·v (the bound Fs/σ0 holds z at 0 there).
+    """
     g, dg = stribeck_curve(v, fc, fs, vs, delta)
+    if g <= RELAXED_LEVEL * fs:
+        return 0.0, s2 * v, 0.0, 0.0, s2, 0.0
     av = abs(v)
     zdot = v - s0 * av * z / g
     dzdot_dv = 1.0 - s0 * z * (_sign(v) * g - av * dg) / (g * g)
@@ -157,6 +177,8 @@ def lugre_law(v, z, s0, s1, ds1_dv, s2, fc, fs, vs, delta):  # pragma: no cover 
 def _lugre_rate_params(v, z, s0, fc, fs, vs, delta):  # pragma: no cover - compiled
     """dz/dt and its derivatives in σ0, Fc, Fs, vs, δ (σ1, σ2 do not enter it)."""
     g, dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(v, fc, fs, vs, delta)
+    if g <= RELAXED_LEVEL * fs:  # no friction level: dz/dt = 0 whatever the parameters
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     av = abs(v)
     dz_dg = s0 * av * z / (g * g)
     return (v - s0 * av * z / g, -av * z / g, dz_dg * dg_dfc, dz_dg * dg_dfs,
@@ -217,9 +239,17 @@ def lugre_decaying_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def presliding_scale(level, s0):  # pragma: no cover - compiled
+    """Typical bristle deflection level/σ0; with no friction level (a frictionless law,
+    whose z stays 0) the deflection under 1 N, so the tolerance on z stays positive."""
+    return (level if level > 0.0 else 1.0) / s0
+
+
+@njit(cache=True)
 def lugre_scales(p, o):  # pragma: no cover - compiled
     """(typical bristle deflection Fs/σ0, bristle stiffness σ0, regularisation speed 0)."""
-    return p[o + LG_FS] / p[o + LG_SIGMA0], p[o + LG_SIGMA0], 0.0
+    s0 = p[o + LG_SIGMA0]
+    return presliding_scale(max(p[o + LG_FS], p[o + LG_FC]), s0), s0, 0.0
 
 
 @njit(cache=True)
@@ -246,6 +276,8 @@ def _dahl_shape(v, z, s0, fc, alpha):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def dahl_law(v, z, s0, fc, s2, alpha):  # pragma: no cover - compiled
+    if fc <= 0.0:  # frictionless: the bristle bound Fc/σ0 is 0, F = σ2·v (see LuGre)
+        return 0.0, s2 * v, 0.0, 0.0, s2, 0.0
     _, phi, dphi = _dahl_shape(v, z, s0, fc, alpha)
     return v * phi, s0 * z + s2 * v, phi, -s0 * abs(v) * dphi / fc, s2, s0
 
@@ -259,9 +291,12 @@ def dahl(v, z, p, o):  # pragma: no cover - compiled
 @njit(cache=True)
 def dahl_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
     s0, fc = p[o + DH_SIGMA0], p[o + DH_FC]
+    _clear(g, rz, rf, o, DAHL_SIZE)
+    if fc <= 0.0:
+        g[rf, o + DH_SIGMA2] = v
+        return
     s, phi, dphi = _dahl_shape(v, z, s0, fc, p[o + DH_ALPHA])
     sv = _sign(v)
-    _clear(g, rz, rf, o, DAHL_SIZE)
     g[rz, o + DH_SIGMA0] = v * dphi * (-z * sv / fc)
     g[rz, o + DH_FC] = v * dphi * (s0 * z * sv / (fc * fc))
     g[rz, o + DH_ALPHA] = v * phi * math.log(abs(s)) if s != 0.0 else 0.0
@@ -271,7 +306,7 @@ def dahl_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def dahl_scales(p, o):  # pragma: no cover - compiled
-    return p[o + DH_FC] / p[o + DH_SIGMA0], p[o + DH_SIGMA0], 0.0
+    return presliding_scale(p[o + DH_FC], p[o + DH_SIGMA0]), p[o + DH_SIGMA0], 0.0
 
 
 @njit(cache=True)
@@ -292,6 +327,8 @@ def _bouc_wen_terms(v, z, s0, fc, beta, gam, n):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def bouc_wen_law(v, z, s0, fc, s2, beta, gam, n):  # pragma: no cover - compiled
+    if fc <= 0.0:  # frictionless: the bound Fc/σ0 is 0, F = σ2·v (see LuGre)
+        return 0.0, s2 * v, 0.0, 0.0, s2, 0.0
     s, an1, numerator, norm = _bouc_wen_terms(v, z, s0, fc, beta, gam, n)
     an = abs(s) * an1
     zdot = v - numerator / norm
@@ -315,10 +352,13 @@ def bouc_wen(v, z, p, o):  # pragma: no cover - compiled
 def bouc_wen_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
     s0, fc = p[o + BW_SIGMA0], p[o + BW_FC]
     beta, gam, n = p[o + BW_BETA], p[o + BW_GAMMA], p[o + BW_N]
+    _clear(g, rz, rf, o, BOUC_WEN_SIZE)
+    if fc <= 0.0:
+        g[rf, o + BW_SIGMA2] = v
+        return
     s, an1, numerator, norm = _bouc_wen_terms(v, z, s0, fc, beta, gam, n)
     an = abs(s) * an1
     dzdot_ds = -n * an1 * (beta * abs(v) + gam * v * _sign(s)) / norm
-    _clear(g, rz, rf, o, BOUC_WEN_SIZE)
     g[rz, o + BW_SIGMA0] = dzdot_ds * z / fc
     g[rz, o + BW_FC] = -dzdot_ds * s / fc
     g[rz, o + BW_BETA] = -(abs(v) * an1 * s - numerator / norm) / norm
@@ -330,7 +370,7 @@ def bouc_wen_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def bouc_wen_scales(p, o):  # pragma: no cover - compiled
-    return p[o + BW_FC] / p[o + BW_SIGMA0], p[o + BW_SIGMA0], 0.0
+    return presliding_scale(p[o + BW_FC], p[o + BW_SIGMA0]), p[o + BW_SIGMA0], 0.0
 
 
 @njit(cache=True)
@@ -505,6 +545,11 @@ class LuGre(FrictionModel):
     cli_name: ClassVar[str] = "lugre"
     scales: ClassVar[str] = "lugre_scales"
     bound: ClassVar[str] = "lugre_bound"
+
+    def __post_init__(self):
+        from ..checks import check_bool
+
+        check_bool("decaying_damping", self.decaying_damping, where="LuGre")
 
     @property
     def law(self) -> str:  # type: ignore[override]

@@ -23,17 +23,22 @@ from .component import Block
 
 P = ParameterSpec
 declare(
-    P("m", "kg", "moving mass (diaphragm, rod, linkage)", None, 0.0, True, group="mechanics"),
-    P("F0", "N", "spring preload at the rest stop", None, 0.0, group="mechanics"),
-    P("k", "N/m", "spring (+ membrane) stiffness", None, 0.0, group="mechanics"),
-    P("x_max", "m", "stroke: position of the far end stop", None, 0.0, True,
-      group="mechanics"),
-    P("k_stop", "N/m", "end-stop contact stiffness (penalty)", 1e8, 0.0, True,
-      group="mechanics"),
+    P("m", "kg", "moving mass (diaphragm, rod, linkage)", None, 1e-9, False, 1e5,
+      group="mechanics", plausible=(1e-3, 1e3)),
+    P("F0", "N", "spring preload at the rest stop", None, 0.0, False, 1e7, group="mechanics",
+      plausible=(0.0, 1e5)),
+    P("k", "N/m", "spring (+ membrane) stiffness", None, 0.0, False, 1e10,
+      group="mechanics", plausible=(0.0, 1e8)),
+    P("x_max", "m", "stroke: position of the far end stop", None, 0.0, True, 10.0,
+      group="mechanics", plausible=(1e-4, 2.0)),
+    P("k_stop", "N/m", "end-stop contact stiffness (penalty)", 1e8, 0.0, True, 1e14,
+      group="mechanics", plausible=(1e5, 1e12)),
     P("c_stop", "N*s/m^2", "end-stop Hunt-Crossley damping: force c_stop·δ·dδ/dt on the "
-      "penetration δ", 1e12, 0.0, group="mechanics"),
-    P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, group="pneumatics"),
-    P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 0.0, True, group="pneumatics"),
+      "penetration δ", 1e12, 0.0, False, 1e18, group="mechanics"),
+    P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, 10.0, group="pneumatics",
+      plausible=(1e-6, 1.0)),
+    P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 1e3, False, 1e7,
+      group="pneumatics", plausible=(50e3, 110e3)),
 )
 
 MECHANICS_BLOCK = Block.of("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")

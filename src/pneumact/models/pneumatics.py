@@ -27,21 +27,26 @@ from .component import Block
 
 P = ParameterSpec
 declare(
-    P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, group="pneumatics"),
-    P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 0.0, True, group="pneumatics"),
-    P("V0", "m^3", "chamber volume at the rest stop (x = 0)", None, 0.0, True,
-      group="pneumatics"),
-    P("p_res", "Pa", "vacuum reservoir pressure (absolute), below p_atm", None, 0.0,
-      group="pneumatics"),
-    P("gamma", "", "ratio of specific heats of air", 1.4, 1.0, True, group="pneumatics"),
-    P("R", "J/(kg*K)", "specific gas constant of air", 287.0, 0.0, True, group="pneumatics"),
-    P("T", "K", "gas temperature (upstream and chamber)", 293.15, 0.0, True,
-      group="pneumatics"),
+    P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, 10.0, group="pneumatics",
+      plausible=(1e-6, 1.0)),
+    P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 1e3, False, 1e7,
+      group="pneumatics", plausible=(50e3, 110e3)),
+    P("V0", "m^3", "chamber volume at the rest stop (x = 0)", None, 0.0, True, 10.0,
+      group="pneumatics", plausible=(1e-8, 0.1)),
+    P("p_res", "Pa", "vacuum reservoir pressure (absolute), below p_atm", None, 0.0, False,
+      1e7, group="pneumatics", plausible=(1e3, 2e6)),
+    P("gamma", "", "ratio of specific heats of the gas (ideal gases: 1 < gamma <= 5/3)", 1.4,
+      1.0, True, 5.0 / 3.0, group="pneumatics"),
+    P("R", "J/(kg*K)", "specific gas constant of air", 287.0, 0.0, True, 1e5,
+      group="pneumatics", plausible=(50.0, 5000.0)),
+    P("T", "K", "gas temperature (upstream and chamber)", 293.15, 0.0, True, 5000.0,
+      group="pneumatics", plausible=(150.0, 600.0)),
     P("r_lin", "", "pressure ratio where the orifice flow turns linear (laminar branch)",
       0.999, 0.53, True, 1.0, group="pneumatics"),
-    P("A_res", "m^2", "max effective area chamber -> vacuum reservoir", None, 0.0,
-      group="valve"),
-    P("A_atm", "m^2", "max effective area atmosphere -> chamber", None, 0.0, group="valve"),
+    P("A_res", "m^2", "max effective area chamber -> vacuum reservoir", None, 0.0, False,
+      1.0, group="valve", plausible=(0.0, 1e-2)),
+    P("A_atm", "m^2", "max effective area atmosphere -> chamber", None, 0.0, False, 1.0,
+      group="valve", plausible=(0.0, 1e-2)),
 )
 declare_relation(("p_res", "p_atm"), lambda p_res, p_atm: p_res < p_atm,
                  lambda p_res, p_atm: f"must be < p_atm = {p_atm:g} Pa (the vacuum reservoir "
@@ -266,8 +271,10 @@ class Polytropic(ChamberLaw):
     n: float = 1.2
 
     def __post_init__(self):
-        if not (np.isfinite(self.n) and self.n >= 1.0):
-            raise ParameterError(f"Polytropic: n = {self.n}, must be >= 1")
+        from ..checks import check_range
+
+        check_range("n", self.n, 1.0, 5.0 / 3.0, where="Polytropic", error=ParameterError,
+                    hint="1 isothermal, γ adiabatic; γ <= 5/3 for any ideal gas")
 
     def settings(self) -> dict[str, float]:
         return {"chamber_n_offset": float(self.n), "chamber_n_gamma": 0.0}

@@ -22,10 +22,12 @@ from .friction import FrictionModel, LuGre
 
 P = ParameterSpec
 declare(
-    P("m", "kg", "moving mass (diaphragm, rod, linkage)", None, 0.0, True, group="mechanics"),
+    P("m", "kg", "moving mass (diaphragm, rod, linkage)", None, 1e-9, False, 1e5,
+      group="mechanics", plausible=(1e-3, 1e3)),
     P("k_drive", "N/m", "stiffness of the spring that pulls the rig mass (stick-slip)", 2.0,
-      0.0, True, group="rig"),
-    P("v_drive", "m/s", "pulling speed of the stick-slip rig", 0.1, group="rig"),
+      0.0, True, 1e10, group="rig", plausible=(1e-3, 1e8)),
+    P("v_drive", "m/s", "pulling speed of the stick-slip rig", 0.1, -100.0, False, 100.0,
+      group="rig", plausible=(-10.0, 10.0)),
 )
 
 RIG_BLOCK = Block.of("m")
@@ -117,9 +119,16 @@ class FrictionRig:
     template: ClassVar[str] = "pneumact.simulation.templates.rig"
 
     def __post_init__(self):
+        from ..checks import as_instance
         from ..errors import ExperimentError
+        from ..parameters.files import as_parameter_set
 
-        if self.drive not in DRIVES:
+        object.__setattr__(self, "params", as_parameter_set(self.params, "FrictionRig"))
+        object.__setattr__(self, "friction", as_instance(
+            "friction", self.friction, FrictionModel, where="FrictionRig",
+            examples="pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
+                     "pa.StribeckMap()"))
+        if not isinstance(self.drive, str) or self.drive not in DRIVES:
             raise ExperimentError(
                 f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}")
         self.params.require(self.required, "FrictionRig")

@@ -56,9 +56,11 @@ from .pneumatics import (
 P = ParameterSpec
 declare(
     P("reg_kp", "", "regulator gain: valve opening per unit of (p - p_set)/p_atm", 20.0, 0.0,
-      group="valve"),
-    P("reg_ti", "s", "regulator integral time", 0.05, 0.0, True, group="valve"),
-    P("reg_tau", "s", "valve (spool) time constant", 0.01, 0.0, True, group="valve"),
+      False, 1e6, group="valve", plausible=(0.0, 1e4)),
+    P("reg_ti", "s", "regulator integral time", 0.05, 0.0, True, 1e4, group="valve",
+      plausible=(1e-6, 100.0)),
+    P("reg_tau", "s", "valve (spool) time constant", 0.01, 0.0, True, 1e4, group="valve",
+      plausible=(1e-7, 10.0)),
 )
 
 SOURCE_BLOCK = Block()

@@ -7,7 +7,13 @@ model assembly lays out the ones its components need.
 """
 
 from pneumact.parameters.catalogue import ParameterSpec, catalogue, declare, declare_relation
-from pneumact.parameters.files import available_params, load_params, params_to_toml, write_params
+from pneumact.parameters.files import (
+    as_parameter_set,
+    available_params,
+    load_params,
+    params_to_toml,
+    write_params,
+)
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
 from pneumact.parameters.units import parse_value, unit_registry
 from pneumact.parameters.validation import (
@@ -20,6 +26,7 @@ __all__ = [
     "ParameterInfo",
     "ParameterSet",
     "ParameterSpec",
+    "as_parameter_set",
     "available_params",
     "catalogue",
     "declare",

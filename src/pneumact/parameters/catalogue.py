@@ -54,6 +54,9 @@ class ParameterSpec:
     strict_minimum: bool = False
     maximum: float | None = None  # inclusive upper bound
     group: str = "misc"
+    #: (low, high) real actuators and rigs lie in; a legal value outside it warns
+    #: (``PlausibilityWarning``): often a unit typed wrong
+    plausible: tuple[float, float] | None = None
 
     def allowed(self) -> str:
         """'must be > 0', 'must be in (0.53, 1]', or '' when any finite value will do."""
@@ -65,6 +68,32 @@ class ParameterSpec:
         if hi is not None:
             return f"must be <= {hi:g}"
         return ""
+
+    def violation(self, value: float) -> str:
+        """What ``value`` breaks: 'must be > 0', 'must be <= 1e+10' ('' if nothing)."""
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and (value <= lo if self.strict_minimum else value < lo):
+            text = f"must be {'>' if self.strict_minimum else '>='} {lo:g}"
+        elif hi is not None and value > hi:
+            text = f"must be <= {hi:g}"
+        else:
+            return ""
+        return f"{text} {self.unit}".rstrip()
+
+    def is_plausible(self, value: float) -> bool:
+        """Whether ``value`` lies in the plausible range (True when none is stated)."""
+        if self.plausible is None:
+            return True
+        lo, hi = self.plausible
+        return lo <= value <= hi
+
+    def hint(self, value: float) -> str:
+        """The likely mistake behind an impossible or implausible ``value``, or ''."""
+        if self.unit != "Pa" or self.plausible is None:
+            return ""
+        from pneumact.checks import pressure_hint
+
+        return pressure_hint(value, self.plausible)
 
     def in_range(self, values):
         """Elementwise: whether each value is finite and inside the allowed range."""

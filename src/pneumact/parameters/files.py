@@ -16,13 +16,19 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from pneumact.errors import ParameterError
+from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
 from pneumact.parameters.units import parse_value
-from pneumact.parameters.validation import message, unknown_name, warn_passivity
+from pneumact.parameters.validation import (
+    message,
+    unknown_name,
+    warn_implausible,
+    warn_passivity,
+)
 
-__all__ = ["available_params", "load_params", "params_to_toml", "write_params"]
+__all__ = ["as_parameter_set", "available_params", "load_params", "params_to_toml",
+           "write_params"]
 
 _TOP_KEYS = ("name", "description", "provenance", "parameters")
 _ENTRY_KEYS = ("value", "source", "note")
@@ -147,12 +153,38 @@ def load_params(name_or_path: str | Path) -> ParameterSet:
     """Load a shipped set by name ("vgt-paper") or a TOML file by path, in SI, validated.
 
     Raises ParameterError for an unknown set, a malformed file, an unknown parameter, a
-    bad unit or an inconsistent set; warns (PassivityWarning, once) if the LuGre
-    parameters break the passivity condition.
+    bad unit, an impossible value or an inconsistent set; warns (PlausibilityWarning)
+    about a legal value outside the range real actuators have (often a unit typed
+    wrong), and (PassivityWarning, once per process) if the LuGre parameters break the
+    passivity condition. A ParameterSet is returned as it is.
     """
+    if isinstance(name_or_path, ParameterSet):
+        return name_or_path
+    if not isinstance(name_or_path, (str, os.PathLike)) or isinstance(name_or_path, bytes):
+        raise ArgumentTypeError(
+            f"load_params: name_or_path = {name_or_path!r}: must be a shipped set name "
+            f"({', '.join(_shipped())}) or the path of a .toml file, not "
+            f"{type(name_or_path).__name__}")
     ps = _load(name_or_path)
+    warn_implausible(ps.values, ps.name, stacklevel=2,
+                     given={n: i.given for n, i in ps.info.items()})
     warn_passivity(ps.values, ps.name, stacklevel=2)
     return ps
+
+
+def as_parameter_set(value, where: str) -> ParameterSet:
+    """A ParameterSet from what a function was given: a set as it is, a shipped set's
+    name or a .toml path loaded (``Actuator("vgt-paper")`` reads as
+    ``Actuator(load_params("vgt-paper"))``); anything else is refused, naming the type."""
+    if isinstance(value, ParameterSet):
+        return value
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        return load_params(value)
+    hint = (" (from a dict: ParameterSet.from_dict(values))"
+            if isinstance(value, Mapping) else "")
+    raise ArgumentTypeError(f"{where}: params = {value!r:.60}: must be a ParameterSet, "
+                            "e.g. pa.load_params('vgt-paper'), or a set name or .toml path, "
+                            f"not {type(value).__name__}{hint}")
 
 
 def available_params() -> list[tuple[str, str]]:

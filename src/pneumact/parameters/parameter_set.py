@@ -22,6 +22,7 @@ from pneumact.parameters.validation import (
     message,
     problems,
     unknown_name,
+    warn_implausible,
     warn_passivity,
 )
 
@@ -189,6 +190,8 @@ class ParameterSet(Mapping[str, float]):
         """Build a validated set from Python: numbers are SI, strings carry units."""
         parsed, info = parse_entries(values, f"parameter set '{name}'", "from_dict")
         ps = cls(parsed, name=name, description=description, info=info)
+        warn_implausible(ps.values, ps.name, stacklevel=2,
+                         given={n: i.given for n, i in info.items()})
         warn_passivity(ps.values, ps.name, stacklevel=2)
         return ps
 
@@ -205,6 +208,8 @@ class ParameterSet(Mapping[str, float]):
         ps = ParameterSet({**self._values, **parsed}, name=self._name,
                           description=self._description, provenance=self._provenance,
                           info={**self._info, **info}, source_path=self._source_path)
+        warn_implausible(ps.values, ps.name, stacklevel=2, names=list(parsed),
+                         given={n: i.given for n, i in info.items()})
         if lugre_passivity_problem(self._values) is None:
             warn_passivity(ps.values, ps.name, stacklevel=2)
         return ps

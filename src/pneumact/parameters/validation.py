@@ -16,17 +16,19 @@ from typing import Any
 
 import numpy as np
 
-from pneumact.errors import ParameterError, PassivityWarning
+from pneumact.errors import ParameterError, PassivityWarning, PlausibilityWarning
 from pneumact.parameters.catalogue import catalogue, relations
 from pneumact.parameters.units import NUMBER_THEN_UNIT
 
 __all__ = [
+    "implausible",
     "lugre_passivity_problem",
     "message",
     "problems",
     "row_problems",
     "unknown_name",
     "validate",
+    "warn_implausible",
     "warn_passivity",
 ]
 
@@ -79,7 +81,9 @@ def problems(values: Mapping[str, Any], where: str,
         elif not math.isfinite(float(value)):
             found.append(f"{_shown(name, float(value), given)}: must be a finite number")
         elif not spec.in_range(float(value)):
-            found.append(f"{_shown(name, float(value), given)}: {spec.allowed()}")
+            hint = spec.hint(float(value))
+            found.append(f"{_shown(name, float(value), given)}: "
+                         f"{spec.violation(float(value))}" + (f" ({hint})" if hint else ""))
         else:
             usable[name] = float(value)
 
@@ -92,6 +96,37 @@ def problems(values: Mapping[str, Any], where: str,
             first = relation.names[0]
             found.append(f"{_shown(first, args[0], given)}: {relation.explain(*args)}")
     return found
+
+
+def implausible(values: Mapping[str, float], names: Iterable[str] | None = None,
+                given: Mapping[str, str] | None = None) -> list[str]:
+    """One line per value (of ``names``, default all) that is legal but outside the range
+    real actuators and rigs have, with the likely mistake where one is recognisable."""
+    specs = catalogue()
+    found = []
+    for name in (values if names is None else names):
+        spec = specs.get(name)
+        if spec is None or spec.plausible is None or name not in values:
+            continue
+        value = float(values[name])
+        if not spec.is_plausible(value):
+            lo, hi = spec.plausible
+            hint = spec.hint(value)
+            found.append(f"{_shown(name, value, given)} is outside the plausible range "
+                         f"[{lo:g}, {hi:g}] {spec.unit}".rstrip()
+                         + (f" ({hint})" if hint else ""))
+    return found
+
+
+def warn_implausible(values: Mapping[str, float], set_name: str, stacklevel: int,
+                     names: Iterable[str] | None = None,
+                     given: Mapping[str, str] | None = None) -> None:
+    """One PlausibilityWarning listing the implausible values of a set (if any)."""
+    found = implausible(values, names, given)
+    if found:
+        warnings.warn(f"parameter set '{set_name}': {'; '.join(found)}; check the units "
+                      "(if the values are meant, the run goes on as given)",
+                      PlausibilityWarning, stacklevel=stacklevel + 1)
 
 
 def message(header: str, found: Sequence[str]) -> str:
@@ -126,7 +161,10 @@ def row_problems(base: Mapping[str, float], columns: Sequence[str],
         ok_value[name] = inside
         for i in np.flatnonzero(~inside):
             shown = _shown(name, float(array[i]))
-            what = "must be a finite number" if not math.isfinite(array[i]) else spec.allowed()
+            what = ("must be a finite number" if not math.isfinite(array[i])
+                    else spec.violation(float(array[i])))
+            hint = spec.hint(float(array[i])) if math.isfinite(array[i]) else ""
+            what += f" ({hint})" if hint else ""
             reasons[i].append(f"{shown}: {what}")
     for relation in relations():
         if not any(name in column for name in relation.names):
@@ -191,8 +229,20 @@ def lugre_passivity_problem(values: Mapping[str, float]) -> str | None:
             "slip onsets")
 
 
-def warn_passivity(values: Mapping[str, float], set_name: str, stacklevel: int) -> None:
+def passivity_note(values: Mapping[str, float], set_name: str) -> str | None:
+    """The passivity warning's text for a set, or None (``params show``, the reports)."""
     problem = lugre_passivity_problem(values)
-    if problem:
-        warnings.warn(f"parameter set '{set_name}': {problem}", PassivityWarning,
-                      stacklevel=stacklevel + 1)
+    return f"parameter set '{set_name}': {problem}" if problem else None
+
+
+def warn_passivity(values: Mapping[str, float], set_name: str, stacklevel: int) -> None:
+    """A PassivityWarning, shown once per process and set (a filter registered with the
+    warning category makes it "once"); ``params show``/``check`` and the reports repeat it."""
+    note = passivity_note(values, set_name)
+    if note:
+        warnings.warn(note, PassivityWarning, stacklevel=stacklevel + 1)
+
+
+# once per process and text, unless the user (or a test runner) set a filter of their own:
+# appended, so any filter set before or after it takes precedence
+warnings.filterwarnings("once", category=PassivityWarning, append=True)

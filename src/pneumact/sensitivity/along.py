@@ -15,13 +15,15 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from ..errors import ParameterError
+from ..checks import check_int
+from ..errors import ArgumentError, ParameterError
 from .methods import (
     Evaluate,
     SensitivityWarning,
     StudyResult,
     batch_evaluate,
     bootstrap_seed,
+    check_sobol_n,
     sobol,
 )
 from .problem import Problem
@@ -80,9 +82,13 @@ def sobol_convergence(problem: Problem, evaluate: Evaluate, n_max: int = 1024,
     wider than ``target_width`` (CI widths shrink as 1/√n)."""
     from SALib.analyze import sobol as analyze
 
-    if n_min < 1 or n_max < n_min:
-        raise ParameterError(f"sobol_convergence: need 1 <= n_min <= n_max, got {n_min}, "
-                             f"{n_max}")
+    n_min = check_int("n_min", n_min, minimum=1, where="sobol_convergence")
+    if n_min & (n_min - 1):
+        raise ArgumentError(f"sobol_convergence: n_min = {n_min}: must be a power of two "
+                            "(the prefixes of a Sobol sequence are balanced only then)")
+    n_max = check_int("n_max", n_max, minimum=n_min, where="sobol_convergence")
+    check_sobol_n(n_min * 2 ** int(np.log2(n_max / n_min)), where="sobol_convergence",
+                  name="the largest sample n_max")
     sizes = [n_min * 2**s for s in range(int(np.log2(n_max / n_min)) + 1)]
     salib = problem.to_salib()
     final = sobol(problem, evaluate, sizes[-1], seed=seed)  # the largest sample, once

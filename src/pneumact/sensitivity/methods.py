@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..errors import PneumactError
+from ..checks import check_int, check_range, check_seed, check_type
+from ..errors import ArgumentError, ArgumentTypeError, PneumactError
 from .problem import Problem
 
 __all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_fast",
@@ -23,6 +24,47 @@ __all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_
 
 Evaluate = Callable[[np.ndarray], pd.DataFrame]
 SRC_MIN_R2 = 0.7  # below this the linear regression explains too little for SRC to mean much
+#: Smallest samples each method accepts. Sobol: Saltelli's scheme on a Sobol sequence,
+#: whose balance needs a power of two; below 8 the bootstrap has nothing to resample.
+#: Morris: σ of the elementary effects needs two trajectories. SRC: the regression has
+#: k + 1 coefficients, so 2·(k + 1) runs leave as many residual degrees of freedom (with
+#: fewer, R² → 1 whatever the model). RBD-FAST: 2·M + 1 points resolve M = 10 harmonics
+#: (SALib's default); 4·M leaves the estimate room.
+MIN_SOBOL_N = 8
+MIN_MORRIS_TRAJECTORIES = 2
+MIN_RBD_FAST_N = 40
+
+
+def check_sobol_n(n, *, where: str = "sobol", name: str = "n") -> int:
+    """A Sobol base sample size: a power of two >= MIN_SOBOL_N."""
+    n = check_int(name, n, minimum=MIN_SOBOL_N, where=where)
+    if n & (n - 1):
+        low = 1 << (n.bit_length() - 1)
+        raise ArgumentError(f"{where + ': ' if where else ''}{name} = {n}: must be a power of "
+                            f"two (the Sobol sequence is balanced only then): {low} or "
+                            f"{2 * low}")
+    return n
+
+
+def check_src_n(n, k: int, *, where: str = "src", name: str = "n") -> int:
+    """An SRC sample size: >= 2·(k + 1) for k parameters."""
+    minimum = 2 * (k + 1)
+    n = check_int(name, n, where=where)
+    if n < minimum:
+        raise ArgumentError(f"{where + ': ' if where else ''}{name} = {n}: must be >= "
+                            f"{minimum} = 2·(k + 1) for k = {k} parameters (with fewer runs "
+                            "the regression fits the sample exactly, R² → 1, whatever the "
+                            "model)")
+    return n
+
+
+def _check_study(where: str, problem, evaluate, seed) -> None:
+    check_type("problem", problem, Problem, where=where,
+               what="a Problem (e.g. sa.Problem.around(params, {...}))")
+    if not callable(evaluate):
+        raise ArgumentTypeError(f"{where}: evaluate = {evaluate!r}: must be a function of the "
+                                "sample (e.g. sa.model_outputs(...))")
+    check_seed("seed", seed, where=where)
 
 
 class SensitivityWarning(UserWarning):
@@ -106,8 +148,13 @@ def sobol(problem: Problem, evaluate: Evaluate, n: int = 1024, second_order: boo
     from SALib.analyze import sobol as analyze
     from SALib.sample import sobol as sample
 
+    _check_study("sobol", problem, evaluate, seed)
+    n = check_sobol_n(n)
+    check_int("resamples", resamples, minimum=1, where="sobol")
+    check_range("conf_level", conf_level, 0.0, 1.0, low_open=True, high_open=True,
+                where="sobol")
     salib = problem.to_salib()
-    x = sample.sample(salib, n, calc_second_order=second_order, seed=seed)
+    x = sample.sample(salib, n, calc_second_order=bool(second_order), seed=seed)
     outputs = _evaluate(problem, evaluate, x)
     rows = []
     for column in outputs.columns:
@@ -153,6 +200,11 @@ def morris(problem: Problem, evaluate: Evaluate, trajectories: int = 20, levels:
     from SALib.analyze import morris as analyze
     from SALib.sample import morris as sample
 
+    _check_study("morris", problem, evaluate, seed)
+    trajectories = check_int("trajectories", trajectories, minimum=MIN_MORRIS_TRAJECTORIES,
+                             where="morris")
+    levels = check_int("levels", levels, minimum=2, where="morris")
+    check_int("resamples", resamples, minimum=1, where="morris")
     salib = problem.to_salib()
     x = sample.sample(salib, trajectories, num_levels=levels, seed=seed)
     outputs = _evaluate(problem, evaluate, x)
@@ -174,6 +226,8 @@ def rbd_fast(problem: Problem, evaluate: Evaluate, n: int = 1000, seed: int = 0
     from SALib.analyze import rbd_fast as analyze
     from SALib.sample import latin
 
+    _check_study("rbd_fast", problem, evaluate, seed)
+    n = check_int("n", n, minimum=MIN_RBD_FAST_N, where="rbd_fast")
     salib = problem.to_salib()
     x = latin.sample(salib, n, seed=seed)
     outputs = _evaluate(problem, evaluate, x)
@@ -195,6 +249,8 @@ def src(problem: Problem, evaluate: Evaluate, n: int = 500, seed: int = 0,
     R² < 0.7: the linear model then explains too little for the coefficients to rank."""
     from SALib.sample import latin
 
+    _check_study("src", problem, evaluate, seed)
+    n = check_src_n(n, len(problem.names))
     x = latin.sample(problem.to_salib(), n, seed=seed)
     outputs = _evaluate(problem, evaluate, x)
     values = problem.transform(x)

@@ -187,7 +187,11 @@ def kernel_key(spec: KernelSpec) -> str:
     source has changed.
     """
     text = spec.source()
-    memo = cache_dir() / f".{spec.label}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.key"
+    # the memo is per source tree: checkouts sharing one cache must not read each other's
+    # keys (their stamps would match their own files, not this tree's)
+    tree = str(Path(__file__).resolve().parents[1])
+    memo_id = hashlib.sha256(f"{text}\n{tree}".encode()).hexdigest()[:16]
+    memo = cache_dir() / f".{spec.label}-{memo_id}.key"
     try:
         saved = json.loads(memo.read_text(encoding="utf-8"))
         if saved["versions"] == _versions() and saved["stamps"] == _stamps(

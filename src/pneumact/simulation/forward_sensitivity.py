@@ -134,7 +134,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     start = _time.perf_counter()
     y_end = kernel.integrate_rodas4_sens(
         prep.y0, prep.vector, prep.sig, prep.ptr, prep.breakpoints, prep.t_out, solver.rtol,
-        prep.atol, solver.h_init, solver.h_max, solver.max_steps, y_out, out, info, w_ptr,
+        prep.atol, solver.h_init, solver.h_max, prep.max_steps, y_out, out, info, w_ptr,
         w_idx, w_val, needed, s0, s_out)
     wall = _time.perf_counter() - start
     stats = SolverStats.from_info(kernel, info)

@@ -9,18 +9,46 @@ from types import ModuleType
 
 import numpy as np
 
-from ..errors import ExperimentError, ParameterError, SolverError
+from ..checks import (
+    as_instance,
+    check_absolute_pressure,
+    check_finite,
+    check_type,
+    shown,
+)
+from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
 from ..experiments.signals import pack_channels
 from .assembly import Assembly, assemble
+from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
 
-__all__ = ["Prepared", "check_drive", "prepare", "run_kernel", "simulate"]
+__all__ = ["Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
+           "model_stroke", "prepare", "run_kernel", "simulate"]
 
 
-def check_drive(model, experiment: Experiment) -> None:
-    """The experiment's signal must be what the model's valve or drive expects."""
+def check_model(model, where: str = "simulate") -> None:
+    """``model`` must be a model (an Actuator, a FrictionRig, a ClosedLoop)."""
+    if not all(hasattr(model, a) for a in ("parts", "drive_quantity", "channels", "params")):
+        raise ArgumentTypeError(
+            f"{where}: model = {shown(model)}: must be a model, e.g. pa.Actuator(params), "
+            f"pa.FrictionRig(params) or pneumact.control.ClosedLoop(...), not "
+            f"{type(model).__name__}")
+
+
+def check_experiment(experiment, where: str = "simulate") -> None:
+    check_type("experiment", experiment, Experiment, where=where,
+               what="an Experiment, e.g. pa.PressureCycle(), pa.CommandCycle() or "
+                    "pa.experiments.from_csv(path)")
+
+
+def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
+    """The experiment's signal must be what the model's valve or drive expects, with
+    values the model can take (an absolute pressure, a command in [0, 1], a set-point
+    within the stroke)."""
+    check_model(model, where)
+    check_experiment(experiment, where)
     expected = model.drive_quantity
     if experiment.quantity != expected:
         valve = getattr(model, "valve", None)
@@ -28,6 +56,33 @@ def check_drive(model, experiment: Experiment) -> None:
         raise ExperimentError(
             f"experiment '{experiment.name}' drives {experiment.quantity!r}, but the "
             f"{who} of this {type(model).__name__} needs a {expected!r} signal")
+    low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
+    what = f"experiment '{experiment.name}'"
+    if expected == "pressure":
+        for value in (low, high):
+            check_absolute_pressure("its pressure", value, where=what, error=ExperimentError)
+    elif expected == "command" and (low < 0.0 or high > 1.0):
+        raise ExperimentError(f"{what}: its command spans {low:g} to {high:g}; a valve "
+                              "command must stay within [0, 1] (0 vents the chamber, 1 "
+                              "opens it to the reservoir)")
+    elif expected == "position":
+        stroke = model_stroke(model)
+        if stroke is not None and (low < 0.0 or high > stroke):
+            raise ExperimentError(
+                f"{what}: its set-point spans {low * 1e3:g} to {high * 1e3:g} mm; the "
+                f"actuator's stroke is 0 to x_max = {stroke * 1e3:g} mm (positions in m: "
+                "4 mm is 0.004)")
+
+
+def model_stroke(model) -> float | None:
+    """x_max of a model whose plant is an actuator (set-points beyond it are impossible)."""
+    plant = getattr(model, "plant", model)
+    if not hasattr(plant, "valve"):
+        return None
+    try:
+        return float(plant.params["x_max"])
+    except (KeyError, TypeError):
+        return None
 
 
 @dataclass(eq=False)
@@ -43,6 +98,7 @@ class Prepared:
     t_out: np.ndarray
     y0: np.ndarray
     atol: np.ndarray
+    max_steps: int = 0
 
     @property
     def segment_time(self) -> float:
@@ -62,12 +118,30 @@ def _breakpoints(model, experiment: Experiment, channels) -> np.ndarray:
 
 
 def _output_times(experiment: Experiment, t_eval) -> np.ndarray:
-    t_out = experiment.output_times() if t_eval is None else np.asarray(t_eval, dtype=float)
-    if t_out.ndim != 1 or t_out.size == 0 or np.any(np.diff(t_out) < 0) or \
-            t_out[0] < experiment.t_start or t_out[-1] > experiment.t_end:
-        raise ExperimentError(f"t_eval must be a non-empty increasing array within "
-                              f"[{experiment.t_start}, {experiment.t_end}] s")
+    if t_eval is None:
+        return np.ascontiguousarray(experiment.output_times())
+    try:
+        t_out = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentTypeError(f"t_eval = {shown(t_eval)}: must be an array of times [s]"
+                                ) from None
+    allowed = (f"must be a non-empty increasing array of finite times within "
+               f"[{experiment.t_start:g}, {experiment.t_end:g}] s")
+    if t_out.ndim != 1 or t_out.size == 0:
+        raise ExperimentError(f"t_eval has shape {t_out.shape}: {allowed}")
+    bad = np.flatnonzero(~np.isfinite(t_out))
+    if bad.size:
+        raise ExperimentError(f"t_eval[{bad[0]}] = {t_out[bad[0]]}: {allowed}")
+    if np.any(np.diff(t_out) < 0) or t_out[0] < experiment.t_start or \
+            t_out[-1] > experiment.t_end:
+        raise ExperimentError(f"t_eval spans {t_out[0]:g}..{t_out[-1]:g} s: {allowed}")
     return np.ascontiguousarray(t_out)
+
+
+def _output_count(experiment: Experiment, t_eval) -> int:
+    if t_eval is None:
+        return int(experiment.n_points)
+    return int(np.size(t_eval))
 
 
 def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
@@ -80,13 +154,19 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
     parameter values by name (SI) for this run only."""
     check_drive(model, experiment)
     assembly = assemble(model)
+    n_out = len(assembly.output_names)
+    check_memory(simulate_bytes(_output_count(experiment, t_eval), len(assembly.states),
+                                n_out),
+                 f"a run of {_output_count(experiment, t_eval)} output points")
     kernel = assembly.kernel
     vec = assembly.pack() if vector is None else np.array(vector, dtype=float)
     if values:
+        if not isinstance(values, Mapping):
+            raise ArgumentTypeError(f"values = {shown(values)}: must be a mapping of "
+                                    "parameter name -> SI value")
         assembly.check_parameters(list(values), "values")
-        bad = {n: v for n, v in values.items() if not np.isfinite(v)}
-        if bad:
-            raise ParameterError(f"values: {bad} must be finite numbers")
+        values = {n: check_finite(f"values[{n!r}]", v, error=ParameterError)
+                  for n, v in values.items()}
         assembly.update(vec, values)
     else:
         kernel.derive(vec)
@@ -99,14 +179,29 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
         start = np.empty(n)
         kernel.initial_state(bp[0], 0.5 * (bp[0] + bp[1]), vec, sig, ptr, start)
     else:
-        start = np.asarray(y0, dtype=float).copy()
+        try:
+            start = np.asarray(y0, dtype=float).copy()
+        except (TypeError, ValueError):
+            raise ArgumentTypeError(f"y0 = {shown(y0)}: must be an array of {n} initial "
+                                    "states") from None
+        if start.shape == (n,) and not np.all(np.isfinite(start)):
+            raise ExperimentError(f"y0 = {start.tolist()}: every initial state must be finite")
         if start.shape != (n,):
             raise ExperimentError(f"y0 has shape {start.shape}; this model has {n} states: "
                                   f"{', '.join(assembly.state_names)}")
     scales = np.empty(n)
     kernel.state_scales(vec, scales)
     atol = solver.atol_vector(assembly.state_names, scales)
-    return Prepared(assembly, kernel, vec, sig, ptr, bp, t_out, start, atol)
+    return Prepared(assembly, kernel, vec, sig, ptr, bp, t_out, start, atol,
+                    solver.step_limit(bp.size - 1))
+
+
+def checked_solver(solver, where: str = "simulate") -> Solver:
+    """The solver to use: Rodas4() when None, an instance for its class."""
+    if solver is None:
+        return Rodas4()
+    return as_instance("solver", solver, Solver, examples="pa.Rodas4(rtol=1e-6) or "
+                       "pa.DormandPrince()", where=where)
 
 
 def compiled(fn, *args):
@@ -132,7 +227,7 @@ def run_kernel(prep: Prepared, solver: Solver,
     bp = prep.breakpoints
     if chunks <= 1:
         y = fn(prep.y0, prep.vector, prep.sig, prep.ptr, bp, prep.t_out, solver.rtol,
-               prep.atol, solver.h_init, solver.h_max, solver.max_steps, y_out, out, info)
+               prep.atol, solver.h_init, solver.h_max, prep.max_steps, y_out, out, info)
         return y, y_out, out, info
     edges = np.linspace(bp[0], bp[-1], chunks + 1)
     y = prep.y0
@@ -147,7 +242,7 @@ def run_kernel(prep: Prepared, solver: Solver,
         sel = prep.t_out[j0:j1] if c == 0 else prep.t_out[j0:j1][prep.t_out[j0:j1] > lo]
         k0 = j1 - sel.size
         y = fn(y, prep.vector, prep.sig, prep.ptr, seg_bp, sel, solver.rtol, prep.atol, h,
-               solver.h_max, solver.max_steps, y_out[k0:j1], out[k0:j1], info)
+               solver.h_max, prep.max_steps, y_out[k0:j1], out[k0:j1], info)
         for index in counters:
             total[index] += info[index]
         for index in (kernel.INFO_STATUS, kernel.INFO_T, kernel.INFO_H):
@@ -182,12 +277,15 @@ def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_e
     this run without building a new parameter set (fitting loops use it; ranges and
     relations are not re-checked).
     """
-    solver = Rodas4() if solver is None else solver
+    solver = checked_solver(solver)
+    if progress is not None and not callable(progress):
+        raise ArgumentTypeError(f"simulate: progress = {shown(progress)}: must be a function "
+                                "progress(fraction)")
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     n_t = prep.t_out.size
     compiled(getattr(prep.kernel, solver.kernel_function), prep.y0, prep.vector, prep.sig,
              prep.ptr, prep.breakpoints, prep.t_out, solver.rtol, prep.atol, solver.h_init,
-             solver.h_max, solver.max_steps, np.empty((n_t, prep.kernel.NSTATE)),
+             solver.h_max, prep.max_steps, np.empty((n_t, prep.kernel.NSTATE)),
              np.empty((n_t, prep.kernel.NOUT)), np.zeros(prep.kernel.INFO_LENGTH))
     start = _time.perf_counter()
     y_end, y_out, out, info = run_kernel(prep, solver, progress,

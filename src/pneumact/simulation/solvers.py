@@ -8,7 +8,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_int, check_positive, check_range
 from ..errors import ParameterError
+
+
+def _real_or_inf(name: str, value, where: str) -> float:
+    """A number > -inf: inf allowed (no limit), NaN not."""
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or math.isnan(value):
+        check_positive(name, value, where=where, error=ParameterError)  # raises
+    return float(value)
+
+
+#: the step limit of a run unless one is given: this many, or STEPS_PER_SEGMENT per
+#: interval between input breakpoints if that is more (a long measured input: a 2-hour
+#: record at 1 kHz has 7.2 million intervals, each needing at least one step)
+DEFAULT_MAX_STEPS = 5_000_000
+STEPS_PER_SEGMENT = 50
 
 
 @dataclass(frozen=True)
@@ -17,23 +34,41 @@ class Solver:
 
     ``atol`` is a number for every state, a mapping state name -> value, or None for
     ``rtol`` × the typical magnitude of each state (stroke, p_atm, Fs/σ0, ...).
+    ``max_steps`` limits the accepted steps of one run; None (the default) follows the
+    input: DEFAULT_MAX_STEPS, or STEPS_PER_SEGMENT per interval between its breakpoints.
     """
 
     rtol: float = 1e-6
     atol: float | Mapping[str, float] | None = None
     h_init: float = 1e-5
     h_max: float = math.inf
-    max_steps: int = 5_000_000
+    max_steps: int | None = None
     kernel_function = "integrate_rodas4"
     explicit = False
 
     def __post_init__(self):
-        if not (np.isfinite(self.rtol) and 1e-14 <= self.rtol < 1):
-            raise ParameterError(f"solver rtol = {self.rtol}: must be in [1e-14, 1)")
-        if not self.h_init > 0:
-            raise ParameterError(f"solver h_init = {self.h_init}: must be > 0")
-        if not self.h_max > 0:
-            raise ParameterError(f"solver h_max = {self.h_max}: must be > 0")
+        where = type(self).__name__
+        check_range("rtol", self.rtol, 1e-14, 1.0, high_open=True, where=where,
+                    error=ParameterError)
+        check_positive("h_init", self.h_init, unit="s", where=where, error=ParameterError)
+        h_max = _real_or_inf("h_max", self.h_max, where)
+        if not h_max > 0:
+            raise ParameterError(f"{where}: h_max = {h_max:g} s: must be > 0")
+        if self.max_steps is not None:
+            check_int("max_steps", self.max_steps, minimum=1, where=where,
+                      error=ParameterError)
+        atol = self.atol
+        if atol is not None and not isinstance(atol, Mapping):
+            check_positive("atol", atol, where=where, error=ParameterError)
+        elif isinstance(atol, Mapping):
+            for name, value in atol.items():
+                check_positive(f"atol[{name!r}]", value, where=where, error=ParameterError)
+
+    def step_limit(self, n_segments: int) -> int:
+        """The step limit of a run whose input has ``n_segments`` intervals."""
+        if self.max_steps is not None:
+            return int(self.max_steps)
+        return max(DEFAULT_MAX_STEPS, STEPS_PER_SEGMENT * int(n_segments))
 
     def atol_vector(self, state_names: tuple[str, ...], scales: np.ndarray) -> np.ndarray:
         if self.atol is None:
@@ -48,8 +83,6 @@ class Solver:
             base = self.rtol * np.asarray(scales, dtype=float)
             return np.array([self.atol.get(n, b) for n, b in zip(state_names, base,
                                                                   strict=True)])
-        if not self.atol > 0:
-            raise ParameterError(f"solver atol = {self.atol}: must be > 0")
         return np.full(len(state_names), float(self.atol))
 
     def atol_overrides(self, state_names: tuple[str, ...]) -> np.ndarray:

@@ -210,13 +210,19 @@ def validate(model, records: Record | Sequence[Record], *,
              progress: Callable[[int, int], None] | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
     measured input and compare ``signals`` with the measurement."""
+    from ..checks import check_names
     from ..identification import experiment_for
+    from ..io.records import as_records
     from ..simulation import simulate
+    from ..simulation.simulate import check_model, model_stroke
 
-    records = [records] if isinstance(records, Record) else list(records)
-    if not records:
-        raise DataError("validate: give at least one record")
-    signals = tuple(dict.fromkeys(signals))
+    check_model(model, "validate")
+    records = as_records(records, "validate")
+    signals = tuple(check_names("signals", signals, where="validate", what="signal name",
+                                allow_empty=False))
+    if model_stroke(model) is not None:
+        for record in records:
+            record.check_within_stroke(model_stroke(model), "validate")
     out = []
     for i, record in enumerate(records):
         record.require(signals, "validation")

@@ -30,10 +30,13 @@ import numpy as np
 import pandas as pd
 
 from ...analysis.features import FEATURE_UNITS
-from ...errors import ParameterError, PneumactError
+from ...checks import check_bool, check_int, check_out_dir
+from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
+from ...io.tables import partial_folder, staged_folder
 from ..assembly import assemble
+from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
 from .spec import (
@@ -46,7 +49,7 @@ from .spec import (
     table_hash,
 )
 
-__all__ = ["BatchResult", "simulate_batch"]
+__all__ = ["BatchResult", "check_outputs", "signal_names", "simulate_batch"]
 
 MANIFEST_FORMAT = "pneumact-batch/2"
 MAX_DEFAULT_CHUNK = 250  # rows; keeps progress and checkpoints frequent on big batches
@@ -82,6 +85,31 @@ class BatchResult:
 
 
 # --------------------------------------------------------------------------- planning
+def signal_names(model, experiment) -> list[str]:
+    """The signals a batch of ``model`` under ``experiment`` can keep: its states, then
+    its derived outputs (the drive named after the experiment's quantity)."""
+    assembly = assemble(model)
+    return [*assembly.state_names,
+            *(f"drive_{experiment.quantity}" if n == "drive" else n
+              for n in assembly.output_names if n not in assembly.state_names)]
+
+
+def check_outputs(model, experiment, features=(), signals=(), *, reference: bool = False,
+                  cli: bool = False) -> None:
+    """Refuse unknown feature or signal names (and pressure features of a model without a
+    pressure) before anything runs; ``cli`` names them as the command line's options."""
+    assembly = assemble(model)
+    has_pressure = assembly.signal_source("pressure") is not None
+    try:
+        check_features(features, has_pressure, reference, type(model).__name__)
+        check_names("signal", signals, signal_names(model, experiment))
+    except PneumactError as exc:
+        if cli:
+            raise ArgumentError(f"{'--features' if 'feature' in exc.message else '--signals'}"
+                                f": {exc.message}") from None
+        raise
+
+
 def _plan(model, experiment, table, features, signals, t_eval, solver, reference, y0):
     """(spec, values, runner): the checked batch and its prepared kernel."""
     assembly = assemble(model)
@@ -96,10 +124,8 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
     y0 = None if y0 is None else np.asarray(y0, dtype=float)
     spec = BatchSpec(model, experiment, solver, columns, features, (), t_eval, reference, y0)
     runner = ChunkRunner(spec)  # prepares the kernel (and checks the experiment) up front
-    names = [*assembly.state_names,
-             *(f"drive_{experiment.quantity}" if n == "drive" else n
-               for n in assembly.output_names if n not in assembly.state_names)]
-    spec = replace(spec, signals=check_names("signal", signals or (), names))
+    spec = replace(spec, signals=check_names("signal", signals or (),
+                                             signal_names(model, experiment)))
     runner.spec = spec
     runner.signal_sources = np.array([runner.source_of(n) for n in spec.signals],
                                      dtype=np.int64).reshape(len(spec.signals), 2)
@@ -116,13 +142,35 @@ def _client_for(scheduler):
     if isinstance(scheduler, Client):
         return scheduler, False
     if isinstance(scheduler, str):
+        address = check_scheduler_address(scheduler)
         try:
-            return Client(scheduler, timeout="20s"), True
-        except OSError as exc:
-            raise PneumactError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}"
-                                ) from exc
-    raise ParameterError(f"scheduler = {scheduler!r}: must be an address string "
-                         "('tcp://host:8786') or a distributed.Client")
+            return Client(address, timeout="20s"), True
+        except Exception as exc:  # distributed raises OSError, TimeoutError, ValueError...
+            raise PneumactError(f"cannot reach the Dask scheduler at {scheduler!r}: "
+                                f"{type(exc).__name__}: {exc}") from exc
+    raise ArgumentTypeError(f"scheduler = {scheduler!r}: must be an address string "
+                            "('tcp://host:8786') or a distributed.Client")
+
+
+SCHEDULER_PROTOCOLS = ("tcp", "tls", "ucx", "ws", "wss", "inproc")
+
+
+def check_scheduler_address(address: str, name: str = "scheduler") -> str:
+    """A Dask scheduler address 'tcp://host:port' (or 'host:port'), checked before any
+    connection is tried: what is not an address is refused at once, not after a timeout."""
+    import re
+
+    text = address.strip()
+    protocol, sep, rest = text.partition("://")
+    if not sep:
+        protocol, rest = "tcp", text
+    match = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d{1,5})", rest)
+    if protocol not in SCHEDULER_PROTOCOLS or (protocol != "inproc" and (
+            match is None or not 0 < int(match[2]) < 65536)):
+        raise ArgumentError(
+            f"{name} = {address!r}: not a Dask scheduler address; write "
+            "'tcp://HOST:PORT' (e.g. 'tcp://127.0.0.1:8786', as printed by dask-scheduler)")
+    return f"{protocol}://{rest}"
 
 
 # --------------------------------------------------------------------------- execution
@@ -191,37 +239,95 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     is called after each chunk. ``y0`` fixes the initial state of every run.
     """
     started = _time.perf_counter()
-    solver = Rodas4() if solver is None else solver
-    if resume and out_dir is None:
-        raise ParameterError("resume=True needs out_dir (the directory of the batch to resume)")
+    solver = _checked_solver(solver)
+    resume = check_bool("resume", resume, where="simulate_batch")
+    overwrite = check_bool("overwrite", overwrite, where="simulate_batch")
+    if resume and overwrite:
+        raise ArgumentError("simulate_batch: resume=True and overwrite=True contradict each "
+                            "other: continue the kept runs, or start them again, not both")
+    if (resume or overwrite) and out_dir is None:
+        raise ArgumentError(f"simulate_batch: {'resume' if resume else 'overwrite'}=True "
+                            "needs out_dir (the directory of the batch)")
+    if workers is not None:
+        workers = check_int("workers", workers, minimum=1, where="simulate_batch")
+    if chunk_size is not None:
+        chunk_size = check_int("chunk_size", chunk_size, minimum=1, where="simulate_batch")
+    if progress is not None and not callable(progress):
+        raise ArgumentTypeError(f"simulate_batch: progress = {progress!r}: must be a "
+                                "function progress(done, failed, total)")
+    out = None if out_dir is None else check_out_dir("out_dir", out_dir,
+                                                      where="simulate_batch")
     spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
                                  reference, y0)
     n, n_t = values.shape[0], runner.t_out.size
+    check_memory(batch_bytes(n, len(spec.signals), n_t, len(spec.features)),
+                 f"simulate_batch: {n} sets x {len(spec.signals)} signals x {n_t} times")
     client, own_client = (None, False) if scheduler is None else _client_for(scheduler)
     try:
         n_workers = (max(1, len(client.scheduler_info().get("workers", {}))) if client
-                     else max(1, int(workers) if workers else (os.cpu_count() or 1)))
-        store = None if out_dir is None else ChunkStore(out_dir)
-        if chunk_size is None and store is not None and resume:
-            chunk_size = store.saved_chunk_size()
+                     else workers or (os.cpu_count() or 1))
+        if chunk_size is None and out is not None and resume:
+            chunk_size = (ChunkStore(partial_folder(out)).saved_chunk_size()
+                          or ChunkStore(out).saved_chunk_size())
         if chunk_size is None:
             chunk_size = max(1, min(math.ceil(n / (4 * n_workers)), MAX_DEFAULT_CHUNK))
-        if int(chunk_size) < 1:
-            raise ParameterError(f"chunk_size = {chunk_size}: must be >= 1")
-        chunk_size = int(chunk_size)
-        starts = list(range(0, n, chunk_size))
-        chunks: list[ChunkOutput | None] = [None] * len(starts)
-        if store is not None:
-            manifest = {"format": MANIFEST_FORMAT, "n_rows": n, "chunk_size": chunk_size,
+        run = _Run(spec, values, runner, int(chunk_size), client, n_workers, progress)
+        if out is None:
+            run.execute(None)
+            result = run.result(table)
+        else:
+            manifest = {"format": MANIFEST_FORMAT, "n_rows": n, "chunk_size": run.chunk_size,
                         "table": table_hash(spec.columns, values), **spec.describe()}
-            if store.open(manifest, resume, overwrite):
-                for c, s in enumerate(starts):
-                    chunks[c] = store.read_chunk(c, s, min(chunk_size, n - s), spec.features,
-                                                 spec.signals, n_t)
-        reused = sum(ch is not None for ch in chunks)
-        todo = [c for c, ch in enumerate(chunks) if ch is None]
+            ChunkStore(out).check_previous(manifest, resume, overwrite)
+            with staged_folder(out, resumable=True, resume=resume,
+                               overwrite=overwrite) as stage:
+                store = ChunkStore(stage)
+                run.execute(store, reuse=store.open(manifest))
+                result = run.result(table)
+                store.write_final(result.table, result.units, result.signals, result.time)
+    finally:
+        if own_client:
+            client.close()
+    result.stats = run.stats(started, client)
+    return result
+
+
+def _checked_solver(solver) -> Solver:
+    from ...checks import as_instance
+
+    if solver is None:
+        return Rodas4()
+    return as_instance("solver", solver, Solver, examples="Rodas4() or DormandPrince()",
+                       where="simulate_batch")
+
+
+class _Run:
+    """The chunks of one batch: which are reused, which are computed, and where."""
+
+    def __init__(self, spec, values, runner, chunk_size, client, n_workers, progress):
+        self.spec, self.values, self.runner = spec, values, runner
+        self.chunk_size, self.client, self.n_workers = chunk_size, client, n_workers
+        self.progress = progress
+        n = values.shape[0]
+        self.starts = list(range(0, n, chunk_size))
+        self.chunks: list[ChunkOutput | None] = [None] * len(self.starts)
+        self.todo: list[int] = []
+        self.reused = 0
+        self.compute_wall = self.compute_cpu = 0.0
+
+    def execute(self, store: ChunkStore | None, reuse: bool = False) -> None:
+        spec, values, runner, n = self.spec, self.values, self.runner, self.values.shape[0]
+        n_t = runner.t_out.size
+        chunks, starts, chunk_size = self.chunks, self.starts, self.chunk_size
+        if store is not None and reuse:
+            for c, s in enumerate(starts):
+                chunks[c] = store.read_chunk(c, s, min(chunk_size, n - s), spec.features,
+                                             spec.signals, n_t)
+        self.reused = sum(ch is not None for ch in chunks)
+        self.todo = todo = [c for c, ch in enumerate(chunks) if ch is None]
         done = sum(len(ch) for ch in chunks if ch is not None)
         failed = sum(sum(st != STATUS_OK for st in ch.status) for ch in chunks if ch is not None)
+        progress = self.progress
         if progress is not None:
             progress(done, failed, n)
 
@@ -237,30 +343,34 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
 
         compute_start, cpu_start = _time.perf_counter(), _time.process_time()
         rows_of = {c: values[starts[c]:starts[c] + chunk_size] for c in todo}
-        if client is not None:
-            _run_dask(client, spec, starts, rows_of, todo, finished)
-        elif n_workers == 1 or len(todo) <= 1:
+        if self.client is not None:
+            _run_dask(self.client, spec, starts, rows_of, todo, finished)
+        elif self.n_workers == 1 or len(todo) <= 1:
             for c in todo:
                 finished(c, runner.run(starts[c], rows_of[c]))
         else:
-            _run_threads(runner, starts, rows_of, todo, n_workers, finished)
-        compute_wall = _time.perf_counter() - compute_start
-        compute_cpu = _time.process_time() - cpu_start
-    finally:
-        if own_client:
-            client.close()
-    result = _assemble(table, spec, values, chunks, runner.t_out)
-    computed = sum(len(chunks[c]) for c in todo)
-    result.stats = {
-        "n_sets": n, "failed": int((result.table["status"] != STATUS_OK).sum()),
-        "computed": computed, "computed_chunks": len(todo), "reused_chunks": reused,
-        "chunks": len(starts), "chunk_size": chunk_size, "workers": n_workers,
-        "scheduler": None if client is None else getattr(client.scheduler, "address", None),
-        "steps": int(sum(int(np.sum(chunks[c].steps)) for c in todo)),
-        "wall_time_s": _time.perf_counter() - started, "compute_time_s": compute_wall,
-        "compute_cpu_s": compute_cpu,
-        "sims_per_s": computed / compute_wall if compute_wall > 0 and computed else 0.0,
-    }
-    if store is not None:
-        store.write_final(result.table, result.units, result.signals, result.time)
-    return result
+            _run_threads(runner, starts, rows_of, todo, self.n_workers, finished)
+        self.compute_wall = _time.perf_counter() - compute_start
+        self.compute_cpu = _time.process_time() - cpu_start
+
+    def result(self, table: pd.DataFrame) -> BatchResult:
+        return _assemble(table, self.spec, self.values, self.chunks, self.runner.t_out)
+
+    def stats(self, started: float, client) -> dict[str, Any]:
+        chunks, todo = self.chunks, self.todo
+        computed = sum(len(chunks[c]) for c in todo)
+        statuses = [s for ch in chunks for s in ch.status]
+        wall = self.compute_wall
+        return {
+            "n_sets": self.values.shape[0],
+            "failed": int(sum(s != STATUS_OK for s in statuses)),
+            "computed": computed, "computed_chunks": len(todo),
+            "reused_chunks": self.reused, "chunks": len(self.starts),
+            "chunk_size": self.chunk_size, "workers": self.n_workers,
+            "scheduler": None if client is None else getattr(client.scheduler, "address",
+                                                                 None),
+            "steps": int(sum(int(np.sum(chunks[c].steps)) for c in todo)),
+            "wall_time_s": _time.perf_counter() - started, "compute_time_s": wall,
+            "compute_cpu_s": self.compute_cpu,
+            "sims_per_s": computed / wall if wall > 0 and computed else 0.0,
+        }

@@ -19,11 +19,13 @@ from ..result import SolverStats
 from ..simulate import prepare
 from .spec import BatchSpec
 
-__all__ = ["STATUS_INVALID", "STATUS_OK", "STATUS_SOLVER", "ChunkRunner", "run_chunk"]
+__all__ = ["STATUS_ERROR", "STATUS_INVALID", "STATUS_OK", "STATUS_SOLVER", "ChunkRunner",
+           "run_chunk"]
 
 STATUS_OK = "ok"
 STATUS_INVALID = "invalid"  # a parameter value out of its range, or a broken relation
 STATUS_SOLVER = "solver"  # the integrator failed (step underflow, NaN, max_steps)
+STATUS_ERROR = "error"  # the row's run raised (an exception inside the compiled loop)
 
 
 class ChunkRunner:
@@ -67,24 +69,26 @@ class ChunkRunner:
         spec, prep, kernel = self.spec, self.prep, self.prep.kernel
         values = np.ascontiguousarray(values, dtype=float).reshape(-1, len(spec.columns))
         n, n_t = values.shape[0], prep.t_out.size
-        problems = row_problems(self.base, spec.columns, values)
+        problems = self._problems(values)
         valid = np.array([p is None for p in problems])
         features = np.full((n, N_FEATURES), np.nan)
         signals = np.full((n, len(spec.signals), n_t), np.nan)
         info = np.zeros((n, kernel.INFO_LENGTH))
+        crashed: dict[int, str] = {}
+        try:
+            self._rows(values, valid, features, signals, info)
+        except Exception:  # one row raised inside the compiled loop: run them one by one
+            crashed = self._one_by_one(values, valid, features, signals, info)
         solver = spec.solver
-        kernel.run_rows(prep.vector, self.slot_ptr, self.slot_idx, values, valid,
-                        self.y0_given, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
-                        True if solver.explicit else None, solver.rtol, self.atol_given,
-                        solver.h_init, solver.h_max, solver.max_steps, self.sources,
-                        self.ref_t, self.ref_x, len(spec.features) > 0, features,
-                        self.signal_sources, signals, info)
         status, error = [], []
         for i in range(n):
             stats = SolverStats.from_info(kernel, info[i])
             if problems[i] is not None:
                 status.append(STATUS_INVALID)
                 error.append(problems[i])
+            elif i in crashed:
+                status.append(STATUS_ERROR)
+                error.append(crashed[i])
             elif not stats.ok:
                 status.append(STATUS_SOLVER)
                 error.append(f"{type(solver).__name__} failed at t = {stats.t:.9g} s after "
@@ -96,6 +100,47 @@ class ChunkRunner:
                            status, error, {name: signals[:, k, :] for k, name in
                                            enumerate(spec.signals)},
                            info[:, kernel.INFO_STEPS].astype(np.int64))
+
+
+    def _problems(self, values: np.ndarray) -> list[str | None]:
+        """Why each row is invalid (None: valid), column by column; should the check
+        itself fail on some row, each row is checked alone and that one is invalid."""
+        try:
+            return row_problems(self.base, self.spec.columns, values)
+        except Exception:
+            found: list[str | None] = []
+            for row in values:
+                try:
+                    found.append(row_problems(self.base, self.spec.columns, row[None, :])[0])
+                except Exception as exc:
+                    found.append(f"invalid parameters: {type(exc).__name__}: {exc}")
+            return found
+
+    def _rows(self, values, valid, features, signals, info) -> None:
+        """The compiled loop over ``values`` (results written into the arrays)."""
+        spec, prep, solver = self.spec, self.prep, self.spec.solver
+        prep.kernel.run_rows(prep.vector, self.slot_ptr, self.slot_idx, values, valid,
+                             self.y0_given, prep.sig, prep.ptr, prep.breakpoints, prep.t_out,
+                             True if solver.explicit else None, solver.rtol, self.atol_given,
+                             solver.h_init, solver.h_max, prep.max_steps, self.sources,
+                             self.ref_t, self.ref_x, len(spec.features) > 0, features,
+                             self.signal_sources, signals, info)
+
+    def _one_by_one(self, values, valid, features, signals, info) -> dict[int, str]:
+        """Each valid row in a call of its own: a row that raises is that row's error
+        (its results stay NaN), the others finish."""
+        crashed: dict[int, str] = {}
+        for i in np.flatnonzero(valid):
+            row_f, row_s = features[i:i + 1].copy(), signals[i:i + 1].copy()
+            row_info = np.zeros((1, info.shape[1]))
+            try:
+                self._rows(values[i:i + 1].copy(), valid[i:i + 1].copy(), row_f, row_s,
+                           row_info)
+            except Exception as exc:
+                crashed[int(i)] = f"{type(exc).__name__} in this row's run: {exc}"
+                continue
+            features[i], signals[i], info[i] = row_f[0], row_s[0], row_info[0]
+        return crashed
 
 
 _RUNNERS: dict[str, ChunkRunner] = {}

@@ -67,7 +67,7 @@ class BatchSpec:
                 "atol": solver.atol if not isinstance(solver.atol, Mapping)
                 else dict(sorted(solver.atol.items())),
                 "h_init": solver.h_init, "h_max": repr(solver.h_max),
-                "max_steps": int(solver.max_steps),
+                "max_steps": solver.max_steps,
             },
             "columns": list(self.columns),
             "features": list(self.features),
