@@ -7,9 +7,11 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 from rich.table import Table
+from rich.text import Text
 
-from pneumact.checks import check_int, check_out_dir, check_positive, check_seed
+from pneumact.checks import check_int, check_out_dir, check_positive, check_range, check_seed
 from pneumact.cli.common import (
     Chamber,
     ChamberOption,
@@ -19,6 +21,7 @@ from pneumact.cli.common import (
     ParamsOption,
     Valve,
     ValveOption,
+    WorkersOption,
     build_model,
     err_console,
     figure_writer,
@@ -67,10 +70,36 @@ def _status(what: str):
 
 
 # --------------------------------------------------------------------------- campaign
+#: Exit code of an identification that ran but could not identify every parameter (the
+#: report says why; identified.toml is written only with --partial).
+EXIT_NOT_IDENTIFIED = 3
+
+
+def _plan_table(plan) -> Table:
+    frame = plan.to_pandas()
+    table = Table(title=f"bench plan for {plan.prior.name} (prior within ±"
+                        f"{100 * plan.spread:.0f} %)")
+    columns = {"kind": "kind", "valve": "driven by", "lowest [kPa abs]": "lowest kPa",
+               "ramp rate [kPa/s]": "kPa/s", "expected speed [mm/s]": "mm/s",
+               "duration [s]": "s", "sample rate [Hz]": "Hz"}
+    table.add_column("test")
+    for label in columns.values():
+        table.add_column(label, justify="right")
+    for name, row in frame.iterrows():
+        table.add_row(str(name), *(fmt(row[c], 3) if isinstance(row[c], float) else
+                                   str(row[c]) for c in columns))
+    return table
+
+
 def campaign(
     params: ParamsOption = "vgt-paper",
     out: Annotated[Path, typer.Option(help="Output directory for the records.")] = Path(
         "pneumact-campaign"),
+    plan: Annotated[bool, typer.Option(
+        "--plan", help="Only design the tests: print and write the plan (plan.csv and one "
+                       "set-point CSV per test) for a real bench, simulate nothing.")] = False,
+    spread: Annotated[float, typer.Option(
+        help="How far off the spring and friction values of --params may be [%].")] = 50.0,
     seed: Annotated[int, typer.Option(help="Seed of the measurement noise (>= 0).")] = 0,
     pressure_noise: Annotated[float, typer.Option(
         "--pressure-noise", help="Pressure sensor noise, standard deviation [kPa].")] = 0.02,
@@ -79,64 +108,123 @@ def campaign(
     resolution: Annotated[float, typer.Option(
         help="Position sensor resolution [µm] (0: none).")] = 1.0,
 ) -> None:
-    """Write a synthetic bench campaign (sweep, ramps, presliding) as CSV records."""
+    """Design a bench campaign (sweep, ramps, presliding) for an actuator known roughly as
+    --params, and simulate it as CSV records (or, with --plan, write the plan only)."""
     with user_errors():
-        from pneumact.identification import Noise, synthetic_campaign
+        from pneumact.identification import Noise, design_campaign, synthetic_campaign
 
         check_seed("--seed", seed)
+        check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         for label, value in (("--pressure-noise", pressure_noise),
                              ("--position-noise", position_noise),
                              ("--resolution", resolution)):
             check_positive(label, value, strict=False)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
-        noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
-        with _status("simulating the bench campaign"):
-            records = synthetic_campaign(parameter_set, noise=noise, seed=seed)
-        units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
-        written = write_outputs(out, {f"{r.source}.csv": (lambda p, r=r: r.save(p, units))
-                                      for r in records})
-        table = Table(title=f"synthetic campaign from {parameter_set.name} (seed {seed})")
-        for column in ("record", "kind", "samples", "duration [s]"):
-            table.add_column(column)
-        for r in records:
-            table.add_row(r.source, r.meta["kind"], str(len(r)), fmt(r.time[-1], 4))
-        out_console.print(table)
-        out_console.print(f"wrote {len(written)} records to {out}")
+        designed = design_campaign(parameter_set, spread=spread / 100)
+        writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
+        for test in designed.tests:
+            writers[f"setpoint_{test.name}.csv"] = (
+                lambda p, name=test.name: designed.breakpoints(name).to_csv(p, index=False))
+        if not plan:
+            noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
+            with _status("simulating the bench campaign"):
+                records = synthetic_campaign(parameter_set, designed.tests, noise=noise,
+                                             seed=seed)
+            units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
+            writers.update({f"{r.source}.csv": (lambda p, r=r: r.save(p, units))
+                            for r in records})
+        written = write_outputs(out, writers)
+        out_console.print(_plan_table(designed))
+        for name, purpose in designed.purposes.items():
+            out_console.print(f"  {name}: {purpose}", soft_wrap=True)
+        for note in designed.notes:
+            err_console.print(f"note: {note}", style="yellow", soft_wrap=True)
+        what = "the plan" if plan else f"{len(designed.tests)} simulated records and the plan"
+        out_console.print(f"wrote {what} ({len(written)} files) to {out}")
 
 
 # --------------------------------------------------------------------------- identify
+def _verdict_table(result) -> Table:
+    table = Table(title="identification: " + result.summary())
+    for column in ("parameter", "value", "95 % interval", "unit", "verdict", "reason"):
+        table.add_column(column, overflow="fold")
+    estimates = result.table()
+    for name, row in estimates.iterrows():
+        style = {"identified": "green", "poorly identified": "yellow"}.get(row["verdict"],
+                                                                            "red")
+        table.add_row(str(name), fmt(row["value"], 6),
+                      f"{fmt(row['ci95_low'], 5)} .. {fmt(row['ci95_high'], 5)}",
+                      str(row["unit"]), Text(row["verdict"], style=style),
+                      escape(str(row["reason"])))
+    return table
+
+
 @identify_app.command("paper")
 def identify_paper_command(
     ctx: typer.Context,
     records: RecordsArgument,
     params: ParamsOption = "vgt-paper",
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-identify"),
-    sliding_speed: Annotated[float, typer.Option(
-        "--sliding-speed", help="Speed [mm/s] above which eq. 13 applies (v >> vs).")] = 5.0,
+    chamber: ChamberOption = Chamber.isothermal,
+    spread: Annotated[float, typer.Option(
+        help="How far off the spring and friction values of --params may be [%].")] = 50.0,
+    sliding_speed: Annotated[float | None, typer.Option(
+        "--sliding-speed", help="Fix the speed [mm/s] above which eq. 13 applies (v >> vs) "
+                                "instead of deriving it from vs; it is then only "
+                                "checked.")] = None,
     fit_delta: Annotated[bool, typer.Option(
-        "--fit-delta", help="Also fit the Stribeck exponent delta in stage (c).")] = False,
+        "--fit-delta", help="Also fit the Stribeck exponent delta.")] = False,
+    staged_only: Annotated[bool, typer.Option(
+        "--staged-only", help="Stop after the paper's four stages (fast; their intervals "
+                              "are conditional on the earlier stages).")] = False,
+    partial: Annotated[bool, typer.Option(
+        "--partial", help="Write identified.toml even when some parameters are not "
+                          "identified (they keep the values of --params).")] = False,
+    seed: Annotated[int, typer.Option(help="Seed of the input-noise replicates.")] = 0,
+    workers: WorkersOption = None,
 ) -> None:
-    """The paper's staged identification (section III.2) on bench records named
-    sweep*, ramp* and presliding*."""
+    """Identify the actuator from bench records named sweep*, ramp* and presliding*: the
+    paper's staged procedure (section III.2), then a joint refinement of every spring and
+    friction parameter, intervals that include the noise on the measured inputs, and a
+    verdict per parameter. Exits 3 when a parameter is not identified."""
     with user_errors():
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
+        from pneumact.models import Adiabatic, Isothermal
 
-        check_positive("--sliding-speed", sliding_speed)
+        if sliding_speed is not None:
+            check_positive("--sliding-speed", sliding_speed)
+        check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
+        check_seed("--seed", seed)
+        if workers is not None:
+            check_int("--workers", workers, minimum=1)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
         with _status("identifying") as status:
-            result = identify_paper(recs, parameter_set, sliding_speed=sliding_speed * 1e-3,
-                                    fit_delta=fit_delta,
-                                    progress=lambda s: status.update(f"stage {s}"))
+            result = identify_paper(
+                recs, parameter_set, fit_delta=fit_delta, prior_spread=spread / 100,
+                sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,
+                chamber=Adiabatic() if chamber is Chamber.adiabatic else Isothermal(),
+                refine=not staged_only, seed=seed, workers=workers,
+                progress=lambda stage, fraction: status.update(f"identifying: {stage}"))
         use_agg()
-        written = write_outputs(out, result.writers(call=the_call(ctx)))
-        out_console.print(_estimates_table("identified parameters", result.table()))
+        written = write_outputs(out, result.writers(call=the_call(ctx), partial=partial))
+        out_console.print(_verdict_table(result))
+        for finding in result.diagnostics:
+            style = {"error": "red", "warning": "yellow"}.get(finding.severity, "")
+            err_console.print(Text(finding.line(), style=style), soft_wrap=True)
         for path in written:
             out_console.print(f"wrote {path}")
+        if not result.ok:
+            err_console.print(Text(
+                "not every parameter is identified: " + ("identified.toml holds the "
+                "identified ones and the prior's values for the others (--partial)"
+                if partial else "identified.toml was not written (use --partial to "
+                "write the identified ones)"), style="red"), soft_wrap=True)
+            raise typer.Exit(EXIT_NOT_IDENTIFIED)
 
 
 class DataFormat(StrEnum):

@@ -1,15 +1,25 @@
 """Identification: parameters of an actuator or a friction law from measured records.
 
-- ``identify_paper``: the paper's staged procedure (section III.2) on bench records;
+- ``identify_paper``: the paper's staged procedure (section III.2) on bench records,
+  then a joint refinement, intervals that include the input noise, and a verdict per
+  parameter;
 - ``fit``: any parameters of any model fitted to one or several records (forward
   sensitivities as the Jacobian, shared or per-record parameters, multistart, profile
   likelihood);
 - ``inverse_friction``: friction laws from measured motion and force (IDIM-LS);
-- ``synthetic_campaign`` / ``paper_campaign``: bench tests for the procedure, simulated
-  with realistic measurement noise.
+- ``design_campaign``: the bench tests for an actuator known roughly (a plan a
+  technician can run); ``synthetic_campaign``: those tests simulated with realistic
+  measurement noise (``paper_campaign``: the paper's fixed set of speeds).
 """
 
-from .campaign import BenchTest, Noise, paper_campaign, synthetic_campaign
+from .campaign import (
+    BenchTest,
+    CampaignPlan,
+    Noise,
+    design_campaign,
+    paper_campaign,
+    synthetic_campaign,
+)
 from .estimates import Estimates, linear_least_squares
 from .fit import FitResult, Profile, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
@@ -17,6 +27,7 @@ from .paper import PaperIdentification, StageResult, identify_paper, record_kind
 
 __all__ = [
     "BenchTest",
+    "CampaignPlan",
     "Estimates",
     "FitResult",
     "InverseFriction",
@@ -24,6 +35,7 @@ __all__ = [
     "PaperIdentification",
     "Profile",
     "StageResult",
+    "design_campaign",
     "experiment_for",
     "fit",
     "identify_paper",

@@ -193,8 +193,7 @@ class CampaignPlan:
             rates = np.abs(np.diff(values) / np.diff(times))
             rows.append({
                 "test": test.name, "kind": test.kind,
-                "valve": "pressure regulator (set-point)" if test.valve == "regulator"
-                else "fast valve (pressure steps)",
+                "valve": "regulator" if test.valve == "regulator" else "fast valve",
                 "from [kPa abs]": values[0] * 1e-3,
                 "lowest [kPa abs]": values.min() * 1e-3,
                 "highest [kPa abs]": values.max() * 1e-3,
