@@ -343,3 +343,22 @@ CLI_API_RTOL = 1e-5
 # error 1.5 mm against 338 mm without it
 DITHER_AMPLITUDE = 2.0
 DITHER_FREQUENCY = 5.0
+
+# ------------------------------------------------ features that measure physics (#19)
+# Break-away (sliding line at rest) with sigma0 x0.5 ... x1.5 on the default 20 s cycles:
+# issue #19 asks for 30 Pa; measured spread 9.3 Pa (source, stick-slip), 0.05 Pa (command).
+# The old 50 µm motion threshold gave 290 Pa.
+BREAKAWAY_SIGMA0_SPREAD = 30.0  # Pa
+SIGMA0_FACTORS = (0.5, 0.75, 1.0, 1.25, 1.5)
+SIGMA1_FACTORS = (0.32, 0.66, 1.0, 1.34, 1.68)  # the paper's ±68 % (Fig. 5b)
+# sigma1 acts on the bristles only: on the command valve's 20 s cycle (steady sliding at
+# 9.4·vs) it moves the loop width by 2e-3 Pa (1e-6 relative); allow 1e-4 relative
+SIGMA1_WIDTH_RTOL = 1e-4
+# ... while it moves the presliding travel at the reversal (measured 1.0 %): it is seen
+SIGMA1_PRESLIDING_MIN_CHANGE = 2e-3
+# Known answers at the measured sliding speed v: break-away vacuum (F0 + g(v) + σ2·v)/A_d
+# and loop width 2·(g(v) + σ2·v)/A_d. The speed varies along the window (command valve:
+# it is not a ramp) and g is convex in v, so the mean gap differs from g at the mean
+# speed: measured +0.01 % / −0.03 % at 20 s (9.4 vs), +0.002 % / −1.2 % at 320 s (0.56 vs).
+SLIDING_LEVEL_BREAKAWAY_RTOL = 1e-3  # of the vacuum
+SLIDING_LEVEL_WIDTH_RTOL = 0.02
