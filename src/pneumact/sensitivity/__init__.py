@@ -13,14 +13,6 @@ from .along import (
     plot_convergence,
     sobol_convergence,
 )
-from .conditions import (
-    Condition,
-    ConditionStudy,
-    across_conditions,
-    at_speeds,
-    conditions,
-    where,
-)
 from .dgsm import dgsm, model_gradient
 from .methods import (
     SensitivityWarning,
@@ -39,6 +31,14 @@ from .oat import (
     OneAtATime,
     friction_velocity,
     one_at_a_time,
+)
+from .operating import (
+    Condition,
+    ConditionStudy,
+    across_conditions,
+    at_speeds,
+    conditions,
+    where,
 )
 from .problem import DEFAULT_RANGES, Factor, Problem
 

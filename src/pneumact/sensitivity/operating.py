@@ -31,8 +31,9 @@ import pandas as pd
 
 from ..errors import ParameterError
 
-__all__ = ["FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES", "Condition", "ConditionStudy",
-           "across_conditions", "at_speeds", "conditions", "where"]
+__all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
+           "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
+           "where"]
 
 #: The lowest pressure [Pa abs] of the full pressure cycle (amplitude 1).
 FULL_CYCLE_LOW_PRESSURE = 20e3
