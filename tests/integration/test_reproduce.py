@@ -11,6 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 import reference as ref
+from browser import assert_fits_the_page, needs_browser
 from pneumact.cli import app
 from pneumact.reproduction import reproduce
 from pneumact.statements import STATEMENTS
@@ -120,6 +121,12 @@ def test_fs_and_fc_matter_most_only_below_the_stribeck_velocity(quick):
     ranking = quick.tables["sensitivity_ranking"]
     first = ranking[(ranking["rank"] == 1) & (ranking["feature"] == "breakaway_pressure")]
     assert (first["parameter"] == "Fc").all()  # not σ0: no motion threshold any more
+
+
+@needs_browser
+def test_the_report_fits_a_1280_px_page(quick):
+    found = assert_fits_the_page(quick.report)
+    assert found["tables"] >= len(TABLES) and found["figures"] >= len(FIGURES)
 
 
 def test_identified_parameters_are_close_to_table_one(quick):
