@@ -314,7 +314,7 @@ def _print_oat(study, features) -> None:
 def _print_across(study, feature: str) -> None:
     frame = study.index(feature)
     speeds = study.conditions.set_index("condition")["speed_vs"]
-    key = study._key(None)
+    key = study.default_index
     table = Table(title=f"{study.method}: {key} of {feature} by condition")
     table.add_column("condition")
     table.add_column("v/vs", justify="right")

@@ -155,6 +155,11 @@ class ConditionStudy:
     indices: pd.DataFrame
     results: list = field(default_factory=list)
 
+    @property
+    def default_index(self) -> str:
+        """The index ``index``, ``ranking`` and ``plot`` use unless told (per method)."""
+        return DEFAULT_INDEX[self.method]
+
     def index(self, output: str, index: str | None = None) -> pd.DataFrame:
         """One index of ``output``: a row per condition (by label), a column per parameter."""
         key = self._key(index)
