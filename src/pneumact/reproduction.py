@@ -70,7 +70,7 @@ class Sizes:
     def full(cls) -> Sizes:
         return cls((1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 3e-2, 4e-2), 60.0, 512,
                    512, (5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0),
-                   ("command", "regulator", "source"), 256,
+                   ("command", "regulator", "source"), 128,
                    (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0))
 
     @classmethod
