@@ -357,7 +357,7 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
 
 
 def _statements(parts: _Parts, across, global_study, effects, bias) -> None:
-    from .statements import STATEMENTS, evaluate_statements, summarise
+    from .statements import STATEMENTS, evaluate_statements, statement_texts, summarise
 
     per_condition = evaluate_statements(across, global_study, effects, bias,
                                         fig3_period=FIG3_PERIOD)
@@ -375,12 +375,16 @@ def _statements(parts: _Parts, across, global_study, effects, bias) -> None:
         "condition the reproduction's figures use ('at our cycle': the "
         f"{CYCLE_PERIOD:g} s command cycle, Fig. 3's ±{FIG3_AMPLITUDE_VS:g}·vs sine, the "
         f"identification's {STAGE_B_LOWEST_VS:g}·vs).")
-    parts.table("paper_statements", summary, "The paper's statements and the conditions "
-                                             "in which they hold")
+    texts = statement_texts()
+    parts.table("statement_texts", texts, "The statements: the paper's words and the "
+                                          "criterion we measure each by")
+    parts.table("paper_statements", summary, "Where each statement holds (per valve for the "
+                                             "loops) and where it stops")
+    words = texts.set_index("statement")["paper"]
     for _, row in summary[summary["at our cycle"] == "does not hold"].iterrows():
-        parts.report.note(f"{row['source']}: “{row['paper']}” does not hold at our cycle "
-                          f"({row['valve']} valve where it applies); it holds for "
-                          f"{row['holds for']}, and stops {row['stops']}.")
+        parts.report.note(f"{row['source']}: “{words[row['statement']]}” does not hold at "
+                          f"our cycle. Where it holds: {row['holds for']}; where it stops: "
+                          f"{row['stops']}.")
     parts.table("statement_conditions", per_condition, "Every statement at every condition: "
                 "what was measured, the margin (positive: it holds) and the verdict")
 

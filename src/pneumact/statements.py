@@ -34,7 +34,7 @@ import pandas as pd
 
 __all__ = ["EQ13_FC_RTOL", "STATEMENTS", "VISIBLE", "Statement", "eq13_bias",
            "evaluate_statements", "friction_effects", "loop_changes", "plot_loop_changes",
-           "summarise"]
+           "statement_texts", "summarise"]
 
 #: A change of the loop is visible from this share of the loop's own width on.
 VISIBLE = 0.05
@@ -288,11 +288,18 @@ def evaluate_statements(oat_study, global_study, effects: pd.DataFrame, bias: pd
 
 
 # --------------------------------------------------------------------------- summary
+def statement_texts() -> pd.DataFrame:
+    """One row per statement: where the paper makes it, its words, and our criterion."""
+    return pd.DataFrame([{"statement": s.key, "source": s.source, "paper": s.paper,
+                          "criterion": s.criterion} for s in STATEMENTS])
+
+
 def summarise(per_condition: pd.DataFrame, reference: dict[str, str] | None = None
               ) -> pd.DataFrame:
-    """One row per statement (and valve): the paper's words, the criterion, the range of
-    the axis where it holds, where it stops, and whether it holds at the ``reference``
-    condition of each statement (its label, e.g. the reproduction's own cycle)."""
+    """One row per statement (and valve): the axis of its condition, the range of that
+    axis where it holds, where it stops, and whether it holds at the ``reference``
+    condition of each statement (its label, e.g. the reproduction's own cycle); the words
+    and criteria are in ``statement_texts()``."""
     from .sensitivity import where
 
     reference = reference or {}
@@ -304,7 +311,6 @@ def summarise(per_condition: pd.DataFrame, reference: dict[str, str] | None = No
         span = f"{sub['x'].min():.3g}–{sub['x'].max():.3g}"
         at = sub[sub["condition"] == reference.get(key)]
         rows.append({"statement": key, "source": statement.source,
-                     "paper": statement.paper, "criterion": statement.criterion,
                      "valve": valve or "–", "axis": statement.axis,
                      "holds for": _holds_text(ranges, statement.axis, span, len(sub)),
                      "stops": _stops_text(ranges),

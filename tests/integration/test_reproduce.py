@@ -3,6 +3,7 @@ numbers that were computed."""
 
 from __future__ import annotations
 
+from html import unescape
 from html.parser import HTMLParser
 
 import numpy as np
@@ -23,7 +24,7 @@ FIGURES = ("fig2_friction_velocity", "fig3_friction_variations", "fig5_loops",
 TABLES = ("table_1", "fig3_effects", "oat_runs", "conditions", "fig5_changes",
           "identification", "eq13", "validation_verdicts", "validation_metrics",
           "validation_loops", "sensitivity_ranking", "global_by_condition",
-          "paper_statements", "statement_conditions")
+          "statement_texts", "paper_statements", "statement_conditions")
 
 
 class _Tables(HTMLParser):
@@ -101,9 +102,10 @@ def test_every_statement_is_shown_with_the_conditions_where_it_holds(quick):
     assert {"Fig. 5a", "Fig. 5b", "Fig. 5c", "Fig. 5d, e", "Fig. 5e", "Fig. 5f",
             "Fig. 3"} <= set(summary["source"])
     assert summary["holds for"].str.len().gt(0).all()
-    html = quick.report.read_text(encoding="utf-8")
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    words = quick.tables["statement_texts"].set_index("statement")["paper"]
     for _, row in summary[summary["at our cycle"] == "does not hold"].iterrows():
-        assert f"“{row['paper']}” does not hold at our cycle" in html
+        assert f"“{words[row['statement']]}” does not hold at our cycle" in html
     per = quick.tables["statement_conditions"]
     assert (per["holds"] == (per["margin"] >= 0)).all()
     assert quick.tables["table_1"]["assumed"].any()  # the values the paper lacks

@@ -37,8 +37,8 @@ def reproduce_command(
     for _, row in statements.iterrows():
         at = row["at our cycle"]
         valve = "" if row["valve"] == "–" else f", {row['valve']} valve"
-        line = Text(f"{row['source']} ({row['statement']}{valve}): holds for "
-                    f"{row['holds for']}; stops {row['stops']}; at our cycle: ")
+        line = Text(f"{row['source']} ({row['statement']}{valve}): holds: "
+                    f"{row['holds for']}; stops: {row['stops']}; at our cycle: ")
         line.append(at, style=styles.get(at, "white"))
         out_console.print(line, soft_wrap=True)
     out_console.print(f"wrote {len(result.files)} files to {out} in {result.wall_time:.1f} s; "
