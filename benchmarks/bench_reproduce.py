@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -22,14 +23,20 @@ import time
 from pathlib import Path
 
 
-def run(args: list[str], out: Path) -> float:
-    started = time.perf_counter()
+def _cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def run(args: list[str], out: Path) -> tuple[float, float]:
+    """(wall time, CPU time) of one ``pneumact reproduce`` in a fresh process."""
+    cpu, started = _cpu(), time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "pneumact", "reproduce", *args, "--out",
                            str(out)], capture_output=True, text=True, check=False)
     wall = time.perf_counter() - started
     if proc.returncode != 0:
         raise RuntimeError(f"reproduce {args} failed: {proc.stderr[-2000:]}")
-    return wall
+    return wall, _cpu() - cpu
 
 
 def main(argv=None) -> None:
@@ -44,12 +51,15 @@ def main(argv=None) -> None:
         modes["pneumact reproduce"] = []
     with tempfile.TemporaryDirectory(prefix="pneumact-reproduce-") as tmp:
         for label, extra in modes.items():
-            first = run(extra, Path(tmp) / "warm-up")
-            times = [run(extra, Path(tmp) / f"run{i}") for i in range(args.repeats)]
+            first, _ = run(extra, Path(tmp) / "warm-up")
+            runs = [run(extra, Path(tmp) / f"run{i}") for i in range(args.repeats)]
+            walls = [wall for wall, _ in runs]
+            best = min(runs)
             print(f"\n{label}")
             print(f"  first run (fills the kernel cache if it was cold): {first:.1f} s")
-            print(f"  warm: best {min(times):.1f} s, median {statistics.median(times):.1f} s "
-                  f"of {args.repeats}; load average now {os.getloadavg()[0]:.2f}")
+            print(f"  warm: best {best[0]:.1f} s (CPU {best[1]:.1f} s), median "
+                  f"{statistics.median(walls):.1f} s of {args.repeats}; load average now "
+                  f"{os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":
