@@ -361,3 +361,26 @@ BOUND_REL_TOL = 1e-2
 # the end stops are stiff contacts (k_stop = 1e8 N/m): under the largest preload and
 # pressure force of the generated sets they yield a few µm (rest stop of vgt-paper: 0.33)
 STOP_PENETRATION_TOL = 1e-5
+
+# ------------------------------------------------ features that measure physics (#19)
+# Break-away (sliding line at rest) with sigma0 x0.5 ... x1.5 on the default 20 s cycles:
+# issue #19 asks for 30 Pa; measured spread 9.3 Pa (source, stick-slip), 0.05 Pa (command).
+# The old 50 µm motion threshold gave 290 Pa.
+BREAKAWAY_SIGMA0_SPREAD = 30.0  # Pa
+SIGMA0_FACTORS = (0.5, 0.75, 1.0, 1.25, 1.5)
+SIGMA1_FACTORS = (0.32, 0.66, 1.0, 1.34, 1.68)  # the paper's ±68 % (Fig. 5b)
+# sigma1 acts on the bristles only: on the command valve's 20 s cycle (steady sliding at
+# 9.4·vs) it moves the loop width by 2e-3 Pa (1e-6 relative); allow 1e-4 relative
+SIGMA1_WIDTH_RTOL = 1e-4
+# ... while it moves the presliding travel at the reversal (measured 1.0 %): it is seen
+SIGMA1_PRESLIDING_MIN_CHANGE = 2e-3
+# Known answers at the measured sliding speed v: break-away vacuum (F0 + g(v) + σ2·v)/A_d
+# and loop width 2·(g(v) + σ2·v)/A_d. The speed varies along the window (command valve:
+# it is not a ramp) and g is convex in v, so the mean gap differs from g at the mean
+# speed: measured +0.01 % / −0.03 % at 20 s (9.4 vs), +0.002 % / −1.2 % at 320 s (0.56 vs).
+SLIDING_LEVEL_BREAKAWAY_RTOL = 1e-3  # of the vacuum
+SLIDING_LEVEL_WIDTH_RTOL = 0.02
+# A model whose loop is 46 % too narrow (Fc × 0.54, issue #19) still scores a fit % above
+# 95 on the 30 s sweep (measured 98.5 % position, 99.9 % pressure); the verdict must flag it
+MISSED_LOOP_FC_ERROR = 0.46
+MISSED_LOOP_FIT_PERCENT = 95.0

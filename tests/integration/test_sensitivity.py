@@ -159,3 +159,59 @@ def test_local_sensitivities_along_time_match_differences(vgt):
         assert error <= ref.LOCAL_FD_RTOL * np.max(np.abs(differences))
     assert sa.plot_along_time(curves) is not None
     assert sa.plot_along_loop(curves, np.arange(9.0), "pressure [kPa]") is not None
+
+
+def test_indices_across_conditions_follow_the_sliding_speed(vgt):
+    """Slow enough that the loop slides below vs, static friction matters as much as
+    Coulomb friction; well above vs it does not (g(v) → Fc)."""
+    from pneumact import sensitivity as sa
+
+    model = pa.Actuator(vgt)
+    study = sa.across_conditions(model, sa.conditions(periods=[20.0, 320.0]), "oat")
+    speeds = study.conditions.set_index("condition")["speed_vs"]
+    assert speeds["command, 20 s"] > 5 > 1 > speeds["command, 320 s"]
+    width = study.index("loop_width_pressure")
+    assert width.loc["command, 20 s", "Fs"] < 0.01 * width.loc["command, 20 s", "Fc"]
+    assert width.loc["command, 320 s", "Fs"] > 0.5 * width.loc["command, 320 s", "Fc"]
+    ranking = study.ranking("loop_width_pressure")
+    assert ranking.loc["command, 320 s", "rank 1"] in ("Fc", "Fs")
+    assert set(study.indices["condition"]) == set(speeds.index)
+    assert study.plot("loop_width_pressure") is not None
+
+
+def test_conditions_at_wanted_sliding_speeds(vgt):
+    from pneumact import sensitivity as sa
+
+    model = pa.Actuator(vgt)
+    targets = [2 * vgt["vs"], 10 * vgt["vs"]]
+    found = sa.at_speeds(model, targets, valve="regulator")
+    for condition, target in zip(found, targets, strict=True):
+        run = pa.simulate(condition.model(model), condition.experiment(vgt))
+        speed = run.summary()["sliding_speed"]
+        assert abs(speed / target - 1) <= 0.02
+    assert found[0].period > found[1].period
+
+
+def test_cli_sensitivity_across_conditions(tmp_path, monkeypatch):
+    import pandas as pd
+
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["sensitivity", "oat", "--conditions", "period=20,5min",
+                                 "--conditions", "valve=command", "--out", "study"])
+    assert result.exit_code == 0, result.output
+    conditions = pd.read_csv(tmp_path / "study" / "conditions.csv")
+    assert conditions["period"].tolist() == [20.0, 300.0]
+    assert conditions["speed_vs"].is_monotonic_decreasing
+    indices = pd.read_csv(tmp_path / "study" / "indices.csv")
+    assert {"speed_vs", "output", "parameter", "relative_change"} <= set(indices.columns)
+    for name in ("indices_loop_width_pressure_by_speed.png", "report.html"):
+        assert (tmp_path / "study" / name).exists(), name
+    for bad, message in ((["--conditions", "pace=20"], "AXIS"),
+                         (["--conditions", "speed=3"], "has no unit"),
+                         (["--conditions", "valve=pump"], "allowed"),
+                         (["--conditions", "amplitude=2"], "amplitude = 2.0"),
+                         (["--conditions", "period=20", "--t-end", "10"], "--t-end")):
+        result = runner.invoke(app, ["sensitivity", "oat", *bad, "--out", "bad"])
+        assert result.exit_code == EXIT_USER_ERROR, (bad, result.output)
+        assert message in result.output, (bad, result.output)
+        assert not (tmp_path / "bad").exists()

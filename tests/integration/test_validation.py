@@ -82,3 +82,68 @@ def test_cli_validate_writes_a_report_and_refuses_bad_records(vgt, sweep, tmp_pa
 def test_validate_needs_records(vgt):
     with pytest.raises(DataError, match="at least one record"):
         validate(pa.Actuator(vgt), [])
+
+
+@pytest.fixture(scope="module")
+def presliding(vgt):
+    tests = [t for t in paper_campaign(vgt) if t.kind == "presliding"]
+    return synthetic_campaign(vgt, tests, seed=3)[0]
+
+
+def test_a_model_that_fits_the_time_series_but_misses_the_loop_is_inadequate(vgt, sweep):
+    """Issue #19: Fc 46 % low still scores a high fit %, but the loop is half as wide."""
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    validation = validate(model, sweep, signals=("position", "pressure"),
+                          values={"Fc": (1 - ref.MISSED_LOOP_FC_ERROR) * vgt["Fc"]})
+    metrics = validation.metrics()
+    assert (metrics["fit_percent"] > ref.MISSED_LOOP_FIT_PERCENT).all()  # fit % is fooled
+    assert (metrics["verdict"] == "inadequate").all()
+    verdict = validation.verdicts().iloc[0]
+    assert "loop width in pressure" in verdict["reasons"]
+    assert verdict["loop_width_pressure_error"] > validation.criteria.loop_width
+    right = validate(model, sweep, signals=("position", "pressure")).verdicts()
+    assert right["verdict"].iloc[0] != "inadequate", right["reasons"].iloc[0]
+
+
+def test_each_record_drives_the_valve_it_was_made_with(vgt, sweep, presliding):
+    from pneumact.validation import drive_for
+
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    validation = validate(model, [sweep, presliding])
+    table = validation.verdicts().set_index("record")
+    assert table.loc[sweep.source, "input"] == "setpoint"
+    assert table.loc[sweep.source, "valve"] == "PressureRegulator"
+    assert table.loc[presliding.source, "input"] == "pressure"
+    assert table.loc[presliding.source, "valve"] == "PressureSource"
+    assert drive_for(model, sweep)[0] is model  # the model's own valve when it fits
+    with pytest.raises(DataError, match=r"lacks; it carries pressure, so it can drive "
+                                        r"PressureSource \(--valve source\)"):
+        validate(model, presliding, input="model")
+    with pytest.raises(DataError, match="input = 'command'"):
+        validate(model, presliding, input="command")
+
+
+def test_cli_validate_drives_each_record_its_own_way_and_flags_verdicts(
+        vgt, sweep, presliding, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for record in (sweep, presliding):
+        record.save(tmp_path / "bench" / f"{record.source}.csv",
+                    units={"pressure": "kPa", "position": "mm", "setpoint": "kPa"})
+    result = runner.invoke(app, ["validate", "bench", "--out", "val"])
+    assert result.exit_code == 0, result.output
+    assert "driven by its pressure, PressureSource" in result.output
+    assert "driven by its setpoint, PressureRegulator" in result.output
+    metrics = pd.read_csv(tmp_path / "val" / "metrics.csv")
+    assert "verdict" in metrics.columns
+    result = runner.invoke(app, ["validate", "bench", "--valve", "regulator", "--out", "bad"])
+    assert result.exit_code == EXIT_USER_ERROR
+    assert "--valve source" in result.output
+    assert not (tmp_path / "bad").exists()
+    wrong = pa.write_params(vgt.replace(Fc=(1 - ref.MISSED_LOOP_FC_ERROR) * vgt["Fc"]),
+                            tmp_path / "wrong.toml")
+    result = runner.invoke(app, ["validate", "bench/sweep.csv", "--params", str(wrong),
+                                 "--out", "wrong"])
+    assert result.exit_code == 0, result.output
+    assert "inadequate" in result.output
+    html = (tmp_path / "wrong" / "report.html").read_text(encoding="utf-8")
+    assert "the model is inadequate for this record" in html

@@ -80,25 +80,82 @@ def test_stroke_is_max_minus_min():
     assert features.stroke([0.0, 0.003, -0.001, 0.002]) == pytest.approx(0.004)
 
 
-def test_breakaway_ignores_presliding_and_finds_motion():
+def test_breakaway_is_where_the_sliding_line_leaves_the_rest_position():
+    # Coulomb play: the falling branch x = ((p_atm − p)·A − F0 − Fc)/k meets x = 0 at a
+    # vacuum of (F0 + Fc)/A, whatever the sampling
+    time, p, x = coulomb_play()
+    expected = P_ATM - (PRELOAD + COULOMB) / AREA
+    assert features.breakaway_pressure(time, p, x) == pytest.approx(expected, rel=REL_TOL)
+
+
+def test_breakaway_does_not_see_presliding_creep():
+    # the same loop with a creep of up to 0.3 mm (three times LuGre's) before sliding:
+    # a motion threshold would follow it, the sliding line does not
+    time, p, x = coulomb_play()
+    vacuum = (P_ATM - p) * AREA - PRELOAD
+    creep = np.where(np.arange(p.size) < SAMPLES_PER_BRANCH,
+                     3e-4 * np.clip(vacuum / COULOMB, 0.0, 1.0), 0.0)
+    crept = np.maximum(x, creep)
+    expected = P_ATM - (PRELOAD + COULOMB) / AREA
+    assert features.breakaway_pressure(time, p, crept) == pytest.approx(expected,
+                                                                        rel=REL_TOL)
+    onset = features.motion_onset_pressure(time, p, crept, threshold=1e-4)
+    assert P_ATM - onset < (PRELOAD + COULOMB) / AREA - 100.0  # fooled by the creep
+
+
+def test_motion_onset_finds_the_threshold_crossing():
     time = np.linspace(0.0, 10.0, 1001)
     pressure = P_HIGH - 8e3 * time  # falling 8 kPa/s
-    presliding = 30e-6 * np.clip(time / 2.0, 0.0, 1.0)  # 30 µm creep, not motion
-    sliding = np.clip(time - 5.0, 0.0, None) * 1e-3  # 1 mm/s from t = 5 s
-    position = presliding + sliding
-    # default threshold: a fraction of the stroke, but never below the minimum
-    threshold = max(features.BREAKAWAY_STROKE_FRACTION * features.stroke(position),
-                    features.BREAKAWAY_MIN_THRESHOLD)
-    assert threshold > 30e-6  # the creep stays below it
-    t_move = 5.0 + (threshold - 30e-6) / 1e-3
-    expected = P_HIGH - 8e3 * t_move
-    assert features.breakaway_pressure(time, pressure, position) == pytest.approx(
-        expected, rel=BREAKAWAY_INTERPOLATION_RTOL)
+    presliding = 30e-6 * np.clip(time / 2.0, 0.0, 1.0)  # 30 µm creep
+    position = presliding + np.clip(time - 5.0, 0.0, None) * 1e-3  # 1 mm/s from t = 5 s
+    threshold = 50e-6
+    expected = P_HIGH - 8e3 * (5.0 + (threshold - 30e-6) / 1e-3)
+    assert features.motion_onset_pressure(time, pressure, position, threshold) == \
+        pytest.approx(expected, rel=BREAKAWAY_INTERPOLATION_RTOL)
+    with pytest.raises(DataError, match="threshold"):
+        features.motion_onset_pressure(time, pressure, position, threshold=-1.0)
 
 
-def test_breakaway_is_nan_without_motion():
+def test_breakaway_is_nan_without_a_loop():
     time = np.linspace(0, 1, 11)
     assert np.isnan(features.breakaway_pressure(time, 1e5 - time, np.full(11, 1e-6)))
+    assert np.isnan(features.motion_onset_pressure(time, 1e5 - time, np.full(11, 1e-6),
+                                                   threshold=1e-5))
+
+
+def test_sliding_speed_of_a_linear_branch():
+    # x = (A/k)·(p_atm − p) + const on the falling branch, p falling at a constant rate
+    time, p, x = coulomb_play()
+    rate = (P_HIGH - P_LOW) / time[SAMPLES_PER_BRANCH - 1]
+    assert features.sliding_speed(time, p, x) == pytest.approx(AREA / STIFFNESS * rate,
+                                                               rel=REL_TOL)
+
+
+def test_presliding_travel_of_a_known_corner():
+    # a play that sticks at the reversal (x held until the pressure has come back by
+    # 2·Fc/A) has a rigid corner; give it a linear presliding compliance c [m/Pa]
+    _, p, x = coulomb_play()
+    turn = SAMPLES_PER_BRANCH - 1
+    stuck = x.copy()
+    stuck[turn:] = np.minimum(x[turn:], x[turn])
+    assert features.presliding_travel(p, stuck) == pytest.approx(0.0, abs=ROUND_OFF_ATOL)
+    compliance = 1e-8  # m/Pa: 8.9 µm over half the 1.78 kPa width
+    corner = stuck.copy()
+    corner[turn:] = np.minimum(x[turn:], x[turn] - compliance * (p[turn:] - P_LOW))
+    width = features.loop_width_pressure(p, corner)
+    assert features.presliding_travel(p, corner) == pytest.approx(compliance * width / 2,
+                                                                  rel=REL_TOL)
+
+
+def test_loop_width_profile_is_the_gap_at_each_position():
+    _, p, x = coulomb_play()
+    profile = features.loop_width_profile(p, x)
+    assert profile.shape == (features.GRID_POINTS,)
+    assert profile == pytest.approx(np.full(profile.size, 2 * COULOMB / AREA), rel=REL_TOL)
+    assert np.mean(profile) == pytest.approx(features.loop_width_pressure(p, x), rel=REL_TOL)
+    outside = features.loop_width_profile(p, x, [-1.0, 0.005])
+    assert np.isnan(outside[0]) and outside[1] == pytest.approx(2 * COULOMB / AREA,
+                                                                rel=REL_TOL)
 
 
 def test_errors_against_reference():
@@ -114,7 +171,8 @@ def test_summary_has_every_feature_with_a_unit():
     time, p, x = coulomb_play()
     summary = features.hysteresis_summary(time, p, x)
     assert set(summary) == {"stroke", "loop_width_pressure", "loop_width_position",
-                            "loop_area", "breakaway_pressure"}
+                            "loop_area", "breakaway_pressure", "sliding_speed",
+                            "presliding_travel"}
     assert set(summary) <= set(features.FEATURE_UNITS)
     assert all(np.isfinite(v) for v in summary.values())
 
@@ -125,6 +183,9 @@ def test_step_response_has_no_loop():
     x = np.where(time < 0.1, 0.0, 0.01)
     assert np.isnan(features.loop_width_pressure(p, x))
     assert np.isnan(features.loop_area(p, x))
+    assert np.isnan(features.breakaway_pressure(time, p, x))
+    assert np.isnan(features.sliding_speed(time, p, x))
+    assert np.isnan(features.presliding_travel(p, x))
 
 
 def test_length_mismatch_is_a_clear_data_error():

@@ -172,3 +172,25 @@ def test_dgsm_of_known_derivatives_and_the_sobol_bound():
     assert table["nu"].to_numpy() == pytest.approx(expected, rel=0.02)
     st = sobol(problem, lambda x: gradient(x)[0], n=2048).table("y")["ST"].to_numpy()
     assert np.all(table["ST_bound"].to_numpy() >= st - ref.SOBOL_ATOL)
+
+
+def test_where_gives_ranges_and_interpolated_boundaries():
+    from pneumact.sensitivity import where
+
+    ranges = where([8.0, 0.5, 2.0, 32.0], [-1.0, 1.0, 1.0, 3.0])  # sorted: 0.5 2 8 32
+    assert ranges[["x_from", "x_to"]].to_numpy().tolist() == [[0.5, 2.0], [32.0, 32.0]]
+    assert np.isnan(ranges["lower"].iloc[0])  # holds from the start of the range studied
+    assert ranges["upper"].iloc[0] == pytest.approx(4.0)  # margin 1 → −1: half-way in log
+    assert ranges["lower"].iloc[1] == pytest.approx(8.0 * 4 ** 0.25)  # −1 → 3: a quarter
+    assert np.isnan(ranges["upper"].iloc[1])
+    assert where([1.0, 2.0], [-1.0, -2.0]).empty
+
+
+def test_conditions_refuse_impossible_cycles():
+    from pneumact.sensitivity import Condition
+
+    for kwargs, message in (({"period": 0.0}, "period"), ({"amplitude": 1.5}, "amplitude"),
+                            ({"valve": "pump"}, "valve")):
+        with pytest.raises(ParameterError, match=message):
+            Condition(**kwargs)
+    assert Condition(80.0, 0.5, "source").label == "source, 80 s, amplitude 0.5"

@@ -63,9 +63,9 @@ def test_loop_measures_of_an_analytic_parallelogram():
     assert m["loop_width_pressure"] == pytest.approx(w, rel=ref.LOOP_RTOL)
     assert m["loop_width_position"] == pytest.approx(c * w, rel=ref.LOOP_RTOL)
     assert m["loop_area"] == pytest.approx(w * stroke, rel=ref.LOOP_RTOL)
-    threshold = max(0.003 * stroke, 50e-6)  # the default motion threshold
-    assert m["breakaway_pressure"] == pytest.approx(
-        ref.PARALLELOGRAM_CENTRE - w / 2 - threshold / c, rel=ref.LOOP_RTOL)
+    # the falling branch's sliding line leaves x = 0 at p0 − w/2
+    assert m["breakaway_pressure"] == pytest.approx(ref.PARALLELOGRAM_CENTRE - w / 2,
+                                                    rel=ref.LOOP_RTOL)
     turns = reversals(t, p, x)
     assert turns["turn"].tolist() == ["minimum"]
     assert turns["pressure"].iloc[0] == pytest.approx(20e3)

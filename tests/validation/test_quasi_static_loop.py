@@ -16,7 +16,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.analysis.features import breakaway_pressure, loop_width_position, loop_width_pressure
+from pneumact.analysis.features import (
+    loop_width_position,
+    loop_width_pressure,
+    motion_onset_pressure,
+)
 from pneumact.experiments.actuator import CommandCycle, PressureCycle
 from pneumact.models import Actuator, CommandValve, CoulombViscous, PressureRegulator
 from pneumact.simulation import Rodas4, simulate
@@ -50,8 +54,8 @@ def test_loop_width_in_position_is_twice_coulomb_over_stiffness(paper_loop, vgt)
 
 def test_motion_starts_at_preload_plus_breakaway_force(paper_loop, vgt):
     threshold = BREAKAWAY_THRESHOLD_FACTOR * vgt["Fs"] / vgt["sigma0"]  # beyond presliding
-    p_break = breakaway_pressure(paper_loop.time, paper_loop["pressure"],
-                                 paper_loop["position"], threshold=threshold)
+    p_break = motion_onset_pressure(paper_loop.time, paper_loop["pressure"],
+                                    paper_loop["position"], threshold=threshold)
     vacuum = vgt["p_atm"] - p_break
     lowest = (vgt["F0"] + vgt["Fc"]) / vgt["A_d"]
     highest = (vgt["F0"] + vgt["Fs"] + vgt["k"] * threshold) / vgt["A_d"]

@@ -8,8 +8,12 @@ from pneumact.analysis.features import (
     loop_area,
     loop_width_position,
     loop_width_pressure,
+    loop_width_profile,
     max_error,
+    motion_onset_pressure,
+    presliding_travel,
     rms_error,
+    sliding_speed,
     stroke,
 )
 
@@ -21,7 +25,11 @@ __all__ = [
     "loop_area",
     "loop_width_position",
     "loop_width_pressure",
+    "loop_width_profile",
     "max_error",
+    "motion_onset_pressure",
+    "presliding_travel",
     "rms_error",
+    "sliding_speed",
     "stroke",
 ]

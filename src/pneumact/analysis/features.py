@@ -1,10 +1,17 @@
 """Scalar features of a pressure–position hysteresis record (SI in, SI out).
 
 These numbers summarise one simulated or measured run: the stroke, the width of the
-hysteresis loop in pressure and in position, the loop area and the pressure at which
-motion starts, and the position error against a reference. They are compiled (numba),
-so the batch engine computes them inside its compiled loop, with no Python lock per
-run, and ``Result.summary()`` runs the very same code.
+hysteresis loop in pressure and in position, the loop area, the break-away pressure, the
+sliding speed and the presliding travel at a reversal, and the position error against a
+reference. They are compiled (numba), so the batch engine computes them inside its
+compiled loop, with no Python lock per run, and ``Result.summary()`` runs the very same
+code.
+
+Each feature measures the actuator, not a threshold: the break-away pressure is where the
+sliding line of a branch meets the position the branch started from (no motion threshold,
+so it does not see the bristle stiffness σ0); the loop width is the pressure gap between
+the branches at stated positions. ``docs/features.md`` gives every definition with the
+conditions under which it means what its name says.
 
 Branches: the record is cut at its pressure turning points (a reversal counts once the
 pressure has come back by more than 10 % of its range, so regulator overshoot or noise
@@ -30,8 +37,12 @@ __all__ = [
     "loop_area",
     "loop_width_position",
     "loop_width_pressure",
+    "loop_width_profile",
     "max_error",
+    "motion_onset_pressure",
+    "presliding_travel",
     "rms_error",
+    "sliding_speed",
     "stroke",
     "turning_points",
 ]
@@ -45,6 +56,8 @@ FEATURE_UNITS: dict[str, str] = {
     "loop_width_position": "m",
     "loop_area": "Pa*m",
     "breakaway_pressure": "Pa",
+    "sliding_speed": "m/s",
+    "presliding_travel": "m",
     "rms_error": "m",
     "max_error": "m",
 }
@@ -56,18 +69,24 @@ F_LOOP_WIDTH_PRESSURE = 3
 F_LOOP_WIDTH_POSITION = 4
 F_LOOP_AREA = 5
 F_BREAKAWAY_PRESSURE = 6
-F_RMS_ERROR = 7
-F_MAX_ERROR = 8
-N_FEATURES = 9
+F_SLIDING_SPEED = 7
+F_PRESLIDING_TRAVEL = 8
+F_RMS_ERROR = 9
+F_MAX_ERROR = 10
+N_FEATURES = 11
 #: Features that need a pressure record, and those that need a reference record.
 PRESSURE_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
-                     "breakaway_pressure")
+                     "breakaway_pressure", "sliding_speed", "presliding_travel")
 REFERENCE_FEATURES = ("rms_error", "max_error")
 
-#: Default motion threshold of ``breakaway_pressure``: this fraction of the stroke ...
-BREAKAWAY_STROKE_FRACTION = 0.003  # 0.3 % of the stroke
-#: ... but at least this much [m], so presliding (tens of µm) is not counted as motion.
-BREAKAWAY_MIN_THRESHOLD = 50e-6  # [m] above LuGre presliding (Fs/σ0 ≈ 32 µm for vgt-paper)
+#: The sliding part of a branch: from this fraction of its travel to that one (counted
+#: from where the branch starts). Gross sliding needs the travel to exceed the presliding
+#: range (≈ 3·Fs/σ0, 0.1 mm for vgt-paper) well before 20 %, and the end stop is only
+#: reached after the branch's last 20 %; the break-away and the sliding speed use it.
+SLIDING_WINDOW = (0.2, 0.8)
+#: The presliding travel is read while the pressure comes back from a reversal by this
+#: fraction of the loop width: the friction then swings from its sliding level to zero.
+PRESLIDING_WIDTH_FRACTION = 0.5
 #: A pressure reversal smaller than this fraction of the range is not a turning point.
 TURN_TOLERANCE = 0.10
 #: A branch spanning at least this fraction of the pressure range is complete.
@@ -97,11 +116,9 @@ def _stroke(x):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _breakaway(p, x, threshold):  # pragma: no cover - compiled
+def _motion_onset(p, x, threshold):  # pragma: no cover - compiled
     """Pressure at the first sample where |x − x[0]| exceeds ``threshold`` (linear
     interpolation with the sample before); NaN if it never does."""
-    if threshold <= 0.0:
-        threshold = max(BREAKAWAY_STROKE_FRACTION * _stroke(x), BREAKAWAY_MIN_THRESHOLD)
     for i in range(1, x.shape[0]):
         after = abs(x[i] - x[0])
         if after > threshold:
@@ -276,6 +293,86 @@ def _loop_width_position(p, x):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _sliding_levels(xb):  # pragma: no cover - compiled
+    """(start, first level, last level) of the sliding window of a branch that moves
+    towards larger x (the falling-pressure branch); levels NaN if it does not move."""
+    start = xb[0]
+    _, top = _span(xb)
+    travel = top - start
+    if not travel > 0.0:
+        return start, math.nan, math.nan
+    return start, start + SLIDING_WINDOW[0] * travel, start + SLIDING_WINDOW[1] * travel
+
+
+@njit(cache=True)
+def _breakaway(p, x):  # pragma: no cover - compiled
+    """Pressure where the sliding line of the last loop's falling branch (p against x,
+    least squares over the sliding window, read where the branch first reaches each of
+    GRID_POINTS positions) meets the position the branch started from; NaN without a
+    loop or when the line does not fall with x."""
+    f0, f1, _, _ = _last_loop(p)
+    if f0 < 0:
+        return math.nan
+    xb, pb = x[f0:f1], p[f0:f1]
+    start, first, last = _sliding_levels(xb)
+    if not math.isfinite(first):
+        return math.nan
+    run = _running(xb)
+    n = 0
+    sx = sp = sxx = sxp = 0.0
+    for i in range(GRID_POINTS):
+        level = first + (last - first) * i / (GRID_POINTS - 1)
+        value = _first_crossing(level, xb, pb, run)
+        if math.isfinite(value):
+            u = level - start
+            n += 1
+            sx += u
+            sp += value
+            sxx += u * u
+            sxp += u * value
+    denominator = n * sxx - sx * sx
+    if n < 2 or denominator <= 0.0:
+        return math.nan
+    slope = (n * sxp - sx * sp) / denominator
+    if not slope < 0.0:
+        return math.nan
+    return (sp - slope * sx) / n  # the line at u = 0: the branch's starting position
+
+
+@njit(cache=True)
+def _sliding_speed(t, p, x):  # pragma: no cover - compiled
+    """Mean speed over the sliding window of the last loop's falling branch: the window's
+    travel over the time the branch takes to cross it."""
+    f0, f1, _, _ = _last_loop(p)
+    if f0 < 0:
+        return math.nan
+    xb, tb = x[f0:f1], t[f0:f1]
+    _, first, last = _sliding_levels(xb)
+    if not math.isfinite(first):
+        return math.nan
+    run = _running(xb)
+    duration = _first_crossing(last, xb, tb, run) - _first_crossing(first, xb, tb, run)
+    return (last - first) / duration if duration > 0.0 else math.nan
+
+
+@njit(cache=True)
+def _presliding_travel(p, x):  # pragma: no cover - compiled
+    """|Δx| on the last loop's rising branch from its low-pressure reversal until the
+    pressure has come back by PRESLIDING_WIDTH_FRACTION of the loop width; NaN without a
+    loop or when the branch starts the record (no reversal)."""
+    f0, _, r0, r1 = _last_loop(p)
+    if f0 < 0 or r0 == 0:
+        return math.nan
+    width = _loop_width_pressure(p, x)
+    if not width > 0.0:
+        return math.nan
+    pb, xb = p[r0:r1], x[r0:r1]
+    run = _running(pb)
+    level = pb[0] + PRESLIDING_WIDTH_FRACTION * width
+    return abs(_first_crossing(level, pb, xb, run) - xb[0])
+
+
+@njit(cache=True)
 def _loop_area(p, x):  # pragma: no cover - compiled
     """|∮ p dx| of the last complete loop, closed by a straight segment (shoelace)."""
     f0, f1, r0, r1 = _last_loop(p)
@@ -329,7 +426,9 @@ def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
         out[F_LOOP_WIDTH_PRESSURE] = _loop_width_pressure(p, x)
         out[F_LOOP_WIDTH_POSITION] = _loop_width_position(p, x)
         out[F_LOOP_AREA] = _loop_area(p, x)
-        out[F_BREAKAWAY_PRESSURE] = _breakaway(p, x, 0.0)
+        out[F_BREAKAWAY_PRESSURE] = _breakaway(p, x)
+        out[F_SLIDING_SPEED] = _sliding_speed(t, p, x)
+        out[F_PRESLIDING_TRAVEL] = _presliding_travel(p, x)
     if has_reference:
         out[F_RMS_ERROR], out[F_MAX_ERROR] = _position_errors(t, x, ref_t, ref_x)
 
@@ -374,28 +473,86 @@ def stroke(position) -> float:
     return float(_stroke(x))
 
 
-def breakaway_pressure(time, pressure, position, threshold: float | None = None) -> float:
-    """Pressure [Pa] at the first instant the position leaves its initial value by more
-    than ``threshold`` [m] (default: 0.3 % of the stroke, at least 50 µm, so presliding is
-    not motion), interpolated linearly between samples; NaN if it never moves."""
+def breakaway_pressure(time, pressure, position) -> float:
+    """Break-away pressure [Pa]: where the sliding line of the loop's falling-pressure
+    branch meets the position that branch started from (at rest, on the default cycle).
+
+    The line is fitted (pressure against position) over 20–80 % of the branch's travel,
+    where the diaphragm slides, and extrapolated back: the onset of gross sliding, with
+    no motion threshold, so the bristle stiffness σ0 and the presliding creep do not move
+    it. In steady sliding its vacuum is (F0 + k·x_start + F_slide)/A_d, F_slide = g(v) +
+    σ2·v at the branch's sliding speed: (F0 + Fc)/A_d when v ≫ vs. NaN without a
+    complete loop. ``time`` is accepted for a uniform signature."""
     _, p, x = _signals(time=time, pressure=pressure, position=position)
-    if threshold is not None and not (np.isfinite(threshold) and threshold > 0):
+    return float(_breakaway(p, x))
+
+
+def motion_onset_pressure(time, pressure, position, threshold: float) -> float:
+    """Pressure [Pa] at the first instant the position leaves its initial value by more
+    than ``threshold`` [m], interpolated linearly between samples; NaN if it never does.
+
+    This is a threshold measure: with LuGre friction the presliding creep runs to about
+    3·Fs/σ0 before gross sliding, so below that the result follows σ0 and the threshold
+    rather than the friction level (use ``breakaway_pressure`` for that)."""
+    _, p, x = _signals(time=time, pressure=pressure, position=position)
+    if not (np.isfinite(threshold) and threshold > 0):
         raise DataError(f"threshold = {threshold} m; must be a finite length > 0")
-    return float(_breakaway(p, x, 0.0 if threshold is None else float(threshold)))
+    return float(_motion_onset(p, x, float(threshold)))
+
+
+def sliding_speed(time, pressure, position) -> float:
+    """Mean speed [m/s] of the loop's falling-pressure branch over 20–80 % of its travel
+    (the window of the break-away line): the speed the loop's friction is measured at;
+    divide by vs to say in which regime of the Stribeck curve the loop lies."""
+    t, p, x = _signals(time=time, pressure=pressure, position=position)
+    return float(_sliding_speed(t, p, x))
+
+
+def presliding_travel(pressure, position) -> float:
+    """Position travel [m] after the loop's low-pressure reversal while the pressure comes
+    back by half the loop width, i.e. while the friction swings from its sliding level to
+    zero: the presliding compliance of the corner (for LuGre about (g/σ0)·ln 2)."""
+    p, x = _signals(pressure=pressure, position=position)
+    return float(_presliding_travel(p, x))
 
 
 def loop_width_pressure(pressure, position) -> float:
     """Mean pressure gap [Pa] between the falling and rising branch at equal positions
-    (grid over 20–80 % of the stroke; each branch read where it first reaches the
-    position). For Coulomb friction Fc on area A this is 2·Fc/A."""
+    (41 positions over 20–80 % of the loop's travel, each branch read where it first
+    reaches the position; ``loop_width_profile`` gives the gap at each). For Coulomb
+    friction Fc on area A this is 2·Fc/A; for LuGre sliding steadily at speed v it is
+    2·(g(v) + σ2·v)/A, which is 2·Fc/A only while v ≫ vs (see ``sliding_speed``)."""
     p, x = _signals(pressure=pressure, position=position)
     return float(_loop_width_pressure(p, x))
 
 
+def loop_width_profile(pressure, position, positions=None) -> np.ndarray:
+    """Pressure gap [Pa] between the falling and the rising branch of the last loop at
+    each of ``positions`` [m] (default: the grid of ``loop_width_pressure``, 41 points
+    over 20–80 % of the loop's travel); NaN where a branch does not reach a position.
+    The loop width as a function of position: near the ends it shows the presliding
+    corners and the end stops, in the middle the sliding friction 2·F_slide/A_d."""
+    p, x = _signals(pressure=pressure, position=position)
+    f0, f1, r0, r1 = _last_loop(p)
+    if f0 < 0:
+        size = GRID_POINTS if positions is None else np.size(positions)
+        return np.full(size, np.nan)
+    if positions is None:
+        lo = min(x[f0:f1].min(), x[r0:r1].min())
+        hi = max(x[f0:f1].max(), x[r0:r1].max())
+        positions = np.linspace(lo + (hi - lo) * POSITION_GRID[0],
+                                lo + (hi - lo) * POSITION_GRID[1], GRID_POINTS)
+    levels = np.atleast_1d(np.asarray(positions, dtype=float))
+    falling, rising = (x[f0:f1], p[f0:f1]), (x[r0:r1], p[r0:r1])
+    runs = _running(falling[0]), _running(rising[0])
+    return np.array([_first_crossing(level, *rising, runs[1])
+                     - _first_crossing(level, *falling, runs[0]) for level in levels])
+
+
 def loop_width_position(pressure, position) -> float:
     """Mean position gap [m] between the falling and rising branch at equal pressures
-    (grid over the middle 60 % of the pressure range). For Coulomb friction Fc and
-    spring stiffness k this is 2·Fc/k."""
+    (grid over the middle 60 % of the pressure range both branches cover). For Coulomb
+    friction Fc and spring stiffness k this is 2·Fc/k (2·F_slide(v)/k in general)."""
     p, x = _signals(pressure=pressure, position=position)
     return float(_loop_width_position(p, x))
 

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.text import Text
 
 from pneumact.checks import check_out_dir, check_seed
 from pneumact.cli.common import ParamsOption, err_console, out_console, the_call, user_errors
@@ -21,8 +22,9 @@ def reproduce_command(
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-paper"),
 ) -> None:
     """Reproduce the paper: Table I, Figs. 2, 3, 5 and 6, the identification on a
-    synthetic campaign, the sensitivity ranking against the paper's statements; writes
-    OUT/index.html with every table and figure (also as CSV and PNG)."""
+    synthetic campaign, the sensitivity across operating conditions, and every statement
+    of the paper with the conditions in which it holds; writes OUT/index.html with every
+    table and figure (also as CSV and PNG)."""
     with user_errors():
         from pneumact.cli.common import load_quietly
         from pneumact.reproduction import reproduce
@@ -35,8 +37,13 @@ def reproduce_command(
                                call=the_call(ctx),
                                progress=lambda label: status.update(f"reproducing: {label}"))
     statements = result.tables["paper_statements"]
+    styles = {"holds": "green", "does not hold": "red"}
     for _, row in statements.iterrows():
-        verdict = "[green]agrees[/]" if row["agrees"] else "[red]disagrees[/]"
-        out_console.print(f"{row['statement']}: {verdict}: {row['ours']}")
+        at = row["at our cycle"]
+        valve = "" if row["valve"] == "–" else f", {row['valve']} valve"
+        line = Text(f"{row['source']} ({row['statement']}{valve}): holds: "
+                    f"{row['holds for']}; stops: {row['stops']}; at our cycle: ")
+        line.append(at, style=styles.get(at, "white"))
+        out_console.print(line, soft_wrap=True)
     out_console.print(f"wrote {len(result.files)} files to {out} in {result.wall_time:.1f} s; "
                       f"open {result.report}")

@@ -1,4 +1,5 @@
-"""``pneumact sensitivity oat|sobol|morris|src|fast``: sensitivity studies of the actuator."""
+"""``pneumact sensitivity oat|sobol|morris|src|fast``: sensitivity studies of the actuator,
+at one operating condition or across several (``--conditions``)."""
 
 from __future__ import annotations
 
@@ -65,6 +66,15 @@ def _variations(text: str | None) -> dict[str, str] | None:
     return out
 
 
+ConditionsOption = Annotated[list[str] | None, typer.Option(
+    "--conditions",
+    help="Run the study at each operating condition: AXIS=V1,V2,... with AXIS period (s, "
+         "or with a unit: 2min), speed (sliding speed with a unit: 2vs, 1.5mm/s; the "
+         "period is found), amplitude (fraction of the full cycle) or valve (source, "
+         "command, regulator). Repeat for more axes: every combination is run. Indices are "
+         "written and plotted against the sliding speed in units of vs.")]
+
+
 def sensitivity(
     ctx: typer.Context,
     method: Annotated[Method, typer.Argument(help="oat (paper eq. 15), sobol, morris, src "
@@ -93,6 +103,7 @@ def sensitivity(
         "--convergence", help="Sobol: indices and CI widths at n/16, n/8, ... n from the "
                               "same sample.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sample (>= 0).")] = 0,
+    conditions: ConditionsOption = None,
     scheduler: SchedulerOption = None,
     workers: WorkersOption = None,
     resume: ResumeOption = False,
@@ -120,6 +131,9 @@ def sensitivity(
         from pneumact.simulation.batch import check_outputs
 
         check_outputs(actuator, experiment, feature_names, signal_names, cli=True)
+        if conditions and (signal_names or convergence):
+            raise ParameterError("--conditions runs the feature study at each condition; "
+                                 "run --signals and --convergence without it")
         use_agg()
         study = Study(method, actuator, experiment, parameter_set, vary,
                       DEFAULT_N if n is None else n, second_order, seed,
@@ -135,7 +149,11 @@ def sensitivity(
 
         with staged_folder(out, resumable=method is not Method.oat, resume=resume,
                            overwrite=overwrite) as stage:
-            writers = study.features(feature_names, stage, convergence)
+            if conditions:
+                chosen = parse_conditions(conditions, actuator, valve, t_end)
+                writers = study.across(chosen, feature_names, stage)
+            else:
+                writers = study.features(feature_names, stage, convergence)
             grid = np.linspace(experiment.t_start, experiment.t_end, times)
             for signal in signal_names:
                 writers.update(study.signal(signal, grid, stage))
@@ -245,6 +263,27 @@ class Study:
                     lambda f=feature: sa.plot_convergence(table, f))
         return writers
 
+    def across(self, chosen: list, feature_names: list[str], out: Path) -> dict:
+        """Writers of the feature study at each condition: the conditions, the indices
+        against them and one plot per feature (index against v/vs)."""
+        from pneumact import sensitivity as sa
+
+        variations = _variations(self.vary)
+        with batch_progress(f"{self.method.value}: {len(chosen)} conditions") as progress:
+            study = sa.across_conditions(
+                self.model, chosen, self.method.value, variations=variations,
+                features=feature_names, n=self.n, seed=self.seed,
+                second_order=self.second_order, out_dir=out / "runs",
+                progress=None if self.method is Method.oat else progress, **self.batch)
+        for feature in feature_names:
+            _print_across(study, feature)
+        writers = {"conditions.csv": lambda p: study.conditions.to_csv(p, index=False),
+                   "indices.csv": lambda p: study.indices.to_csv(p, index=False)}
+        for feature in feature_names:
+            writers[f"indices_{feature}_by_speed.png"] = figure_writer(
+                lambda f=feature: study.plot(f))
+        return writers
+
     def signal(self, signal: str, grid, out: Path) -> dict:
         """Writers of the signal's indices along time and along the loop, and of its
         local normalised sensitivities."""
@@ -307,6 +346,107 @@ def _print_oat(study, features) -> None:
         for name, value in ranking.items():
             table.add_row(name, fmt(value, 4))
         out_console.print(table)
+
+
+def _print_across(study, feature: str) -> None:
+    frame = study.index(feature)
+    speeds = study.conditions.set_index("condition")["speed_vs"]
+    key = study.default_index
+    table = Table(title=f"{study.method}: {key} of {feature} by condition")
+    table.add_column("condition")
+    table.add_column("v/vs", justify="right")
+    for column in frame.columns:
+        table.add_column(column, justify="right")
+    for label, row in frame.iterrows():
+        table.add_row(label, fmt(speeds[label], 3), *(fmt(v, 3) for v in row))
+    out_console.print(table)
+
+
+def parse_conditions(items: list[str], model, valve: Valve, t_end: float | None) -> list:
+    """The conditions of ``--conditions AXIS=V1,V2 ...`` (every combination of the axes;
+    axes not given: the command's --valve, the period --t-end or 20 s, amplitude 1)."""
+    from pneumact import sensitivity as sa
+
+    axes: dict[str, list] = {}
+    for item in items:
+        axis, sep, values = item.partition("=")
+        axis = axis.strip()
+        if not sep or axis not in CONDITION_AXES or not names(values):
+            raise ParameterError(f"--conditions {item!r}; write AXIS=V1,V2,... with AXIS one "
+                                 f"of {', '.join(CONDITION_AXES)} (e.g. period=20,80,320)")
+        if axis in axes:
+            raise ParameterError(f"--conditions: the axis {axis} is given twice")
+        axes[axis] = [CONDITION_AXES[axis](v, model) for v in names(values)]
+    if "period" in axes and "speed" in axes:
+        raise ParameterError("--conditions: give either periods or sliding speeds, not both")
+    if t_end is not None and ("period" in axes or "speed" in axes):
+        raise ParameterError("--t-end and --conditions period/speed both set the cycle; give "
+                             "the periods in --conditions only")
+    valves = axes.get("valve", [valve.value])
+    amplitudes = axes.get("amplitude", [1.0])
+    if "speed" not in axes:
+        return sa.conditions(axes.get("period", [t_end or 20.0]), amplitudes, valves)
+    return [c for v in valves for a in amplitudes
+            for c in sa.at_speeds(model, axes["speed"], amplitude=a, valve=v)]
+
+
+def _period(text: str, model) -> float:
+    from pneumact.parameters.units import parse_value
+
+    value = parse_value("--conditions period", text if not _bare(text) else f"{text} s", "s")
+    if not value > 0:
+        raise ParameterError(f"--conditions period={text}; must be a duration > 0")
+    return value
+
+
+def _speed(text: str, model) -> float:
+    """A sliding speed [m/s]: '2vs' (times the set's Stribeck velocity) or with a unit."""
+    from pneumact.parameters.units import parse_value
+
+    compact = text.replace(" ", "")
+    if compact.endswith("vs"):
+        factor = compact.removesuffix("vs") or "1"
+        try:
+            value = float(factor) * float(model.params["vs"])
+        except ValueError:
+            raise ParameterError(f"--conditions speed={text}; write a multiple of vs such as "
+                                 "2vs") from None
+    elif _bare(text):
+        raise ParameterError(f"--conditions speed={text} has no unit; write e.g. {text}vs or "
+                             f"{text}mm/s")
+    else:
+        value = parse_value("--conditions speed", text, "m/s")
+    if not value > 0:
+        raise ParameterError(f"--conditions speed={text}; must be > 0")
+    return value
+
+
+def _amplitude(text: str, model) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParameterError(f"--conditions amplitude={text}; give a fraction of the full "
+                             "cycle in (0, 1]") from None
+    return value
+
+
+def _valve(text: str, model) -> str:
+    if text not in {v.value for v in Valve}:
+        raise ParameterError(f"--conditions valve={text}; allowed: "
+                             f"{', '.join(v.value for v in Valve)}")
+    return text
+
+
+def _bare(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+CONDITION_AXES = {"period": _period, "speed": _speed, "amplitude": _amplitude,
+                  "valve": _valve}
 
 
 def _print_indices(study, feature: str) -> None:

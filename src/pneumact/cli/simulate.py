@@ -85,8 +85,9 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
         ("stroke", fmt(summary["stroke"] * 1e3), "mm"),
         ("loop width (pressure)", fmt(summary["loop_width_pressure"] * 1e-3), "kPa"),
         ("loop width (position)", fmt(summary["loop_width_position"] * 1e3), "mm"),
-        ("motion starts at", fmt(start * 1e-3), "kPa abs"),
-        ("motion starts at", fmt((p_atm - start) * 1e-3), "kPa of vacuum"),
+        ("break-away (sliding line at rest)", fmt(start * 1e-3), "kPa abs"),
+        ("break-away (sliding line at rest)", fmt((p_atm - start) * 1e-3), "kPa of vacuum"),
+        ("sliding speed (20-80 % of stroke)", fmt(summary["sliding_speed"] * 1e3), "mm/s"),
         ("solver steps", str(result.meta.get("steps", "n/a")), ""),
         ("wall time", fmt(result.meta.get("wall_time_s", float("nan")), 3), "s"),
     ]

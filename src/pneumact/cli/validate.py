@@ -1,16 +1,21 @@
 """``pneumact validate RECORDS... --out DIR``: the model against measured records.
 
-With ``--train`` records and ``--free`` parameters, fits on the training records first
-and validates on both sets, with the metrics side by side.
+Each record drives the model the way it was made (``--valve auto``, the default: its
+logged set-point through the regulator, else its pressure as a pressure source, else its
+command through the valve). With ``--train`` records and ``--free`` parameters, fits on
+the training records first and validates on both sets, with the metrics side by side.
+Every record gets a verdict that combines fit % with the loop measures and the residuals.
 """
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
@@ -22,7 +27,6 @@ from pneumact.cli.common import (
     ParamsOption,
     RtolOption,
     Valve,
-    ValveOption,
     build_model,
     err_console,
     fit_with_progress,
@@ -36,12 +40,20 @@ from pneumact.cli.common import (
 from pneumact.cli.identify import RecordsArgument
 from pneumact.errors import ParameterError
 
+#: ``--valve`` of validate: the command's valves, or auto (each record picks its own).
+DriveValve = StrEnum("DriveValve", {"auto": "auto", **{v.name: v.value for v in Valve}})
+VERDICT_STYLE = {"adequate": "green", "adequate, residuals not white": "yellow",
+                 "inadequate": "red"}
+
 
 def validate_command(
     ctx: typer.Context,
     records: RecordsArgument,
     params: ParamsOption = "vgt-paper",
-    valve: ValveOption = Valve.regulator,
+    valve: Annotated[DriveValve, typer.Option(
+        help="auto: each record drives the valve it was made with (set-point: regulator, "
+             "else pressure: source, else command: command); or one valve for all "
+             "records.")] = DriveValve.auto,
     friction: FrictionOption = Friction.lugre,
     chamber: ChamberOption = Chamber.isothermal,
     signals: Annotated[str, typer.Option(help="Measured signals to compare.")] = "position",
@@ -64,7 +76,9 @@ def validate_command(
         out = check_out_dir("--out", out)
         wanted = tuple(names(signals, "--signals") or ("position",))
         free_names = names(free, "--free")
-        parameter_set, model = build_model(ModelOptions(params, valve, friction, chamber,
+        chosen = Valve.regulator if valve is DriveValve.auto else Valve(valve.value)
+        drive = "auto" if valve is DriveValve.auto else "model"
+        parameter_set, model = build_model(ModelOptions(params, chosen, friction, chamber,
                                                         rtol=rtol))
         test = read_records(records, p_atm=parameter_set["p_atm"])
         solver = pa.Rodas4(rtol=rtol)
@@ -75,18 +89,29 @@ def validate_command(
         if train:
             training = read_records(train, p_atm=parameter_set["p_atm"])
             result = fit_with_progress(lambda report: train_test(
-                model, training, test, free_names or [], signals=wanted,
+                model, training, test, free_names or [], signals=wanted, input=drive,
                 smooth_input=smooth_input, solver=solver, progress=report))
             written = result.write(out, call=the_call(ctx))
             _print_metrics(result.metrics())
+            _print_verdicts(result.test.verdicts())
         else:
             with err_console.status("simulating the records"):
                 validation = validate(model, test, signals=wanted, solver=solver,
-                                      smooth_input=smooth_input)
+                                      smooth_input=smooth_input, input=drive)
             written = validation.write(out, call=the_call(ctx), parameters=parameter_set)
             _print_metrics(validation.metrics())
+            _print_verdicts(validation.verdicts())
         for path in written:
             out_console.print(f"wrote {path}")
+
+
+def _print_verdicts(frame) -> None:
+    for _, row in frame.iterrows():
+        style = VERDICT_STYLE.get(row["verdict"], "white")
+        line = Text(f"{row['record']} (driven by its {row['input']}, {row['valve']}): ")
+        line.append(row["verdict"], style=style)
+        line.append(f": {row['reasons']}")
+        out_console.print(line, soft_wrap=True)
 
 
 def _print_metrics(frame) -> None:

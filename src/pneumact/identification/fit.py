@@ -256,10 +256,12 @@ def _parameter_names(model) -> frozenset[str]:
 
 
 def _input_name(model) -> str:
+    """The record signal that drives ``model``: its valve's (``models.inputs``), or its
+    drive quantity (a rig's force)."""
+    from ..models.inputs import input_signal
+
     valve = getattr(model, "valve", None)
-    if getattr(valve, "cli_name", "") == "regulator":
-        return "setpoint"
-    return model.drive_quantity
+    return input_signal(valve) if valve is not None else model.drive_quantity
 
 
 # --------------------------------------------------------------------------- results

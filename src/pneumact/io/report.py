@@ -58,6 +58,19 @@ def figure_png(fig, dpi: int = 110) -> bytes:
     return buffer.getvalue()
 
 
+PROSE_LENGTH = 40  # a text cell longer than this many characters is a sentence
+
+
+def _has_prose(frame: pd.DataFrame) -> bool:
+    """Whether a text column of ``frame`` holds a sentence."""
+    for column in frame.columns:
+        values = frame[column]
+        if not pd.api.types.is_numeric_dtype(values) and len(values) and \
+                values.astype(str).str.len().max() > PROSE_LENGTH:
+            return True
+    return False
+
+
 @dataclass
 class Report:
     """An HTML report under construction. ``call``: how it was produced (the command
@@ -84,7 +97,10 @@ class Report:
 
     def table(self, frame: pd.DataFrame, caption: str = "", digits: int = 4,
               index: bool = True) -> Report:
-        html = frame.to_html(index=index, border=0, classes="data", na_rep="–",
+        """A table (wider than the page: it scrolls in its own box); a table with
+        sentences in it is set left-aligned, to be read."""
+        classes = ["data", "prose"] if _has_prose(frame) else ["data"]
+        html = frame.to_html(index=index, border=0, classes=classes, na_rep="–",
                              float_format=lambda v: f"{v:.{digits}g}")
         self.blocks.append(Block("table", html, caption))
         return self

@@ -10,6 +10,7 @@ from .friction import (
     StribeckMap,
     friction_models,
 )
+from .inputs import INPUT_SIGNALS, input_signal, valve_for_signal
 from .pneumatics import (
     Adiabatic,
     ChamberLaw,
@@ -22,8 +23,9 @@ from .rig import FrictionRig
 from .valves import VALVES, CommandValve, PressureRegulator, PressureSource, Valve
 
 __all__ = [
-    "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve",
+    "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve",
     "CoulombViscous", "Dahl", "FrictionModel", "FrictionRig", "Isothermal", "LuGre",
     "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
-    "flow_function_values", "friction_models", "orifice_mass_flow",
+    "flow_function_values", "friction_models", "input_signal", "orifice_mass_flow",
+    "valve_for_signal",
 ]

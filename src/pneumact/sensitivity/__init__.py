@@ -1,6 +1,8 @@
 """Sensitivity analysis (paper section III.A): the one-at-a-time study of eq. 15, and
 global methods (Sobol, Morris, RBD-FAST through SALib; standardised regression
-coefficients, eq. 14) on any function or on the actuator through the batch engine."""
+coefficients, eq. 14) on any function or on the actuator through the batch engine, and
+any of them across operating conditions (cycle period or sliding speed in units of vs,
+amplitude, valve)."""
 
 from .along import (
     along_time,
@@ -30,19 +32,32 @@ from .oat import (
     friction_velocity,
     one_at_a_time,
 )
+from .operating import (
+    Condition,
+    ConditionStudy,
+    across_conditions,
+    at_speeds,
+    conditions,
+    where,
+)
 from .problem import DEFAULT_RANGES, Factor, Problem
 
 __all__ = [
     "DEFAULT_RANGES",
     "PAPER_VARIATIONS",
+    "Condition",
+    "ConditionStudy",
     "Factor",
     "FrictionCurves",
     "OneAtATime",
     "Problem",
     "SensitivityWarning",
     "StudyResult",
+    "across_conditions",
     "along_time",
+    "at_speeds",
     "batch_evaluate",
+    "conditions",
     "dgsm",
     "friction_velocity",
     "local_along_time",
@@ -59,4 +74,5 @@ __all__ = [
     "sobol_convergence",
     "src",
     "src_coefficients",
+    "where",
 ]

@@ -39,19 +39,67 @@ class OneAtATime:
         return varied.groupby("parameter")[column].apply(lambda c: c.abs().max()) \
             .sort_values(ascending=False)
 
-    def plot_loops(self):
-        """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5)."""
+    def plot_loops(self, zoom: bool = False):
+        """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5);
+        with ``zoom`` a row per parameter: the whole loop, the break-away (where the
+        diaphragm leaves rest) and the low-pressure reversal, where σ0, σ1 and vs act."""
         params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
+        if zoom:
+            return self._plot_zoomed(params)
         fig, axes = _panels(len(params))
-        nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
-        p, x = self.signals["pressure"] * 1e-3, self.signals["position"] * 1e3
         for ax, name in zip(axes.ravel(), params, strict=False):
-            ax.plot(p[nominal], x[nominal], "k-", lw=1.2, label="nominal")
-            for i in np.flatnonzero(self.runs["parameter"] == name):
-                change = self.runs["change_%"].iloc[i]
-                ax.plot(p[i], x[i], lw=0.9, label=f"{name} {change:+.3g} %")
+            self._draw(ax, name)
             _label(ax, "pressure [kPa abs]", "position [mm]")
         return _finish(fig, axes, len(params))
+
+    def _draw(self, ax, name: str, window=None) -> None:
+        """The nominal loop and the runs varying ``name`` (kPa, mm); within ``window``
+        ((p_lo, p_hi) kPa) the position axis is fitted to the curves."""
+        nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
+        p, x = self.signals["pressure"] * 1e-3, self.signals["position"] * 1e3
+        rows = [nominal, *np.flatnonzero(self.runs["parameter"] == name)]
+        for i in rows:
+            label = "nominal" if i == nominal else \
+                f"{name} {self.runs['change_%'].iloc[i]:+.3g} %"
+            ax.plot(p[i], x[i], "k-" if i == nominal else "-",
+                    lw=1.2 if i == nominal else 0.9, label=label)
+        if window is not None:
+            inside = (p[rows] >= window[0]) & (p[rows] <= window[1])
+            shown = x[rows][inside]
+            if shown.size:
+                pad = 0.08 * (np.ptp(shown) or 1e-3)
+                ax.set_ylim(shown.min() - pad, shown.max() + pad)
+            ax.set_xlim(*window)
+
+    def _plot_zoomed(self, params: list[str]):
+        import matplotlib.pyplot as plt
+
+        from ..analysis.features import hysteresis_summary
+
+        nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
+        p, x = self.signals["pressure"][nominal], self.signals["position"][nominal]
+        summary = hysteresis_summary(self.time, p, x)
+        width = summary["loop_width_pressure"] * 1e-3
+        breakaway = summary["breakaway_pressure"] * 1e-3
+        turn = float(p.min()) * 1e-3
+        windows = {"whole loop": None,
+                   "at break-away": (breakaway - 0.8 * width, breakaway + 0.8 * width),
+                   "at the reversal": (turn - 0.1 * width, turn + 1.3 * width)}
+        if not np.isfinite(width) or not np.isfinite(breakaway):
+            windows = {"whole loop": None}
+        fig, axes = plt.subplots(len(params), len(windows), squeeze=False,
+                                 figsize=(3.9 * len(windows), 2.9 * len(params)))
+        for row, name in zip(axes, params, strict=True):
+            for ax, (title, window) in zip(row, windows.items(), strict=True):
+                self._draw(ax, name, window)
+                ax.set_title(f"{name}: {title}", fontsize=9)
+                ax.grid(True, alpha=0.3)
+                ax.set_xlabel("pressure [kPa abs]", fontsize=8)
+                ax.set_ylabel("position [mm]", fontsize=8)
+                ax.tick_params(labelsize=7)
+            row[0].legend(fontsize=7)
+        fig.tight_layout()
+        return fig
 
 
 def _panels(n: int):
@@ -130,16 +178,57 @@ class FrictionCurves:
     (the paper's Fig. 3): ``curves[parameter]`` is a list of (label, velocity, friction)."""
 
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]]
+    vs: float = float("nan")
 
-    def plot(self):
+    def plot(self, zoom: bool = False):
+        """One panel per parameter; with ``zoom`` a row per parameter: the whole curve,
+        low speeds (|v| ≤ 4·vs: presliding and the Stribeck drop, where σ0, σ1 and vs
+        act) and the fastest 20 % (the sliding level, where Fc, Fs and σ2 act)."""
         params = list(self.curves)
+        if zoom:
+            return self._plot_zoomed(params)
         fig, axes = _panels(len(params))
         for ax, name in zip(axes.ravel(), params, strict=False):
-            for label, v, f in self.curves[name]:
-                ax.plot(v * 1e3, f, lw=1.2 if label == "nominal" else 0.9,
-                        color="k" if label == "nominal" else None, label=label)
+            self._draw(ax, name)
             _label(ax, "velocity [mm/s]", "friction [N]")
         return _finish(fig, axes, len(params))
+
+    def _draw(self, ax, name: str, window=None) -> None:
+        shown = []
+        for label, v, f in self.curves[name]:
+            ax.plot(v * 1e3, f, lw=1.2 if label == "nominal" else 0.9,
+                    color="k" if label == "nominal" else None, label=label)
+            if window is not None:
+                shown.append(f[(v * 1e3 >= window[0]) & (v * 1e3 <= window[1])])
+        if window is not None:
+            values = np.concatenate(shown)
+            if values.size:
+                pad = 0.08 * (np.ptp(values) or 0.1)
+                ax.set_ylim(values.min() - pad, values.max() + pad)
+            ax.set_xlim(*window)
+
+    def _plot_zoomed(self, params: list[str]):
+        import matplotlib.pyplot as plt
+
+        top = max(float(np.max(v)) for entries in self.curves.values()
+                  for _, v, _ in entries) * 1e3
+        windows = {"whole curve": None}
+        if np.isfinite(self.vs):
+            windows["|v| ≤ 4·vs"] = (-4e3 * self.vs, 4e3 * self.vs)
+        windows["fastest 20 %"] = (0.8 * top, top)
+        fig, axes = plt.subplots(len(params), len(windows), squeeze=False,
+                                 figsize=(3.9 * len(windows), 2.9 * len(params)))
+        for row, name in zip(axes, params, strict=True):
+            for ax, (title, window) in zip(row, windows.items(), strict=True):
+                self._draw(ax, name, window)
+                ax.set_title(f"{name}: {title}", fontsize=9)
+                ax.grid(True, alpha=0.3)
+                ax.set_xlabel("velocity [mm/s]", fontsize=8)
+                ax.set_ylabel("friction [N]", fontsize=8)
+                ax.tick_params(labelsize=7)
+            row[0].legend(fontsize=7)
+        fig.tight_layout()
+        return fig
 
 
 def friction_velocity(params, variations: Mapping[str, object] | None = None, *,
@@ -170,4 +259,4 @@ def friction_velocity(params, variations: Mapping[str, object] | None = None, *,
             entries.append((f"{name} {change:+.3g} %", run["drive_velocity"][keep],
                             run["friction"][keep]))
         curves[name] = entries
-    return FrictionCurves(curves)
+    return FrictionCurves(curves, float(params["vs"]) if "vs" in params else float("nan"))

@@ -1,21 +1,33 @@
 """Validation of a model against measured records: error metrics (RMS, max, NRMSE,
 fit %, R²), hysteresis-loop measures of model and measurement, residual analysis,
-training/test splits, and self-contained HTML reports."""
+verdicts that combine them, training/test splits, and self-contained HTML reports."""
 
 from .friction import FrictionValidation, friction_across_levels, validate_friction
 from .loops import LOOP_MEASURES, compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
-from .validate import RecordValidation, TrainTest, Validation, train_test, validate
+from .validate import (
+    INPUTS,
+    RecordValidation,
+    TrainTest,
+    Validation,
+    drive_for,
+    train_test,
+    validate,
+)
+from .verdicts import Criteria
 
 __all__ = [
+    "INPUTS",
     "LOOP_MEASURES",
     "METRIC_NAMES",
+    "Criteria",
     "FrictionValidation",
     "RecordValidation",
     "TrainTest",
     "Validation",
     "autocorrelation",
     "compare_loops",
+    "drive_for",
     "error_metrics",
     "friction_across_levels",
     "loop_measures",

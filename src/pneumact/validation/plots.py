@@ -88,6 +88,21 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     report.text(f"{len(validation.records)} record(s); compared: "
                 f"{', '.join(validation.signals)}. NRMSE = ‖y − ŷ‖/‖y − ȳ‖, "
                 "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; SI units.")
+    verdicts = validation.verdicts()
+    c = validation.criteria
+    report.text("Verdict per record: fit % alone is not enough (a model whose loop is half "
+                "as wide still follows the stroke). Adequate needs fit % ≥ "
+                f"{c.min_fit_percent:g} for every signal, loop widths within "
+                f"{100 * c.loop_width:g} %, loop area within {100 * c.loop_area:g} %, the "
+                f"break-away within {100 * c.breakaway:g} % of the loop width and the "
+                f"reversal positions within {100 * c.reversal:g} % of the loop width in "
+                f"position; residuals count as white when at most "
+                f"{100 * c.max_lags_outside:g} % of their autocorrelation lags leave the "
+                "white-noise band. Each record drives the model through the input shown.")
+    report.table(verdicts, "Verdict per record, with the value of every check", index=False)
+    for _, row in verdicts[verdicts["verdict"] == "inadequate"].iterrows():
+        report.note(f"{row['record']}: the model is inadequate for this record: "
+                    f"{row['reasons']}.")
     report.table(validation.metrics(), "Error metrics per record and pooled", index=False)
     loops = validation.loops()
     if len(loops):

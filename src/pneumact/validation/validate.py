@@ -1,15 +1,18 @@
 """Validation of a model against measured records (the paper's Fig. 6, for any record).
 
-``validate`` drives the model with each record's measured input (the pressure, or the
-command or set-point through the model's valve), simulates on the record's own time
-grid and compares the measured outputs: error metrics per record and over all records,
-the hysteresis-loop measures of model and measurement, and the residuals (over time,
-against pressure, their autocorrelation). ``train_test`` fits on some records and
-validates on others, with both sets of metrics side by side.
+``validate`` drives the model the way each record was made: by the input the record
+carries (a logged regulator set-point first, else the measured pressure as a pressure
+source, else the valve command; ``input=`` chooses otherwise), simulates on the record's
+own time grid and compares the measured outputs: error metrics per record and over all
+records, the hysteresis-loop measures of model and measurement, the residuals (over time,
+against pressure, their autocorrelation), and a verdict per record that combines fit %
+with the loop measures and the residuals' whiteness (``verdicts``). ``train_test`` fits
+on some records and validates on others, with both sets of metrics side by side.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -20,12 +23,60 @@ import pandas as pd
 
 from ..errors import DataError
 from ..io.records import Record
+from ..models.inputs import INPUT_SIGNALS, input_signal, valve_for_signal
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
+from .verdicts import Criteria, record_verdict, worst_verdict
 
-__all__ = ["RecordValidation", "TrainTest", "Validation", "train_test", "validate"]
+__all__ = ["INPUTS", "RecordValidation", "TrainTest", "Validation", "drive_for", "train_test",
+           "validate"]
 
 ALL_RECORDS = "all records"
+#: How ``validate`` picks each record's input: ``auto`` (the first of setpoint, pressure,
+#: command the record carries, the model's valve changed to the one it drives), ``model``
+#: (the model's own valve, whose input the record must carry), or one signal name.
+INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
+
+
+def _can_drive(record: Record) -> str:
+    carried = [s for s in INPUT_SIGNALS.values() if s in record]
+    if not carried:
+        return "it carries none of setpoint, pressure, command, so it can drive no valve"
+    valves = [f"{valve_for_signal(s).name} (--valve {c})" for c, s in INPUT_SIGNALS.items()
+              if s in carried]
+    return f"it carries {', '.join(carried)}, so it can drive {' or '.join(valves)}"
+
+
+def drive_for(model, record: Record, input: str = "auto"):
+    """(the model behind the valve that ``record`` drives, the record signal that drives
+    it), as ``input`` says (see ``INPUTS``); a model without a valve is driven by its own
+    input quantity."""
+    if input not in INPUTS:
+        raise DataError(f"input = {input!r}; allowed: {', '.join(INPUTS)}")
+    valve = getattr(model, "valve", None)
+    if valve is None or input == "model":
+        signal = model.drive_quantity if valve is None else input_signal(valve)
+        if signal not in record:
+            what = "the model" if valve is None else (
+                f"the model's {valve.name} (--valve {valve.cli_name})")
+            raise DataError(f"{record.source}: {what} is driven by a record's {signal}, "
+                            f"which this record lacks; {_can_drive(record)} (input='auto' "
+                            "or --valve auto picks it)")
+        return model, signal
+    if input == "auto":
+        carried = [s for s in INPUT_SIGNALS.values() if s in record]
+        if not carried:
+            raise DataError(f"{record.source}: {_can_drive(record)}; the record has: time, "
+                            f"{', '.join(record.signals) or '(nothing)'}")
+        signal = carried[0]
+    else:
+        signal = input
+        if signal not in record:
+            raise DataError(f"{record.source}: input = {signal!r}, which this record lacks; "
+                            f"{_can_drive(record)}")
+    if input_signal(valve) == signal:
+        return model, signal
+    return dataclasses.replace(model, valve=valve_for_signal(signal)), signal
 
 
 @dataclass(eq=False)
@@ -36,6 +87,8 @@ class RecordValidation:
     record: Record
     simulated: object
     signals: tuple[str, ...]
+    input: str = ""
+    valve: str = ""
 
     def measured(self, signal: str) -> np.ndarray:
         return self.record[signal]
@@ -87,19 +140,31 @@ class Validation:
     signals: tuple[str, ...]
     values: dict[str, float] = field(default_factory=dict)
     label: str = "validation"
+    criteria: Criteria = field(default_factory=Criteria)
 
     def metrics(self) -> pd.DataFrame:
-        """Per record and signal, plus all records pooled: RMS, max, NRMSE, fit %, R², n."""
+        """Per record and signal, plus all records pooled: RMS, max, NRMSE, fit %, R², n,
+        and the record's verdict (``verdicts()``; pooled: the worst)."""
+        verdicts = self.verdicts().set_index("record")["verdict"]
         rows = []
         for rv in self.records:
             for signal, m in rv.metrics().items():
-                rows.append({"record": rv.name, "signal": signal, **m})
+                rows.append({"record": rv.name, "signal": signal, **m,
+                             "verdict": verdicts[rv.name]})
         for signal in self.signals:
             measured = np.concatenate([rv.measured(signal) for rv in self.records])
             predicted = np.concatenate([rv.predicted(signal) for rv in self.records])
             rows.append({"record": ALL_RECORDS, "signal": signal,
-                         **error_metrics(measured, predicted, f"{ALL_RECORDS}: {signal}")})
-        return pd.DataFrame(rows, columns=["record", "signal", *METRIC_NAMES])
+                         **error_metrics(measured, predicted, f"{ALL_RECORDS}: {signal}"),
+                         "verdict": worst_verdict(verdicts)})
+        return pd.DataFrame(rows, columns=["record", "signal", *METRIC_NAMES, "verdict"])
+
+    def verdicts(self) -> pd.DataFrame:
+        """Per record: the input and valve that drove it, the verdict (adequate,
+        adequate with non-white residuals, inadequate), the reasons, and the value of
+        every check (fit %, loop measure errors, share of residual lags outside the
+        white-noise band); see ``validation.verdicts``."""
+        return pd.DataFrame([record_verdict(rv, self.criteria) for rv in self.records])
 
     def loops(self) -> pd.DataFrame:
         """Loop measures of every record with a loop (record, measure, unit, measured,
@@ -207,9 +272,16 @@ class Validation:
 def validate(model, records: Record | Sequence[Record], *,
              signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
              solver=None, smooth_input: bool = False, label: str = "validation",
+             input: str = "auto", criteria: Criteria | None = None,
              progress: Callable[[int, int], None] | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
-    measured input and compare ``signals`` with the measurement."""
+    measured input and compare ``signals`` with the measurement.
+
+    ``input``: ``auto`` drives each record the way it was made (its set-point through the
+    regulator, else its pressure as a pressure source, else its command through the
+    valve; the model's valve is kept when it is that kind), ``model`` keeps the model's
+    valve, or name the signal (``INPUTS``). ``criteria``: the thresholds of the verdicts.
+    """
     from ..checks import check_names
     from ..identification import experiment_for
     from ..io.records import as_records
@@ -226,14 +298,16 @@ def validate(model, records: Record | Sequence[Record], *,
     out = []
     for i, record in enumerate(records):
         record.require(signals, "validation")
+        driven, signal = drive_for(model, record, input)
         name = os.path.basename(record.source) or f"record {i + 1}"
-        experiment = experiment_for(model, record, smooth_input)
-        simulated = simulate(model, experiment, solver, t_eval=record.time,
+        experiment = experiment_for(driven, record, smooth_input)
+        simulated = simulate(driven, experiment, solver, t_eval=record.time,
                              values=dict(values or {}))
-        out.append(RecordValidation(name, record, simulated, signals))
+        valve = getattr(getattr(driven, "valve", None), "name", "")
+        out.append(RecordValidation(name, record, simulated, signals, signal, valve))
         if progress is not None:
             progress(i + 1, len(records))
-    return Validation(out, signals, dict(values or {}), label)
+    return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
 
 @dataclass(eq=False)
@@ -280,15 +354,30 @@ class TrainTest:
 
 
 def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Sequence[str],
-               *, signals: Sequence[str] = ("position",), **fit_options) -> TrainTest:
+               *, signals: Sequence[str] = ("position",), input: str = "auto",
+               **fit_options) -> TrainTest:
     """Fit ``free`` parameters on ``train`` (``identification.fit`` options), then
-    validate the fitted model on both sets."""
+    validate the fitted model on both sets. With ``input='auto'`` the fit drives the
+    model by the first input every training record carries (setpoint, pressure, command)
+    and each test record by its own (see ``validate``)."""
     from ..identification import fit
 
-    if not list(train) or not list(test):
+    train, test = list(train), list(test)
+    if not train or not test:
         raise DataError("train_test: give at least one training and one test record")
-    result = fit(model, list(train), free, signals=signals, **fit_options)
+    chosen = input
+    if input == "auto":
+        shared = [s for s in INPUT_SIGNALS.values() if all(s in r for r in train)]
+        if not shared:
+            raise DataError("train_test: the training records share no input signal "
+                            "(setpoint, pressure or command); fit records made the same way")
+        chosen = shared[0]
+    model, _ = drive_for(model, train[0], chosen)
+    smooth = fit_options.get("smooth_input", False)
+    result = fit(model, train, free, signals=signals, **fit_options)
     values = {k: v for k, v in result.values.items() if "[" not in k}
     return TrainTest(result,
-                     validate(model, train, signals=signals, values=values, label="training"),
-                     validate(model, test, signals=signals, values=values, label="test"))
+                     validate(model, train, signals=signals, values=values, label="training",
+                              input="model", smooth_input=smooth),
+                     validate(model, test, signals=signals, values=values, label="test",
+                              input=input, smooth_input=smooth))

@@ -1,0 +1,44 @@
+"""README.md's Python API and validation snippets run as written, in order, in a folder
+holding a bench campaign like the one `pneumact campaign --out bench` writes (a sweep,
+ramp pairs, a presliding test): the validation drives each record the way it was made."""
+
+from __future__ import annotations
+
+import re
+import warnings
+from pathlib import Path
+
+import matplotlib
+
+import pneumact as pa
+from pneumact.identification import paper_campaign, synthetic_campaign
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+UNITS = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
+
+
+def _blocks(*first_lines: str) -> list[str]:
+    """The README's Python blocks that contain each of ``first_lines``, in page order."""
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
+    chosen = [b for b in blocks if any(line in b for line in first_lines)]
+    assert len(chosen) == len(first_lines), "a README snippet this test runs has moved"
+    return chosen
+
+
+def test_the_readme_api_and_validation_snippets_run(vgt, tmp_path, monkeypatch):
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    tests = paper_campaign(vgt, speeds=(5e-3, 1e-2, 2e-2), sweep_period=30.0)
+    for record in synthetic_campaign(vgt, tests, seed=5):
+        record.save(tmp_path / "bench" / f"{record.source}.csv", units=UNITS)
+    namespace: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pa.PassivityWarning)  # Table I's σ1, as published
+        for i, block in enumerate(_blocks("import pneumact as pa",
+                                          "from pneumact.validation import validate")):
+            exec(compile(block, f"README.md, snippet {i + 1}", "exec"), namespace)
+    verdicts = namespace["validation"].verdicts().set_index("record")
+    assert verdicts.loc["presliding.csv", "valve"] == "PressureSource"
+    assert verdicts.loc["sweep.csv", "valve"] == "PressureRegulator"
+    assert (tmp_path / "val" / "report.html").exists()
+    assert set(namespace["split"].metrics()["set"]) == {"training", "test"}
