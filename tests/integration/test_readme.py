@@ -1,6 +1,7 @@
-"""README.md's Python API and validation snippets run as written, in order, in a folder
-holding a bench campaign like the one `pneumact campaign --out bench` writes (a sweep,
-ramp pairs, a presliding test): the validation drives each record the way it was made."""
+"""README.md's Python API, identification and validation snippets run as written, in
+order, in a folder holding a bench campaign like the one `pneumact campaign --out bench`
+writes (a sweep, ramp pairs, a presliding test): the identification chooses its records
+by name, and the validation drives each record the way it was made."""
 
 from __future__ import annotations
 
@@ -35,8 +36,11 @@ def test_the_readme_api_and_validation_snippets_run(vgt, tmp_path, monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pa.PassivityWarning)  # Table I's σ1, as published
         for i, block in enumerate(_blocks("import pneumact as pa",
+                                          "ident = pa.identify_paper(records, prior)",
                                           "from pneumact.validation import validate")):
             exec(compile(block, f"README.md, snippet {i + 1}", "exec"), namespace)
+    assert namespace["fitted"].records[0].name.startswith("presliding")
+    assert (tmp_path / "ident" / "report.html").exists()
     verdicts = namespace["validation"].verdicts().set_index("record")
     assert verdicts.loc["presliding.csv", "valve"] == "PressureSource"
     assert verdicts.loc["sweep.csv", "valve"] == "PressureRegulator"

@@ -10,8 +10,7 @@ import pytest
 
 import pneumact as pa
 import reference as ref
-from pneumact.identification import Noise, fit, inverse_friction, paper_campaign
-from pneumact.identification import paper as stages
+from pneumact.identification import Noise, fit, inverse_friction, paper_campaign, stages
 from pneumact.identification.campaign import add_noise, synthetic_campaign
 from pneumact.io.datasets import read_emps, read_tudelft_cylinder
 
@@ -22,8 +21,9 @@ needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data is not be
 
 
 def test_staged_intervals_cover_the_truth(vgt):
-    """Stages (a)-(c) on COVERAGE_SEEDS noise realisations of one simulated campaign."""
-    clean = synthetic_campaign(vgt, noise=Noise(0.0, 0.0, 0.0))
+    """Stages (a)-(c) on COVERAGE_SEEDS noise realisations of one simulated campaign
+    (the paper's fixed speeds and its 5 mm/s threshold of eq. 13)."""
+    clean = synthetic_campaign(vgt, paper_campaign(vgt), noise=Noise(0.0, 0.0, 0.0))
     start = vgt.replace({n: vgt[n] * f for n, f in ref.IDENT_START_FACTORS.items()})
     hits = dict.fromkeys(ref.IDENT_WITHIN_CI, 0)
     for seed in range(ref.COVERAGE_SEEDS):
@@ -31,7 +31,8 @@ def test_staged_intervals_cover_the_truth(vgt):
         sweeps = [r for r in records if r.meta["kind"] == "sweep"]
         spring = stages.stage_spring(sweeps, start)
         current = start.replace(F0=spring.estimates["F0"], k=spring.estimates["k"])
-        segments = stages._segments(records, current)
+        segments = stages.segments_of([r for r in records if r.meta["kind"] != "presliding"],
+                                      current, stages.presliding_range(start))
         sliding = stages.stage_sliding(segments, 5e-3)
         stribeck = stages.stage_stribeck(segments, sliding, current, 5e-3)
         for stage in (spring, sliding, stribeck):

@@ -109,7 +109,8 @@ def campaign(
         help="Position sensor resolution [µm] (0: none).")] = 1.0,
 ) -> None:
     """Design a bench campaign (sweep, ramps, presliding) for an actuator known roughly as
-    --params, and simulate it as CSV records (or, with --plan, write the plan only)."""
+    --params, and simulate it as CSV records; with --plan, write the plan only (plan.csv
+    and the set-point of each test) for a real bench."""
     with user_errors():
         from pneumact.identification import Noise, design_campaign, synthetic_campaign
 
@@ -122,25 +123,25 @@ def campaign(
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         designed = design_campaign(parameter_set, spread=spread / 100)
-        writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
-        for test in designed.tests:
-            writers[f"setpoint_{test.name}.csv"] = (
-                lambda p, name=test.name: designed.breakpoints(name).to_csv(p, index=False))
-        if not plan:
+        if plan:  # the tests, for a real bench
+            writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
+            for test in designed.tests:
+                writers[f"setpoint_{test.name}.csv"] = (
+                    lambda p, name=test.name: designed.breakpoints(name).to_csv(p, index=False))
+        else:  # the tests simulated: a folder of records, nothing else
             noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
             with _status("simulating the bench campaign"):
                 records = synthetic_campaign(parameter_set, designed.tests, noise=noise,
                                              seed=seed)
             units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
-            writers.update({f"{r.source}.csv": (lambda p, r=r: r.save(p, units))
-                            for r in records})
+            writers = {f"{r.source}.csv": (lambda p, r=r: r.save(p, units)) for r in records}
         written = write_outputs(out, writers)
         out_console.print(_plan_table(designed))
         for name, purpose in designed.purposes.items():
             out_console.print(f"  {name}: {purpose}", soft_wrap=True)
         for note in designed.notes:
             err_console.print(f"note: {note}", style="yellow", soft_wrap=True)
-        what = "the plan" if plan else f"{len(designed.tests)} simulated records and the plan"
+        what = "the plan" if plan else f"{len(designed.tests)} simulated records"
         out_console.print(f"wrote {what} ({len(written)} files) to {out}")
 
 

@@ -26,7 +26,7 @@ from ..io.records import Record
 from .inputs import sensor_noise
 
 __all__ = ["Kinematics", "drive_force", "kinematics", "smoothing_window", "steady_segments",
-           "velocity_noise"]
+           "typical_speed", "velocity_noise"]
 
 #: The differentiation window is the shortest whose velocity noise is at most this
 #: fraction of the record's typical speed: a 5 % noise averages to well below 1 % over
@@ -81,6 +81,21 @@ def _window_samples(n_samples: int, dt: float, position_noise: float, speed: flo
     return n
 
 
+def typical_speed(record: Record) -> float:
+    """The record's typical speed [m/s]: the median |v| of the samples that move, over a
+    differentiation window of a fiftieth of the record (0 if nothing moves)."""
+    rec = _uniform(record)
+    dt = float(rec.time[1] - rec.time[0])
+    x = rec["position"]
+    sigma = max(sensor_noise(x), 1e-12 * max(np.ptp(x), 1e-3))
+    coarse = max(MIN_WINDOW_SAMPLES, (len(rec) // 50) | 1)
+    if coarse >= len(rec):
+        raise DataError(f"{record.source}: {len(rec)} samples are too few to differentiate")
+    v = np.abs(savgol_filter(x, coarse, 3, deriv=1, delta=dt))
+    moving = v[v > MOVING_SIGMAS * velocity_noise(coarse, dt, sigma)]
+    return float(np.median(moving)) if moving.size else 0.0
+
+
 def smoothing_window(record: Record, speed: float | None = None) -> float:
     """Differentiation window [s] for ``record``: the shortest whose velocity noise is
     ``SMOOTHING_NOISE`` of ``speed`` (default: the record's typical speed, the median
@@ -91,13 +106,7 @@ def smoothing_window(record: Record, speed: float | None = None) -> float:
     x = rec["position"]
     sigma = max(sensor_noise(x), 1e-12 * max(np.ptp(x), 1e-3))
     if speed is None:
-        coarse = max(MIN_WINDOW_SAMPLES, (len(rec) // 50) | 1)
-        if coarse >= len(rec):
-            raise DataError(f"{record.source}: {len(rec)} samples are too few to "
-                            "differentiate")
-        v = np.abs(savgol_filter(x, coarse, 3, deriv=1, delta=dt))
-        moving = v[v > MOVING_SIGMAS * velocity_noise(coarse, dt, sigma)]
-        speed = float(np.median(moving)) if moving.size else 0.0
+        speed = typical_speed(rec)
     if not speed > 0:
         return MIN_WINDOW_SAMPLES * dt
     return _window_samples(len(rec), dt, sigma, speed) * dt

@@ -231,7 +231,9 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
     roughly as ``prior`` (each spring and friction value within ±``spread``):
 
     - a quasi-static sweep from p_atm to the pressure that draws the diaphragm to 90 % of
-      its stroke (x_max) and back (F0, k), at about three times the highest plausible vs;
+      its stroke (x_max) and back (F0, k), at about three times the highest plausible vs
+      (steady sliding, no stick-slip), at least 0.2 mm/s and at most half the regulator's
+      reach;
     - ``ramps`` ramp pairs, both directions from mid-stroke, at log-spaced steady speeds
       from a third of the lowest plausible vs (at least ``MIN_RAMP_SPEED``) up to where
       the Stribeck term of the highest plausible vs and Fs − Fc falls below
@@ -257,7 +259,7 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
 
     # sweep: 90 % of the stroke, at three times the highest plausible vs
     low = max(p_atm - (f0 + 0.9 * k * x_max + fs * hi) / area, floor)
-    sweep_speed = float(np.clip(3 * vs * hi, 2e-4, 2e-3))
+    sweep_speed = float(min(max(3 * vs * hi, 2e-4), 0.5 * reach))
     travel = ((p_atm - low) * area - f0) / k
     period = sweep_period or max(2 * travel / sweep_speed, 4.0)
     rate = 1000.0 if period < 200 else 100.0

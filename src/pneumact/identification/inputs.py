@@ -33,15 +33,19 @@ def noise_level(values: np.ndarray) -> float:
 def resolution(values: np.ndarray) -> float:
     """Quantisation step of a signal whose samples lie on a grid (a digital sensor), or
     0: the smallest non-zero step between samples, if at least 90 % of the steps are
-    whole multiples of it (a smooth signal's steps are not)."""
-    steps = np.abs(np.diff(np.asarray(values, dtype=float)))
-    steps = steps[steps > 0]
+    whole multiples of it and the signal shows it is quantised (it holds still for a
+    tenth of its samples, or steps by different multiples): a ramp's equal steps are
+    not quantisation."""
+    all_steps = np.diff(np.asarray(values, dtype=float))
+    steps = np.abs(all_steps[all_steps != 0])
     if steps.size < 10:
         return 0.0
     q = float(steps.min())
-    multiples = steps / q
-    on_grid = np.abs(multiples - np.round(multiples)) <= 1e-6 * np.maximum(multiples, 1.0)
-    return q if np.mean(on_grid) >= 0.9 else 0.0
+    multiples = np.round(all_steps / q)
+    on_grid = np.abs(all_steps / q - multiples) <= 1e-6 * np.maximum(np.abs(multiples), 1.0)
+    holds = np.mean(all_steps == 0) >= 0.1
+    varied = np.unique(multiples[on_grid & (all_steps != 0)]).size >= 2
+    return q if np.mean(on_grid) >= 0.9 and (holds or varied) else 0.0
 
 
 def sensor_noise(values: np.ndarray) -> float:

@@ -32,7 +32,14 @@ import pandas as pd
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
-from .diagnostics import REMEDIES, Diagnostic, Verdict, residual_checks, verdicts
+from .diagnostics import (
+    MODEL_FIDELITY,
+    REMEDIES,
+    Diagnostic,
+    Verdict,
+    residual_checks,
+    verdicts,
+)
 from .estimates import Estimates
 from .fit import FitResult
 from .joint import JOINT_RTOL, SPRING_AND_FRICTION, joint_refinement
@@ -50,6 +57,7 @@ from .uncertainty import (
     INPUT_REPLICATES,
     InputNoise,
     input_noise_covariance,
+    nuisance_covariance,
     prediction_band,
     with_covariance,
 )
@@ -118,6 +126,15 @@ class PaperIdentification:
 
     # -- the verdict ------------------------------------------------------------------
     @property
+    def intervals_hold(self) -> bool:
+        """Whether the intervals mean what they say: the joint fit converged and the model
+        fits every record it used (else no interval is reported)."""
+        if self.joint is None:
+            return not self.extra.get("joint_failed", False)
+        fits = bool(self.residuals["fits"].all()) if len(self.residuals) else True
+        return fits and bool(self.joint.success)
+
+    @property
     def ok(self) -> bool:
         """Every parameter identified and no error found: the result can be used."""
         return all(v.identified for v in self.verdicts) and \
@@ -141,8 +158,12 @@ class PaperIdentification:
     def table(self, truth=None) -> pd.DataFrame:
         """Per parameter: the staged estimate and its (conditional) standard error, the
         final (joint) estimate, its standard error and 95 % interval, the verdict and its
-        reason (with the truth and the errors in % when ``truth`` is given)."""
+        reason (with the truth and the errors in % when ``truth`` is given). Where the
+        model does not fit the records (``intervals_hold`` is False) no standard error or
+        interval is reported: they would not hold."""
         ci = self.estimates.interval(0.95)
+        if not self.intervals_hold:
+            ci = np.full_like(ci, np.nan)
         rows = []
         staged = self._staged_values()
         for j, name in enumerate(self.estimates.names):
@@ -152,7 +173,8 @@ class PaperIdentification:
             stage, s_value, s_err = staged.get(name, ("", np.nan, np.nan))
             row = {"parameter": name, "unit": self.estimates.units[j], "stage": stage,
                    "staged": s_value, "staged_stderr": s_err,
-                   "value": self.estimates.values[j], "stderr": self.estimates.stderr[j],
+                   "value": self.estimates.values[j],
+                   "stderr": self.estimates.stderr[j] if self.intervals_hold else np.nan,
                    "ci95_low": ci[j, 0], "ci95_high": ci[j, 1],
                    "initial": self.initial[name], "verdict": verdict.verdict,
                    "reason": verdict.reason}
@@ -160,7 +182,8 @@ class PaperIdentification:
                 row["truth"] = truth[name]
                 row["staged_error_%"] = 100 * (s_value - truth[name]) / truth[name]
                 row["error_%"] = 100 * (row["value"] - truth[name]) / truth[name]
-                row["truth_in_ci95"] = bool(ci[j, 0] <= truth[name] <= ci[j, 1])
+                row["truth_in_ci95"] = (bool(ci[j, 0] <= truth[name] <= ci[j, 1])
+                                        if self.intervals_hold else None)
             rows.append(row)
         return pd.DataFrame(rows).set_index("parameter")
 
@@ -390,17 +413,39 @@ def _staged(kinds, prior, friction, fit_delta, sliding_speed, prior_spread, step
         diagnostics += notes
         if sliding is not None and stribeck is not None:
             stages.update(sliding=sliding, stribeck=stribeck)
-            current = current.replace({"Fc": sliding.estimates["Fc"],
-                                       "sigma2": sliding.estimates["sigma2"],
-                                       **stribeck.estimates.as_dict()})
+            current, found = _accept(current, {"Fc": sliding.estimates["Fc"],
+                                               "sigma2": sliding.estimates["sigma2"],
+                                               **stribeck.estimates.as_dict()}, "(b, c)")
+            diagnostics += found
     step("presliding", 0.2)
     try:
-        presliding = stage_presliding(kinds["presliding"], current, friction)
+        presliding = stage_presliding(kinds["presliding"], current, friction, prior=prior)
         stages["presliding"] = presliding
-        current = current.replace(presliding.estimates.as_dict())
+        current, found = _accept(current, presliding.estimates.as_dict(), "(d)")
+        diagnostics += found
     except (DataError, SolverError) as exc:
         diagnostics.append(Diagnostic("warning", "(d)", f"the presliding fit failed: {exc}"))
     return stages, current, diagnostics
+
+
+def _accept(params, updates: dict[str, float], stage: str):
+    """``params`` with a stage's estimates; one the parameter set refuses (a negative σ2
+    from noisy segments) keeps its earlier value, with a diagnostic."""
+    from ..parameters import catalogue
+
+    specs = catalogue()
+    refused = {n for n, v in updates.items()
+               if not (np.isfinite(v) and specs[n].in_range(np.array([v]))[0])}
+    notes = [Diagnostic("warning", stage, f"the estimate {n} = {updates[n]:.4g} is not "
+                        "physical; the next stages start from the earlier value "
+                        f"{params[n]:.4g}", REMEDIES.get(n, "")) for n in sorted(refused)]
+    kept = {n: v for n, v in updates.items() if n not in refused}
+    try:
+        return params.replace(kept), notes
+    except ParameterError as exc:  # a relation between the kept ones (Fs < Fc)
+        return params, [*notes, Diagnostic("warning", stage, f"its estimates are not "
+                                           f"physical together ({exc}); the next stages "
+                                           "start from the earlier values")]
 
 
 #: σ0 and σ1 are identifiable from a presliding test only when its static deflection
@@ -426,21 +471,38 @@ def _presliding_identifiable(kinds, staged) -> tuple[bool, str]:
 
 
 def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed, workers,
-            step):
-    """The joint refinement, its input-noise covariance and its residual checks. Returns
-    (joint fit, input noise, final estimates, residual checks, diagnostics)."""
+            step, prior, held: dict[str, float]):
+    """The joint refinement, its input-noise covariance, the share of the parameters
+    ``held`` at the prior (name -> standard deviation of the prior's value), and its
+    residual checks. Returns (joint fit, input noise, final estimates, residual checks,
+    diagnostics)."""
     from ..simulation import Rodas4
 
     diagnostics: list[Diagnostic] = []
     step("joint refinement", 0.3)
+    chaotic: list[str] = []
     joint = joint_refinement(records, kinds, staged, friction=friction, chamber=chamber,
-                             free=free, replicates=replicates, seed=seed, workers=workers)
+                             free=free, replicates=replicates, seed=seed, workers=workers,
+                             prior=prior, excluded=chaotic)
+    for name in chaotic:
+        diagnostics.append(Diagnostic(
+            "warning", "joint", f"{Path(name).name} left out of the joint fit: the model "
+            "fitted to the steady records does not follow it (a stick-slip whose timing "
+            "no output-error fit follows sample by sample)", "ramps at steadier speeds "
+            "(above the stick-slip range) carry the same information; compare the loops "
+            "with pneumact validate"))
     step("input noise", 0.7)
     noise = input_noise_covariance(joint, replicates=replicates or INPUT_REPLICATES,
                                    seed=seed + 1, workers=workers,
                                    solver=Rodas4(rtol=JOINT_RTOL))
     checks = residual_checks(joint, noise.moves)
-    estimates = with_covariance(joint.estimates, joint.estimates.covariance + noise.covariance)
+    fidelity = np.diag((MODEL_FIDELITY * joint.estimates.values) ** 2)
+    fidelity[[j for j, n in enumerate(joint.estimates.names) if "[" in n]] = 0.0
+    covariance = joint.estimates.covariance + noise.covariance + fidelity
+    if held:
+        covariance = covariance + nuisance_covariance(joint, held, Rodas4(rtol=JOINT_RTOL),
+                                                      workers)
+    estimates = with_covariance(joint.estimates, covariance)
     if not joint.success:
         diagnostics.append(Diagnostic("error", "joint", "the joint fit did not converge: "
                                       + joint.message,
@@ -513,40 +575,58 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                           prior_spread, step)
     free = list(SPRING_AND_FRICTION) + (["delta"] if fit_delta else [])
     presliding_ok, why_not = _presliding_identifiable(kinds, staged)
-    if not presliding_ok:
-        free = [n for n in free if n not in PRESLIDING_PARAMETERS]
+    held: dict[str, float] = {}
+    if not presliding_ok:  # held at the prior; their uncertainty goes into the others'
+        held = {n: params[n] * prior_spread / 1.96 for n in PRESLIDING_PARAMETERS}
+        free = [n for n in free if n not in held]
+        staged = staged.replace({n: params[n] for n in held})
         diagnostics.append(Diagnostic(
-            "warning", "presliding", f"σ0 and σ1 are not identifiable: {why_not}; the "
-            "joint refinement holds them at the staged values",
+            "warning", "presliding", f"σ0 and σ1 are not identifiable: {why_not}; they are "
+            "held at the prior's values, and the uncertainty of those (±"
+            f"{100 * prior_spread:.0f} %) is carried into the other parameters' intervals",
             "a position sensor with less noise and a finer resolution, or larger presliding "
             "steps if the friction allows"))
     joint = input_noise = None
     if refine:
-        joint, input_noise, final_values, residuals, found = _refine(
-            records, [record_kind(r) for r in records], staged, friction=friction,
-            chamber=chamber, free=free, replicates=replicates, seed=seed, workers=workers,
-            step=step)
-        diagnostics += found
+        try:
+            joint, input_noise, final_values, residuals, found = _refine(
+                records, [record_kind(r) for r in records], staged, friction=friction,
+                chamber=chamber, free=free, replicates=replicates, seed=seed,
+                workers=workers, step=step, prior=params, held=held)
+            diagnostics += found
+        except DataError as exc:  # nothing left that output error can follow
+            diagnostics.append(Diagnostic("error", "joint", str(exc), "ramps at speeds "
+                                          "where the diaphragm slides steadily"))
+            refine = False
+    joint_failed = False
+    if refine:
         misfit = [Path(r).name for r, fits in zip(residuals["record"], residuals["fits"],
                                                    strict=True) if not fits]
         lower, upper = joint.bounds
         at_bound = (np.isclose(final_values.values, lower, rtol=1e-6)
                     | np.isclose(final_values.values, upper, rtol=1e-6))
     else:
-        final_values = _staged_estimates(stages)
+        final_values = _staged_estimates(stages, staged, free)
         residuals = pd.DataFrame()
         misfit = []
         at_bound = np.zeros(len(final_values.names), bool)
+        joint_failed = any(d.stage == "joint" for d in diagnostics)
     diagnostics += _presliding_check(records, kinds, staged)
     ci = final_values.interval(0.95)
     names = [n for n in final_values.names if "[" not in n]
     idx = [final_values.names.index(n) for n in names]
     half = (ci[idx, 1] - ci[idx, 0]) / 2
-    judged = verdicts(names, final_values.values[idx], half, at_bound[idx], misfit)
-    held = [n for n in PRESLIDING_PARAMETERS if n not in final_values.names]
-    if held:  # held at the staged values: shown, with an infinite interval
+    caveat = ""
+    if not refine and joint_failed:
+        caveat = "the joint refinement could not run: staged values, no interval holds"
+    elif misfit:
+        caveat = f"the model does not fit {', '.join(misfit)}, so no interval holds"
+    elif refine and not joint.success:
+        caveat = "the joint fit did not converge, so no interval holds"
+    judged = verdicts(names, final_values.values[idx], half, at_bound[idx], caveat)
+    if held:  # shown at the prior's values, with no interval
         judged += [Verdict(n, "not identifiable", why_not, REMEDIES[n]) for n in held]
-        final_values = _with_held(final_values, held, staged)
+        final_values = _with_held(final_values, list(held), staged)
     when = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     from .. import __version__
 
@@ -554,7 +634,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     idx = [final_values.names.index(n) for n in names]
     sources = {n: ("identified, joint refinement" if refine else
                    f"identified, stage {_stage_of(stages, n)}") for n in names}
-    sources.update({n: "held at the staged value: not identifiable" for n in held})
+    sources.update({n: "prior value, held: not identifiable" for n in held})
     identified = with_estimates(
         params, Estimates(tuple(names), final_values.values[idx], final_values.stderr[idx],
                           final_values.covariance[np.ix_(idx, idx)], final_values.dof,
@@ -565,7 +645,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     step("done", 1.0)
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
-                               {"friction": friction, "chamber": chamber})
+                               {"friction": friction, "chamber": chamber,
+                                "joint_failed": joint_failed})
 
 
 def _with_held(estimates: Estimates, names: Sequence[str], params) -> Estimates:
@@ -590,19 +671,20 @@ def _stage_of(stages, name: str) -> str:
     return ""
 
 
-def _staged_estimates(stages) -> Estimates:
-    """The stages' estimates as one (block-diagonal) set."""
-    names, values, errors, units = [], [], [], []
+def _staged_estimates(stages, staged, free: Sequence[str]) -> Estimates:
+    """The stages' results as one (block-diagonal) set of the ``free`` parameters: the
+    values the stages handed on (``staged``: an estimate a stage could not support, or
+    an unphysical one, kept the prior's value and gets an infinite variance)."""
+    from ..parameters import catalogue
+
+    errors = {}
     for stage in stages.values():
         for j, n in enumerate(stage.estimates.names):
-            if n in ("offset", "spring_error", "friction_level"):
-                continue
-            names.append(n)
-            values.append(stage.estimates.values[j])
-            errors.append(stage.estimates.stderr[j])
-            units.append(stage.estimates.units[j] if stage.estimates.units else "")
-    errors_a = np.array(errors)
-    cov = np.diag(errors_a**2)
+            if stage.estimates.values[j] == staged[n] if n in free else False:
+                errors[n] = stage.estimates.stderr[j]
+    values = np.array([staged[n] for n in free])
+    stderr = np.array([errors.get(n, np.inf) for n in free])
+    cov = np.diag(stderr**2)
     dof = min(s.estimates.dof for s in stages.values())
-    return Estimates(tuple(names), np.array(values), errors_a, cov, dof, tuple(units))
-
+    return Estimates(tuple(free), values, stderr, cov, dof,
+                     tuple(catalogue()[n].unit for n in free))

@@ -33,9 +33,9 @@ from .bench import drive_force, kinematics, moving_threshold, steady_segments
 from .diagnostics import Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
 
-__all__ = ["STAGES", "StageResult", "presliding_range", "presliding_window",
-           "segments_of", "sliding_and_stribeck", "stage_presliding", "stage_sliding",
-           "stage_spring", "stage_stribeck"]
+__all__ = ["PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range", "presliding_window",
+           "prior_bounds", "segments_of", "sliding_and_stribeck", "stage_presliding",
+           "stage_sliding", "stage_spring", "stage_stribeck", "within"]
 
 STAGES = {
     "spring": "(a) spring: F0, k from the quasi-static sweep",
@@ -58,6 +58,8 @@ MIN_SLIDING_SEGMENTS = 5
 #: The presliding part of a record starts this many stuck-mode periods
 #: 2π·√(m/(k + σ0)) after the approach (its ringing has decayed to a few per cent).
 SETTLE_PERIODS = 5.0
+#: Search bounds of the output-error fits: this factor either side of the prior value.
+PRIOR_FACTOR = 10.0
 #: A presliding record's "approach" is its longest run faster than this fraction of its
 #: fastest motion (scale-free: whatever the actuator's speed).
 APPROACH_FRACTION = 0.1
@@ -341,17 +343,35 @@ def presliding_window(record: Record, params) -> float:
     return float(kin.time[min(i1, kin.time.size - 1)] + SETTLE_PERIODS * stuck_period(params))
 
 
-def stage_presliding(records: Sequence[Record], params, friction=None, solver=None
-                     ) -> StageResult:
+def prior_bounds(prior, names: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """Search bounds of each parameter: ``PRIOR_FACTOR`` either side of its prior value
+    (a guess off by more than that is not a prior; a fit that wanders there meets a
+    model so stiff or so light that every simulation crawls)."""
+    return {n: (prior[n] / PRIOR_FACTOR, prior[n] * PRIOR_FACTOR) for n in names}
+
+
+def within(values: dict[str, float], bounds: dict[str, tuple[float, float]]
+           ) -> dict[str, float]:
+    """``values`` clipped into ``bounds`` (those that have bounds)."""
+    return {n: float(np.clip(v, *bounds[n])) if n in bounds else v
+            for n, v in values.items()}
+
+
+def stage_presliding(records: Sequence[Record], params, friction=None, solver=None,
+                     prior=None) -> StageResult:
     """(d): σ0, σ1 by output error on the presliding part of each record (a sensor
-    offset per record is fitted too: the stuck position remembers the approach)."""
+    offset per record is fitted too: the stuck position remembers the approach), within
+    ``prior_bounds`` of ``prior`` (default ``params``)."""
     from ..models import Actuator, LuGre, PressureSource
     from .fit import fit
 
+    free = ["sigma0", "sigma1"]
+    bounds = prior_bounds(params if prior is None else prior, free)
+    start = within({n: params[n] for n in free}, bounds)
     model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
     windows = [(presliding_window(r, params), r.time[-1]) for r in records]
-    result = fit(model, records, ["sigma0", "sigma1"], offsets=["position"],
-                 window=windows, solver=solver)
+    result = fit(model, records, free, offsets=["position"], window=windows,
+                 solver=solver, bounds=bounds, start=start)
     keep = [n in ("sigma0", "sigma1") for n in result.estimates.names]
     est = result.estimates
     idx = np.flatnonzero(keep)

@@ -38,7 +38,8 @@ from .fit import FitResult, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
 
 __all__ = ["InputNoise", "PredictionBand", "input_noise", "input_noise_covariance",
-           "input_noise_weights", "input_replicates", "prediction_band", "with_covariance"]
+           "input_noise_weights", "input_replicates", "nuisance_covariance",
+           "prediction_band", "with_covariance"]
 
 #: Replicates of the input-noise bootstrap: the variance of a 64-sample estimate is
 #: within ±25 % (2σ) of its value, the standard error within ±12 %.
@@ -169,6 +170,43 @@ def input_noise_covariance(fit: FitResult, replicates: int = INPUT_REPLICATES,
         shifts = (fit.weight(i, fit.signals[0]) * delta) @ pinv[:, offsets[i]:offsets[i + 1]].T
         covariance += shifts.T @ shifts / len(shifts)
     return InputNoise(covariance, noise, replicates, moves)
+
+
+def nuisance_covariance(fit: FitResult, held: dict[str, float], solver=None,
+                        workers: int | None = None) -> np.ndarray:
+    """What parameters held at a guess do to ``fit``'s estimates: ``held`` maps each
+    held parameter to the standard deviation of its guess; returns G·Σ·Gᵀ with
+    G = −J⁺·J_held (how the estimates shift to absorb a change of a held parameter), from
+    forward sensitivities of every record to the held parameters at the estimate. A
+    parameter the records cannot tell but whose wrong value still moves them would
+    otherwise bias the others inside intervals that ignore it."""
+    from ..simulation import Rodas4, simulate_sensitivities
+    from .fit import experiment_for
+
+    solver = Rodas4(rtol=1e-8) if solver is None else solver
+    names = list(held)
+    values = {**fit.base_values, **fit.values}
+    signal = fit.signals[0]
+
+    def column_block(i: int) -> np.ndarray:
+        model, record = fit.models[i], fit.records[i]
+        own = _parameters_of(model)
+        used = [n for n in names if n in own]
+        block = np.zeros((int(fit.masks()[i].sum()), len(names)))
+        if not used:
+            return block
+        sens = simulate_sensitivities(
+            model, experiment_for(model, record, smooth=True), used, solver,
+            t_eval=record.time, values={n: v for n, v in values.items() if n in own})
+        for k, name in enumerate(used):
+            block[:, names.index(name)] = fit.weight(i, signal) * \
+                sens[signal][fit.masks()[i], k]
+        return block
+
+    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+        j_held = np.vstack(list(pool.map(column_block, range(len(fit.records)))))
+    gain = -np.linalg.pinv(fit.jacobian) @ j_held
+    return gain @ np.diag([held[n] ** 2 for n in names]) @ gain.T
 
 
 def _knot_projector(time, knot_t, knot_v, sigma: float) -> np.ndarray:

@@ -53,6 +53,12 @@ class Record:
     source: str = ""
     meta: dict[str, str] = field(default_factory=dict)
 
+    @property
+    def name(self) -> str:
+        """The record's name: its file name without folder and suffix ("presliding" for
+        bench/presliding.csv), to choose records by name rather than by position."""
+        return Path(self.source).stem if self.source else ""
+
     @classmethod
     def from_arrays(cls, time, signals: Mapping[str, object],
                     units: Mapping[str, str] | None = None, source: str = "record",

@@ -1,0 +1,121 @@
+"""Identification on a family of actuators: accuracy, verdicts, interval coverage, time.
+
+Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
+
+Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
+0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
+mm/s, δ 1 or 2, realistic geometry), designs each one's bench campaign from a prior up
+to ±50 % off, simulates it with sensor noise for each noise seed, identifies it from
+that prior (``identify_paper`` defaults), and prints:
+
+- per actuator and seed: the wall time, the verdicts and the errors;
+- per parameter: how often it is identified, the largest error of an identified one
+  against its tolerance (5 %; σ0, σ1 15 %), and the coverage of the reported 95 %
+  intervals;
+- overall: the identified share, the coverage of every reported interval, and the
+  median and largest wall time.
+
+The same study, smaller, is the validation test
+``tests/validation/test_identification_family.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pneumact.identification import design_campaign, identify_paper, synthetic_campaign
+from pneumact.parameters.family import ActuatorFamily
+
+FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
+TOLERANCE = {"F0": 5.0, "k": 5.0, "Fc": 5.0, "sigma2": 5.0, "Fs": 5.0, "vs": 5.0,
+             "sigma0": 15.0, "sigma1": 15.0}
+SPREAD = 0.5
+
+
+def prior_of(truth, rng):
+    factor = {n: rng.uniform(1 - SPREAD, 1 + SPREAD) for n in FREE}
+    values = {n: truth[n] * factor[n] for n in FREE}
+    values["Fs"] = values["Fc"] * (1 + (truth["Fs"] / truth["Fc"] - 1) * factor["Fs"])
+    return truth.replace(values)
+
+
+def run_one(job):
+    index, seed, truth, family_seed = job
+    rng = np.random.default_rng(family_seed * 1000 + index)
+    prior = prior_of(truth, rng)
+    tic = time.perf_counter()
+    records = synthetic_campaign(truth, design_campaign(prior, spread=SPREAD).tests,
+                                 seed=seed)
+    result = identify_paper(records, prior, seed=seed, workers=1)
+    wall = time.perf_counter() - tic
+    table = result.table(truth)
+    rows = []
+    for name in FREE:
+        row = table.loc[name]
+        reported = bool(np.isfinite(row["ci95_low"]) and np.isfinite(row["ci95_high"]))
+        rows.append({"actuator": truth.name, "seed": seed, "parameter": name,
+                     "verdict": row["verdict"], "error_%": row["error_%"],
+                     "reported": reported,
+                     "covered": bool(row["truth_in_ci95"]) if reported else None,
+                     "wall_s": wall})
+    return rows, result.summary()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--actuators", type=int, default=40)
+    parser.add_argument("--seeds", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=7, help="seed of the family")
+    parser.add_argument("--csv", type=Path, default=None, help="write every row here")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    family = ActuatorFamily().draw(args.actuators, seed=args.seed)
+    jobs = [(i, s, truth, args.seed) for i, truth in enumerate(family)
+            for s in range(args.seeds)]
+    rows = []
+    started = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        for (index, seed, truth, _), (result_rows, summary) in zip(
+                jobs, pool.map(run_one, jobs), strict=True):
+            rows += result_rows
+            errors = " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows)
+            print(f"{truth.name} seed {seed}: {result_rows[0]['wall_s']:.1f} s; {summary}; "
+                  f"{errors}", flush=True)
+    total = time.perf_counter() - started
+    table = pd.DataFrame(rows)
+    identified = table[table["verdict"] == "identified"]
+    reported = table[table["reported"]]
+    per = pd.DataFrame({
+        "identified_%": 100 * table.groupby("parameter")["verdict"].apply(
+            lambda v: np.mean(v == "identified")),
+        "max_error_identified_%": identified.groupby("parameter")["error_%"].apply(
+            lambda e: np.max(np.abs(e))),
+        "tolerance_%": pd.Series(TOLERANCE),
+        "coverage_reported_%": 100 * reported.groupby("parameter")["covered"].mean(),
+    }).reindex(list(FREE))
+    print()
+    print(per.to_string(float_format=lambda x: f"{x:.3g}"))
+    wrong = identified[identified["error_%"].abs() > identified["parameter"].map(TOLERANCE)]
+    walls = table.drop_duplicates(["actuator", "seed"])["wall_s"]
+    print(f"\n{len(family)} actuators × {args.seeds} seeds: identified "
+          f"{100 * len(identified) / len(table):.1f} % of the parameters, "
+          f"{len(wrong)} identified but out of tolerance; reported intervals "
+          f"{len(reported)}, coverage {100 * reported['covered'].mean():.1f} %; "
+          f"wall per identification median {statistics.median(walls):.1f} s, "
+          f"max {walls.max():.1f} s; total {total:.0f} s on {os.cpu_count()} cores")
+    if args.csv:
+        table.to_csv(args.csv, index=False)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

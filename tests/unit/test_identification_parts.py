@@ -1,0 +1,180 @@
+"""The parts of the identification that hold without a simulation: noise and resolution
+of a measured signal, the rebuilt input's knot Jacobian, the differentiation window, the
+campaign designer, the covariance of very different parameters, the residual checks and
+the verdicts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pneumact as pa
+import reference as ref
+from pneumact.errors import ExperimentError
+from pneumact.identification import design_campaign
+from pneumact.identification.bench import smoothing_window
+from pneumact.identification.diagnostics import (
+    IDENTIFIED_HALF_WIDTH,
+    POORLY_HALF_WIDTH,
+    verdicts,
+)
+from pneumact.identification.estimates import covariance_from_jacobian
+from pneumact.identification.inputs import knot_jacobian, resolution, sensor_noise
+from pneumact.io import Record
+from pneumact.parameters.family import ActuatorFamily
+
+
+# --------------------------------------------------------------------------- signals
+def test_resolution_is_found_on_a_quantised_signal_and_not_on_a_ramp():
+    rng = np.random.default_rng(0)
+    time = np.linspace(0.0, 10.0, 20001)
+    smooth = 1e-3 * np.sin(time)
+    quantised = np.round((smooth + rng.normal(0, 1e-6, time.size)) / 1e-6) * 1e-6
+    assert resolution(quantised) == pytest.approx(1e-6, rel=1e-6)
+    assert resolution(1e-4 * time) == 0.0  # a ramp's equal steps are not quantisation
+    # a quantised signal that holds still: noise_level sees nothing, the resolution does
+    still = np.round(np.full(1000, 3.3e-6) / 1e-6) * 1e-6
+    still[::50] += 1e-6
+    assert sensor_noise(still) >= 1e-6 / np.sqrt(12) * (1 - ref.REL_TOL)
+
+
+def test_knot_jacobian_matches_differences():
+    time = np.linspace(0.0, 1.0, 501)
+    knot_t = np.array([0.0, 0.23, 0.51, 0.77, 1.0])
+    knot_v = np.array([1.0, 3.0, 2.5, 4.0, 0.5])
+
+    def signal(t, v):
+        return np.interp(time, t, v)
+
+    analytic = knot_jacobian(time, knot_t, knot_v).toarray()
+    step = 1e-7
+    for k in range(1, knot_t.size - 1):  # interior knot times
+        up, down = knot_t.copy(), knot_t.copy()
+        up[k] += step
+        down[k] -= step
+        column = (signal(up, knot_v) - signal(down, knot_v)) / (2 * step)
+        away = np.abs(time - knot_t[k]) > 2 * step  # the kink itself is not differentiable
+        np.testing.assert_allclose(analytic[away, k - 1], column[away], atol=1e-6)
+    for k in range(knot_v.size):  # knot values: exactly linear
+        moved = knot_v.copy()
+        moved[k] += 1.0
+        np.testing.assert_allclose(analytic[:, knot_t.size - 2 + k],
+                                   signal(knot_t, moved) - signal(knot_t, knot_v), atol=1e-12)
+
+
+def test_the_differentiation_window_follows_noise_and_speed():
+    rng = np.random.default_rng(1)
+    time = np.linspace(0.0, 20.0, 20001)
+
+    def window(noise, speed):
+        x = speed * time + rng.normal(0.0, noise, time.size)
+        return smoothing_window(Record.from_arrays(time, {"position": x,
+                                                          "pressure": np.full_like(x, 5e4)}))
+
+    base = window(1e-6, 1e-3)
+    assert window(4e-6, 1e-3) > 1.5 * base  # noisier: longer
+    assert window(1e-6, 1e-4) > 1.5 * base  # slower: longer
+
+
+# --------------------------------------------------------------------------- design
+@pytest.mark.parametrize("index", range(4))
+def test_a_designed_campaign_spans_the_speeds_and_stays_in_the_stroke(index):
+    prior = ActuatorFamily().draw(4, seed=ref.FAMILY_SEED)[index]
+    plan = design_campaign(prior, spread=0.5)
+    speeds = sorted(v for name, v in plan.speeds.items() if name.startswith("ramp"))
+    assert speeds[0] <= max(prior["vs"] * 0.5 / 3, 5e-5) * 1.05  # a third of the lowest vs
+    assert speeds[-1] >= 10 * speeds[0]
+    table = plan.to_pandas()
+    floor = prior["p_res"] * 1e-3
+    assert (table["lowest [kPa abs]"] > floor).all()
+    for test in plan.tests:  # every corner on the sampling grid
+        corners = np.asarray(test.experiment.drive.breakpoints()) * test.sample_rate
+        np.testing.assert_allclose(corners, np.round(corners), atol=1e-6)
+    # the presliding steps stay below break-away for any Fs within the spread: after the
+    # reversal by the lowest plausible Fs/A_d, two steps swing the force by 0.7·Fs_prior
+    presliding = next(t for t in plan.tests if t.kind == "presliding")
+    drive = presliding.experiment.drive
+    values = drive(np.asarray(drive.breakpoints()))
+    settled = values[5:]  # from the reversal on
+    swing = (settled.max() - settled.min()) * prior["A_d"]
+    assert swing <= 2 * 0.35 * prior["Fs"] * (1 + ref.REL_TOL)
+
+
+def test_the_design_refuses_what_it_cannot_plan(vgt):
+    with pytest.raises(ExperimentError, match="spread"):
+        design_campaign(vgt, spread=1.5)
+    with pytest.raises(ExperimentError, match="ramps"):
+        design_campaign(vgt, ramps=2)
+
+
+def test_the_plan_is_a_table_in_bench_units(vgt):
+    plan = design_campaign(vgt)
+    table = plan.to_pandas()
+    assert {"kind", "valve", "ramp rate [kPa/s]", "expected speed [mm/s]", "duration [s]",
+            "sample rate [Hz]", "purpose"} <= set(table.columns)
+    assert table.loc["sweep", "from [kPa abs]"] == pytest.approx(vgt["p_atm"] * 1e-3)
+    corners = plan.breakpoints("presliding")
+    assert list(corners.columns) == ["time [s]", "pressure [kPa abs]"]
+
+
+# --------------------------------------------------------------------------- covariance
+def test_parameters_of_very_different_size_are_not_rank_deficient():
+    rng = np.random.default_rng(2)
+    x = np.linspace(0, 1, 400)
+    jac = np.column_stack([np.ones_like(x) * 1e-9, x * 1e3, np.sin(7 * x) * 1e-6])
+    residuals = rng.normal(0, 1e-3, x.size)
+    cov, _ = covariance_from_jacobian(jac, residuals, 3, correlated=False)
+    assert np.all(np.isfinite(np.diag(cov)))
+    # an exact duplicate direction: those two are not determined, the third still is
+    dup = np.column_stack([x, 2 * x, np.cos(3 * x)])
+    cov, _ = covariance_from_jacobian(dup, residuals, 3, correlated=False)
+    assert np.isinf(cov[0, 0]) and np.isinf(cov[1, 1]) and np.isfinite(cov[2, 2])
+
+
+@pytest.mark.parametrize("rho", [0.3, ref.HAC_AR1_RHO])
+def test_hac_direct_and_fft_lag_sums_agree(rho, monkeypatch):
+    from pneumact.identification import estimates
+
+    rng = np.random.default_rng(3)
+    n = 2000
+    e = np.empty(n)
+    e[0] = rng.normal()
+    for i in range(1, n):
+        e[i] = rho * e[i - 1] + rng.normal()
+    jac = np.column_stack([np.ones(n), np.linspace(0, 1, n)])
+    direct, _ = covariance_from_jacobian(jac, e, 2)
+    monkeypatch.setattr(estimates, "DIRECT_BANDWIDTH", -1)  # force the FFT path
+    fft, _ = covariance_from_jacobian(jac, e, 2)
+    np.testing.assert_allclose(direct, fft, rtol=1e-9)
+
+
+# --------------------------------------------------------------------------- verdicts
+def test_verdicts_follow_the_interval_the_bound_and_the_fit():
+    names = ["a", "b", "c", "d", "e"]
+    values = np.ones(5)
+    half = np.array([0.5 * IDENTIFIED_HALF_WIDTH, 0.5 * (IDENTIFIED_HALF_WIDTH
+                                                         + POORLY_HALF_WIDTH),
+                     2 * POORLY_HALF_WIDTH, np.inf, 0.01])
+    at_bound = [False, False, False, False, True]
+    judged = {v.parameter: v for v in verdicts(names, values, half, at_bound)}
+    assert [judged[n].verdict for n in names] == [
+        "identified", "poorly identified", "not identifiable", "not identifiable",
+        "not identifiable"]
+    assert "bound" in judged["e"].reason and "excite" in judged["d"].reason
+    misfit = {v.parameter: v for v in verdicts(names, values, half, at_bound,
+                                               caveat="the model does not fit ramp_1mm_s")}
+    assert misfit["a"].verdict == "poorly identified"
+    assert "ramp_1mm_s" in misfit["a"].reason
+
+
+def test_a_family_is_drawn_consistent_and_reproducible():
+    family = ActuatorFamily()
+    first = family.draw(6, seed=ref.FAMILY_SEED)
+    again = family.draw(6, seed=ref.FAMILY_SEED)
+    for a, b in zip(first, again, strict=True):
+        assert dict(a.values) == dict(b.values)
+        full = (a["F0"] + a["k"] * a["x_max"] + a["Fs"]) / a["A_d"]
+        assert full < a["p_atm"] - a["p_res"]  # the stroke is reachable
+        assert a["V0"] > a["A_d"] * a["x_max"]  # the chamber keeps a volume
+        assert a["Fs"] >= a["Fc"]
+    assert isinstance(first[0], pa.ParameterSet)
