@@ -394,6 +394,8 @@ MISSED_LOOP_FIT_PERCENT = 95.0
 FAMILY_SEED = 7  # the seed of the drawn actuators (parameters.family.ActuatorFamily)
 FAMILY_SIZE = 20  # actuators of the family test (issue 18: at least 20)
 FAMILY_PRIOR_SPREAD = 0.5  # the prior: spring and friction each within ±50 % (issue 18)
+FAMILY_RAMPS = 6  # ramp pairs per designed campaign (the default 10 in the benchmark)
+FAMILY_REPLICATES = 32  # input-noise replicates (the default 64 in the benchmark)
 # An "identified" parameter is right within (issue 18): spring and sliding friction 5 %,
 # the presliding pair σ0, σ1 15 % (they act only through micrometres of deflection).
 FAMILY_TOLERANCE_PERCENT = {"F0": 5.0, "k": 5.0, "Fc": 5.0, "sigma2": 5.0, "Fs": 5.0,

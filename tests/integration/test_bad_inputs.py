@@ -82,6 +82,11 @@ BAD_VALUES: dict[str, list[str]] = {
     "--resume": ["+--overwrite"],  # together: contradict each other
     "--overwrite": [],
     "--seed": ["-1"],
+    "--spread": ["-1", "100", "150"],  # the prior's uncertainty, % in [0, 100)
+    "--plan": [],
+    "--staged-only": [],
+    "--partial": [],
+    "identify paper --chamber": [],  # behind the regulator of the set-point records: legal
     "--pressure-noise": ["-1"],
     "--position-noise": ["-1"],
     "--resolution": ["-1"],
@@ -93,6 +98,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--profile": ["sigma1"],  # not free
     "--loss": ["foo"],
     "sensitivity --vary": ["sigma0=abc%", "sigma0"],
+    "sensitivity --conditions": ["period=0", "valve=butterfly", "period", "colour=red"],
     "--times": ["1"],
     "--n": ["3", "100"],
     "--second-order": ["+--convergence"],

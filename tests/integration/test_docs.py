@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "robustness.md"
@@ -22,3 +23,29 @@ def test_the_robustness_page_runs(tmp_path, monkeypatch, capsys):
     assert namespace["batch"].table["status"].tolist() == ["invalid", "ok"]
     on_disk = pd.read_csv(tmp_path / "batch" / "summary.csv")
     assert on_disk["status"].tolist() == ["invalid", "ok"]
+
+
+IDENTIFICATION = PAGE.with_name("identification.md")
+
+
+def test_the_identification_page_runs(tmp_path, monkeypatch):
+    """docs/identification.md: plan, identify an actuator that is not the prior, and
+    every parameter either within its tolerance or refused with a reason."""
+    import matplotlib
+
+    import reference as ref
+
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    text = IDENTIFICATION.read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) >= 3
+    namespace: dict = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"{IDENTIFICATION.name}, block {i + 1}", "exec"), namespace)
+    table = namespace["table"]
+    identified = table[table["verdict"] == "identified"]
+    tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in identified.index])
+    assert ((identified["value"] / identified["truth"] - 1).abs() * 100 <= tolerance).all()
+    assert (table.loc[table["verdict"] != "identified", "reason"].str.len() > 0).all()
+    assert (tmp_path / "identification" / "report.html").exists()

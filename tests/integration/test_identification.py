@@ -16,6 +16,7 @@ from pneumact.cli import app
 from pneumact.errors import DataError, ParameterError, PassivityWarning
 from pneumact.identification import (
     Noise,
+    design_campaign,
     fit,
     identify_paper,
     paper_campaign,
@@ -61,7 +62,10 @@ def test_the_procedure_recovers_table_one_and_says_so(identified, vgt, tmp_path)
         assert table.loc[name, "staged"] == pytest.approx(vgt[name], rel=rtol), name
         assert table.loc[name, "value"] == pytest.approx(vgt[name],
                                                          rel=ref.JOINT_RTOL[name]), name
-        assert table.loc[name, "truth_in_ci95"], (name, table.loc[name].to_dict())
+        # one campaign: each truth within 3 standard errors (all 8 at once: 98 % of seeds;
+        # the 95 % coverage itself is measured over the family)
+        z = (table.loc[name, "value"] - vgt[name]) / table.loc[name, "stderr"]
+        assert abs(z) <= 3, (name, table.loc[name].to_dict())
     assert identified.ok, identified.summary()
     assert set(table["verdict"]) == {"identified"}
     written = identified.write(tmp_path / "ident", truth=vgt)
@@ -113,23 +117,26 @@ def test_a_fixed_sliding_speed_is_checked_not_trusted(campaign, start):
     assert warned and "not well above vs" in warned[0].message
 
 
-def test_records_without_the_stribeck_speeds_leave_vs_unidentified(vgt, start):
-    """Ramps only far above vs: the Stribeck dip is not in the records, and the verdict
-    says so instead of printing a number; identified.toml is not written."""
-    tests = paper_campaign(vgt, speeds=(1e-2, 2e-2, 3e-2, 4e-2))
-    records = synthetic_campaign(vgt, tests, seed=ref.IDENT_SEED)
-    result = identify_paper(records, start)
-    verdicts = result.verdicts_table()["verdict"]
-    assert verdicts["vs"] != "identified" or verdicts["Fs"] != "identified"
-    assert not result.ok
-    assert "identified.toml" not in result.writers()
-    partial = result.parameter_set(partial=True)
-    for name in ("vs", "Fs"):
-        if verdicts[name] != "identified":
-            assert partial[name] == start[name]
-            assert "not identified" in partial.info[name].source
+@pytest.fixture(scope="module")
+def no_stribeck(vgt, start):
+    """An actuator without a Stribeck dip (Fs = Fc): vs moves nothing, and the verdict
+    must say so instead of printing a number."""
+    truth = vgt.replace(Fs=vgt["Fc"])
+    records = synthetic_campaign(truth, design_campaign(start).tests, seed=ref.IDENT_SEED)
+    return identify_paper(records, start)
+
+
+def test_a_parameter_the_records_cannot_tell_is_refused(no_stribeck, start):
+    verdicts = no_stribeck.verdicts_table()
+    assert verdicts.loc["vs", "verdict"] == "not identifiable", verdicts
+    assert verdicts.loc["vs", "remedy"]
+    assert not no_stribeck.ok
+    assert "identified.toml" not in no_stribeck.writers()
+    partial = no_stribeck.parameter_set(partial=True)
+    assert partial["vs"] == start["vs"]
+    assert "not identified" in partial.info["vs"].source
     with pytest.raises(ParameterError, match="partial"):
-        result.parameter_set()
+        no_stribeck.parameter_set()
 
 
 def test_staged_procedure_names_missing_tests(campaign, start):
@@ -242,10 +249,10 @@ def test_cli_campaign_plan_simulate_identify_and_fit(tmp_path, monkeypatch):
     assert (tmp_path / "fit" / "fit.png").exists()
 
 
-def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch, vgt):
+def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
+                                                         no_stribeck):
     monkeypatch.chdir(tmp_path)
-    tests = paper_campaign(vgt, speeds=(1e-2, 2e-2, 3e-2, 4e-2))
-    for record in synthetic_campaign(vgt, tests, seed=ref.IDENT_SEED):
+    for record in no_stribeck.records:
         record.save(f"fast/{record.source}.csv")
     result = runner.invoke(app, ["identify", "paper", "fast", "--out", "ident"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output

@@ -20,6 +20,7 @@ its table is in ``benchmarks/README.md``.
 from __future__ import annotations
 
 import os
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -47,10 +48,13 @@ def prior_of(truth, rng: np.random.Generator):
 def identify_one(args):
     index, truth = args
     rng = np.random.default_rng(ref.FAMILY_SEED * 1000 + index)
-    prior = prior_of(truth, rng)
-    plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD)
-    records = synthetic_campaign(truth, plan.tests, seed=index)
-    return truth, identify_paper(records, prior, seed=index, workers=1)
+    with warnings.catch_warnings():  # drawn σ1 often break the passivity bound, as Table I's
+        warnings.simplefilter("ignore", pa.PassivityWarning)
+        prior = prior_of(truth, rng)
+        plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.FAMILY_RAMPS)
+        records = synthetic_campaign(truth, plan.tests, seed=index)
+        return truth, identify_paper(records, prior, seed=index, workers=1,
+                                     replicates=ref.FAMILY_REPLICATES)
 
 
 @pytest.fixture(scope="module")
@@ -121,7 +125,7 @@ def test_a_richer_truth_is_flagged_not_trusted(case, vgt):
     table = result.table(vgt if case != "delta" else vgt.replace(delta=2.0))
     if case in ("adiabatic", "sensor lag", "delta"):  # the truth's parameters exist
         trusted = table[table["verdict"] == "identified"]
-        tolerance = trusted.index.map(ref.FAMILY_TOLERANCE_PERCENT)
+        tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in trusted.index])
         assert (trusted["error_%"].abs() <= tolerance).all(), trusted
     assert not result.intervals_hold
     assert table["ci95_low"].isna().all()  # no interval where none holds

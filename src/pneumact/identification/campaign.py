@@ -341,8 +341,11 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
     solver = Rodas4(rtol=1e-9) if solver is None else solver
     records = []
     for test in tests:
-        valve = PressureRegulator() if test.valve == "regulator" else PressureSource()
-        model = Actuator(params, friction=friction, valve=valve, chamber=chamber)
+        if test.valve == "regulator":
+            model = Actuator(params, friction=friction, valve=PressureRegulator(),
+                             chamber=chamber)
+        else:  # the pressure is prescribed: no chamber law applies
+            model = Actuator(params, friction=friction, valve=PressureSource())
         result = simulate(model, test.experiment, solver)
         signals = {"pressure": result["pressure"], "position": result["position"]}
         if test.valve == "regulator":  # the bench logs what it commanded, too

@@ -35,8 +35,8 @@ from .fit import FitResult, fit
 from .stages import presliding_window, prior_bounds, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
-           "SPRING_AND_FRICTION", "amplification", "bench_model", "joint_refinement",
-           "prediction_ratio"]
+           "SPRING_AND_FRICTION", "amplification", "bench_model", "feasible",
+           "joint_refinement", "prediction_ratio"]
 
 #: Tolerance of the joint fit's simulations (see the module docstring).
 JOINT_RTOL = 1e-8
@@ -148,7 +148,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
         dropped: list[str] = []
         result = _fit_records([records[i] for i in used], [kinds[i] for i in used], params,
                               excluded=dropped, **options)
-        params = result.parameters(params.name)
+        params = params.with_values(feasible(result.values, params))
         waiting = [i for i in range(len(records)) if i not in used]
         admitted = [i for i in waiting if prediction_ratio(
             records[i], kinds[i], params, friction, chamber, solver) <= ADMIT_RATIO]
@@ -165,6 +165,16 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
             break
         used = sorted(used + admitted)
     return result
+
+
+def feasible(values: dict[str, float], params) -> dict[str, float]:
+    """The fitted parameter ``values`` (offsets dropped), with Fs raised to Fc where a fit
+    of records that show no static friction above the Coulomb level went below it."""
+    out = {n: v for n, v in values.items() if "[" not in n}
+    fc = out.get("Fc", params["Fc"])
+    if out.get("Fs", params["Fs"]) < fc:
+        out["Fs"] = fc
+    return out
 
 
 def prediction_ratio(record: Record, kind: str, params, friction=None, chamber=None,

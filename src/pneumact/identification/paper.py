@@ -42,7 +42,7 @@ from .diagnostics import (
 )
 from .estimates import Estimates
 from .fit import FitResult
-from .joint import JOINT_RTOL, SPRING_AND_FRICTION, joint_refinement
+from .joint import JOINT_RTOL, SPRING_AND_FRICTION, feasible, joint_refinement
 from .stages import (
     STAGES,
     StageResult,
@@ -94,10 +94,11 @@ def with_estimates(params, estimates: Estimates, sources: dict[str, str], name: 
 
     values = dict(params.values)
     info = dict(params.info)
+    chosen = feasible(estimates.as_dict(), params)  # Fs never below Fc in a parameter set
     for j, pname in enumerate(estimates.names):
         if pname not in params or (keep is not None and pname not in keep):
             continue
-        value = float(estimates.values[j])
+        value = float(chosen.get(pname, estimates.values[j]))
         values[pname] = value
         info[pname] = ParameterInfo(
             number_text(pname, value), sources[pname],
@@ -395,7 +396,7 @@ def _staged(kinds, prior, friction, fit_delta, sliding_speed, prior_spread, step
     diagnostics: list[Diagnostic] = []
     step("spring", 0.0)
     spring = stage_spring(kinds["sweep"], prior)
-    current = prior.replace(F0=spring.estimates["F0"], k=spring.estimates["k"])
+    current = prior.with_values({"F0": spring.estimates["F0"], "k": spring.estimates["k"]})
     stages = {"spring": spring}
     step("sliding", 0.1)
     # the slowest creep that is not sliding: the prior's presliding range, at the low end
@@ -441,7 +442,7 @@ def _accept(params, updates: dict[str, float], stage: str):
                         f"{params[n]:.4g}", REMEDIES.get(n, "")) for n in sorted(refused)]
     kept = {n: v for n, v in updates.items() if n not in refused}
     try:
-        return params.replace(kept), notes
+        return params.with_values(kept), notes
     except ParameterError as exc:  # a relation between the kept ones (Fs < Fc)
         return params, [*notes, Diagnostic("warning", stage, f"its estimates are not "
                                            f"physical together ({exc}); the next stages "
@@ -579,7 +580,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     if not presliding_ok:  # held at the prior; their uncertainty goes into the others'
         held = {n: params[n] * prior_spread / 1.96 for n in PRESLIDING_PARAMETERS}
         free = [n for n in free if n not in held]
-        staged = staged.replace({n: params[n] for n in held})
+        staged = staged.with_values({n: params[n] for n in held})
         diagnostics.append(Diagnostic(
             "warning", "presliding", f"σ0 and σ1 are not identifiable: {why_not}; they are "
             "held at the prior's values, and the uncertainty of those (±"
@@ -617,6 +618,14 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     idx = [final_values.names.index(n) for n in names]
     half = (ci[idx, 1] - ci[idx, 0]) / 2
     caveat = ""
+    estimate = final_values.as_dict()
+    if "Fs" in estimate and "Fc" in estimate and estimate["Fs"] < estimate["Fc"]:
+        diagnostics.append(Diagnostic(
+            "error", "joint", f"the fit asks for Fs = {estimate['Fs']:.4g} N below Fc = "
+            f"{estimate['Fc']:.4g} N: the records show no static friction above the "
+            "Coulomb level, which LuGre cannot produce that way", "check the friction law "
+            "(pneumact compare) and the slow ramps"))
+        misfit = [*misfit, "the Stribeck curve (Fs < Fc)"]
     if not refine and joint_failed:
         caveat = "the joint refinement could not run: staged values, no interval holds"
     elif misfit:

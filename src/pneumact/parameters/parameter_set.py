@@ -214,6 +214,18 @@ class ParameterSet(Mapping[str, float]):
             warn_passivity(ps.values, ps.name, stacklevel=2)
         return ps
 
+    def with_values(self, values: Mapping[str, float]) -> ParameterSet:
+        """A validated copy with SI ``values`` changed, without the passivity and
+        plausibility warnings of ``replace``: for procedures that move values many times
+        (fits, identification) and judge the result as a whole."""
+        changed = {n: float(v) for n, v in values.items()}
+        info = {n: ParameterInfo(number_text(n, v), "computed", "")
+                for n, v in changed.items() if n not in self._info or
+                self._values.get(n) != v}
+        return ParameterSet({**self._values, **changed}, name=self._name,
+                            description=self._description, provenance=self._provenance,
+                            info={**self._info, **info}, source_path=self._source_path)
+
     # -- use by models
     def require(self, names: Iterable[str], model: str) -> None:
         """Raise one ParameterError listing every name that has neither value nor default."""
