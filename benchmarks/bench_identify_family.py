@@ -85,7 +85,7 @@ def main() -> None:
     rows = []
     started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        for (index, seed, truth, _), (result_rows, summary) in zip(
+        for (_index, seed, truth, _), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
             errors = " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows)

@@ -54,7 +54,8 @@ def identify_one(args):
         plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.FAMILY_RAMPS)
         records = synthetic_campaign(truth, plan.tests, seed=index)
         return truth, identify_paper(records, prior, seed=index, workers=1,
-                                     replicates=ref.FAMILY_REPLICATES)
+                                     replicates=ref.FAMILY_REPLICATES,
+                                     max_evaluations=ref.FAMILY_EVALUATIONS)
 
 
 @pytest.fixture(scope="module")

@@ -141,19 +141,22 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
     used = sorted([i for i, k in enumerate(kinds) if k == "sweep"]
                   + ramps[: max(MIN_RECORDS, len(ramps) // 3)])
     result = None
+    chaotic: list[str] = []
+    options.update(screened=set(), weights={})
     for round_ in range(MAX_ROUNDS):
         if progress:
             progress(f"joint refinement: {len(used)} of {len(records)} records",
                      len(used) / len(records))
-        dropped: list[str] = []
         result = _fit_records([records[i] for i in used], [kinds[i] for i in used], params,
-                              excluded=dropped, **options)
+                              excluded=chaotic, **options)
+        used = [i for i in used if records[i].source not in chaotic]
         params = params.with_values(feasible(result.values, params))
-        waiting = [i for i in range(len(records)) if i not in used]
+        waiting = [i for i in range(len(records))
+                   if i not in used and records[i].source not in chaotic]
         admitted = [i for i in waiting if prediction_ratio(
             records[i], kinds[i], params, friction, chamber, solver) <= ADMIT_RATIO]
         if not admitted or round_ == MAX_ROUNDS - 1:
-            excluded.extend(dropped)
+            excluded.extend(chaotic)
             excluded.extend(records[i].source for i in waiting)
             if len(excluded) > MAX_EXCLUDED_SHARE * len(records):
                 raise DataError(
@@ -204,46 +207,51 @@ def prediction_ratio(record: Record, kind: str, params, friction=None, chamber=N
 def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, friction,
                  chamber, free: Sequence[str], solver, replicates: int | None, seed: int,
                  workers: int | None, max_evaluations: int, prior, drop_chaotic: bool,
-                 excluded: list) -> FitResult:
-    """One output-error fit of ``free`` to ``records`` (see ``joint_refinement``)."""
+                 excluded: list, screened: set, weights: dict) -> FitResult:
+    """One output-error fit of ``free`` to ``records`` (see ``joint_refinement``). Only
+    the records not yet in ``screened`` are screened for chaos, and the input-noise
+    weight of a record is computed once (``weights``, by source)."""
     from ..simulation import Rodas4
     from .uncertainty import INPUT_REPLICATES, input_noise_weights
 
     solver = Rodas4(rtol=JOINT_RTOL) if solver is None else solver
-    models, windows, offset_records = [], [], []
-    for i, (record, kind) in enumerate(zip(records, kinds, strict=True)):
-        model = bench_model(record, params, friction, chamber)
-        models.append(model)
-        if kind == "presliding" and "setpoint" not in record:
-            windows.append((presliding_window(record, params), float(record.time[-1])))
-            offset_records.append(i)
-        else:
-            windows.append(None)
-    masks = [np.ones(r.time.size, bool) if w is None else (r.time >= w[0]) & (r.time <= w[1])
-             for r, w in zip(records, windows, strict=True)]
     if drop_chaotic:
-        keep = [i for i, m in enumerate(models)
-                if amplification(m, records[i], params, free, solver) <= CHAOS_AMPLIFICATION]
-        if len(keep) < len(records):
-            chaotic = [records[i].source for i in range(len(records)) if i not in keep]
+        chaotic = [r.source for r in records if r.source not in screened and amplification(
+            bench_model(r, params, friction, chamber), r, params, free, solver)
+            > CHAOS_AMPLIFICATION]
+        screened.update(r.source for r in records)
+        if chaotic:
+            keep = [i for i, r in enumerate(records) if r.source not in chaotic]
             if sum(kinds[i] != "presliding" for i in keep) < MIN_RECORDS:
                 raise DataError(f"joint refinement: the motion of {len(chaotic)} of "
                                 f"{len(records)} records is chaotic in the parameters "
                                 f"(stick-slip); fewer than {MIN_RECORDS} sweeps or ramps "
                                 "are left for output error")
             records = [records[i] for i in keep]
-            models = [models[i] for i in keep]
-            windows = [windows[i] for i in keep]
-            masks = [masks[i] for i in keep]
-            offset_records = [keep.index(i) for i in offset_records if i in keep]
+            kinds = [kinds[i] for i in keep]
             excluded.extend(chaotic)
-    values = dict(params.values)
-    weights = input_noise_weights(models, list(records), values, masks,
-                                  replicates=replicates or INPUT_REPLICATES, seed=seed,
-                                  solver=solver, workers=workers)
+    models, windows, offset_records = [], [], []
+    for i, (record, kind) in enumerate(zip(records, kinds, strict=True)):
+        models.append(bench_model(record, params, friction, chamber))
+        if kind == "presliding" and "setpoint" not in record:
+            windows.append((presliding_window(record, params), float(record.time[-1])))
+            offset_records.append(i)
+        else:
+            windows.append(None)
+    new = [i for i, r in enumerate(records) if r.source not in weights]
+    if new:
+        masks = [np.ones(records[i].time.size, bool) if windows[i] is None else
+                 (records[i].time >= windows[i][0]) & (records[i].time <= windows[i][1])
+                 for i in new]
+        found = input_noise_weights([models[i] for i in new], [records[i] for i in new],
+                                    dict(params.values), masks,
+                                    replicates=replicates or INPUT_REPLICATES, seed=seed,
+                                    solver=solver, workers=workers)
+        weights.update({records[i].source: w for i, w in zip(new, found, strict=True)})
+    record_weights = [weights[r.source] for r in records]
     bounds = prior_bounds(params if prior is None else prior, free)
     return fit(models, list(records), list(free), window=windows,
                offsets=["position"] if offset_records else (),
-               offset_records=offset_records, solver=solver, record_weights=weights,
-               max_nfev=max_evaluations, bounds=bounds,
+               offset_records=offset_records, solver=solver,
+               record_weights=record_weights, max_nfev=max_evaluations, bounds=bounds,
                start=within({n: params[n] for n in free}, bounds))

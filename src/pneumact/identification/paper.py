@@ -42,7 +42,13 @@ from .diagnostics import (
 )
 from .estimates import Estimates
 from .fit import FitResult
-from .joint import JOINT_RTOL, SPRING_AND_FRICTION, feasible, joint_refinement
+from .joint import (
+    JOINT_RTOL,
+    MAX_EVALUATIONS,
+    SPRING_AND_FRICTION,
+    feasible,
+    joint_refinement,
+)
 from .stages import (
     STAGES,
     StageResult,
@@ -472,7 +478,7 @@ def _presliding_identifiable(kinds, staged) -> tuple[bool, str]:
 
 
 def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed, workers,
-            step, prior, held: dict[str, float]):
+            step, prior, held: dict[str, float], max_evaluations: int):
     """The joint refinement, its input-noise covariance, the share of the parameters
     ``held`` at the prior (name -> standard deviation of the prior's value), and its
     residual checks. Returns (joint fit, input noise, final estimates, residual checks,
@@ -484,7 +490,8 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     chaotic: list[str] = []
     joint = joint_refinement(records, kinds, staged, friction=friction, chamber=chamber,
                              free=free, replicates=replicates, seed=seed, workers=workers,
-                             prior=prior, excluded=chaotic)
+                             prior=prior, excluded=chaotic,
+                             max_evaluations=max_evaluations)
     for name in chaotic:
         diagnostics.append(Diagnostic(
             "warning", "joint", f"{Path(name).name} left out of the joint fit: the model "
@@ -546,7 +553,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
                    replicates: int | None = None, seed: int = 0, workers: int | None = None,
-                   name: str | None = None,
+                   max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
                    progress: Callable[[str, float], None] | None = None
                    ) -> PaperIdentification:
     """Identify the actuator from bench ``records`` (sweeps, ramps, presliding tests; see
@@ -559,8 +566,9 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     threshold of eq. 13 instead of deriving it from vs (it is then only checked).
     ``refine=False`` stops after the stages (fast; their intervals are conditional on
     the earlier stages). ``replicates`` of the input-noise bootstrap (default
-    ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads. ``progress(stage,
-    fraction)`` is called as the work goes on.
+    ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads; each round of the joint
+    fit gives up after ``max_evaluations``. ``progress(stage, fraction)`` is called as
+    the work goes on.
     """
     from ..io.records import as_records
     from ..parameters import as_parameter_set
@@ -593,7 +601,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             joint, input_noise, final_values, residuals, found = _refine(
                 records, [record_kind(r) for r in records], staged, friction=friction,
                 chamber=chamber, free=free, replicates=replicates, seed=seed,
-                workers=workers, step=step, prior=params, held=held)
+                workers=workers, step=step, prior=params, held=held,
+                max_evaluations=max_evaluations)
             diagnostics += found
         except DataError as exc:  # nothing left that output error can follow
             diagnostics.append(Diagnostic("error", "joint", str(exc), "ramps at speeds "
