@@ -287,13 +287,14 @@ def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike
     from pathlib import Path
 
     from pneumact.io import atomic_write
+    from pneumact.io.report import write_png
 
     figure = getattr(fig, "figure", None) if not hasattr(fig, "savefig") else fig
     if figure is None or not hasattr(figure, "savefig"):
         raise DataError(f"save_figure: expected a matplotlib Figure or Axes, got {type(fig)}")
     target = Path(path)
     with atomic_write(target) as tmp:
-        figure.savefig(tmp, format="png", dpi=PNG_DPI, bbox_inches="tight")
+        write_png(figure, tmp, PNG_DPI)
     return target
 
 
@@ -338,9 +339,11 @@ def figure_writer(make):
     def write(path):
         import matplotlib.pyplot as plt
 
+        from pneumact.io.report import write_png
+
         fig = make()
         try:
-            fig.savefig(path, format="png", dpi=PNG_DPI, bbox_inches="tight")
+            write_png(fig, path, PNG_DPI)
         finally:
             plt.close(fig)
 

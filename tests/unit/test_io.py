@@ -343,3 +343,34 @@ def test_gauge_column_becomes_absolute_pressure_with_p_atm(tmp_path):
 def test_repeated_time_is_named_as_a_duplicate_sample(tmp_path):
     path = _write(tmp_path / "d.csv", "time [s],position [mm]\n0,1\n1,2\n1,2\n")
     assert "repeats" in _error(path)
+
+
+def test_figures_do_not_pass_on_the_slow_legend_warning_but_others():
+    import warnings
+
+    import matplotlib
+    import matplotlib.artist
+    from matplotlib.figure import Figure
+
+    from pneumact.io.report import figure_png
+
+    matplotlib.use("Agg")
+
+    class Warns(matplotlib.artist.Artist):
+        def __init__(self, message):
+            super().__init__()
+            self.message = message
+
+        def draw(self, renderer):
+            warnings.warn(self.message, UserWarning, stacklevel=1)
+
+    fig = Figure()
+    fig.add_artist(Warns('Creating legend with loc="best" can be slow with large amounts '
+                         'of data.'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert figure_png(fig).startswith(b"\x89PNG")
+    fig = Figure()
+    fig.add_artist(Warns("something else"))
+    with pytest.warns(UserWarning, match="something else"):
+        figure_png(fig)

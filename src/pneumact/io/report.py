@@ -12,6 +12,7 @@ import base64
 import datetime as _dt
 import io
 import platform
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,13 +47,23 @@ def parameter_notes(params) -> list[str]:
     return [n for n in notes if n]
 
 
+def write_png(fig, target, dpi: int) -> None:
+    """Draw ``fig`` as PNG into ``target`` (a path or a binary file). Matplotlib warns
+    when placing a ``loc="best"`` legend over many points took it over a second, a
+    matter of the machine's load, not of the figure: that warning is not passed on."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message='Creating legend with loc="best"',
+                                category=UserWarning)
+        fig.savefig(target, format="png", dpi=dpi, bbox_inches="tight")
+
+
 def figure_png(fig, dpi: int = 110) -> bytes:
     """A matplotlib figure as PNG bytes (the figure is closed)."""
     import matplotlib.pyplot as plt
 
     buffer = io.BytesIO()
     try:
-        fig.savefig(buffer, format="png", dpi=dpi, bbox_inches="tight")
+        write_png(fig, buffer, dpi)
     finally:
         plt.close(fig)
     return buffer.getvalue()
