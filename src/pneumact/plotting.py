@@ -53,7 +53,7 @@ PNG_DPI = 120
 # --------------------------------------------------------------------------- access
 
 
-def _get(source: Any, name: str) -> np.ndarray:
+def signal_values(source: Any, name: str) -> np.ndarray:
     """Signal ``name`` (or "time") of a Result, Record, DataFrame or mapping, as floats."""
     if hasattr(source, "result") and hasattr(source, "kind"):  # a FrictionTestResult
         source = source.result
@@ -82,7 +82,8 @@ def _names(source: Any) -> str:
         return "(unknown)"
 
 
-def _has(source: Any, name: str) -> bool:
+def has_signal(source: Any, name: str) -> bool:
+    """Whether ``source`` (as for ``signal_values``) carries signal ``name``."""
     if hasattr(source, "result") and hasattr(source, "kind"):
         source = source.result
     if hasattr(source, "columns"):
@@ -112,16 +113,17 @@ def _unit_of(source: Any, name: str) -> str:
     return KNOWN_SIGNALS.get(name, "")
 
 
-def _display(source: Any, name: str) -> tuple[np.ndarray, str]:
+def display_values(source: Any, name: str) -> tuple[np.ndarray, str]:
     """(values in display units, axis label "name [unit]")."""
-    values = _get(source, name)
+    values = signal_values(source, name)
     unit = _unit_of(source, name)
     shown, factor = _SIGNAL_DISPLAY.get(name) or DISPLAY_UNITS.get(unit, (unit, 1.0))
     label = name.replace("_", " ")
     return values * factor, f"{label} [{shown}]" if shown else label
 
 
-def _new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
+def new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
+    """A figure of ``nrows`` stacked axes: (figure, list of axes)."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(nrows, 1, sharex=sharex, squeeze=False,
@@ -138,14 +140,14 @@ def plot_hysteresis(result_or_frame: Any, ax: Axes | None = None, label: str | N
     Figs. 5-6; ``reference`` (a Result, Record or DataFrame, e.g. a measurement) is
     overlaid as a dashed black line. Returns the Axes."""
     if ax is None:
-        _, (ax,) = _new_axes()
-    pressure = _get(result_or_frame, "pressure") * 1e-3
-    position = _get(result_or_frame, "position") * 1e3
+        _, (ax,) = new_axes()
+    pressure = signal_values(result_or_frame, "pressure") * 1e-3
+    position = signal_values(result_or_frame, "position") * 1e3
     ax.plot(pressure, position, label=label or ("simulated" if reference is not None
                                                  else None), **line_kw)
     if reference is not None:
-        ax.plot(_get(reference, "pressure") * 1e-3, _get(reference, "position") * 1e3,
-                "k--", linewidth=1.0, label="measured")
+        ax.plot(signal_values(reference, "pressure") * 1e-3,
+                signal_values(reference, "position") * 1e3, "k--", linewidth=1.0, label="measured")
     ax.set_xlabel("pressure [kPa abs]")
     ax.set_ylabel("position [mm]")
     ax.grid(True, alpha=0.3)
@@ -159,22 +161,22 @@ def plot_time_series(result: Any, signals: Sequence[str] | None = None,
     """One panel per signal (default: pressure, position, velocity, friction, those
     present), in display units, over a shared time axis [s]. Returns the Figure."""
     if signals is None:
-        signals = [s for s in _DEFAULT_SIGNALS if _has(result, s)]
+        signals = [s for s in _DEFAULT_SIGNALS if has_signal(result, s)]
         signals += [s for s in _names(result).split(", ") if s.startswith("drive_")]
     if isinstance(signals, str):
         signals = [signals]
     if not signals:
         raise DataError("plot_time_series: no signal to plot; pass signals=[...]")
     if axes is None:
-        fig, axes = _new_axes(len(signals))
+        fig, axes = new_axes(len(signals))
     else:
         axes = list(np.ravel(axes))
         if len(axes) < len(signals):
             raise DataError(f"plot_time_series: {len(signals)} signals but {len(axes)} axes")
         fig = axes[0].figure
-    time = _get(result, "time")
+    time = signal_values(result, "time")
     for ax, name in zip(axes, signals, strict=False):
-        values, ylabel = _display(result, name)
+        values, ylabel = display_values(result, name)
         ax.plot(time, values)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
@@ -184,15 +186,15 @@ def plot_time_series(result: Any, signals: Sequence[str] | None = None,
 
 def _drive_force_name(result: Any) -> str | None:
     for name in ("drive_force", "drive_drive_force"):
-        if _has(result, name):
+        if has_signal(result, name):
             return name
     return None
 
 
 def _xy(ax: Axes, source: Any, x: str, ys: Sequence[str], **kw) -> None:
-    xv, xlabel = _display(source, x)
+    xv, xlabel = display_values(source, x)
     for y in ys:
-        yv, ylabel = _display(source, y)
+        yv, ylabel = display_values(source, y)
         ax.plot(xv, yv, label=y.replace("_", " "), **kw)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel if len(ys) == 1 else "force [N]")
@@ -257,15 +259,15 @@ def plot_friction_test(result: Any, kind: str) -> Figure:
     table = getattr(result, "table", None)
     drive_force = _drive_force_name(result)
     if kind in ("steady-state", "frictional-lag"):
-        fig, (ax,) = _new_axes()
+        fig, (ax,) = new_axes()
         if table is None or not _curve_from_table(ax, table, kind):
             _xy(ax, result, "velocity", ["friction"])
     elif kind == "presliding":
-        fig, (ax,) = _new_axes()
+        fig, (ax,) = new_axes()
         ys = ["friction"] + ([drive_force] if drive_force else [])
-        xv = _get(result, "position") * 1e6
+        xv = signal_values(result, "position") * 1e6
         for y in ys:
-            ax.plot(xv, _get(result, y), label=y.replace("_", " "))
+            ax.plot(xv, signal_values(result, y), label=y.replace("_", " "))
         ax.set_xlabel("position [µm]")
         ax.set_ylabel("force [N]")
         ax.legend()

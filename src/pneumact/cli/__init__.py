@@ -26,7 +26,6 @@ from typing import Annotated
 
 import typer
 
-from pneumact import __version__
 from pneumact.cli.batch import batch
 from pneumact.cli.common import out_console
 from pneumact.cli.control import control_app
@@ -37,6 +36,7 @@ from pneumact.cli.reproduce import reproduce_command
 from pneumact.cli.sensitivity import sensitivity
 from pneumact.cli.simulate import simulate
 from pneumact.cli.validate import validate_command
+from pneumact.version import __version__
 
 app = typer.Typer(
     name="pneumact",

@@ -343,11 +343,10 @@ def replay_drive(record: Record, friction, *, gains: Mapping[str, float] | None 
     sign's rounding. ``velocity_cutoff`` [Hz]: the low-pass before the velocity's
     central difference. ``solver``: default ``Rodas4()``.
     """
-    import pneumact as pa
-
     from ..experiments.setpoints import SetpointProfile
     from ..experiments.signals import Constant, PiecewiseLinear
     from ..simulation.assembly import assemble
+    from ..simulation.simulate import simulate
     from .controllers import Cascade
     from .loop import ClosedLoop
 
@@ -402,7 +401,7 @@ def replay_drive(record: Record, friction, *, gains: Mapping[str, float] | None 
         y0[i] = start.get(name, 0.0)
 
     began = _time.perf_counter()
-    result = pa.simulate(loop, experiment, solver, t_eval=grid, y0=y0)
+    result = simulate(loop, experiment, solver, t_eval=grid, y0=y0)
     wall = _time.perf_counter() - began
     x = result.signals["position"][:n]
     force = g["gtau"] * result.signals["command"][:n]

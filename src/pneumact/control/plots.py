@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..plotting import _display, _get, _has, _new_axes
+from ..plotting import display_values, has_signal, new_axes, signal_values
 from .metrics import LoopMetrics, _rise_times
 
 if TYPE_CHECKING:
@@ -30,10 +30,10 @@ def plot_loop(result: Any, metrics: LoopMetrics | None = None) -> Figure:
     throughout, the friction compensation [N]; (4) velocity [mm/s]. ``result``: a Result
     or a DataFrame with the same signals (``time``, ``position``, ``setpoint`` required).
     The key metrics go into the title. Returns the Figure."""
-    time = _get(result, "time")
-    position = _get(result, "position")
-    setpoint = _get(result, "setpoint")
-    fig, (ax_x, ax_u, ax_f, ax_v) = _new_axes(4, height=9.0)
+    time = signal_values(result, "time")
+    position = signal_values(result, "position")
+    setpoint = signal_values(result, "setpoint")
+    fig, (ax_x, ax_u, ax_f, ax_v) = new_axes(4, height=9.0)
 
     ax_x.plot(time, setpoint * _MM, "k--", linewidth=1.0, label="set-point")
     ax_x.plot(time, position * _MM, "C0-", label="position")
@@ -42,17 +42,17 @@ def plot_loop(result: Any, metrics: LoopMetrics | None = None) -> Figure:
     ax_x.set_ylabel("position [mm]")
     ax_x.legend(loc="best", fontsize=8)
 
-    if _has(result, "command"):
-        values, label = _display(result, "command")
+    if has_signal(result, "command"):
+        values, label = display_values(result, "command")
         ax_u.plot(time, values, "C1-")
         ax_u.set_ylabel(label)
     else:
         _absent(ax_u, "command")
 
-    if _has(result, "friction"):
-        ax_f.plot(time, _get(result, "friction"), "C3-", label="friction")
-        if _has(result, "friction_compensation"):
-            compensation = _get(result, "friction_compensation")
+    if has_signal(result, "friction"):
+        ax_f.plot(time, signal_values(result, "friction"), "C3-", label="friction")
+        if has_signal(result, "friction_compensation"):
+            compensation = signal_values(result, "friction_compensation")
             if np.any(compensation != 0.0):
                 ax_f.plot(time, compensation, "C2-", linewidth=1.0,
                           label="friction compensation")
@@ -61,8 +61,8 @@ def plot_loop(result: Any, metrics: LoopMetrics | None = None) -> Figure:
     else:
         _absent(ax_f, "friction")
 
-    if _has(result, "velocity"):
-        velocity = _get(result, "velocity")
+    if has_signal(result, "velocity"):
+        velocity = signal_values(result, "velocity")
         ax_v.plot(time, velocity * _MM, "C4-")
         if metrics is not None and metrics.stick_speed > 0:
             for sign in (-1.0, 1.0):

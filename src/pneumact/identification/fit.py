@@ -675,9 +675,9 @@ def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, sched
         return [_solve(problem, starts[0], lo, hi, loss, f_scale, max_nfev)]
     options = (lo, hi, loss, f_scale, max_nfev)
     if scheduler is not None:
-        from ..simulation.batch.engine import _client_for
+        from ..simulation.batch.engine import dask_client
 
-        client, owned = _client_for(scheduler)
+        client, owned = dask_client(scheduler)
         try:
             futures = client.map(_solve_copy, [problem] * len(starts), starts,
                                  [options] * len(starts), pure=False)

@@ -646,7 +646,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         judged += [Verdict(n, "not identifiable", why_not, REMEDIES[n]) for n in held]
         final_values = _with_held(final_values, list(held), staged)
     when = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-    from .. import __version__
+    from ..version import __version__
 
     names = [n for n in final_values.names if "[" not in n]
     idx = [final_values.names.index(n) for n in names]

@@ -127,7 +127,7 @@ class Report:
     def render(self) -> str:
         import jinja2
 
-        from .. import __version__
+        from ..version import __version__
 
         env = jinja2.Environment(loader=jinja2.PackageLoader("pneumact.io", "templates"),
                                  autoescape=jinja2.select_autoescape(["html", "j2"]))

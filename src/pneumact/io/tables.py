@@ -145,7 +145,7 @@ def _commit(stage: Path, out: Path, replace: bool, resumable: bool = False) -> l
     if replace:
         import time
 
-        from pneumact import __version__
+        from ..version import __version__
 
         listing = {"files": entries, "pneumact": __version__, "resumable": resumable,
                    "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}

@@ -28,7 +28,7 @@ from typing import ClassVar
 
 from numba import njit
 
-from ..experiments.signals import Signal, channel_eval
+from ..experiments.signals import Signal, channel_eval, map_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
 from .component import Block, Part, StateSpec
@@ -140,8 +140,8 @@ def _valve_flows(pressure, u, p, o, sig, ptr):  # pragma: no cover - compiled
     Orifice flow is linear in the area, so each orifice is evaluated once per unit area
     and scaled by the mapped opening.
     """
-    m_res, dm_res = channel_eval(sig, ptr, CH_MAP_RES, u, u)
-    m_atm, dm_atm = channel_eval(sig, ptr, CH_MAP_ATM, u, u)
+    m_res, dm_res = map_eval(sig, ptr, CH_MAP_RES, u)
+    m_atm, dm_atm = map_eval(sig, ptr, CH_MAP_ATM, u)
     a_res = p[o + PN_ARES] * m_res
     a_atm = p[o + PN_AATM] * m_atm
     q_in, _, dqin_dp = orifice_of(p[o + PN_PATM], pressure, p, o)
@@ -175,8 +175,8 @@ def chamber_jac(x, v, pressure, mdot, dmdot_dp, ad, v0, n, rt):  # pragma: no co
 @njit(cache=True)
 def _chamber_params(x, v, pressure, u, p, o, sig, ptr, g, row):  # pragma: no cover
     """g[row, o + k] = ∂ṗ/∂p_k for the chamber block entries k."""
-    m_res = channel_eval(sig, ptr, CH_MAP_RES, u, u)[0]
-    m_atm = channel_eval(sig, ptr, CH_MAP_ATM, u, u)[0]
+    m_res = map_eval(sig, ptr, CH_MAP_RES, u)[0]
+    m_atm = map_eval(sig, ptr, CH_MAP_ATM, u)[0]
     p_atm, p_res = p[o + PN_PATM], p[o + PN_PRES]
     q_in, dqin_dpatm, _ = orifice_of(p_atm, pressure, p, o)
     q_out, _, dqout_dpres = orifice_of(pressure, p_res, p, o)

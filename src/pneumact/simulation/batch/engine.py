@@ -132,7 +132,7 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
     return spec, values, runner
 
 
-def _client_for(scheduler):
+def dask_client(scheduler):
     """(client, whether we own it) for an address string or a distributed.Client."""
     try:
         from distributed import Client
@@ -262,7 +262,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     n, n_t = values.shape[0], runner.t_out.size
     check_memory(batch_bytes(n, len(spec.signals), n_t, len(spec.features)),
                  f"simulate_batch: {n} sets x {len(spec.signals)} signals x {n_t} times")
-    client, own_client = (None, False) if scheduler is None else _client_for(scheduler)
+    client, own_client = (None, False) if scheduler is None else dask_client(scheduler)
     try:
         n_workers = (max(1, len(client.scheduler_info().get("workers", {}))) if client
                      else workers or (os.cpu_count() or 1))
