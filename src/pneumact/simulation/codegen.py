@@ -12,8 +12,10 @@ compiles once per machine and loads from disk afterwards. Parameter values are a
 runtime array: changing them never recompiles.
 
 The generated file's name carries a key over its own text, every pneumact source file
-the kernel depends on (found by following the imports of the templates and of the
-component modules, not from a list kept by hand), and the numba and Python versions.
+the kernel depends on (found by following the module-level imports of the templates and
+of the component modules, not from a list kept by hand: an import inside a function
+binds no global that compiled code reads), and the numba and Python versions. An edit
+to the CLI, a plot or the identification therefore recompiles nothing.
 Files are created atomically and only if absent, so several processes may generate the
 same kernel at once.
 """
@@ -36,7 +38,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "kernel", "kernel_key", "load"]
+__all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
+           "kernel_key", "load"]
 
 _LOCK = threading.RLock()
 _LOADED: dict[str, types.ModuleType] = {}
@@ -128,12 +131,35 @@ def _module_file(name: str) -> Path | None:
     return next((path for path in candidates if path.is_file()), None)
 
 
-def _imported_modules(name: str, path: Path) -> set[str]:
-    """pneumact modules imported by the module ``name`` (absolute and relative imports)."""
+def _import_time_statements(body: list[ast.stmt]) -> Iterable[ast.stmt]:
+    """The statements of a module that run when it is imported: its body, through
+    ``if``/``try``/``with`` blocks and class bodies, but not function bodies (an import
+    inside a function cannot bind a global that compiled code reads) nor
+    ``if TYPE_CHECKING:`` blocks."""
+    for node in body:
+        yield node
+        if isinstance(node, ast.If):
+            test = node.test
+            checking = (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+                isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+            if not checking:
+                yield from _import_time_statements(node.body)
+            yield from _import_time_statements(node.orelse)
+        elif isinstance(node, ast.Try):
+            for block in (node.body, node.orelse, node.finalbody,
+                          *(handler.body for handler in node.handlers)):
+                yield from _import_time_statements(block)
+        elif isinstance(node, (ast.With, ast.ClassDef)):
+            yield from _import_time_statements(node.body)
+
+
+def import_time_imports(name: str, path: Path) -> set[str]:
+    """pneumact modules imported by the module ``name`` when it is imported (absolute and
+    relative imports at module level: see ``_import_time_statements``)."""
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
-    for node in ast.walk(tree):
+    for node in _import_time_statements(tree.body):
         if isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -148,7 +174,8 @@ def _imported_modules(name: str, path: Path) -> set[str]:
 
 
 def dependency_files(modules: Iterable[str]) -> list[Path]:
-    """Every pneumact source file reachable by imports from ``modules`` (sorted)."""
+    """Every pneumact source file reachable by import-time imports from ``modules``
+    (sorted): the code that can reach a kernel built from them."""
     return list(_dependency_closure(tuple(sorted(modules))))
 
 
@@ -164,7 +191,7 @@ def _dependency_closure(modules: tuple[str, ...]) -> tuple[Path, ...]:
         if path is None:
             continue  # an attribute imported with "from x import y", not a module
         seen[name] = path
-        todo.extend(_imported_modules(name, path) - set(seen))
+        todo.extend(import_time_imports(name, path) - set(seen))
     return tuple(sorted(set(seen.values())))
 
 
