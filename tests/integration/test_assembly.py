@@ -165,3 +165,61 @@ def test_parameters_not_used_by_the_model_are_refused(canudas):
         assembly.check_parameters(["A_d"], "table column")
     vec = assembly.pack()
     assert np.all(np.isfinite(vec))
+
+
+def _templates(tmp_path, monkeypatch, **sources: str) -> None:
+    """Write template modules ``name -> source`` where they can be imported."""
+    for name, source in sources.items():
+        (tmp_path / f"{name}.py").write_text(textwrap.dedent(source))
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+
+MODEL = """
+    from pneumact.simulation.codegen import kernel
+    helper = None
+    SCALE = 2.0
+    NOUT = 7  # a placeholder: the generated module says how many outputs there are
+    @kernel()
+    def rhs(x):
+        return SCALE * helper(x) + NOUT
+"""
+DRIVER = """
+    from pneumact.simulation.codegen import kernel
+    rhs = None
+    OPTIONAL_FUNCTIONS = ("jump",)
+    jump = None
+    SCALE = {scale}
+    NOUT = 1
+    @kernel()
+    def helper(x):
+        return x + 1.0
+    @kernel()
+    def run(x):
+        return rhs(x)
+"""
+
+
+@pytest.mark.parametrize("order", [("model_t", "driver_t"), ("driver_t", "model_t")])
+def test_binding_does_not_depend_on_the_order(tmp_path, monkeypatch, order):
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path / "cache"))
+    _templates(tmp_path, monkeypatch, model_t=MODEL, driver_t=DRIVER.format(scale=2.0))
+    spec = codegen.KernelSpec(f"order_{order[0]}", order, (), (("NOUT", 3),))
+    module = codegen.load(spec)
+    assert module.run(1.0) == 2.0 * 2.0 + 3  # NOUT from the generated module
+    assert module.jump is None  # optional, and nobody defines it
+
+
+def test_a_name_two_templates_define_differently_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path / "cache"))
+    _templates(tmp_path, monkeypatch, model_c=MODEL, driver_c=DRIVER.format(scale=3.0))
+    spec = codegen.KernelSpec("clash", ("model_c", "driver_c"), (), (("NOUT", 3),))
+    with pytest.raises(pa.PneumactError, match="driver_c and model_c both define 'SCALE'"):
+        codegen.load(spec)
+
+
+def test_a_function_nobody_defines_is_named(tmp_path, monkeypatch):
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path / "cache"))
+    _templates(tmp_path, monkeypatch, model_m=MODEL)
+    spec = codegen.KernelSpec("missing", ("model_m",), (), (("NOUT", 3),))
+    with pytest.raises(pa.PneumactError, match="model_m needs 'helper'"):
+        codegen.load(spec)

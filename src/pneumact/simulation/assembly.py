@@ -201,7 +201,8 @@ class Assembly:
             imports.extend(part.functions.items())
             imports.extend(part.constants.items())
         constants: list[tuple[str, object]] = [("NSTATE", len(self.states)),
-                                               ("NPARAM", self.size)]
+                                               ("NPARAM", self.size),
+                                               ("NOUT", len(self.output_names))]
         for role, (lo, hi) in self.block_ranges.items():
             constants += [(f"{role.upper()}_LO", lo), (f"{role.upper()}_HI", hi)]
         first = 0

@@ -41,6 +41,9 @@ from pathlib import Path
 __all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
            "kernel_key", "load"]
 
+#: a template's tuple of the placeholders it can do without (called only under a switch)
+OPTIONAL = "OPTIONAL_FUNCTIONS"
+
 _LOCK = threading.RLock()
 _LOADED: dict[str, types.ModuleType] = {}
 _PACKAGE = "pneumact"
@@ -259,18 +262,60 @@ def _write_once(path: Path, text: str) -> None:
         os.unlink(tmp)
 
 
-def _bind(namespace: dict, template: types.ModuleType, filename: str) -> None:
-    """Copy the template's other globals where the generated module has none, then bind
-    its ``@kernel`` functions to the generated namespace, compiled with disk caching."""
+def _same(a: object, b: object) -> bool:
+    """Whether two template globals are the same thing (one object, or equal constants)."""
+    if a is b:
+        return True
+    try:
+        return type(a) is type(b) and bool(a == b)
+    except (TypeError, ValueError):  # e.g. arrays: only the same object is the same
+        return False
+
+
+def _bind(namespace: dict, template: types.ModuleType, filename: str,
+          provided: frozenset[str], origins: dict[str, str], needs: dict[str, str]) -> None:
+    """Bind ``template``'s ``@kernel`` functions to the generated namespace, compiled
+    with disk caching, with the template's other globals beside them.
+
+    A global the generated module ``provided`` (its imports and constants: the layout,
+    the chosen components) is the template's placeholder and is not copied. A global
+    set to None is a placeholder for a function another template defines: it is
+    recorded in ``needs`` (name -> template; ``_verify_needs`` checks them once all are
+    bound) unless the template lists it in ``OPTIONAL_FUNCTIONS``. Any other global is
+    copied; if another template bound before it holds a different value under that
+    name, which one a kernel function would read depends on the binding order, so that
+    is refused naming both (``origins``: name -> template that defined it).
+    """
     import numba
+
+    from ..errors import PneumactError
 
     marked = {name: obj for name, obj in vars(template).items()
               if getattr(obj, "__kernel_options__", None) is not None
               and getattr(obj, "__module__", None) == template.__name__}
+    optional = set(getattr(template, OPTIONAL, ()))
     for name, obj in vars(template).items():
-        if name not in namespace and name not in marked and not name.startswith("__"):
+        if name.startswith("__") or name in marked or name in provided or name == OPTIONAL:
+            continue
+        if obj is None:  # a placeholder: another template or a component defines it
+            if name in optional:  # ... or nobody, and the template does without it
+                namespace.setdefault(name, None)
+            else:
+                needs.setdefault(name, template.__name__)
+            continue
+        if name in namespace and not _same(namespace[name], obj):
+            raise PneumactError(
+                f"kernel {namespace['__name__']}: {template.__name__} and "
+                f"{origins.get(name, 'the generated module')} both define {name!r} with "
+                f"different values; a name the templates share must be generated (a "
+                f"constant of the kernel spec) or defined once")
+        if name not in namespace:
             namespace[name] = obj
+            origins[name] = template.__name__
     for name, fn in marked.items():
+        if name in origins:
+            raise PneumactError(f"kernel {namespace['__name__']}: {template.__name__} and "
+                                f"{origins[name]} both define the kernel function {name!r}")
         code = fn.__code__.replace(co_filename=filename)
         bound = types.FunctionType(code, namespace, name, fn.__defaults__, fn.__closure__)
         bound.__qualname__ = f"{template.__name__.rpartition('.')[2]}.{fn.__qualname__}"
@@ -280,16 +325,34 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str) -> None:
         if name.startswith("_"):  # called from compiled code only: no Python wrapper
             options.setdefault("no_cpython_wrapper", True)
         namespace[name] = numba.njit(cache=True, **options)(bound)
+        origins[name] = template.__name__
 
 
-def _bind_child(namespace: dict, child: Child, filename: str) -> None:
+def _verify_needs(namespace: dict, needs: dict[str, str]) -> None:
+    """Every placeholder a template declared is defined by now (by another template, a
+    child or a component); else name it and the template that needs it."""
+    from ..errors import PneumactError
+
+    missing = sorted(name for name in needs if namespace.get(name) is None)
+    if missing:
+        raise PneumactError(
+            f"kernel {namespace['__name__']}: " + "; ".join(
+                f"{needs[name]} needs {name!r}, which no template, child or component "
+                "of this model defines" for name in missing))
+
+
+def _bind_child(namespace: dict, child: Child, filename: str,
+                provided: frozenset[str]) -> None:
     """Bind ``child.template`` in a copy of ``namespace`` and export its compiled
     functions to ``namespace`` under ``child.prefix``."""
     own = {k: v for k, v in namespace.items() if not k.startswith("__")}
     own["__name__"] = namespace["__name__"]
     own.update(child.constants)
     template = importlib.import_module(child.template)
-    _bind(own, template, filename)
+    needs: dict[str, str] = {}
+    _bind(own, template, filename, provided | {name for name, _ in child.constants}, {},
+          needs)
+    _verify_needs(own, needs)
     for name, obj in vars(template).items():
         if getattr(obj, "__kernel_options__", None) is not None and \
                 getattr(obj, "__module__", None) == template.__name__:
@@ -312,10 +375,16 @@ def load(spec: KernelSpec) -> types.ModuleType:
         module_spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(module_spec)
         module_spec.loader.exec_module(module)
+        provided = frozenset([*(alias for alias, _ in spec.imports),
+                              *(name for name, _ in spec.constants)])
         for child in spec.children:
-            _bind_child(module.__dict__, child, str(path))
+            _bind_child(module.__dict__, child, str(path), provided)
+        origins: dict[str, str] = {}
+        needs: dict[str, str] = {}
         for template in spec.templates:
-            _bind(module.__dict__, importlib.import_module(template), str(path))
+            _bind(module.__dict__, importlib.import_module(template), str(path), provided,
+                  origins, needs)
+        _verify_needs(module.__dict__, needs)
         sys.modules[name] = module
         _LOADED[name] = module
         return module

@@ -32,6 +32,8 @@ from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------
 rhs = jac = outputs = param_jac = derive = project = jump = None
+#: only a model with jumps defines ``jump`` (it is called under ``HAS_JUMPS``)
+OPTIONAL_FUNCTIONS = ("jump",)
 #: a model with a sampled part (a digital controller) updates it at breakpoints
 HAS_JUMPS = False
 NSTATE = 3
