@@ -49,3 +49,31 @@ def test_the_identification_page_runs(tmp_path, monkeypatch):
     assert ((identified["value"] / identified["truth"] - 1).abs() * 100 <= tolerance).all()
     assert (table.loc[table["verdict"] != "identified", "reason"].str.len() > 0).all()
     assert (tmp_path / "identification" / "report.html").exists()
+
+
+def _run_page(name: str, tmp_path, monkeypatch) -> dict:
+    monkeypatch.chdir(tmp_path)
+    page = PAGE.with_name(name)
+    blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
+    assert blocks, name
+    namespace: dict = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"{page.name}, block {i + 1}", "exec"), namespace)
+    return namespace
+
+
+def test_the_model_page_runs_and_names_every_assumed_value(tmp_path, monkeypatch):
+    namespace = _run_page("model.md", tmp_path, monkeypatch)
+    text = PAGE.with_name("model.md").read_text(encoding="utf-8")
+    params = namespace["params"]
+    assumed = [n for n, info in params.info.items() if info.source == "assumed"]
+    assert assumed
+    for name in assumed:  # the page says what the paper does not give
+        words = {"x_max": "x_max", "gamma": "γ", "R": "R 287", "T": "T 293.15",
+                 "p_res": "reservoir", "A_res": "valve areas", "A_atm": "valve areas"}
+        assert words.get(name, name) in text, name
+
+
+def test_the_architecture_page_runs(tmp_path, monkeypatch):
+    namespace = _run_page("architecture.md", tmp_path, monkeypatch)
+    assert "plotting.py" not in namespace["reached"]
