@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -223,3 +224,19 @@ def test_a_function_nobody_defines_is_named(tmp_path, monkeypatch):
     spec = codegen.KernelSpec("missing", ("model_m",), (), (("NOUT", 3),))
     with pytest.raises(pa.PneumactError, match="model_m needs 'helper'"):
         codegen.load(spec)
+
+
+def test_output_indices_are_generated_from_the_names(valve_actuator):
+    assembly = assemble(valve_actuator)
+    constants = dict(assembly.kernel_spec().constants)
+    assert constants["NOUT"] == len(assembly.output_names)
+    for i, name in enumerate(assembly.output_names):
+        assert constants[f"OUT_{name.upper()}"] == i
+    # and no template numbers an output by hand
+    templates = Path(codegen.__file__).with_name("templates")
+    for path in templates.glob("*.py"):
+        # (the integrators' O_* are slots of their own info array, not outputs)
+        hand = re.findall(r"^(?:NOUT|OUT_\w+) = \d+", path.read_text(), re.M)
+        if path.name != "integrators.py":
+            hand += re.findall(r"^O_\w+ = \d+", path.read_text(), re.M)
+        assert not hand, (path.name, hand)

@@ -159,8 +159,12 @@ class ClosedLoop:
 
     def kernel_children(self) -> tuple[Child, ...]:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
+        from ..simulation.assembly import output_constant
+
+        outputs = tuple((output_constant(name), i)
+                        for i, name in enumerate(self._plant_module().OUTPUT_NAMES))
         return (Child("plant_", self.plant.template,
-                      (("NSTATE", self._plant_states()), ("NOUT", n_plant_out))),)
+                      (("NSTATE", self._plant_states()), ("NOUT", n_plant_out), *outputs)),)
 
     @property
     def kernel_templates(self) -> tuple[str, ...]:

@@ -211,6 +211,7 @@ class Assembly:
                 constants.append((f"S_{part.role.upper()}", first))
             first += len(part.states)
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
+        constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
         constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))
         switches = getattr(self.model, "kernel_constants", dict)()
         constants += sorted(switches.items())
@@ -229,6 +230,11 @@ class Assembly:
 
 _ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _LOCK = threading.Lock()
+
+
+def output_constant(name: str) -> str:
+    """The kernel constant holding the index of output ``name`` ("OUT_<NAME>")."""
+    return f"OUT_{name.upper()}"
 
 
 def assemble(model) -> Assembly:

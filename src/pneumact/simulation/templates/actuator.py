@@ -43,17 +43,10 @@ S_VALVE = 3
 OUTPUT_NAMES = ("pressure", "friction", "spring_force", "pressure_force", "stop_force",
                 "load", "opening", "mass_flow_in", "mass_flow_out", "bristle_rate")
 OUTPUT_UNITS = ("Pa", "N", "N", "N", "N", "N", "1", "kg/s", "kg/s", "m/s")
-NOUT = 10
-O_PRESSURE = 0
-O_FRICTION = 1
-O_SPRING = 2
-O_PRESSURE_FORCE = 3
-O_STOP = 4
-O_LOAD = 5
-O_OPENING = 6
-O_FLOW_IN = 7
-O_FLOW_OUT = 8
-O_BRISTLE_RATE = 9
+#: generated from OUTPUT_NAMES (the assembly's layout): NOUT and OUT_<NAME>
+NOUT = OUT_PRESSURE = OUT_FRICTION = OUT_SPRING_FORCE = OUT_PRESSURE_FORCE = None
+OUT_STOP_FORCE = OUT_LOAD = OUT_OPENING = OUT_MASS_FLOW_IN = OUT_MASS_FLOW_OUT = None
+OUT_BRISTLE_RATE = None
 #: Fixed-point steps of the rest position under a load that depends on position.
 LOAD_ITERATIONS = 20
 
@@ -154,16 +147,16 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
     zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
     u, q_in, q_out = valve_flows(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-    out[O_PRESSURE] = p
-    out[O_FRICTION] = f_fric
-    out[O_SPRING] = prm[MECHANICS_LO + MC_F0] + prm[MECHANICS_LO + MC_K] * x
-    out[O_PRESSURE_FORCE] = (prm[MECHANICS_LO + MC_PATM] - p) * prm[MECHANICS_LO + MC_AD]
-    out[O_STOP] = stop_force_of(x, v, prm, MECHANICS_LO)[0]
-    out[O_LOAD] = external_load(t, ts, x, sig, ptr)[0]
-    out[O_OPENING] = u
-    out[O_FLOW_IN] = q_in
-    out[O_FLOW_OUT] = q_out
-    out[O_BRISTLE_RATE] = zdot
+    out[OUT_PRESSURE] = p
+    out[OUT_FRICTION] = f_fric
+    out[OUT_SPRING_FORCE] = prm[MECHANICS_LO + MC_F0] + prm[MECHANICS_LO + MC_K] * x
+    out[OUT_PRESSURE_FORCE] = (prm[MECHANICS_LO + MC_PATM] - p) * prm[MECHANICS_LO + MC_AD]
+    out[OUT_STOP_FORCE] = stop_force_of(x, v, prm, MECHANICS_LO)[0]
+    out[OUT_LOAD] = external_load(t, ts, x, sig, ptr)[0]
+    out[OUT_OPENING] = u
+    out[OUT_MASS_FLOW_IN] = q_in
+    out[OUT_MASS_FLOW_OUT] = q_out
+    out[OUT_BRISTLE_RATE] = zdot
 
 
 @kernel()

@@ -14,7 +14,7 @@ from pneumact.simulation.codegen import kernel
 # --- bound by the generator and the other templates --------------------------------------
 derive = initial_state = state_scales = integrate_rodas4 = integrate_dopri5 = None
 NSTATE = 3
-NOUT = 1
+NOUT = None  # generated from the model's outputs
 INFO_LENGTH = 8
 INFO_STATUS = 0
 INFO_T = 1

@@ -37,7 +37,7 @@ OPTIONAL_FUNCTIONS = ("jump",)
 #: a model with a sampled part (a digital controller) updates it at breakpoints
 HAS_JUMPS = False
 NSTATE = 3
-NOUT = 1
+NOUT = None  # generated from the model's outputs
 NPARAM = 0
 MONOTONE = (False, False, False)
 # ------------------------------------------------------------------------------------------

@@ -66,7 +66,7 @@ plant_rhs = plant_jac = plant_param_jac = plant_outputs = plant_initial_state = 
 plant_project = plant_state_scales = plant_derive = None
 NSTATE = 4
 NPARAM = 0
-NOUT = 5
+NOUT = None  # generated: the plant's outputs and the loop's
 PLANT_NSTATE = 3
 PLANT_NOUT = 0
 CONTROLLER_LO = 0
@@ -89,11 +89,8 @@ HAS_DISTURBANCE = False
 
 #: the loop's own outputs, after the plant's
 LOOP_OUTPUTS = ("setpoint", "error", "command", "plant_input", "friction_compensation")
-O_SETPOINT = 0
-O_ERROR = 1
-O_COMMAND = 2
-O_INPUT = 3
-O_COMPENSATION = 4
+#: generated from the loop's output names (after the plant's): OUT_<NAME>
+OUT_SETPOINT = OUT_ERROR = OUT_COMMAND = OUT_PLANT_INPUT = OUT_FRICTION_COMPENSATION = None
 #: relative step of the finite differences of the Jacobian's coupling terms
 COUPLING_FD = 1e-7
 #: clamping anti-windup: width of the output layer over which the integrator stops,
@@ -313,11 +310,11 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     command = y[S_HELD_COMMAND] if SAMPLED else law[0]
     value = _write_input(t, ts, command, prm, sig, ptr)
     plant_outputs(t, ts, y, prm, sig, ptr, out)
-    out[PLANT_NOUT + O_SETPOINT] = law[7]
-    out[PLANT_NOUT + O_ERROR] = law[8]
-    out[PLANT_NOUT + O_COMMAND] = command
-    out[PLANT_NOUT + O_INPUT] = value
-    out[PLANT_NOUT + O_COMPENSATION] = law[6]
+    out[OUT_SETPOINT] = law[7]
+    out[OUT_ERROR] = law[8]
+    out[OUT_COMMAND] = command
+    out[OUT_PLANT_INPUT] = value
+    out[OUT_FRICTION_COMPENSATION] = law[6]
 
 
 @kernel()

@@ -22,11 +22,8 @@ S_BRISTLE = 2
 
 OUTPUT_NAMES = ("friction", "drive", "drive_force", "bristle_rate")
 OUTPUT_UNITS = ("N", "1", "N", "m/s")
-NOUT = 4
-O_FRICTION = 0
-O_DRIVE = 1
-O_DRIVE_FORCE = 2
-O_BRISTLE_RATE = 3
+#: generated from OUTPUT_NAMES (the assembly's layout): NOUT and OUT_<NAME>
+NOUT = OUT_FRICTION = OUT_DRIVE = OUT_DRIVE_FORCE = OUT_BRISTLE_RATE = None
 
 
 @kernel()
@@ -95,10 +92,10 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     kin, v_kin, _, f_drive, _, _, drive = _drive(t, ts, y, prm, sig, ptr)
     v = v_kin if kin else y[S_VELOCITY]
     zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
-    out[O_FRICTION] = f_fric
-    out[O_DRIVE] = drive
-    out[O_DRIVE_FORCE] = f_fric if kin else f_drive
-    out[O_BRISTLE_RATE] = zdot
+    out[OUT_FRICTION] = f_fric
+    out[OUT_DRIVE] = drive
+    out[OUT_DRIVE_FORCE] = f_fric if kin else f_drive
+    out[OUT_BRISTLE_RATE] = zdot
 
 
 @kernel()
