@@ -1,7 +1,8 @@
 """The generated kernels' analytic Jacobian ``jac`` (∂f/∂y) and parameter Jacobian
 ``param_jac`` (∂f/∂ every slot of the parameter vector) equal central finite differences of
-their ``rhs``, for every friction law and every valve, at states away from the non-smooth
-points (v ≠ 0, inside the stroke or well inside an end stop, u_raw in (0, 1)).
+their ``rhs``, for every valve, at states away from the non-smooth points (v ≠ 0, inside
+the stroke or well inside an end stop, u_raw in (0, 1)); every friction law's own
+partials against differences on the law's small kernel.
 
 Each component combination is compiled once and cached on disk afterwards.
 """
@@ -26,6 +27,10 @@ from pneumact.models import (
     StribeckMap,
 )
 from pneumact.simulation import Rodas4
+from pneumact.simulation.assembly import (
+    friction_law_parameter_derivatives,
+    friction_law_values,
+)
 from pneumact.simulation.simulate import prepare
 from reference import JAC_FD_REL_STEP, JAC_RTOL, PARAM_JAC_RTOL
 
@@ -100,7 +105,51 @@ FRICTIONS = [LuGre(), LuGre(decaying_damping=True), Dahl(), BoucWen(), CoulombVi
              StribeckMap()]
 
 
+def _law(friction, v, z, values):
+    return friction_law_values(friction, v, z, values)
+
+
 @pytest.mark.parametrize("friction", FRICTIONS, ids=lambda f: f.kernel)
+def test_friction_law_partials(friction, vgt):
+    """Each law's own partials (∂/∂v, ∂/∂z of dz/dt and F; ∂/∂θ of both for every
+    parameter of its block) against central differences, on the law's small kernel: the
+    actuator's Jacobian below is checked with two laws, the assembly being the same for
+    all."""
+    v = np.array([s[1] for s in MECHANICAL_STATES])
+    z = np.array([s[2] if friction.has_state else 0.0 for s in MECHANICAL_STATES])
+    values = {name: vgt[name] for name in friction.part().block.parameters}
+    law = _law(friction, v, z, values)
+    for var, scale, keys in (("v", STATE_SCALES[1], ("dzdot_dv", "dforce_dv")),
+                             ("z", STATE_SCALES[2], ("dzdot_dz", "dforce_dz"))):
+        if var == "z" and not friction.has_state:
+            continue
+        h = JAC_FD_REL_STEP * np.maximum(np.abs(v if var == "v" else z), scale)
+        plus = _law(friction, v + h, z, values) if var == "v" else _law(friction, v, z + h,
+                                                                         values)
+        minus = _law(friction, v - h, z, values) if var == "v" else _law(friction, v,
+                                                                          z - h, values)
+        for key, rate in zip(keys, ("zdot", "force"), strict=True):
+            numeric = (plus[rate] - minus[rate]) / (2.0 * h)
+            size = np.abs(numeric * scale) + np.abs(law[rate]) + 1e-300
+            error = np.abs(law[key] - numeric) * scale / size
+            assert error.max() <= JAC_RTOL, (friction.kernel, key, law[key], numeric)
+    partials = friction_law_parameter_derivatives(friction, v, z, values)
+    for name, analytic in partials.items():
+        theta = values.get(name)
+        if theta is None or theta == 0.0:
+            continue
+        h = JAC_FD_REL_STEP * abs(theta)
+        plus = _law(friction, v, z, {**values, name: theta + h})
+        minus = _law(friction, v, z, {**values, name: theta - h})
+        for column, rate in enumerate(("zdot", "force")):
+            numeric = (plus[rate] - minus[rate]) / (2.0 * h)
+            size = np.maximum(np.abs(law[rate]), np.abs(numeric * theta)) + 1e-300
+            error = np.abs(analytic[:, column] - numeric) * abs(theta) / size
+            assert error.max() <= PARAM_JAC_RTOL, (friction.kernel, name, rate,
+                                                   analytic[:, column], numeric)
+
+
+@pytest.mark.parametrize("friction", [LuGre(), CoulombViscous()], ids=lambda f: f.kernel)
 def test_actuator_pressure_source_jacobian(friction, vgt):
     # a load map with a slope exercises the ∂F_ext/∂x entry; a ramp in pressure the time
     load_map = PiecewiseLinear([0.0, 0.02], [0.0, 60.0])
