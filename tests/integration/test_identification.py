@@ -259,7 +259,8 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
     assert not (tmp_path / "ident" / "identified.toml").exists()
     assert (tmp_path / "ident" / "report.html").exists()
     assert "--partial" in result.output
-    result = runner.invoke(app, ["identify", "paper", "fast", "--partial", "--out", "ident"])
+    result = runner.invoke(app, ["identify", "paper", "fast", "--partial", "--staged-only",
+                                 "--out", "ident"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
     assert (tmp_path / "ident" / "identified.toml").exists()
 
