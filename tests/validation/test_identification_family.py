@@ -105,9 +105,10 @@ def test_reported_intervals_cover_the_truth_on_a_family(family_results):
 def _mismatched(vgt, start, **campaign):
     noise = campaign.pop("noise", Noise())
     truth = campaign.pop("truth", vgt)
-    records = synthetic_campaign(truth, design_campaign(start).tests, noise=noise,
-                                 seed=ref.IDENT_SEED, **campaign)
-    return identify_paper(records, start)
+    plan = design_campaign(start, ramps=ref.FAMILY_RAMPS)
+    records = synthetic_campaign(truth, plan.tests, noise=noise, seed=ref.IDENT_SEED,
+                                 **campaign)
+    return identify_paper(records, start, replicates=ref.FAMILY_REPLICATES)
 
 
 @pytest.mark.parametrize("case", ["adiabatic", "sensor lag", "dahl", "delta"])
