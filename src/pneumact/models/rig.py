@@ -30,9 +30,13 @@ declare(
       group="rig", plausible=(-10.0, 10.0)),
 )
 
-RIG_BLOCK = Block.of("m")
+#: the drive, a setting of the rig block: the force and kinematic drives share one kernel
+#: (changing the drive never recompiles); the spring drive has a parameter of its own
+DRIVE_KIND = {"force": 0.0, "velocity": 1.0, "position": 2.0, "spring": 3.0}
+RIG_BLOCK = Block.of("m", settings=("drive_kind",))
 SPRING_RIG_BLOCK = RIG_BLOCK + Block.of("k_drive")
 RG_M = RIG_BLOCK.index("m")
+RG_KIND = RIG_BLOCK.index("drive_kind")
 RG_KDRIVE = SPRING_RIG_BLOCK.index("k_drive")
 RIG_SIZE = len(RIG_BLOCK)
 SPRING_RIG_SIZE = len(SPRING_RIG_BLOCK)
@@ -69,6 +73,17 @@ def position_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
     return True, vel, (vel2 - vel) / dt, 0.0, 0.0, 0.0, pos
 
 
+@njit(cache=True, inline="always")
+def prescribed_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The force, velocity or position drive, as the block's ``drive_kind`` says."""
+    kind = p[o + RG_KIND]
+    if kind == 1.0:
+        return velocity_drive(t, ts, x, v, p, o, sig, ptr)
+    if kind == 2.0:
+        return position_drive(t, ts, x, v, p, o, sig, ptr)
+    return force_drive(t, ts, x, v, p, o, sig, ptr)
+
+
 @njit(cache=True)
 def no_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover - compiled
     """g[row, o + k] = ∂F_drive/∂p_k: zero for drives without parameters of their own."""
@@ -84,27 +99,23 @@ def spring_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cove
 
 
 @njit(cache=True)
-def rest_start(t, ts, sig, ptr):  # pragma: no cover - compiled
-    """(x0, v0) of a force or spring drive: the mass at rest at the origin."""
+def drive_start(t, ts, p, o, sig, ptr):  # pragma: no cover - compiled
+    """(x0, v0): at rest at the origin under a force or a spring, else the prescribed
+    motion's initial velocity (velocity drive) or position and velocity (position)."""
+    kind = p[o + RG_KIND]
+    if kind == 1.0:
+        return 0.0, channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    if kind == 2.0:
+        return channel_eval(sig, ptr, CH_DRIVE, t, ts)
     return 0.0, 0.0
 
 
-@njit(cache=True)
-def velocity_start(t, ts, sig, ptr):  # pragma: no cover - compiled
-    return 0.0, channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
-
-
-@njit(cache=True)
-def position_start(t, ts, sig, ptr):  # pragma: no cover - compiled
-    return channel_eval(sig, ptr, CH_DRIVE, t, ts)
-
-
-#: drive name -> (unit of the drive signal, meaning, start function)
+#: drive name -> (unit of the drive signal, meaning)
 DRIVES = {
-    "force": ("N", "force applied to the mass", "rest_start"),
-    "spring": ("m", "position of the pulling spring's free end", "rest_start"),
-    "velocity": ("m/s", "prescribed velocity of the mass", "velocity_start"),
-    "position": ("m", "prescribed position of the mass", "position_start"),
+    "force": ("N", "force applied to the mass"),
+    "spring": ("m", "position of the pulling spring's free end"),
+    "velocity": ("m/s", "prescribed velocity of the mass"),
+    "position": ("m", "prescribed position of the mass"),
 }
 
 
@@ -151,10 +162,12 @@ class FrictionRig:
         params = "spring_drive_params" if spring else "no_drive_params"
         rig = Part(role="rig", block=SPRING_RIG_BLOCK if spring else RIG_BLOCK,
                    states=(StateSpec("position", "m"), StateSpec("velocity", "m/s")),
-                   functions={"drive_eval": f"{module}:{self.drive}_drive",
+                   functions={"drive_eval": f"{module}:"
+                                            f"{'spring' if spring else 'prescribed'}_drive",
                               "drive_params": f"{module}:{params}",
-                              "drive_start": f"{module}:{DRIVES[self.drive][2]}"},
-                   label=f"{self.drive} drive", key=self.drive)
+                              "drive_start": f"{module}:drive_start"},
+                   settings={"drive_kind": DRIVE_KIND[self.drive]},
+                   label=f"{self.drive} drive", key="spring" if spring else "driven")
         return rig, self.friction.part()
 
     def channels(self, drive_signal):

@@ -103,7 +103,7 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     """At rest at the origin, or moving with a kinematic drive's initial value."""
     for i in range(NSTATE):
         y0[i] = 0.0
-    y0[S_POSITION], y0[S_VELOCITY] = drive_start(t, ts, sig, ptr)
+    y0[S_POSITION], y0[S_VELOCITY] = drive_start(t, ts, prm, RIG_LO, sig, ptr)
 
 
 @kernel()
