@@ -226,11 +226,12 @@ class ClosedLoop:
         hi = min(self.controller.u_max * self.drive_gain, natural[1]) if hi is None else hi
         prep = prepare(plant, Experiment(Constant(lo), plant.drive_quantity, 1.0), Rodas4())
         y0 = np.empty_like(prep.y0)
+        at = prep.assembly.state_index("position")
 
         def rest(value):
             sig, ptr = pack_channels(plant.channels(Constant(value)))
             prep.kernel.initial_state(0.0, 0.5, prep.vector, sig, ptr, y0)
-            return y0[0] - position
+            return y0[at] - position
 
         f_lo, f_hi = rest(lo), rest(hi)
         if f_lo * f_hi > 0:

@@ -19,6 +19,7 @@ from ..checks import (
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
 from ..experiments.signals import pack_channels
+from ..models.channels import CH_LOAD_T
 from .assembly import Assembly, assemble
 from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
@@ -108,7 +109,7 @@ class Prepared:
 
 def _breakpoints(model, experiment: Experiment, channels) -> np.ndarray:
     bp = experiment.breakpoints()
-    load = channels[1]  # a load against time has corners of its own
+    load = channels[CH_LOAD_T]  # a load against time has corners of its own
     if load is not None:
         bp = np.unique(np.concatenate([bp, load.breakpoints()]))
         bp = bp[(bp >= experiment.t_start) & (bp <= experiment.t_end)]

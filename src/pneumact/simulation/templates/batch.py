@@ -10,15 +10,12 @@ import numpy as np
 
 from pneumact.analysis.features import N_FEATURES, all_features
 from pneumact.simulation.codegen import kernel
+from pneumact.simulation.templates.integrators import INFO_LENGTH, INFO_STATUS
 
 # --- bound by the generator and the other templates --------------------------------------
 derive = initial_state = state_scales = integrate_rodas4 = integrate_dopri5 = None
 NSTATE = 3
 NOUT = None  # generated from the model's outputs
-INFO_LENGTH = 8
-INFO_STATUS = 0
-INFO_T = 1
-INFO_STEPS = 2
 #: the model writes its own input (a closed loop's controller output) into ``sig``
 PRIVATE_INPUTS = False
 # ------------------------------------------------------------------------------------------
