@@ -8,8 +8,8 @@ import pytest
 import pneumact as pa
 from pneumact.analysis.features import loop_width_position, loop_width_pressure
 from pneumact.experiments.friction import StickSlip
+from pneumact.simulation.simulate import prepare
 from reference import (
-    BOUND_RTOL,
     CONVERGED_RTOL,
     LONG_CYCLE_H_MAX,
     LONG_CYCLE_PERIODS,
@@ -31,8 +31,8 @@ def stick_slip(canudas):
 def test_bristle_and_friction_stay_bounded_at_loose_tolerance(stick_slip, canudas, rtol):
     rig, experiment, reference = stick_slip
     r = pa.simulate(rig, experiment, pa.Rodas4(rtol=rtol))
-    # |σ0·z| <= Fs holds for the exact LuGre dynamics: it holds for what is reported
-    assert np.max(np.abs(r["bristle"])) * canudas["sigma0"] <= canudas["Fs"] * (1 + BOUND_RTOL)
+    # (|σ0·z| <= Fs is projected onto every step, so it is tested on the law's rates:
+    # test_friction_experiments.py::test_bristle_bound_is_invariant_under_the_dynamics)
     # the friction output lies in the reference's range, up to the integration error (it
     # used to reach 14.9 N and -35.9 N at rtol 1e-3 against 0.72-1.48 N)
     margin = LOOSE_FRICTION_MARGIN * canudas["Fs"]
@@ -40,12 +40,30 @@ def test_bristle_and_friction_stay_bounded_at_loose_tolerance(stick_slip, canuda
     assert r["friction"].max() <= reference["friction"].max() + margin
 
 
-@pytest.mark.parametrize("rtol", LOOSE_RTOLS)
-def test_regulator_opening_stays_in_its_range_at_loose_tolerance(vgt, rtol):
+def test_regulator_opening_range_is_invariant_under_the_dynamics(vgt):
+    """The opening stays in [0, 1] because at either end its rate points inward,
+    whatever the pressure and the regulator's integral (which may ask for more than a
+    full opening): checked on the kernel's right-hand side, since the integrator also
+    projects every step onto the range."""
     model = pa.Actuator(vgt, valve=pa.PressureRegulator())
-    r = pa.simulate(model, pa.PressureCycle(high=vgt["p_atm"], low=20e3, period=2.0),
-                    pa.Rodas4(rtol=rtol))
-    assert r["opening"].min() >= 0.0 and r["opening"].max() <= 1.0
+    experiment = pa.PressureCycle(high=vgt["p_atm"], low=20e3, period=2.0)
+    prep = prepare(model, experiment, pa.Rodas4())
+    index = {name: prep.assembly.state_index(name)
+             for name in ("pressure", "opening", "integral")}
+    y = prep.y0.copy()
+    rate = np.empty_like(y)
+    checked = 0
+    for t in (0.1, 0.6, 1.3):  # falling and rising set-points
+        for pressure in (15e3, 40e3, 70e3, 99e3):
+            for held in (-5.0, 0.0, 0.5, 5.0):
+                for opening, inward in ((0.0, 1.0), (1.0, -1.0)):
+                    y[index["pressure"]], y[index["opening"]] = pressure, opening
+                    y[index["integral"]] = held
+                    prep.kernel.rhs(t, prep.segment_time, y, prep.vector, prep.sig,
+                                    prep.ptr, rate)
+                    assert inward * rate[index["opening"]] >= 0.0, (t, pressure, held)
+                    checked += 1
+    assert checked == 96
 
 
 @pytest.mark.parametrize("period", LONG_CYCLE_PERIODS)
