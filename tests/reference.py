@@ -408,4 +408,8 @@ FAMILY_MIN_INTERVALS = 60  # at least this many reported intervals make the cove
 # the stick-slip records are chaotic, so the last bits of the arithmetic move verdicts);
 # benchmarks/README.md, "identification on a family", has the longer study.
 FAMILY_MIN_IDENTIFIED = 0.4
+# A thinner campaign (issue 18, found by the family study): family actuator 7 with 4 ramp
+# pairs has one ramp below vs, left out of the joint fit (stick-slip)
+THIN_ACTUATOR = 7
+THIN_RAMPS = 4
 SENSOR_LAG = 5e-3  # s: a first-order position sensor of 5 ms (issue 18's mismatch case)
