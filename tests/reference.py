@@ -404,7 +404,7 @@ FAMILY_TOLERANCE_PERCENT = {"F0": 5.0, "k": 5.0, "Fc": 5.0, "sigma2": 5.0, "Fs":
 FAMILY_COVERAGE = 0.90  # issue 18: >= 90 % of the reported 95 % intervals hold the truth
 FAMILY_MIN_INTERVALS = 60  # at least this many reported intervals make the coverage
 # Refusing is not a way to pass: at least this share of the family's parameters must be
-# identified. Measured 46-51 % (this family with 16 or 32 replicates, on two machines:
+# identified. Measured 45-51 % (this family with 16 or 32 replicates, on two machines:
 # the stick-slip records are chaotic, so the last bits of the arithmetic move verdicts);
 # benchmarks/README.md, "identification on a family", has the longer study.
 FAMILY_MIN_IDENTIFIED = 0.4
