@@ -72,8 +72,6 @@ class OneAtATime:
             ax.set_xlim(*window)
 
     def _plot_zoomed(self, params: list[str]):
-        import matplotlib.pyplot as plt
-
         from ..analysis.features import hysteresis_summary
 
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
@@ -87,19 +85,28 @@ class OneAtATime:
                    "at the reversal": (turn - 0.1 * width, turn + 1.3 * width)}
         if not np.isfinite(width) or not np.isfinite(breakaway):
             windows = {"whole loop": None}
-        fig, axes = plt.subplots(len(params), len(windows), squeeze=False,
-                                 figsize=(3.9 * len(windows), 2.9 * len(params)))
-        for row, name in zip(axes, params, strict=True):
-            for ax, (title, window) in zip(row, windows.items(), strict=True):
-                self._draw(ax, name, window)
-                ax.set_title(f"{name}: {title}", fontsize=9)
-                ax.grid(True, alpha=0.3)
-                ax.set_xlabel("pressure [kPa abs]", fontsize=8)
-                ax.set_ylabel("position [mm]", fontsize=8)
-                ax.tick_params(labelsize=7)
-            row[0].legend(fontsize=7)
-        fig.tight_layout()
-        return fig
+        return _zoomed_grid(self._draw, params, windows, "pressure [kPa abs]",
+                            "position [mm]")
+
+
+def _zoomed_grid(draw, params: list[str], windows: dict, xlabel: str, ylabel: str):
+    """A figure with a row per varied parameter and a column per window (title ->
+    x-range, None for all), each panel drawn by ``draw(ax, name, window)``."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(params), len(windows), squeeze=False,
+                             figsize=(3.9 * len(windows), 2.9 * len(params)))
+    for row, name in zip(axes, params, strict=True):
+        for ax, (title, window) in zip(row, windows.items(), strict=True):
+            draw(ax, name, window)
+            ax.set_title(f"{name}: {title}", fontsize=9)
+            ax.grid(True, alpha=0.3)
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_ylabel(ylabel, fontsize=8)
+            ax.tick_params(labelsize=7)
+        row[0].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
 
 
 def _panels(n: int):
@@ -208,27 +215,13 @@ class FrictionCurves:
             ax.set_xlim(*window)
 
     def _plot_zoomed(self, params: list[str]):
-        import matplotlib.pyplot as plt
-
         top = max(float(np.max(v)) for entries in self.curves.values()
                   for _, v, _ in entries) * 1e3
         windows = {"whole curve": None}
         if np.isfinite(self.vs):
             windows["|v| ≤ 4·vs"] = (-4e3 * self.vs, 4e3 * self.vs)
         windows["fastest 20 %"] = (0.8 * top, top)
-        fig, axes = plt.subplots(len(params), len(windows), squeeze=False,
-                                 figsize=(3.9 * len(windows), 2.9 * len(params)))
-        for row, name in zip(axes, params, strict=True):
-            for ax, (title, window) in zip(row, windows.items(), strict=True):
-                self._draw(ax, name, window)
-                ax.set_title(f"{name}: {title}", fontsize=9)
-                ax.grid(True, alpha=0.3)
-                ax.set_xlabel("velocity [mm/s]", fontsize=8)
-                ax.set_ylabel("friction [N]", fontsize=8)
-                ax.tick_params(labelsize=7)
-            row[0].legend(fontsize=7)
-        fig.tight_layout()
-        return fig
+        return _zoomed_grid(self._draw, params, windows, "velocity [mm/s]", "friction [N]")
 
 
 def friction_velocity(params, variations: Mapping[str, object] | None = None, *,
