@@ -178,3 +178,34 @@ def test_a_family_is_drawn_consistent_and_reproducible():
         assert a["V0"] > a["A_d"] * a["x_max"]  # the chamber keeps a volume
         assert a["Fs"] >= a["Fc"]
     assert isinstance(first[0], pa.ParameterSet)
+
+
+
+def test_identification_runs_blas_on_one_thread_and_restores_it():
+    """While an identification runs (nested calls included) BLAS uses one thread; the
+    original limit is back once the outermost call has returned, or raised."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from pneumact.identification.fit import one_blas_thread
+
+    def blas_threads():
+        return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+
+    seen = []
+
+    @one_blas_thread
+    def inner():
+        seen.append(blas_threads())
+
+    @one_blas_thread
+    def outer():
+        inner()
+        seen.append(blas_threads())
+        raise ValueError("a failed identification")
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        original = blas_threads()
+        with pytest.raises(ValueError):
+            outer()
+        assert seen and all(n == 1 for values in seen for n in values), seen
+        assert blas_threads() == original

@@ -42,7 +42,7 @@ from .diagnostics import (
     verdicts,
 )
 from .estimates import Estimates
-from .fit import FitResult
+from .fit import FitResult, one_blas_thread
 from .joint import (
     JOINT_RTOL,
     MAX_EVALUATIONS,
@@ -581,6 +581,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
             for v in judged]
 
 
+@one_blas_thread
 def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
