@@ -105,10 +105,6 @@ FRICTIONS = [LuGre(), LuGre(decaying_damping=True), Dahl(), BoucWen(), CoulombVi
              StribeckMap()]
 
 
-def _law(friction, v, z, values):
-    return friction_law_values(friction, v, z, values)
-
-
 @pytest.mark.parametrize("friction", FRICTIONS, ids=lambda f: f.kernel)
 def test_friction_law_partials(friction, vgt):
     """Each law's own partials (∂/∂v, ∂/∂z of dz/dt and F; ∂/∂θ of both for every
@@ -118,16 +114,15 @@ def test_friction_law_partials(friction, vgt):
     v = np.array([s[1] for s in MECHANICAL_STATES])
     z = np.array([s[2] if friction.has_state else 0.0 for s in MECHANICAL_STATES])
     values = {name: vgt[name] for name in friction.part().block.parameters}
-    law = _law(friction, v, z, values)
+    law = friction_law_values(friction, v, z, values)
     for var, scale, keys in (("v", STATE_SCALES[1], ("dzdot_dv", "dforce_dv")),
                              ("z", STATE_SCALES[2], ("dzdot_dz", "dforce_dz"))):
         if var == "z" and not friction.has_state:
             continue
         h = JAC_FD_REL_STEP * np.maximum(np.abs(v if var == "v" else z), scale)
-        plus = _law(friction, v + h, z, values) if var == "v" else _law(friction, v, z + h,
-                                                                         values)
-        minus = _law(friction, v - h, z, values) if var == "v" else _law(friction, v,
-                                                                          z - h, values)
+        dv, dz = (h, 0.0) if var == "v" else (0.0, h)
+        plus = friction_law_values(friction, v + dv, z + dz, values)
+        minus = friction_law_values(friction, v - dv, z - dz, values)
         for key, rate in zip(keys, ("zdot", "force"), strict=True):
             numeric = (plus[rate] - minus[rate]) / (2.0 * h)
             size = np.abs(numeric * scale) + np.abs(law[rate]) + 1e-300
@@ -139,8 +134,8 @@ def test_friction_law_partials(friction, vgt):
         if theta is None or theta == 0.0:
             continue
         h = JAC_FD_REL_STEP * abs(theta)
-        plus = _law(friction, v, z, {**values, name: theta + h})
-        minus = _law(friction, v, z, {**values, name: theta - h})
+        plus = friction_law_values(friction, v, z, {**values, name: theta + h})
+        minus = friction_law_values(friction, v, z, {**values, name: theta - h})
         for column, rate in enumerate(("zdot", "force")):
             numeric = (plus[rate] - minus[rate]) / (2.0 * h)
             size = np.maximum(np.abs(law[rate]), np.abs(numeric * theta)) + 1e-300
