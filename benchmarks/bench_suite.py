@@ -2,12 +2,14 @@
 kernel and numba caches, as on a fresh clone: every kernel compiles once).
 
 Runs ``python -m pytest -x -q -p no:cacheprovider`` from the repository root in a
-subprocess and prints its wall time and pytest's summary line. Cold uses temporary
-``PNEUMACT_CACHE_DIR`` and ``NUMBA_CACHE_DIR``, so the user's caches are left alone.
+subprocess (one test process per core, pyproject's ``addopts``) and prints its wall time
+and pytest's summary line; ``--serial`` also runs it in one process (``-n 0``, what a
+plain pytest did before) and prints the ratio. Cold uses temporary ``PNEUMACT_CACHE_DIR``
+and ``NUMBA_CACHE_DIR`` (fresh ones per run), so the user's caches are left alone.
 The suite's target (2 cores): under 6 minutes cold.
 
 Run (after ``pip install -e ".[test]"``):
-    python benchmarks/bench_suite.py [--cold] [-- extra pytest arguments]
+    python benchmarks/bench_suite.py [--cold] [--serial] [-- extra pytest arguments]
 """
 
 from __future__ import annotations
@@ -24,33 +26,49 @@ ROOT = Path(__file__).resolve().parents[1]
 TARGET_COLD_S = 360.0
 
 
+def run_suite(command: list[str], cold: bool) -> tuple[subprocess.CompletedProcess, float]:
+    """One run of ``command``: (the finished process, wall seconds)."""
+    with tempfile.TemporaryDirectory(prefix="pneumact-suite-") as tmp:
+        env = dict(os.environ)
+        if cold:
+            env.update(PNEUMACT_CACHE_DIR=str(Path(tmp) / "kernels"),
+                       NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
+        started = time.perf_counter()
+        proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
+                              check=False)
+        return proc, time.perf_counter() - started
+
+
+def report(command: list[str], proc: subprocess.CompletedProcess, wall: float) -> None:
+    lines = [line for line in proc.stdout.splitlines() if line.strip()]
+    print(f"  {' '.join(command[1:])}: exit {proc.returncode}, {wall:.0f} s "
+          f"({wall / 60:.1f} min); load average now {os.getloadavg()[0]:.2f}")
+    print(f"  pytest: {lines[-1] if lines else proc.stderr[-500:]}")
+    if proc.returncode != 0:
+        print(proc.stdout[-4000:])
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cold", action="store_true", help="empty kernel and numba caches")
+    parser.add_argument("--serial", action="store_true",
+                        help="also run in one process (-n 0) and print the ratio")
     parser.add_argument("pytest_args", nargs="*", help="more pytest arguments (after --)")
     args = parser.parse_args(argv)
     command = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
                *args.pytest_args]
     print(f"pneumact test suite benchmark ({'cold' if args.cold else 'warm'}); "
           f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}")
-    with tempfile.TemporaryDirectory(prefix="pneumact-suite-") as tmp:
-        env = dict(os.environ)
-        if args.cold:
-            env.update(PNEUMACT_CACHE_DIR=str(Path(tmp) / "kernels"),
-                       NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
-        started = time.perf_counter()
-        proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
-                              check=False)
-        wall = time.perf_counter() - started
-    lines = [line for line in proc.stdout.splitlines() if line.strip()]
-    print(f"  {' '.join(command[1:])}: exit {proc.returncode}, {wall:.0f} s "
-          f"({wall / 60:.1f} min); load average now {os.getloadavg()[0]:.2f}")
-    print(f"  pytest: {lines[-1] if lines else proc.stderr[-500:]}")
+    proc, wall = run_suite(command, args.cold)
+    report(command, proc, wall)
     if args.cold:
         print(f"  target (cold, 2 cores): under {TARGET_COLD_S / 60:g} min: "
               f"{'met' if wall <= TARGET_COLD_S else 'NOT met'}")
-    if proc.returncode != 0:
-        print(proc.stdout[-4000:])
+    if args.serial:
+        serial = [*command, "-n", "0"]
+        serial_proc, serial_wall = run_suite(serial, args.cold)
+        report(serial, serial_proc, serial_wall)
+        print(f"  one process per core: {serial_wall / wall:.2f}x faster than one process")
     sys.exit(proc.returncode)
 
 

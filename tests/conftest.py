@@ -7,6 +7,7 @@ so ``pytest -m unit`` runs the fast tier; markers are strict and warnings are er
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 
@@ -18,12 +19,29 @@ from pneumact.parameters import load_params
 TIERS = ("unit", "integration", "validation")
 
 
+#: in a parallel run each test process has one core: one BLAS thread per process (and per
+#: process it starts), or numpy's BLAS threads compete with the other processes
+_ONE_CORE_EACH: object = None
+
+
+def pytest_configure(config):
+    global _ONE_CORE_EACH
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        from threadpoolctl import threadpool_limits
+
+        for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(name, "1")
+        _ONE_CORE_EACH = threadpool_limits(limits=1, user_api="blas")
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         tier = Path(str(item.fspath)).parent.name
         if tier in TIERS:
             item.add_marker(getattr(pytest.mark, tier))
-
+    # long tests first (a stable sort keeps the rest in order): with one process per
+    # core they run beside the others instead of ending the run alone
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)
 
 def load_quietly(name: str):
     """A shipped set without its passivity warning: both shipped sets knowingly break the
@@ -44,3 +62,20 @@ def vgt():
 def canudas():
     """Canudas de Wit et al. (1995) friction + stick-slip rig."""
     return load_quietly("canudas1995")
+
+
+@pytest.fixture
+def dask_client(monkeypatch):
+    """A two-process Dask cluster whose workers import the ``pneumact`` this process runs;
+    its dashboard on a free port, so that clusters of concurrent test processes
+    (``pytest -n``) do not collide on the default one."""
+    distributed = pytest.importorskip("distributed")
+    import pneumact
+
+    src = str(Path(pneumact.__file__).resolve().parents[1])
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
+        src, os.environ.get("PYTHONPATH")])))
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, \
+            distributed.Client(cluster) as client:
+        yield client

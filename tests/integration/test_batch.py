@@ -151,20 +151,14 @@ def test_reference_enables_rms_error():
     assert batch.table["rms_error"].iloc[1] > 0.0
 
 
-def test_dask_local_cluster_gives_identical_results(monkeypatch):
-    distributed = pytest.importorskip("distributed")
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
-        SRC, os.environ.get("PYTHONPATH")])))
+def test_dask_local_cluster_gives_identical_results(dask_client):
     table = random_table(N_DASK, seed=4)
     local = simulate_batch(MODEL, EXPERIMENT, table, signals=["position"],
                            features=["stroke", "loop_area", "breakaway_pressure"])
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = simulate_batch(MODEL, EXPERIMENT, table, signals=["position"],
-                                features=["stroke", "loop_area", "breakaway_pressure"],
-                                scheduler=client)
-        assert remote.stats["workers"] == 2 and remote.stats["chunks"] > 1
+    remote = simulate_batch(MODEL, EXPERIMENT, table, signals=["position"],
+                            features=["stroke", "loop_area", "breakaway_pressure"],
+                            scheduler=dask_client)
+    assert remote.stats["workers"] == 2 and remote.stats["chunks"] > 1
     pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
     np.testing.assert_array_equal(remote.signals["position"], local.signals["position"])
 

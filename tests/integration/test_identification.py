@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -297,19 +295,12 @@ def test_fit_result_parameters_keep_provenance(vgt, clean_presliding):
     assert dataclasses.is_dataclass(result)
 
 
-def test_multistart_on_dask_equals_local(vgt, clean_presliding, monkeypatch):
-    distributed = pytest.importorskip("distributed")
-    src = str(Path(__file__).resolve().parents[2] / "src")
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
-        src, os.environ.get("PYTHONPATH")])))
+def test_multistart_on_dask_equals_local(vgt, clean_presliding, dask_client):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     options = dict(multistart=2, bounds={"sigma0": (3e4, 3e5), "sigma1": (50.0, 800.0)})
     local = fit(model, clean_presliding, ["sigma0", "sigma1"], **options)
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = fit(model, clean_presliding, ["sigma0", "sigma1"], scheduler=client,
-                     **options)
+    remote = fit(model, clean_presliding, ["sigma0", "sigma1"], scheduler=dask_client,
+                 **options)
     np.testing.assert_array_equal(remote.estimates.values, local.estimates.values)
     assert remote.simulations == local.simulations
 

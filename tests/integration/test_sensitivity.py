@@ -88,28 +88,16 @@ def test_position_indices_along_the_cycle(vgt):
     assert np.all(curves["Fc"] > curves["sigma2"])  # Coulomb friction moves the loop
 
 
-def test_sobol_on_dask_equals_local(vgt, monkeypatch):
-    import os
-    from pathlib import Path
-
-    import pytest
-
+def test_sobol_on_dask_equals_local(vgt, dask_client):
     from pneumact import sensitivity as sa
 
-    distributed = pytest.importorskip("distributed")
-    src = str(Path(__file__).resolve().parents[2] / "src")
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
-        src, os.environ.get("PYTHONPATH")])))
     model = pa.Actuator(vgt, valve=pa.CommandValve())
     experiment = pa.CommandCycle(period=20.0)
     problem = sa.Problem.around(vgt, {"Fc": "10%", "Fs": "10%"})
     features = ["loop_width_pressure"]
     local = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features), n=8)
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features,
-                                                    scheduler=client), n=8)
+    remote = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features,
+                                                scheduler=dask_client), n=8)
     np.testing.assert_array_equal(remote.outputs.to_numpy(), local.outputs.to_numpy())
 
 

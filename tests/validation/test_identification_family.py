@@ -1,5 +1,4 @@
-"""Identification on actuators it was never tuned on, and on records its model cannot
-explain (issue 18).
+"""Identification on actuators it was never tuned on (issue 18).
 
 - A family of actuators drawn from wide, realistic ranges
   (``parameters.family.ActuatorFamily``), each with a bench campaign designed from a
@@ -8,10 +7,11 @@ explain (issue 18).
   its tolerance or refused with a reason; the 95 % intervals the procedure reports hold
   the truth at least 90 % of the time over the family and its seeds; and refusing is not
   a way to pass: most parameters must be identified.
-- Model mismatch: campaigns made by a richer model than the one identified (an
-  adiabatic chamber, a 5 ms position-sensor lag, Dahl friction, another Stribeck
-  exponent). The procedure finishes, flags the mismatch, and prints no confident wrong
-  answer (no parameter off by more than its tolerance with an "identified" verdict).
+- A thinner campaign of one of them, whose slow ramps stick-slip: Fs and vs refused.
+
+Records its model cannot explain: ``test_identification_mismatch.py``. The family is this
+suite's longest computation: this module is marked ``long`` (it starts first in a parallel
+run) and the family runs its actuators on one thread there.
 
 The longer study (more actuators and seeds) is ``benchmarks/bench_identify_family.py``;
 its table is in ``benchmarks/README.md``.
@@ -29,8 +29,10 @@ import pytest
 
 import pneumact as pa
 import reference as ref
-from pneumact.identification import Noise, design_campaign, identify_paper, synthetic_campaign
+from pneumact.identification import design_campaign, identify_paper, synthetic_campaign
 from pneumact.parameters.family import ActuatorFamily
+
+pytestmark = pytest.mark.long
 
 FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
 
@@ -61,7 +63,9 @@ def identify_one(args):
 @pytest.fixture(scope="module")
 def family_results():
     family = ActuatorFamily().draw(ref.FAMILY_SIZE, seed=ref.FAMILY_SEED)
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+    # in a parallel run (pytest-xdist) the other processes have the other cores
+    threads = 1 if os.environ.get("PYTEST_XDIST_WORKER") else os.cpu_count() or 1
+    with ThreadPoolExecutor(max_workers=threads) as pool:
         return list(pool.map(identify_one, enumerate(family)))
 
 
@@ -99,38 +103,6 @@ def test_reported_intervals_cover_the_truth_on_a_family(family_results):
     assert len(reported) >= ref.FAMILY_MIN_INTERVALS
     assert coverage >= ref.FAMILY_COVERAGE, (coverage, reported[~reported["covered"]
                                                                  .astype(bool)])
-
-
-# --------------------------------------------------------------------------- mismatch
-def _mismatched(vgt, start, **campaign):
-    noise = campaign.pop("noise", Noise())
-    truth = campaign.pop("truth", vgt)
-    plan = design_campaign(start, ramps=ref.FAMILY_RAMPS)
-    records = synthetic_campaign(truth, plan.tests, noise=noise, seed=ref.IDENT_SEED,
-                                 **campaign)
-    return identify_paper(records, start, replicates=ref.FAMILY_REPLICATES)
-
-
-@pytest.mark.parametrize("case", ["adiabatic", "sensor lag", "dahl", "delta"])
-def test_a_richer_truth_is_flagged_not_trusted(case, vgt):
-    start = vgt.replace({n: vgt[n] * f for n, f in ref.IDENT_START_FACTORS.items()})
-    if case == "adiabatic":
-        result = _mismatched(vgt, start, chamber=pa.Adiabatic())
-    elif case == "sensor lag":
-        result = _mismatched(vgt, start, noise=Noise(lag=ref.SENSOR_LAG))
-    elif case == "dahl":
-        result = _mismatched(vgt, start, friction=pa.Dahl())
-    else:  # the records have δ = 2, the model keeps the prior's δ = 1
-        result = _mismatched(vgt, start, truth=vgt.replace(delta=2.0))
-    assert not result.ok
-    assert any(d.severity == "error" for d in result.diagnostics), result.summary()
-    table = result.table(vgt if case != "delta" else vgt.replace(delta=2.0))
-    if case in ("adiabatic", "sensor lag", "delta"):  # the truth's parameters exist
-        trusted = table[table["verdict"] == "identified"]
-        tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in trusted.index])
-        assert (trusted["error_%"].abs() <= tolerance).all(), trusted
-    assert not result.intervals_hold
-    assert table["ci95_low"].isna().all()  # no interval where none holds
 
 
 def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():

@@ -1,0 +1,47 @@
+"""Identification on records its model cannot explain (issue 18).
+
+Campaigns made by a richer model than the one identified (an adiabatic chamber, a 5 ms
+position-sensor lag, Dahl friction, another Stribeck exponent): the procedure finishes,
+flags the mismatch, and prints no confident wrong answer (no parameter off by more than
+its tolerance with an "identified" verdict) and no interval.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pneumact as pa
+import reference as ref
+from pneumact.identification import Noise, design_campaign, identify_paper, synthetic_campaign
+
+
+def _mismatched(vgt, start, **campaign):
+    noise = campaign.pop("noise", Noise())
+    truth = campaign.pop("truth", vgt)
+    plan = design_campaign(start, ramps=ref.FAMILY_RAMPS)
+    records = synthetic_campaign(truth, plan.tests, noise=noise, seed=ref.IDENT_SEED,
+                                 **campaign)
+    return identify_paper(records, start, replicates=ref.FAMILY_REPLICATES)
+
+
+@pytest.mark.parametrize("case", ["adiabatic", "sensor lag", "dahl", "delta"])
+def test_a_richer_truth_is_flagged_not_trusted(case, vgt):
+    start = vgt.replace({n: vgt[n] * f for n, f in ref.IDENT_START_FACTORS.items()})
+    if case == "adiabatic":
+        result = _mismatched(vgt, start, chamber=pa.Adiabatic())
+    elif case == "sensor lag":
+        result = _mismatched(vgt, start, noise=Noise(lag=ref.SENSOR_LAG))
+    elif case == "dahl":
+        result = _mismatched(vgt, start, friction=pa.Dahl())
+    else:  # the records have δ = 2, the model keeps the prior's δ = 1
+        result = _mismatched(vgt, start, truth=vgt.replace(delta=2.0))
+    assert not result.ok
+    assert any(d.severity == "error" for d in result.diagnostics), result.summary()
+    table = result.table(vgt if case != "delta" else vgt.replace(delta=2.0))
+    if case in ("adiabatic", "sensor lag", "delta"):  # the truth's parameters exist
+        trusted = table[table["verdict"] == "identified"]
+        tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in trusted.index])
+        assert (trusted["error_%"].abs() <= tolerance).all(), trusted
+    assert not result.intervals_hold
+    assert table["ci95_low"].isna().all()  # no interval where none holds
