@@ -5,7 +5,9 @@ L-stable, stiffly accurate Rosenbrock method with the model's analytic Jacobian;
 default. ``integrate_rodas4_sens`` is the same loop carrying forward sensitivities
 ds/dt = J·s + ∂f/∂θ (compiled only when first used: the plain run passes ``None`` and
 numba prunes the sensitivity code from it). ``integrate_dopri5``: Dormand-Prince 5(4),
-explicit, for non-stiff variants.
+explicit, for non-stiff variants. One driver (``_integrate``) runs them all: the breakpoint
+intervals, jumps, step control, dense output and sensitivities are written once, and
+only a step attempt is the method's own.
 
 All integrate interval by interval between breakpoints (corners and jumps of the
 inputs, the samples of a digital controller) and control the step on a per-state
@@ -268,8 +270,8 @@ def _rodas_stages(t, h, ts, y, f0, ft, e, piv, prm, sig, ptr, ks, yst, fst, fb):
 def integrate_rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
                      y_out, out, info):
     """Integrate from tb[0] to tb[-1]; return the final state (the failing one on error)."""
-    return _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
-                   y_out, out, info, None)
+    return _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                  y_out, out, info, None, None)
 
 
 @kernel(nogil=True)
@@ -283,27 +285,51 @@ def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_ma
     included. ``needed`` flags the vector slots that occur. ``s0`` (n × P): the initial
     sensitivity; ``s_out`` (n × n_out × P) receives them at ``t_out``.
     """
-    return _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
-                   y_out, out, info, SensInput(w_ptr, w_idx, w_val, needed, s0, s_out))
+    return _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                  y_out, out, info, SensInput(w_ptr, w_idx, w_val, needed, s0, s_out), None)
+
+
+@kernel(nogil=True)
+def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                     y_out, out, info):
+    """Explicit adaptive Dormand-Prince 5(4); same interface as ``integrate_rodas4``."""
+    n = NSTATE
+    return _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                  y_out, out, info, None, DopriWork(np.empty(n), np.empty(n)))
+
+
+#: Dormand-Prince's work arrays: a stage's state (cont) and the error estimate (err).
+#: ``None`` in their place selects RODAS4.
+DopriWork = namedtuple("DopriWork", ["cont", "err"])
 
 
 @kernel()
-def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, y_out, out,
-            info, sens):
+def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, y_out, out,
+           info, sens, dopri):
+    """The one integration loop of every method: breakpoint intervals and jumps, step
+    attempts and their control, dense output, forward sensitivities. ``dopri`` holds
+    Dormand-Prince 5(4)'s work arrays, ``None`` selects RODAS4; ``sens`` is ``None`` in a
+    plain run. numba prunes the branches of an argument that is ``None`` (not those of
+    one that is not): the default method and a plain run compile only their own code."""
     n = NSTATE
     derive(prm)
     y = y0.copy()
     ynew = np.empty(n)
-    f0 = np.empty(n)
     f1 = np.empty(n)
-    fb = np.empty(n)
-    ft = np.empty(n)
     ks = np.empty((6, n))
-    yst = np.empty((6, n))
-    fst = np.empty((6, n))
+    # RODAS4: the Jacobian, the iteration matrix and its pivots, the stage states and
+    # rates, f at t + dt and ∂f/∂t
     jm = np.zeros((n, n))
     e = np.empty((n, n))
     piv = np.zeros(n, dtype=np.int64)
+    yst = np.empty((6, n))
+    fst = np.empty((6, n))
+    fb = np.empty(n)
+    ft = np.empty(n)
+    if dopri is None:
+        f0 = np.empty(n)
+    else:  # f(t, y) is Dormand-Prince's first stage (FSAL)
+        f0 = ks[0]
     ybuf = np.empty(n)
     obuf = np.empty(NOUT)
     o0 = np.empty(NOUT)
@@ -356,53 +382,76 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
             if steps >= max_steps:
                 status = STATUS_MAX_STEPS
                 break
-            # Jacobian and time derivative (forward difference inside the segment); both
-            # are kept after a rejected step (same t, y)
-            if not jm_valid:
-                for a in range(n):
-                    for b in range(n):
-                        jm[a, b] = 0.0
-                jac(t, ts, y, prm, sig, ptr, jm)
-                n_jac += 1
-                jm_valid = True
-            if not ft_valid:
-                dt = TIME_FD * max(abs(t), 1e-3)
-                rhs(t + dt, ts, y, prm, sig, ptr, fb)
-                n_rhs += 1
-                for a in range(n):
-                    ft[a] = (fb[a] - f0[a]) / dt
-                ft_valid = True
-            # an unstable mode (negative damping as a slip starts) must be followed, not
-            # damped away by a long L-stable step: a state that feeds itself (J_ii > 0)
-            # limits h·J_ii, and det(E) < 0 (a real eigenvalue above 1/(h·γ)) rejects
-            h = min(h, h_max, _unstable_step_limit(jm, n))
+            if dopri is None:
+                # Jacobian and time derivative (forward difference inside the segment);
+                # both are kept after a rejected step (same t, y)
+                if not jm_valid:
+                    for a in range(n):
+                        for b in range(n):
+                            jm[a, b] = 0.0
+                    jac(t, ts, y, prm, sig, ptr, jm)
+                    n_jac += 1
+                    jm_valid = True
+                if not ft_valid:
+                    dt = TIME_FD * max(abs(t), 1e-3)
+                    rhs(t + dt, ts, y, prm, sig, ptr, fb)
+                    n_rhs += 1
+                    for a in range(n):
+                        ft[a] = (fb[a] - f0[a]) / dt
+                    ft_valid = True
+                # an unstable mode (negative damping as a slip starts) must be followed,
+                # not damped away by a long L-stable step: a state that feeds itself
+                # (J_ii > 0) limits h·J_ii, and det(E) < 0 (a real eigenvalue above
+                # 1/(h·γ)) rejects
+                h = min(h, h_max, _unstable_step_limit(jm, n))
+            else:
+                h = min(h, h_max)
             last = False
             if t + h >= t_end - 1e-3 * h:
                 h = t_end - t
                 last = True
-            if not lu_factor(e_of(jm, h, e, n), piv, n) or lu_det_sign(e, piv, n) < 0.0:
-                h *= 0.5
-                rejected += 1
-                if h < 1e-14 * max(1.0, abs(t)):
-                    status = STATUS_STEP_UNDERFLOW
-                    break
-                continue
-            _rodas_stages(t, h, ts, y, f0, ft, e, piv, prm, sig, ptr, ks, yst, fst, fb)
-            n_rhs += 5
-            finite = True
-            for a in range(n):
-                ynew[a] = yst[5, a] + ks[5, a]
-                if not math.isfinite(ynew[a]):
-                    finite = False
-            err = _error_norm(ks[5], y, ynew, rtol, atol, n) if finite else math.inf
+            t_new = t_end if last else t + h
+            if dopri is None:
+                if (not lu_factor(e_of(jm, h, e, n), piv, n)
+                        or lu_det_sign(e, piv, n) < 0.0):
+                    h *= 0.5
+                    rejected += 1
+                    if h < 1e-14 * max(1.0, abs(t)):
+                        status = STATUS_STEP_UNDERFLOW
+                        break
+                    continue
+                _rodas_stages(t, h, ts, y, f0, ft, e, piv, prm, sig, ptr, ks, yst, fst, fb)
+                err, finite = _rodas_solution(y, ks, yst, ynew, rtol, atol)
+                n_rhs += 5
+                if err <= 1.0:
+                    project(prm, ynew)
+                    rhs(t_new, ts, ynew, prm, sig, ptr, f1)
+                    n_rhs += 1
+            else:
+                _dopri_stages(t, h, ts, y, prm, sig, ptr, ks, dopri.cont)
+                finite = True
+                for a in range(n):
+                    acc = 0.0
+                    for st in range(6):
+                        acc += DP_W[st] * ks[st, a]
+                    ynew[a] = y[a] + h * acc
+                    if not math.isfinite(ynew[a]):
+                        finite = False
+                err = math.inf
+                if finite:
+                    project(prm, ynew)
+                    rhs(t_new, ts, ynew, prm, sig, ptr, f1)
+                    for a in range(n):
+                        acc = E7 * f1[a]
+                        for st in range(6):
+                            acc += DP_E[st] * ks[st, a]
+                        dopri.err[a] = h * acc
+                    err = _error_norm(dopri.err, y, ynew, rtol, atol, n)
+                n_rhs += 6
             if err <= 1.0:
-                t_new = t_end if last else t + h
-                project(prm, ynew)
-                rhs(t_new, ts, ynew, prm, sig, ptr, f1)
-                n_rhs += 1
                 if sens is not None:
-                    n_jac += _sens_step(t, t_new, ts, y, ynew, jm, e, piv, yst, prm, sig,
-                                        ptr, sens, work, s)
+                    n_jac += _sens_step(t, t_new, ts, y, ynew, jm, e, piv,
+                                        yst, prm, sig, ptr, sens, work, s)
                 if j < n_out and t_out[j] <= t_new:
                     hh = t_new - t
                     if not o0_valid:
@@ -431,22 +480,29 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
                 ft_valid = False
                 t = t_new
                 steps += 1
-                # predictive (Gustafsson) controller, as in Hairer & Wanner's RODAS
-                quot = min(5.0, max(1.0 / 6.0, err ** 0.25 / 0.9))
-                if h_acc > 0.0:
-                    gus = (h_acc / h) * (err * err / err_acc) ** 0.25 / 0.9
-                    quot = max(quot, min(5.0, max(1.0 / 6.0, gus)))
-                h_acc = h
-                err_acc = max(1e-2, err)
-                h_new = h / quot
-                if just_rejected:
-                    h_new = min(h_new, h)
-                just_rejected = False
-                h = h_new
+                if dopri is None:
+                    # predictive (Gustafsson) controller, as in Hairer & Wanner's RODAS
+                    quot = min(5.0, max(1.0 / 6.0, err ** 0.25 / 0.9))
+                    if h_acc > 0.0:
+                        gus = (h_acc / h) * (err * err / err_acc) ** 0.25 / 0.9
+                        quot = max(quot, min(5.0, max(1.0 / 6.0, gus)))
+                    h_acc = h
+                    err_acc = max(1e-2, err)
+                    h_new = h / quot
+                    if just_rejected:
+                        h_new = min(h_new, h)
+                    just_rejected = False
+                    h = h_new
+                else:
+                    scale = 0.9 * err ** -0.2 if err > 0.0 else 5.0
+                    h *= min(5.0, max(0.2, scale))
             else:
                 rejected += 1
-                just_rejected = True
-                h *= 0.25 if not finite else max(0.2, 0.9 * err ** -0.25)
+                if dopri is None:
+                    just_rejected = True
+                    h *= 0.25 if not finite else max(0.2, 0.9 * err ** -0.25)
+                else:
+                    h *= 0.25 if not finite else max(0.2, 0.9 * err ** -0.2)
                 if h < 1e-14 * max(1.0, abs(t)):
                     status = STATUS_NON_FINITE if not finite else STATUS_STEP_UNDERFLOW
                     break
@@ -460,6 +516,20 @@ def _rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps, 
         j += 1
     _finish(info, status, t, steps, rejected, n_rhs, n_jac, h)
     return y
+
+
+@kernel()
+def _rodas_solution(y, ks, yst, ynew, rtol, atol):
+    """RODAS4's new state from its last stage (stiffly accurate) and the error norm (inf,
+    False when not finite)."""
+    finite = True
+    for a in range(NSTATE):
+        ynew[a] = yst[5, a] + ks[5, a]
+        if not math.isfinite(ynew[a]):
+            finite = False
+    if not finite:
+        return math.inf, False
+    return _error_norm(ks[5], y, ynew, rtol, atol, NSTATE), True
 
 
 # --------------------------------------------------------------------------- sensitivities
@@ -650,120 +720,3 @@ def _dopri_stages(t, h, ts, y, prm, sig, ptr, ks, cont):
                 acc += DP_A[st, jj] * ks[jj, a]
             cont[a] = y[a] + h * acc
         rhs(t + DP_C[st] * h, ts, cont, prm, sig, ptr, ks[st])
-
-
-@kernel(nogil=True)
-def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
-                     y_out, out, info):
-    """Explicit adaptive Dormand-Prince 5(4); same interface as ``integrate_rodas4``."""
-    n = NSTATE
-    derive(prm)
-    y = y0.copy()
-    ynew = np.empty(n)
-    cont = np.empty(n)
-    ks = np.empty((6, n))
-    f1 = np.empty(n)
-    err = np.empty(n)
-    ybuf = np.empty(n)
-    obuf = np.empty(NOUT)
-    o0 = np.empty(NOUT)
-    do0 = np.empty(NOUT)
-    o1 = np.empty(NOUT)
-    do1 = np.empty(NOUT)
-    slopes = np.empty((2, NSTATE + NOUT))
-    for i in range(INFO_LENGTH):
-        info[i] = 0.0
-    n_out = t_out.shape[0]
-    h = h_init
-    steps = 0
-    rejected = 0
-    n_rhs = 0
-    j = 0
-    t = tb[0]
-    while not HAS_JUMPS and j < n_out and t_out[j] <= t:
-        _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out[j], out[j])
-        j += 1
-    status = STATUS_OK
-    for seg in range(tb.shape[0] - 1):
-        t = tb[seg]
-        t_end = tb[seg + 1]
-        if t_end <= t:
-            continue
-        ts = 0.5 * (t + t_end)
-        t_stop = t_end
-        if HAS_JUMPS:
-            jump(t, ts, y, prm, sig, ptr)
-            j = _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out)
-            if seg < tb.shape[0] - 2:  # a point on the next breakpoint: after its jump
-                t_stop = t_end - JUMP_EDGE * max(1.0, abs(t_end))
-        rhs(t, ts, y, prm, sig, ptr, ks[0])
-        n_rhs += 1
-        o0_valid = False
-        while t < t_end:
-            if steps >= max_steps:
-                status = STATUS_MAX_STEPS
-                break
-            h = min(h, h_max)
-            last = False
-            if t + h >= t_end - 1e-3 * h:
-                h = t_end - t
-                last = True
-            _dopri_stages(t, h, ts, y, prm, sig, ptr, ks, cont)
-            finite = True
-            for a in range(n):
-                acc = 0.0
-                for st in range(6):
-                    acc += DP_W[st] * ks[st, a]
-                ynew[a] = y[a] + h * acc
-                if not math.isfinite(ynew[a]):
-                    finite = False
-            t_new = t_end if last else t + h
-            if finite:
-                project(prm, ynew)
-                rhs(t_new, ts, ynew, prm, sig, ptr, f1)
-            n_rhs += 6
-            en = math.inf
-            if finite:
-                for a in range(n):
-                    acc = E7 * f1[a]
-                    for st in range(6):
-                        acc += DP_E[st] * ks[st, a]
-                    err[a] = h * acc
-                en = _error_norm(err, y, ynew, rtol, atol, n)
-            if en <= 1.0:
-                if j < n_out and t_out[j] <= t_new:
-                    hh = t_new - t
-                    if not o0_valid:
-                        outputs(t, ts, y, prm, sig, ptr, o0)
-                    _output_rate(t, ts, y, ks[0], OUTPUT_FD * hh, prm, sig, ptr, o0, do0, ybuf,
-                                 obuf)
-                    outputs(t_new, ts, ynew, prm, sig, ptr, o1)
-                    _output_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1, do1,
-                                 ybuf, obuf)
-                    j = _dense(t, hh, y, ks[0], ynew, f1, o0, do0, o1, do1, t_out, j, t_stop,
-                               y_out, out, slopes, prm)
-                    for k in range(NOUT):
-                        o0[k] = o1[k]
-                    o0_valid = True
-                else:
-                    o0_valid = False
-                for a in range(n):
-                    y[a] = ynew[a]
-                    ks[0, a] = f1[a]
-                t = t_new
-                steps += 1
-                scale = 0.9 * en ** -0.2 if en > 0.0 else 5.0
-                h *= min(5.0, max(0.2, scale))
-            else:
-                rejected += 1
-                h *= 0.25 if not finite else max(0.2, 0.9 * en ** -0.2)
-                if h < 1e-14 * max(1.0, abs(t)):
-                    status = STATUS_NON_FINITE if not finite else STATUS_STEP_UNDERFLOW
-                    break
-        if status != STATUS_OK:
-            break
-    while status == STATUS_OK and j < n_out:
-        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, y_out[j], out[j])
-        j += 1
-    _finish(info, status, t, steps, rejected, n_rhs, 0, h)
-    return y
