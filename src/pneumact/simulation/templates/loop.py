@@ -15,6 +15,7 @@ holds its output in between (zero-order hold); its states then have zero rates.
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
@@ -100,6 +101,14 @@ CLAMP_LAYER = 1e-4
 SAMPLE_MATCH = 1e-6
 
 
+#: The control law at one instant: the limited and unlimited output, the integrator's
+#: rate, the derivative filter's input, the observer's dẑ/dt = a − b·ẑ, the friction
+#: compensation F̂, the set-point and the error.
+LawValue = namedtuple("LawValue", ["output", "unlimited", "integrator_rate", "filter_input",
+                                   "observer_a", "observer_b", "friction_estimate",
+                                   "setpoint", "error"])
+
+
 @kernel()
 def _observer(v, zhat, e, prm):
     """(a, b, F̂): dẑ/dt = a − b·ẑ of the LuGre observer and its force estimate."""
@@ -125,9 +134,8 @@ def _static_ff(rdot, prm):
 
 @kernel()
 def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
-    """The control law at one instant, from the measured x, v and the controller's
-    states: (u limited, u, integrator rate, derivative-filter input, observer a and b,
-    friction estimate, set-point, error)."""
+    """The control law at one instant (a ``LawValue``), from the measured x, v and the
+    controller's states."""
     c = CONTROLLER_LO
     r, rdot = channel_eval(sig, ptr, CH_SETPOINT, t, ts)
     e = r - x
@@ -171,7 +179,7 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
         # the output, since a switched rate would chatter on the limit (Filippov sliding)
         layer = CLAMP_LAYER * max(abs(u_sat), 1.0)
         rate = integrand * max(1.0 - abs(u - u_sat) / layer, 0.0)
-    return u_sat, u, rate, q, obs_a, obs_b, f_hat, r, e
+    return LawValue(u_sat, u, rate, q, obs_a, obs_b, f_hat, r, e)
 
 
 @kernel()
@@ -188,7 +196,7 @@ def _command(t, ts, y, prm, sig, ptr):
     """The controller output acting now: held (sampled) or the continuous law's."""
     if SAMPLED:
         return y[S_HELD_COMMAND]
-    return _states_law(t, ts, y, prm, sig, ptr)[0]
+    return _states_law(t, ts, y, prm, sig, ptr).output
 
 
 @kernel()
@@ -221,12 +229,13 @@ def derive(prm):
 @kernel()
 def _rates_of(law, y, prm, dydt):
     """The continuous controller's state rates from one evaluation of the law."""
-    dydt[S_CONTROL_INTEGRAL] = law[2]
+    dydt[S_CONTROL_INTEGRAL] = law.integrator_rate
     if FILTERED_DERIVATIVE:
-        dydt[S_DERIVATIVE_FILTER] = (law[3] - y[S_DERIVATIVE_FILTER]) / prm[CONTROLLER_LO
-                                                                             + CT_TF]
+        dydt[S_DERIVATIVE_FILTER] = ((law.filter_input - y[S_DERIVATIVE_FILTER])
+                                     / prm[CONTROLLER_LO + CT_TF])
     if OBSERVER:
-        dydt[S_FRICTION_ESTIMATE_BRISTLE] = law[4] - law[5] * y[S_FRICTION_ESTIMATE_BRISTLE]
+        dydt[S_FRICTION_ESTIMATE_BRISTLE] = (law.observer_a - law.observer_b
+                                             * y[S_FRICTION_ESTIMATE_BRISTLE])
 
 
 @kernel()
@@ -248,7 +257,7 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
             dydt[i] = 0.0
         return
     law = _states_law(t, ts, y, prm, sig, ptr)
-    _write_input(t, ts, law[0], prm, sig, ptr)
+    _write_input(t, ts, law.output, prm, sig, ptr)
     plant_rhs(t, ts, y, prm, sig, ptr, dydt)
     for i in range(PLANT_NSTATE, NSTATE):
         dydt[i] = 0.0
@@ -307,14 +316,14 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     """The plant's outputs, then set-point, error, command, plant input and the
     friction compensation F̂ the law holds at this instant."""
     law = _states_law(t, ts, y, prm, sig, ptr)
-    command = y[S_HELD_COMMAND] if SAMPLED else law[0]
+    command = y[S_HELD_COMMAND] if SAMPLED else law.output
     value = _write_input(t, ts, command, prm, sig, ptr)
     plant_outputs(t, ts, y, prm, sig, ptr, out)
-    out[OUT_SETPOINT] = law[7]
-    out[OUT_ERROR] = law[8]
+    out[OUT_SETPOINT] = law.setpoint
+    out[OUT_ERROR] = law.error
     out[OUT_COMMAND] = command
     out[OUT_PLANT_INPUT] = value
-    out[OUT_FRICTION_COMPENSATION] = law[6]
+    out[OUT_FRICTION_COMPENSATION] = law.friction_estimate
 
 
 @kernel()
@@ -349,13 +358,15 @@ def jump(t, ts, y, prm, sig, ptr):
         y[S_LAST_POSITION] = x
     filt = y[S_DERIVATIVE_FILTER] if FILTERED_DERIVATIVE else 0.0
     zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
-    u_sat, _, rate, q, obs_a, obs_b, _, _, _ = _law(t, ts, x, v, y[S_CONTROL_INTEGRAL], filt,
-                                                    zhat, prm, sig, ptr)
-    y[S_HELD_COMMAND] = u_sat
-    y[S_CONTROL_INTEGRAL] += period * rate
+    law = _law(t, ts, x, v, y[S_CONTROL_INTEGRAL], filt, zhat, prm, sig, ptr)
+    y[S_HELD_COMMAND] = law.output
+    y[S_CONTROL_INTEGRAL] += period * law.integrator_rate
     if FILTERED_DERIVATIVE:
-        y[S_DERIVATIVE_FILTER] = filt + period / (prm[c + CT_TF] + period) * (q - filt)
+        y[S_DERIVATIVE_FILTER] = filt + period / (prm[c + CT_TF] + period) * (law.filter_input
+                                                                               - filt)
     if OBSERVER:
+        obs_a = law.observer_a
+        obs_b = law.observer_b
         if obs_b * period > 1e-12:
             steady = obs_a / obs_b
             y[S_FRICTION_ESTIMATE_BRISTLE] = steady + (zhat - steady) * math.exp(-obs_b * period)
