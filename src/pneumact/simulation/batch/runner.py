@@ -13,10 +13,12 @@ import threading
 import numpy as np
 
 from ...analysis.features import FEATURES, N_FEATURES
+from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
 from ...parameters.validation import row_problems
 from ..result import SolverStats
 from ..simulate import prepare
+from ..templates.batch import FEATURE_SIGNALS
 from .spec import BatchSpec
 
 __all__ = ["STATUS_ERROR", "STATUS_INVALID", "STATUS_OK", "STATUS_SOLVER", "ChunkRunner",
@@ -26,6 +28,16 @@ STATUS_OK = "ok"
 STATUS_INVALID = "invalid"  # a parameter value out of its range, or a broken relation
 STATUS_SOLVER = "solver"  # the integrator failed (step underflow, NaN, max_steps)
 STATUS_ERROR = "error"  # the row's run raised (an exception inside the compiled loop)
+
+
+def _feature_source(assembly, name: str) -> tuple[int, int]:
+    """Where the features read ``name``; a model without pressure (a friction rig) gives
+    (−1, −1) there, and the pressure features are NaN."""
+    source = assembly.signal_source(name)
+    if source is None and name != "pressure":
+        raise ArgumentError(f"batch: the model has no {name!r} signal, which every feature "
+                            f"needs; its signals: {', '.join(assembly.state_names)}")
+    return source if source is not None else (-1, -1)
 
 
 class ChunkRunner:
@@ -38,10 +50,7 @@ class ChunkRunner:
         assembly = prep.assembly
         self.slot_ptr, self.slot_idx = assembly.column_slots(spec.columns)
         self.base = dict(spec.model.params.values)
-        pressure = assembly.signal_source("pressure")
-        self.sources = np.array([assembly.signal_source("position"),
-                                 assembly.signal_source("velocity"),
-                                 pressure if pressure is not None else (-1, -1)],
+        self.sources = np.array([_feature_source(assembly, name) for name in FEATURE_SIGNALS],
                                 dtype=np.int64)
         self.signal_sources = np.array([self.source_of(name) for name in spec.signals],
                                        dtype=np.int64).reshape(len(spec.signals), 2)

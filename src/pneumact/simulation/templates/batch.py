@@ -23,6 +23,11 @@ PRIVATE_INPUTS = False
 #: where a feature reads a signal: from the states or from the derived outputs
 FROM_STATE = 0
 FROM_OUTPUT = 1
+#: the signals the features are computed from: the rows of ``sources``, in this order
+FEATURE_SIGNALS = ("position", "velocity", "pressure")
+ROW_POSITION = FEATURE_SIGNALS.index("position")
+ROW_VELOCITY = FEATURE_SIGNALS.index("velocity")
+ROW_PRESSURE = FEATURE_SIGNALS.index("pressure")
 
 
 @kernel(nogil=True)
@@ -35,8 +40,8 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
     (NSTATE values, or empty) replaces the equilibrium start; ``explicit``: None for
     Rodas4 (the other integrator is then not compiled), True for Dormand-Prince;
     ``atol_given[i] > 0``
-    replaces rtol × scale of state i. ``sources`` (3 × 2: kind, column) says where
-    position, velocity and pressure are (pressure kind −1: none); ``features`` (n ×
+    replaces rtol × scale of state i. ``sources`` (one row per FEATURE_SIGNALS: kind,
+    column) says where each is (kind −1: none, for the pressure); ``features`` (n ×
     N_FEATURES, when ``want_features``) and ``signals`` (n × k × n_t, from
     ``signal_sources``) are written for the rows that succeed; ``info_rows`` (n ×
     INFO_LENGTH) gets each row's solver info.
@@ -92,10 +97,11 @@ def run_rows(prm0, slot_ptr, slot_idx, values, valid, y0_given, sig, ptr, tb, t_
 @kernel()
 def _features(t_out, y_out, out, sources, ref_t, ref_x, has_reference, feats):
     """Every feature of one run, from the columns ``sources`` points at."""
-    x = _column(y_out, out, sources[0, 0], sources[0, 1])
-    v = _column(y_out, out, sources[1, 0], sources[1, 1])
-    has_pressure = sources[2, 0] >= 0
-    p = _column(y_out, out, sources[2, 0], sources[2, 1]) if has_pressure else x
+    x = _column(y_out, out, sources[ROW_POSITION, 0], sources[ROW_POSITION, 1])
+    v = _column(y_out, out, sources[ROW_VELOCITY, 0], sources[ROW_VELOCITY, 1])
+    has_pressure = sources[ROW_PRESSURE, 0] >= 0
+    p = (_column(y_out, out, sources[ROW_PRESSURE, 0], sources[ROW_PRESSURE, 1])
+         if has_pressure else x)
     all_features(t_out, x, v, p, has_pressure, ref_t, ref_x, has_reference, feats)
 
 
