@@ -62,18 +62,19 @@ FEATURE_UNITS: dict[str, str] = {
     "max_error": "m",
 }
 FEATURES = tuple(FEATURE_UNITS)
-F_FINAL_POSITION = 0
-F_MAX_VELOCITY = 1
-F_STROKE = 2
-F_LOOP_WIDTH_PRESSURE = 3
-F_LOOP_WIDTH_POSITION = 4
-F_LOOP_AREA = 5
-F_BREAKAWAY_PRESSURE = 6
-F_SLIDING_SPEED = 7
-F_PRESLIDING_TRAVEL = 8
-F_RMS_ERROR = 9
-F_MAX_ERROR = 10
-N_FEATURES = 11
+#: each feature's place in that vector (compiled code reads these constants)
+F_FINAL_POSITION = FEATURES.index("final_position")
+F_MAX_VELOCITY = FEATURES.index("max_velocity")
+F_STROKE = FEATURES.index("stroke")
+F_LOOP_WIDTH_PRESSURE = FEATURES.index("loop_width_pressure")
+F_LOOP_WIDTH_POSITION = FEATURES.index("loop_width_position")
+F_LOOP_AREA = FEATURES.index("loop_area")
+F_BREAKAWAY_PRESSURE = FEATURES.index("breakaway_pressure")
+F_SLIDING_SPEED = FEATURES.index("sliding_speed")
+F_PRESLIDING_TRAVEL = FEATURES.index("presliding_travel")
+F_RMS_ERROR = FEATURES.index("rms_error")
+F_MAX_ERROR = FEATURES.index("max_error")
+N_FEATURES = len(FEATURES)
 #: Features that need a pressure record, and those that need a reference record.
 PRESSURE_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
                      "breakaway_pressure", "sliding_speed", "presliding_travel")

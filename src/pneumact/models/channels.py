@@ -9,15 +9,19 @@ plant's drive channel then holds one value, the controller's output, which the l
 writes at ``INPUT_OFFSET`` past the channel's start.
 """
 
-CH_DRIVE = 0
-CH_LOAD_T = 1
-CH_LOAD_X = 2
-CH_MAP_RES = 3
-CH_MAP_ATM = 4
-N_CHANNELS = 5
-CH_SETPOINT = 5
-CH_FEEDFORWARD = 6
-CH_DISTURBANCE = 7
-N_LOOP_CHANNELS = 8
+#: a model's channels, in order
+CHANNELS = ("drive", "load_t", "load_x", "map_res", "map_atm")
+#: a closed loop's: its plant's, then its own
+LOOP_CHANNELS = (*CHANNELS, "setpoint", "feedforward", "disturbance")
+CH_DRIVE = LOOP_CHANNELS.index("drive")
+CH_LOAD_T = LOOP_CHANNELS.index("load_t")
+CH_LOAD_X = LOOP_CHANNELS.index("load_x")
+CH_MAP_RES = LOOP_CHANNELS.index("map_res")
+CH_MAP_ATM = LOOP_CHANNELS.index("map_atm")
+CH_SETPOINT = LOOP_CHANNELS.index("setpoint")
+CH_FEEDFORWARD = LOOP_CHANNELS.index("feedforward")
+CH_DISTURBANCE = LOOP_CHANNELS.index("disturbance")
+N_CHANNELS = len(CHANNELS)
+N_LOOP_CHANNELS = len(LOOP_CHANNELS)
 #: [n_terms = 1, kind = PWL, n = 1, t0, value]: where a one-point channel holds its value
 INPUT_OFFSET = 4
