@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import ExperimentError, ParameterError
 from ..experiments.signals import Constant, Signal
 from ..models.actuator import Actuator
-from ..models.channels import N_CHANNELS
+from ..models.channels import CHANNELS, LOOP_CHANNELS, in_order
 from ..models.component import Part
 from ..models.rig import FrictionRig
 from ..simulation.codegen import Child
@@ -174,10 +174,9 @@ class ClosedLoop:
 
     def channels(self, setpoint: Signal) -> list[Signal | None]:
         held = Constant(self.drive_gain * self.bias)
-        plant = self.plant.channels(held)
-        if len(plant) != N_CHANNELS:
-            raise ExperimentError(f"ClosedLoop: the plant gave {len(plant)} channels")
-        return [*plant, setpoint, self.feedforward, self.disturbance]
+        plant = dict(zip(CHANNELS, self.plant.channels(held), strict=True))
+        return in_order({**plant, "setpoint": setpoint, "feedforward": self.feedforward,
+                         "disturbance": self.disturbance}, LOOP_CHANNELS)
 
     def breakpoints(self, bp: np.ndarray, channels, t_start: float, t_end: float
                     ) -> np.ndarray:

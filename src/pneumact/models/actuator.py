@@ -9,6 +9,7 @@ from ..checks import as_instance, check_type
 from ..errors import ArgumentError
 from ..experiments.signals import Signal
 from ..parameters.files import as_parameter_set
+from .channels import in_order
 from .component import Part, StateSpec
 from .friction import FrictionModel, LuGre
 from .mechanics import MECHANICS_BLOCK
@@ -80,7 +81,8 @@ class Actuator:
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         res_map, atm_map = self.valve.maps()
-        return [drive, self.load, self.load_map, res_map, atm_map]
+        return in_order({"drive": drive, "load_t": self.load, "load_x": self.load_map,
+                         "map_res": res_map, "map_atm": atm_map})
 
     def describe(self) -> str:
         return (f"Actuator(friction={self.friction!r}, valve={self.valve.name}, "

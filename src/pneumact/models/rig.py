@@ -16,7 +16,7 @@ from numba import njit
 
 from ..experiments.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
-from .channels import CH_DRIVE
+from .channels import CH_DRIVE, in_order
 from .component import Block, Part, StateSpec
 from .friction import FrictionModel, LuGre
 
@@ -171,7 +171,7 @@ class FrictionRig:
         return rig, self.friction.part()
 
     def channels(self, drive_signal):
-        return [drive_signal, None, None, None, None]
+        return in_order({"drive": drive_signal})
 
     def describe(self) -> str:
         return f"FrictionRig(friction={self.friction!r}, drive={self.drive!r})"

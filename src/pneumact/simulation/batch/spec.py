@@ -20,6 +20,7 @@ import pandas as pd
 from ...analysis.features import FEATURE_UNITS, FEATURES, PRESSURE_FEATURES, REFERENCE_FEATURES
 from ...errors import DataError, ParameterError
 from ...experiments.actuator import Experiment
+from ...models.channels import LOOP_CHANNELS
 from ..solvers import Solver
 
 __all__ = ["BatchSpec", "check_names", "check_reference", "check_table", "default_features"]
@@ -53,8 +54,10 @@ class BatchSpec:
                 "kernel": assembly.kernel_spec().label,
                 "parameter_set": getattr(model.params, "name", "custom"),
                 "values": _hash_array(assembly.pack()),
-                "channels": [None if c is None else _hash_array(c.encode())
-                             for c in channels[1:]],
+                "channels": {name: None if c is None else _hash_array(c.encode())
+                             # a plant has the first of LOOP_CHANNELS, a loop all
+                             for name, c in zip(LOOP_CHANNELS, channels, strict=False)
+                             if name != "drive"},
             },
             "experiment": {
                 "name": exp.name, "quantity": exp.quantity, "t_start": exp.t_start,
