@@ -43,6 +43,7 @@ def pytest_collection_modifyitems(config, items):
     # core they run beside the others instead of ending the run alone
     items.sort(key=lambda item: item.get_closest_marker("long") is None)
 
+
 def load_quietly(name: str):
     """A shipped set without its passivity warning: both shipped sets knowingly break the
     LuGre passivity bound (they are the published values); the warning is tested in
