@@ -90,6 +90,9 @@ STEADY_STATE_RTOL = 1e-4
 # Presliding stiffness from a 0 → 0.01·Fs ramp: dF/dx = sigma0·(1 − F/g) drops by < 1 %
 # over the fit range, the ramp-following transient (ζ = 0.5, 316 rad/s) is gone after 50 ms.
 STIFFNESS_RTOL = 0.03
+# The linearised actuator's gain Δx/Δp at ω = 1e-6·ω0 against A_d/(k + presliding
+# stiffness): the ω² terms are 1e-12 of it; round-off of the solve ≈ 1e-12 relative.
+LINEAR_DC_RTOL = 1e-6
 # On the bristle bound (Fs/sigma0 for LuGre, Fc/sigma0 for Dahl) the outward rate is <= 0: allow
 BRISTLE_BOUND_RTOL = 1e-6  # this much of |v| (rounding in g(v))
 # Dahl closed form in space vs simulation (rtol 1e-7): force error in units of Fc.

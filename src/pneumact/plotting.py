@@ -42,7 +42,6 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
 #: Signals shown in finer units than their SI unit suggests.
 _SIGNAL_DISPLAY: dict[str, tuple[str, float]] = {
     "bristle": ("µm", 1e6),
-    "bristle_rate": ("µm/s", 1e6),
 }
 _DEFAULT_SIGNALS = ("pressure", "position", "velocity", "friction")
 FRICTION_TEST_KINDS = ("steady-state", "presliding", "frictional-lag", "break-away",

@@ -423,7 +423,7 @@ def _fig2(params):
     grid = np.linspace(-5e-3, 5e-3, 801)
     fig, ax = plt.subplots(figsize=(6.5, 4.0))
     ax.plot(v * 1e3, f, "C0-", lw=1.2, label="LuGre, velocity sine")
-    ax.plot(grid * 1e3, LuGre().steady_state(grid, params), "k--", lw=1,
+    ax.plot(grid * 1e3, LuGre().steady_force(grid, params), "k--", lw=1,
             label="steady state (Stribeck curve + viscous)")
     ax.set_xlabel("velocity [mm/s]")
     ax.set_ylabel("friction [N]")

@@ -156,11 +156,11 @@ def friction_effects(params, amplitudes_vs, period: float = 2.0, friction=None
                                    amplitude=float(amplitude) * params["vs"])
         for name, entries in curves.curves.items():
             _, v0, f0 = entries[0]
-            steady0 = law.steady_state(v0, params)
+            steady0 = law.steady_force(v0, params)
             dynamic = steady = 0.0
             for (_, v, f), sign in zip(entries[1:], (-1.0, 1.0), strict=True):
                 varied = params.replace(**{name: _varied(params, name, sign)})
-                steady1 = law.steady_state(v, varied)
+                steady1 = law.steady_force(v, varied)
                 dynamic = max(dynamic, _rms((f - steady1) - (f0 - steady0)))
                 steady = max(steady, _rms(steady1 - steady0))
             rows.append({"amplitude_vs": float(amplitude), "parameter": name,
@@ -190,7 +190,7 @@ def eq13_bias(params, lowest_vs, friction=None, points: int = 20) -> pd.DataFram
         speeds = np.geomspace(float(lowest) * params["vs"], EQ13_TOP_SPEED, points)
         v = np.concatenate([-speeds[::-1], speeds])
         design = np.column_stack([np.sign(v), v])
-        (fc, sigma2), *_ = np.linalg.lstsq(design, law.steady_state(v, params), rcond=None)
+        (fc, sigma2), *_ = np.linalg.lstsq(design, law.steady_force(v, params), rcond=None)
         rows.append({"lowest_vs": float(lowest), "Fc_error": fc / params["Fc"] - 1,
                      "sigma2_error": sigma2 / params["sigma2"] - 1})
     return pd.DataFrame(rows)

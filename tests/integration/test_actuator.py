@@ -96,7 +96,7 @@ def test_end_stops_create_no_energy_and_never_pull(pressure, x_start, stop, vgt)
     params = vgt.replace(Fc=0.0, sigma2=0.0)  # frictionless: only the stops dissipate
     model = Actuator(params, friction=CoulombViscous(), valve=PressureSource())
     experiment = Experiment(Constant(pressure), "pressure", t_end=0.3, n_points=30001)
-    r = simulate(model, experiment, SOLVER, y0=np.array([x_start, 0.0, 0.0]))
+    r = simulate(model, experiment, SOLVER, y0={"position": x_start, "velocity": 0.0})
     x, f_stop = r["position"], r["stop_force"]
     x_max = params["x_max"]
     hit = x < 0.0 if stop == "rest" else x > x_max

@@ -1,8 +1,8 @@
 """The generated kernels' analytic Jacobian ``jac`` (∂f/∂y) and parameter Jacobian
 ``param_jac`` (∂f/∂ every slot of the parameter vector) equal central finite differences of
 their ``rhs``, for every valve, at states away from the non-smooth points (v ≠ 0, inside
-the stroke or well inside an end stop, u_raw in (0, 1)); every friction law's own
-partials against differences on the law's small kernel.
+the stroke or well inside an end stop, u_raw in (0, 1)), with a law of one state and a
+law of none (every law's own partials: ``test_friction_registry.py``).
 
 Each component combination is compiled once and cached on disk afterwards.
 """
@@ -16,21 +16,14 @@ from pneumact.experiments.actuator import Experiment
 from pneumact.experiments.signals import Constant, PiecewiseLinear, Ramp
 from pneumact.models import (
     Actuator,
-    BoucWen,
     CommandValve,
     CoulombViscous,
-    Dahl,
     FrictionRig,
     LuGre,
     PressureRegulator,
     PressureSource,
-    StribeckMap,
 )
 from pneumact.simulation import Rodas4
-from pneumact.simulation.assembly import (
-    friction_law_parameter_derivatives,
-    friction_law_values,
-)
 from pneumact.simulation.simulate import prepare
 from reference import JAC_FD_REL_STEP, JAC_RTOL, PARAM_JAC_RTOL
 
@@ -101,49 +94,6 @@ def _param_fd_check(prep, t, ts, y, label):
             f"{analytic[:, k].tolist()}, finite difference {numeric.tolist()}")
 
 
-FRICTIONS = [LuGre(), LuGre(decaying_damping=True), Dahl(), BoucWen(), CoulombViscous(),
-             StribeckMap()]
-
-
-@pytest.mark.parametrize("friction", FRICTIONS, ids=lambda f: f.kernel)
-def test_friction_law_partials(friction, vgt):
-    """Each law's own partials (∂/∂v, ∂/∂z of dz/dt and F; ∂/∂θ of both for every
-    parameter of its block) against central differences, on the law's small kernel: the
-    actuator's Jacobian below is checked with two laws, the assembly being the same for
-    all."""
-    v = np.array([s[1] for s in MECHANICAL_STATES])
-    z = np.array([s[2] if friction.has_state else 0.0 for s in MECHANICAL_STATES])
-    values = {name: vgt[name] for name in friction.part().block.parameters}
-    law = friction_law_values(friction, v, z, values)
-    for var, scale, keys in (("v", STATE_SCALES[1], ("dzdot_dv", "dforce_dv")),
-                             ("z", STATE_SCALES[2], ("dzdot_dz", "dforce_dz"))):
-        if var == "z" and not friction.has_state:
-            continue
-        h = JAC_FD_REL_STEP * np.maximum(np.abs(v if var == "v" else z), scale)
-        dv, dz = (h, 0.0) if var == "v" else (0.0, h)
-        plus = friction_law_values(friction, v + dv, z + dz, values)
-        minus = friction_law_values(friction, v - dv, z - dz, values)
-        for key, rate in zip(keys, ("zdot", "force"), strict=True):
-            numeric = (plus[rate] - minus[rate]) / (2.0 * h)
-            size = np.abs(numeric * scale) + np.abs(law[rate]) + 1e-300
-            error = np.abs(law[key] - numeric) * scale / size
-            assert error.max() <= JAC_RTOL, (friction.kernel, key, law[key], numeric)
-    partials = friction_law_parameter_derivatives(friction, v, z, values)
-    for name, analytic in partials.items():
-        theta = values.get(name)
-        if theta is None or theta == 0.0:
-            continue
-        h = JAC_FD_REL_STEP * abs(theta)
-        plus = friction_law_values(friction, v, z, {**values, name: theta + h})
-        minus = friction_law_values(friction, v, z, {**values, name: theta - h})
-        for column, rate in enumerate(("zdot", "force")):
-            numeric = (plus[rate] - minus[rate]) / (2.0 * h)
-            size = np.maximum(np.abs(law[rate]), np.abs(numeric * theta)) + 1e-300
-            error = np.abs(analytic[:, column] - numeric) * abs(theta) / size
-            assert error.max() <= PARAM_JAC_RTOL, (friction.kernel, name, rate,
-                                                   analytic[:, column], numeric)
-
-
 @pytest.mark.parametrize("friction", [LuGre(), CoulombViscous()], ids=lambda f: f.kernel)
 def test_actuator_pressure_source_jacobian(friction, vgt):
     # a load map with a slope exercises the ∂F_ext/∂x entry; a ramp in pressure the time
@@ -153,9 +103,7 @@ def test_actuator_pressure_source_jacobian(friction, vgt):
     experiment = Experiment(Ramp(90e3, 30e3, duration=2.0), "pressure", t_end=2.0)
     prep = prepare(model, experiment, Rodas4())
     for x, v, z in MECHANICAL_STATES:
-        if not friction.has_state:
-            z = 0.0
-        y = np.array([x, v, z])
+        y = np.array([x, v, *([z] if friction.states else [])])
         _fd_check(prep, 0.7, prep.segment_time, y, friction.kernel)
         _param_fd_check(prep, 0.7, prep.segment_time, y, friction.kernel)
 
@@ -197,6 +145,6 @@ def test_friction_rig_spring_drive_jacobian(friction, canudas):
     experiment = Experiment(Ramp(0.0, 1.0, duration=10.0), "spring", t_end=10.0)
     prep = prepare(model, experiment, Rodas4())
     for x, v, z in [(0.1, 0.05, 1e-5), (0.3, -0.02, -1.2e-5), (0.2, 2e-4, 3e-6)]:
-        y = np.array([x, v, z if friction.has_state else 0.0])
+        y = np.array([x, v, *([z] if friction.states else [])])
         _fd_check(prep, 3.0, 5.0, y, friction.kernel)
         _param_fd_check(prep, 3.0, 5.0, y, friction.kernel)

@@ -37,7 +37,7 @@ def test_frictionless_law_is_viscous_only(frictionless, law):
     v = np.array([-0.3, -1e-3, 0.0, 2e-4, 0.5])
     values = law.evaluate(v, 0.0, frictionless)
     np.testing.assert_allclose(values["force"], frictionless["sigma2"] * v, atol=1e-12)
-    np.testing.assert_array_equal(values["zdot"], 0.0)
+    np.testing.assert_array_equal(values["rates"], 0.0)
     assert all(np.all(np.isfinite(a)) for a in values.values())
 
 

@@ -48,7 +48,7 @@ def test_breakaway_and_width_are_the_sliding_friction_at_the_sliding_speed(vgt, 
     run = simulate(Actuator(vgt, valve=CommandValve()), CommandCycle(0.0, 1.0, period))
     summary = run.summary()
     speed = summary["sliding_speed"]
-    sliding = float(LuGre().steady_state(np.array([speed]), vgt)[0])  # g(v) + σ2·v
+    sliding = float(LuGre().steady_force(np.array([speed]), vgt)[0])  # g(v) + σ2·v
     vacuum = vgt["p_atm"] - summary["breakaway_pressure"]
     assert vacuum == pytest.approx((vgt["F0"] + sliding) / vgt["A_d"],
                                    rel=ref.SLIDING_LEVEL_BREAKAWAY_RTOL)

@@ -111,12 +111,12 @@ def test_bristle_bound_is_invariant_under_the_dynamics(params, law):
     v = np.concatenate([speeds, -speeds, speeds, -speeds])
     z = np.concatenate([np.full(2 * speeds.size, bound), np.full(2 * speeds.size, -bound)])
     values = {name: params[name] for name in law.part().block.parameters}
-    rates = friction_law_values(law, v, z, values)["zdot"]
+    rates = friction_law_values(law, v, z, values)["rates"][:, 0]
     outward = np.sign(z) * rates
     assert np.all(outward <= BRISTLE_BOUND_RTOL * np.abs(v)), (v[outward > 0],
                                                                outward[outward > 0])
     # inside the bound the bristle moves with the velocity's sign (it is not stuck)
-    inside = friction_law_values(law, v, 0.0 * z, values)["zdot"]
+    inside = friction_law_values(law, v, 0.0 * z, values)["rates"][:, 0]
     assert np.all(np.sign(inside) == np.sign(v))
 
 

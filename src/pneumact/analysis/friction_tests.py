@@ -54,18 +54,26 @@ class FrictionTestResult:
     test: FrictionTest | None = None
 
 
-def solver_for(test: FrictionTest, params) -> Rodas4:
-    """Rodas4 at the test's rtol, absolute tolerances scaled to the presliding range.
+def solver_for(test: FrictionTest, params, friction: FrictionModel | None = None) -> Rodas4:
+    """Rodas4 at the test's rtol, absolute tolerances scaled to the law's presliding range.
 
-    The rig has no natural state scales, so atol is ``atol_factor`` × Fs/sigma0 (bristle
-    and position) and × Fs/sqrt(sigma0·m) (velocity, the presliding oscillation).
+    The rig has no natural state scales, so atol is ``atol_factor`` × the presliding range
+    (position and every friction state; Fs/σ0 for LuGre) and × range·√(stiffness/m)
+    (velocity, the presliding oscillation). A static map has neither: its regularisation
+    speed v_reg scales the velocity, and v_reg × 10 ms the position.
     """
-    level = max(params["Fs"], params["Fc"]) or 1.0  # frictionless: the 1 N deflection
-    z_scale = level / params["sigma0"]
-    v_scale = level / math.sqrt(params["sigma0"] * params["m"])
+    friction = LuGre() if friction is None else friction
+    stiffness = friction.presliding_stiffness(params)
+    if stiffness > 0.0:
+        x_scale = friction.presliding_range(params)
+        v_scale = x_scale * math.sqrt(stiffness / params["m"])
+    else:
+        v_scale = params["v_reg"]
+        x_scale = 1e-2 * v_scale
     f = test.atol_factor
-    return Rodas4(rtol=test.rtol, atol={"position": f * z_scale, "velocity": f * v_scale,
-                                        "bristle": f * z_scale})
+    atol = {"position": f * x_scale, "velocity": f * v_scale}
+    atol.update({name: f * x_scale for name in friction.state_names})
+    return Rodas4(rtol=test.rtol, atol=atol)
 
 
 # -- analysis ------------------------------------------------------------------------------
@@ -139,7 +147,7 @@ def _steady_state_table(test, params, friction, runs):
     at_end = np.searchsorted(result.time, ends)
     v = result["drive_velocity"][at_end]
     return pd.DataFrame({"velocity [m/s]": v, "friction [N]": result["friction"][at_end],
-                         "steady-state friction [N]": friction.steady_state(v, params)})
+                         "steady-state friction [N]": friction.steady_force(v, params)})
 
 
 def _presliding_table(test, params, friction, runs):
@@ -156,7 +164,7 @@ def _lag_table(test, params, friction, runs):
         parts.append(pd.DataFrame({
             "frequency [Hz]": setup.key, "time [s]": result.time[last], "velocity [m/s]": v,
             "friction [N]": result["friction"][last],
-            "steady-state friction [N]": friction.steady_state(v, params)}))
+            "steady-state friction [N]": friction.steady_force(v, params)}))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -186,7 +194,7 @@ def run_friction_test(test: FrictionTest | str, params, friction: FrictionModel 
     """Run one classic friction experiment on a ``FrictionRig`` and derive its table.
 
     ``test`` is a settings object (``SteadyState(speeds=...)``) or a kind name with
-    ``settings`` as keywords; the solver defaults to ``solver_for(test, params)``.
+    ``settings`` as keywords; the solver defaults to ``solver_for(test, params, friction)``.
     """
     if isinstance(test, str):
         test = friction_test(test, **settings)
@@ -198,7 +206,7 @@ def run_friction_test(test: FrictionTest | str, params, friction: FrictionModel 
         raise ExperimentError(f"{test.kind}: the test measures friction, but parameter set "
                               f"'{getattr(params, 'name', 'custom')}' has none (Fc = Fs = "
                               "0); give a set with friction (stick-slip runs without)")
-    solver = solver_for(test, params) if solver is None else solver
+    solver = solver_for(test, params, friction) if solver is None else solver
     runs = [(setup, _run(setup, params, friction, solver))
             for setup in test.setups(params, friction)]
     tabulate = _TABLES[type(test)]

@@ -104,16 +104,17 @@ def _rates(kernel, y, vec, sig, ptr) -> np.ndarray:
     return f
 
 
-def _bristle_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u) -> None:
-    """A rig under a constant force rests on its bristle: σ0·z = F (Newton on z, exact for
-    the laws linear in z at v = 0); a static map or a force beyond the bristle's bound
-    leaves no state of rest."""
+def _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u) -> None:
+    """A rig under a constant force rests on its friction law's state: σ0·z = F for LuGre
+    (Newton on the state, exact for the laws linear in z at v = 0); a static map, a force
+    beyond the law's bound, or a law of several states (whose rest under a load depends on
+    its history) leaves no state of rest here."""
     if kind != "force" or u == 0.0:
         return
-    names = assembly.state_names
-    iv, iz = names.index("velocity"), names.index("bristle")
-    friction = plant.friction
-    if friction.has_state:
+    iv = assembly.state_index("velocity")
+    friction_states = assembly.role_states("friction")
+    if len(friction_states) == 1:
+        iz, = friction_states
         jac = np.zeros((y.size, y.size))
         for _ in range(3):
             f = _rates(kernel, y, vec, sig, ptr)
@@ -127,21 +128,23 @@ def _bristle_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u) -> N
         residual = _rates(kernel, y, vec, sig, ptr)[iv] * float(plant.params["m"])
         if bounded[iz] == y[iz] and abs(residual) <= 1e-9 * abs(u):
             return
+    can_carry = {0: "0 N (a static map)", 1: "its presliding force (max(Fs, Fc) for LuGre)"}
     raise ExperimentError(
         f"linearise: input_value = {u:g} N holds no presliding rest for "
         f"{plant.describe()} (the friction at rest can carry at most "
-        f"{'max(Fs, Fc)' if friction.has_state else '0 N (a static map)'}); "
+        f"{can_carry.get(len(friction_states), 'a force that depends on its history')}); "
         "allowed: a smaller force, or regime='sliding'")
 
 
 def _friction_words(plant) -> str:
     names = plant.friction.block.names
     params = plant.params
-    if "sigma0" not in names:
+    stiffness = plant.friction.presliding_stiffness(params)
+    if stiffness == 0.0:
         return "the static friction map acts as its slope at v = 0"
     damping = sum(float(params[n]) for n in ("sigma1", "sigma2") if n in names)
     label = "σ1 + σ2" if "sigma1" in names else "σ2"
-    return (f"the friction acts as the bristle spring σ0 = {float(params['sigma0']):g} N/m "
+    return (f"the friction acts as a spring of its presliding stiffness {stiffness:g} N/m "
             f"with damping {label} = {damping:g} N·s/m")
 
 
@@ -334,22 +337,22 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     y = np.empty(n)
     kernel.initial_state(T_POINT, T_POINT, vec, sig, ptr, y)
     iv = names.index("velocity")
-    iz = names.index("bristle")
+    friction_states = list(assembly.role_states("friction"))
     friction_words = _friction_words(plant)
     unit = QUANTITIES[plant.drive_quantity]
     applied = _quantity(plant.drive_quantity, u, unit)
     if regime == "presliding":
-        _bristle_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
+        _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
-                     f"(v = 0, bristle at rest: {friction_words}); {_where(plant, y, names)}.")
+                     f"(v = 0, friction at rest: {friction_words}); {_where(plant, y, names)}.")
     else:
         v = float(velocity)
         y[iv] = v
-        if plant.friction.has_state:
-            y[iz] = math.copysign(float(plant.friction.steady_deflection(abs(v),
-                                                                         plant.params)), v)
-        statement = (f"Linearised about steady sliding at v = {v:g} m/s (bristle at its steady "
-                     f"deflection z = {y[iz]:.6g} m) under {applied}, from "
+        y[friction_states] = plant.friction.steady_states(v, plant.params)[0]
+        steady = ", ".join(f"{names[i]} = {y[i]:.6g}" for i in friction_states)
+        steady = f": {steady}" if steady else ""
+        statement = (f"Linearised about steady sliding at v = {v:g} m/s (friction states at "
+                     f"their steady values{steady}) under {applied}, from "
                      f"{_where(plant, y, names)}: a motion, not an equilibrium (the position "
                      "moves at v), with the friction entering through its "
                      "local slopes ∂F/∂v, ∂F/∂z there.")

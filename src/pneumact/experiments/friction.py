@@ -40,14 +40,14 @@ class RigSetup:
     """What one run of a friction experiment applies to the ``FrictionRig``.
 
     ``drive`` is the rig drive ("force", "velocity", "position" or "spring"),
-    ``experiment`` the drive signal over time, ``initial_state`` the [x, v, z] start (None:
-    at rest with relaxed bristles), ``key`` the run's label in a multi-run experiment
+    ``experiment`` the drive signal over time, ``initial_state`` the start by state name
+    (None: at rest with relaxed friction states), ``key`` the run's label in a multi-run experiment
     (rate, frequency), ``marks`` times of interest (e.g. the ends of steady plateaus).
     """
 
     drive: str
     experiment: Experiment
-    initial_state: np.ndarray | None = None
+    initial_state: Mapping[str, float] | None = None
     key: float | None = None
     marks: tuple[float, ...] = ()
 
@@ -118,9 +118,8 @@ class SteadyState(FrictionTest):
     def setups(self, params, friction) -> list[RigSetup]:
         speeds = np.sort(np.abs(np.asarray(self.speeds, dtype=float)))
         velocities = np.concatenate([-speeds[::-1], speeds])
-        # bristle time constant at each speed (none for a static map)
-        per_speed = (friction_deflection(friction, speeds, params) / speeds
-                     if friction.has_state else np.zeros_like(speeds))
+        # the law's time constant at each speed (none for a static map)
+        per_speed = friction.relaxation_length(speeds, params) / speeds
         tau = np.concatenate([per_speed[::-1], per_speed])
         times: list[float] = []
         values: list[float] = []
@@ -138,11 +137,6 @@ class SteadyState(FrictionTest):
         exp = Experiment(PiecewiseLinear(times, values), "velocity", t,
                          n_points=self.n_points, name="steady-state")
         return [RigSetup("velocity", exp, marks=tuple(ends))]
-
-
-def friction_deflection(friction, speeds, params) -> np.ndarray:
-    """Steady bristle deflection at ``speeds``: its time constant is this over the speed."""
-    return np.asarray(friction.steady_deflection(np.asarray(speeds, float), params), float)
 
 
 @dataclass(frozen=True)
@@ -203,15 +197,16 @@ class FrictionalLag(FrictionTest):
         _check_points(self.kind, self.samples_per_period)
 
     def setups(self, params, friction) -> list[RigSetup]:
-        deflection = friction_deflection(friction, abs(self.mean), params).reshape(-1)[0]
-        z0 = math.copysign(float(deflection), self.mean) if friction.has_state else 0.0
+        steady = friction.steady_states(self.mean, params)[0]
+        start = {"position": 0.0, "velocity": self.mean,
+                 **dict(zip(friction.state_names, steady.tolist(), strict=True))}
         runs = []
         for f in self.frequencies:
             t_end = self.periods / f
             exp = Experiment(Sine(self.amplitude, f, offset=self.mean), "velocity", t_end,
                              n_points=round(self.periods * self.samples_per_period) + 1,
                              name=f"frictional-lag {f:g} Hz")
-            runs.append(RigSetup("velocity", exp, np.array([0.0, self.mean, z0]), float(f),
+            runs.append(RigSetup("velocity", exp, start, float(f),
                                  (t_end - 1.0 / f,)))
         return runs
 

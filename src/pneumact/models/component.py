@@ -82,10 +82,13 @@ class StateSpec:
 class Part:
     """One component as the assembly sees it.
 
-    ``functions`` maps the name the model template calls (``friction_eval``) to
+    ``functions`` maps the name a template calls (``friction_law``, ``valve_rates``) to
     ``"module:function"``; ``constants`` likewise for compile-time constants.
     ``settings`` gives the values of the block's setting entries; ``label`` describes the
     component for people, ``key`` names its compiled variant in the kernel's file name.
+    ``templates`` are kernel templates of the component's own (a friction law's functions
+    on its slice of the state vector), bound before the model's templates and visible to
+    a closed loop's plant.
     """
 
     role: str
@@ -96,3 +99,4 @@ class Part:
     settings: Mapping[str, float] = field(default_factory=dict)
     label: str = ""
     key: str = ""
+    templates: tuple[str, ...] = ()

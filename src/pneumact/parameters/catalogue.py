@@ -1,7 +1,7 @@
 """The parameter catalogue: every parameter a component declares, with unit and range.
 
 Components declare the parameters they read, next to the equations that read them
-(``models/friction.py`` declares sigma0 … vs, ``models/valves.py`` the orifice areas,
+(``models/friction/`` declares sigma0 … vs, ``models/valves.py`` the orifice areas,
 and so on), with ``declare(...)``; relations between parameters (Fs >= Fc, p_res <
 p_atm) are declared the same way with ``declare_relation(...)``. The catalogue is only a
 lookup of those declarations (name -> unit, meaning, default, range): it fixes no vector

@@ -101,6 +101,15 @@ class Assembly:
     def state_index(self, name: str) -> int:
         return self.state_names.index(name)
 
+    def role_states(self, role: str) -> tuple[int, ...]:
+        """Columns of the states of the component ``role`` (a friction law's: any number)."""
+        first = 0
+        for part in self.parts:
+            if part.role == role:
+                return tuple(range(first, first + len(part.states)))
+            first += len(part.states)
+        raise KeyError(f"{self.describe()} has no component {role!r}")
+
     def signal_source(self, name: str) -> tuple[int, int] | None:
         """(0, state column) or (1, output column) of a signal name; states win."""
         if name in self.state_names:
@@ -206,9 +215,8 @@ class Assembly:
         for role, (lo, hi) in self.block_ranges.items():
             constants += [(f"{role.upper()}_LO", lo), (f"{role.upper()}_HI", hi)]
         first = 0
-        for part in self.parts:
-            if part.states:
-                constants.append((f"S_{part.role.upper()}", first))
+        for part in self.parts:  # where each component's states start (even if it has none)
+            constants.append((f"S_{part.role.upper()}", first))
             first += len(part.states)
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
@@ -219,8 +227,9 @@ class Assembly:
         label = "_".join([self.template.rpartition(".")[2], *keys])
         templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS, BATCH))
         children = tuple(getattr(self.model, "kernel_children", tuple)())
+        components = tuple(dict.fromkeys(t for part in self.parts for t in part.templates))
         return codegen.KernelSpec(label, tuple(templates), tuple(imports),
-                                  tuple(dict.fromkeys(constants)), children)
+                                  tuple(dict.fromkeys(constants)), children, components)
 
     @cached_property
     def kernel(self) -> ModuleType:
@@ -260,28 +269,39 @@ class _Law:
         return (self.friction.part(),)
 
 
-def _law_inputs(friction, v, z, params):
+def _law_inputs(friction, v, y, params):
+    """The law's assembly, v (n,), its states y (n, N) (a scalar or an (n,) array
+    broadcast over the N states) and the packed vector."""
     assembly = Assembly(_Law(friction, params))
-    v = np.atleast_1d(np.asarray(v, dtype=np.float64))
-    z = np.ascontiguousarray(np.broadcast_to(np.asarray(z, dtype=np.float64), v.shape))
-    return assembly, np.ascontiguousarray(v), z, assembly.pack()
+    n_states = len(assembly.states)
+    v = np.ascontiguousarray(np.atleast_1d(np.asarray(v, dtype=np.float64)))
+    y = np.asarray(y, dtype=np.float64)
+    if y.ndim < 2:
+        y = np.broadcast_to(y.reshape(-1, 1) if y.ndim == 1 else y, (v.size, n_states))
+    if y.shape != (v.size, n_states):
+        raise ValueError(f"friction states: shape {y.shape}, expected ({v.size}, "
+                         f"{n_states}) for {friction!r}")
+    return assembly, v, np.array(y, dtype=np.float64, order="C"), assembly.pack()
 
 
-def friction_law_values(friction, v, z, params) -> dict[str, np.ndarray]:
-    """The law at arrays ``v``, ``z``: dz/dt, force and the partial derivatives."""
-    assembly, v, z, vec = _law_inputs(friction, v, z, params)
-    out = np.empty((v.size, 6))
-    assembly.kernel.law_values(v, z, vec, out)
-    keys = ("zdot", "force", "dzdot_dv", "dzdot_dz", "dforce_dv", "dforce_dz")
-    return {k: out[:, i] for i, k in enumerate(keys)}
+def friction_law_values(friction, v, y, params) -> dict[str, np.ndarray]:
+    """The law at arrays ``v`` (n,), ``y`` (n, N): force, rates and partial derivatives
+    (see ``FrictionModel.evaluate``)."""
+    assembly, v, y, vec = _law_inputs(friction, v, y, params)
+    n = len(assembly.states)
+    force, dforce_dv, rates = np.empty(v.size), np.empty(v.size), np.empty((v.size, n))
+    jac = np.zeros((v.size, n + 1, n + 1))
+    assembly.kernel.law_values(v, y, vec, force, dforce_dv, rates, jac)
+    return {"force": force, "dforce_dv": dforce_dv, "rates": rates,
+            "drates_dv": jac[:, :n, n], "drates_dy": jac[:, :n, :n],
+            "dforce_dy": -jac[:, n, :n]}
 
 
-def friction_law_parameter_derivatives(friction, v, z, params) -> dict[str, np.ndarray]:
-    """name -> (n, 2) array of (∂(dz/dt)/∂θ, ∂F/∂θ) for every parameter of the law."""
-    assembly, v, z, vec = _law_inputs(friction, v, z, params)
-    n = len(friction.block)
-    dzdot = np.zeros((v.size, n))
-    dforce = np.zeros((v.size, n))
-    assembly.kernel.law_parameter_derivatives(v, z, vec, dzdot, dforce)
-    return {name: np.column_stack([dzdot[:, k], dforce[:, k]])
-            for k, name in enumerate(friction.block.names)}
+def friction_law_parameter_derivatives(friction, v, y, params) -> dict[str, np.ndarray]:
+    """name -> (n, N + 1) array: ∂ż_i/∂θ of each state, then ∂F/∂θ, for every parameter
+    of the law."""
+    assembly, v, y, vec = _law_inputs(friction, v, y, params)
+    n = len(assembly.states)
+    g = np.zeros((v.size, n + 1, assembly.size))
+    assembly.kernel.law_parameter_derivatives(v, y, vec, g)
+    return {name: g[:, :, k] for k, name in enumerate(friction.block.names)}

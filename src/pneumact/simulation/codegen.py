@@ -4,7 +4,7 @@ Numba caches compiled code on disk per source file, but not for closures or for
 functions passed as arguments, so components cannot be composed at run time without
 recompiling in every process. Instead, for each combination a small module is generated
 that holds only imports (the chosen component functions under the names a template
-calls: ``friction_eval``, ``valve_rates``, …) and constants (the layout of the state and
+calls: ``friction_law``, ``valve_rates``, …) and constants (the layout of the state and
 parameter vectors). The functions of the templates (``templates/*.py``, marked with
 ``@kernel``) are then bound to that module's namespace and compiled with
 ``cache=True``: numba keys their disk cache on the generated file, so each combination
@@ -34,9 +34,11 @@ import sys
 import tempfile
 import threading
 import types
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+
+from ..core.marks import kernel
 
 __all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
            "kernel_key", "load"]
@@ -49,17 +51,6 @@ _LOADED: dict[str, types.ModuleType] = {}
 _PACKAGE = "pneumact"
 
 
-def kernel(**options) -> Callable:
-    """Mark a template function: bound into each generated kernel and compiled there with
-    ``njit(cache=True, **options)`` (e.g. ``nogil=True`` for the integrators)."""
-
-    def mark(fn):
-        fn.__kernel_options__ = options
-        return fn
-
-    return mark
-
-
 @dataclass(frozen=True)
 class KernelSpec:
     """What a generated kernel module holds.
@@ -67,6 +58,9 @@ class KernelSpec:
     ``templates``: modules whose ``@kernel`` functions are bound into it; ``imports``:
     (alias, "module:attribute") pairs; ``constants``: (name, value) pairs of ints,
     floats, bools or tuples of them. ``label`` names the combination in the file name.
+    ``components``: the components' own templates (a friction law's functions on its
+    slice of the state), bound first, so that the model's templates and its children
+    (a closed loop's plant) call them.
     """
 
     label: str
@@ -74,11 +68,12 @@ class KernelSpec:
     imports: tuple[tuple[str, str], ...]
     constants: tuple[tuple[str, object], ...]
     children: tuple[Child, ...] = ()
+    components: tuple[str, ...] = ()
 
     def source(self) -> str:
         """Text of the generated module: a docstring, imports and constants."""
         lines = [f'"""pneumact kernel {self.label}: generated, do not edit.',
-                 "", f"Templates bound to it: {', '.join(self.templates)}."]
+                 "", f"Templates bound to it: {', '.join((*self.components, *self.templates))}."]
         lines += [f"Bound under '{c.prefix}': {c.template} with {dict(c.constants)}."
                   for c in self.children]
         lines.append('"""')
@@ -93,7 +88,8 @@ class KernelSpec:
         """The modules the kernel's code comes from (templates and component modules)."""
         imported = (target.split(":")[0] for _, target in self.imports)
         children = (c.template for c in self.children)
-        return tuple(dict.fromkeys((*self.templates, *children, *imported)))
+        return tuple(dict.fromkeys((*self.components, *self.templates, *children,
+                                    *imported)))
 
 
 @dataclass(frozen=True)
@@ -377,10 +373,13 @@ def load(spec: KernelSpec) -> types.ModuleType:
         module_spec.loader.exec_module(module)
         provided = frozenset([*(alias for alias, _ in spec.imports),
                               *(name for name, _ in spec.constants)])
-        for child in spec.children:
-            _bind_child(module.__dict__, child, str(path), provided)
         origins: dict[str, str] = {}
         needs: dict[str, str] = {}
+        for template in spec.components:
+            _bind(module.__dict__, importlib.import_module(template), str(path), provided,
+                  origins, needs)
+        for child in spec.children:
+            _bind_child(module.__dict__, child, str(path), provided)
         for template in spec.templates:
             _bind(module.__dict__, importlib.import_module(template), str(path), provided,
                   origins, needs)

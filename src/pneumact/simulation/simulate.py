@@ -176,9 +176,11 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
     bp = _breakpoints(model, experiment, channels)
     t_out = _output_times(experiment, t_eval)
     n = len(assembly.states)
-    if y0 is None:
+    if y0 is None or isinstance(y0, Mapping):
         start = np.empty(n)
         kernel.initial_state(bp[0], 0.5 * (bp[0] + bp[1]), vec, sig, ptr, start)
+        if y0 is not None:
+            _set_named_states(assembly, start, y0)
     else:
         try:
             start = np.asarray(y0, dtype=float).copy()
@@ -195,6 +197,17 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
     atol = solver.atol_vector(assembly.state_names, scales)
     return Prepared(assembly, kernel, vec, sig, ptr, bp, t_out, start, atol,
                     solver.step_limit(bp.size - 1))
+
+
+def _set_named_states(assembly, start: np.ndarray, y0: Mapping[str, float]) -> None:
+    """Overwrite the states ``y0`` names (SI) in the model's equilibrium ``start``."""
+    names = assembly.state_names
+    for name, value in y0.items():
+        if name not in names:
+            raise ExperimentError(f"y0: unknown state {name!r}; the states of "
+                                  f"{assembly.describe()} are {', '.join(names)}")
+        start[names.index(name)] = check_finite(f"y0[{name!r}]", value,
+                                                error=ExperimentError)
 
 
 def checked_solver(solver, where: str = "simulate") -> Solver:
@@ -276,7 +289,9 @@ def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_e
     (the run is then split into chunks). Raises ``SolverError`` saying when and in which
     state the integrator failed. ``values`` changes parameter values (SI, by name) for
     this run without building a new parameter set (fitting loops use it; ranges and
-    relations are not re-checked).
+    relations are not re-checked). ``y0`` starts the run elsewhere than at the model's
+    equilibrium: an array of every state, or state name -> SI value (the others at the
+    equilibrium).
     """
     solver = checked_solver(solver)
     if progress is not None and not callable(progress):

@@ -3,10 +3,12 @@
 The generator (``simulation.codegen``) binds these functions into one module per
 friction × valve combination, where the names below marked "bound by the generator"
 are the chosen component functions and the layout constants of the assembly
-(``simulation.assembly``): states are [position, velocity, bristle | valve states], the
-parameter vector is [mechanics block | friction block | valve block].
+(``simulation.assembly``): states are [position, velocity | friction states | valve
+states], the parameter vector is [mechanics block | friction block | valve block]. The
+friction law is called through its slice-level functions (``models.friction.base``).
 """
 
+from pneumact.core import kernel
 from pneumact.models.mechanics import (
     MC_AD,
     MC_F0,
@@ -23,10 +25,10 @@ from pneumact.models.mechanics import (
     rest_position,
     stop_force_of,
 )
-from pneumact.simulation.codegen import kernel
 
 # --- bound by the generator --------------------------------------------------------------
-friction_eval = friction_params = friction_scales = friction_bound = None
+friction_rates = friction_force = friction_partials = friction_param_partials = None
+friction_project = friction_scales = friction_store = friction_store_partials = None
 valve_pressure = valve_rates = valve_partials = valve_params = valve_flows = None
 valve_derive = valve_equilibrium = valve_scales = valve_project = None
 VALVE_PRESSURE_STATE = -1
@@ -36,17 +38,16 @@ NPARAM = 0
 MECHANICS_LO = MECHANICS_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
-S_BRISTLE = 2
+S_FRICTION = 2
 S_VALVE = 3
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("pressure", "friction", "spring_force", "pressure_force", "stop_force",
-                "load", "opening", "mass_flow_in", "mass_flow_out", "bristle_rate")
-OUTPUT_UNITS = ("Pa", "N", "N", "N", "N", "N", "1", "kg/s", "kg/s", "m/s")
+                "load", "opening", "mass_flow_in", "mass_flow_out")
+OUTPUT_UNITS = ("Pa", "N", "N", "N", "N", "N", "1", "kg/s", "kg/s")
 #: generated from OUTPUT_NAMES (the assembly's layout): NOUT and OUT_<NAME>
 NOUT = OUT_PRESSURE = OUT_FRICTION = OUT_SPRING_FORCE = OUT_PRESSURE_FORCE = None
 OUT_STOP_FORCE = OUT_LOAD = OUT_OPENING = OUT_MASS_FLOW_IN = OUT_MASS_FLOW_OUT = None
-OUT_BRISTLE_RATE = None
 #: Fixed-point steps of the rest position under a load that depends on position.
 LOAD_ITERATIONS = 20
 
@@ -75,12 +76,12 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
     p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
     f_ext = external_load(t, ts, x, sig, ptr)[0]
     net = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)[0]
     dydt[S_POSITION] = v
     dydt[S_VELOCITY] = net / prm[MECHANICS_LO + MC_M]
-    dydt[S_BRISTLE] = zdot
+    friction_store(z_rates, dydt, S_FRICTION)
     valve_rates(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
 
 
@@ -90,17 +91,14 @@ def jac(t, ts, y, prm, sig, ptr, out):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
     p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-    _, f_fric, dzd_dv, dzd_dz, df_dv, df_dz = friction_eval(v, y[S_BRISTLE], prm,
-                                                            FRICTION_LO)
+    m = prm[MECHANICS_LO + MC_M]
+    f_fric, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
     f_ext, dext_dx = external_load(t, ts, x, sig, ptr)
     _, dnet_dx, dnet_dv, dnet_dp = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)
-    m = prm[MECHANICS_LO + MC_M]
     out[S_POSITION, S_VELOCITY] = 1.0
     out[S_VELOCITY, S_POSITION] = (dnet_dx - dext_dx) / m
     out[S_VELOCITY, S_VELOCITY] = (dnet_dv - df_dv) / m
-    out[S_VELOCITY, S_BRISTLE] = -df_dz / m
-    out[S_BRISTLE, S_VELOCITY] = dzd_dv
-    out[S_BRISTLE, S_BRISTLE] = dzd_dz
+    friction_store_partials(z_partials, out, S_FRICTION, S_VELOCITY, S_VELOCITY, m)
     if VALVE_PRESSURE_STATE >= 0:
         out[S_VELOCITY, S_VALVE + VALVE_PRESSURE_STATE] = dnet_dp / m
     valve_partials(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr, out, S_POSITION,
@@ -117,13 +115,13 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     v = y[S_VELOCITY]
     if _any(needed, MECHANICS_LO, MECHANICS_HI):
         p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-        f_fric = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)[1]
+        f_fric = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
         f_ext = external_load(t, ts, x, sig, ptr)[0]
         net = net_force(x, v, p, f_fric, f_ext, prm, MECHANICS_LO)[0]
         acceleration_params(x, v, p, net, prm, MECHANICS_LO, g, S_VELOCITY)
     if _any(needed, FRICTION_LO, FRICTION_HI):
         # the friction force enters the acceleration as −F/m
-        friction_params(v, y[S_BRISTLE], prm, FRICTION_LO, g, S_BRISTLE, S_VELOCITY)
+        friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
         m = prm[MECHANICS_LO + MC_M]
         for k in range(FRICTION_LO, FRICTION_HI):
             g[S_VELOCITY, k] = -g[S_VELOCITY, k] / m
@@ -145,7 +143,7 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
     p = valve_pressure(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
-    zdot, f_fric, _, _, _, _ = friction_eval(v, y[S_BRISTLE], prm, FRICTION_LO)
+    f_fric = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
     u, q_in, q_out = valve_flows(t, ts, x, v, y, S_VALVE, prm, VALVE_LO, sig, ptr)
     out[OUT_PRESSURE] = p
     out[OUT_FRICTION] = f_fric
@@ -156,7 +154,6 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_OPENING] = u
     out[OUT_MASS_FLOW_IN] = q_in
     out[OUT_MASS_FLOW_OUT] = q_out
-    out[OUT_BRISTLE_RATE] = zdot
 
 
 @kernel()
@@ -180,11 +177,10 @@ def initial_state(t, ts, prm, sig, ptr, y0):
 
 @kernel()
 def project(prm, y):
-    """Back onto the bounds the exact dynamics never leave (the bristle deflection, the
-    regulator's opening) after a step: a loose tolerance may overshoot them slightly,
+    """Back onto the bounds the exact dynamics never leave (the friction law's states,
+    the regulator's opening) after a step: a loose tolerance may overshoot them slightly,
     and the projection onto such a convex set can only bring y closer to the solution."""
-    bound = friction_bound(prm, FRICTION_LO)
-    y[S_BRISTLE] = min(max(y[S_BRISTLE], -bound), bound)
+    friction_project(prm, FRICTION_LO, y, S_FRICTION)
     valve_project(y, S_VALVE)
 
 
@@ -192,5 +188,5 @@ def project(prm, y):
 def state_scales(prm, out):
     """Typical magnitude of each state (for the default absolute tolerances)."""
     out[S_POSITION], out[S_VELOCITY] = mechanics_scales(prm, MECHANICS_LO)
-    out[S_BRISTLE] = friction_scales(prm, FRICTION_LO)[0]
+    friction_scales(prm, FRICTION_LO, out, S_FRICTION)
     valve_scales(prm, VALVE_LO, out, S_VALVE)

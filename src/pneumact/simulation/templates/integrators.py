@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from pneumact.simulation.codegen import kernel
+from pneumact.core import kernel
 from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------

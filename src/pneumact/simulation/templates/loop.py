@@ -52,6 +52,7 @@ from pneumact.control.controllers import (
     CT_UMIN,
     CT_VFF,
 )
+from pneumact.core import kernel
 from pneumact.experiments.signals import channel_eval
 from pneumact.models.channels import (
     CH_DISTURBANCE,
@@ -60,7 +61,6 @@ from pneumact.models.channels import (
     CH_SETPOINT,
     INPUT_OFFSET,
 )
-from pneumact.simulation.codegen import kernel
 
 # --- bound by the generator --------------------------------------------------------------
 plant_rhs = plant_jac = plant_param_jac = plant_outputs = plant_initial_state = None
