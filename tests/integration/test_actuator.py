@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
+from pneumact.core.signals import Constant, Ramp, Step, Triangle
 from pneumact.experiments.actuator import Experiment
-from pneumact.experiments.signals import Constant, Ramp, Step, Triangle
 from pneumact.models import (
     Actuator,
     Adiabatic,

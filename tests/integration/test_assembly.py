@@ -77,10 +77,10 @@ def test_key_covers_every_source_the_kernel_imports(valve_actuator):
              for p in codegen.dependency_files(spec.modules())}
     for needed in ("models/friction/lugre.py", "models/friction/scalar_law.py",
                    "models/friction/base.py", "core/marks.py", "models/valves.py",
-                   "models/pneumatics.py", "models/mechanics.py", "experiments/signals.py",
+                   "models/pneumatics.py", "models/mechanics.py", "core/signals.py",
                    "simulation/linalg.py",
                    "simulation/templates/integrators.py", "simulation/templates/batch.py",
-                   "analysis/features.py"):
+                   "core/features.py"):
         assert needed in names, needed
     # nothing the kernel does not use: an import inside a function binds no global that
     # compiled code reads, so it is not followed (models/friction/base.py imports the assembly

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 import pneumact as pa
-from pneumact.analysis import features as ft
+from pneumact.core import features as ft
 from pneumact.errors import DataError, ParameterError, PassivityWarning
 from pneumact.io.tables import partial_folder
 from pneumact.simulation.batch import BatchResult, simulate_batch

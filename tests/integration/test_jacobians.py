@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pneumact.core.signals import Constant, PiecewiseLinear, Ramp
 from pneumact.experiments.actuator import Experiment
-from pneumact.experiments.signals import Constant, PiecewiseLinear, Ramp
 from pneumact.models import (
     Actuator,
     CommandValve,

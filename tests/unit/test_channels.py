@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 import pneumact as pa
+from pneumact.core.signals import Constant
 from pneumact.errors import ExperimentError
-from pneumact.experiments.signals import Constant
 from pneumact.models.channels import CH_DRIVE, CH_LOAD_T, CH_LOAD_X, CHANNELS, in_order
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.analysis import features
+from pneumact.core import features
 from pneumact.errors import DataError
 from reference import (
     BREAKAWAY_INTERPOLATION_RTOL,

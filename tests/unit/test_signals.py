@@ -7,8 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pneumact.errors import ExperimentError
-from pneumact.experiments.signals import (
+from pneumact.core.signals import (
     Constant,
     PiecewiseLinear,
     Ramp,
@@ -16,6 +15,7 @@ from pneumact.experiments.signals import (
     Step,
     Triangle,
 )
+from pneumact.errors import ExperimentError
 from reference import (
     ROUND_OFF_ATOL,
     SIGNAL_RTOL,

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from pneumact.core.signals import Constant, Sine, Triangle
 from pneumact.experiments.actuator import CommandCycle, Experiment
-from pneumact.experiments.signals import Constant, Sine, Triangle
 from pneumact.models import Actuator, CommandValve, CoulombViscous, FrictionRig, LuGre
 from pneumact.simulation import DormandPrince, Rodas4, simulate
 from pneumact.simulation.simulate import prepare

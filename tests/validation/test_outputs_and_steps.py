@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pneumact as pa
-from pneumact.analysis.features import loop_width_position, loop_width_pressure
+from pneumact.core.features import loop_width_position, loop_width_pressure
 from pneumact.experiments.friction import StickSlip
 from pneumact.simulation.simulate import prepare
 from reference import (

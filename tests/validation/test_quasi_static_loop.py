@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.analysis.features import (
+from pneumact.core.features import (
     loop_width_position,
     loop_width_pressure,
     motion_onset_pressure,

@@ -1,6 +1,9 @@
-"""Analysis of runs and records: hysteresis features, friction-test analysis."""
+"""Analysis of runs and records: hysteresis features, friction-test analysis.
 
-from pneumact.analysis.features import (
+The features are computed by ``core.features`` (compiled, below the simulation, so the
+batch engine runs them inside its loop); this package is where users find them."""
+
+from pneumact.core.features import (
     FEATURE_UNITS,
     FEATURES,
     breakaway_pressure,

@@ -343,8 +343,8 @@ def replay_drive(record: Record, friction, *, gains: Mapping[str, float] | None 
     sign's rounding. ``velocity_cutoff`` [Hz]: the low-pass before the velocity's
     central difference. ``solver``: default ``Rodas4()``.
     """
+    from ..core.signals import Constant, PiecewiseLinear
     from ..experiments.setpoints import SetpointProfile
-    from ..experiments.signals import Constant, PiecewiseLinear
     from ..simulation.assembly import assemble
     from ..simulation.simulate import simulate
     from .controllers import Cascade

@@ -35,9 +35,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.signals import Constant, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import QUANTITIES, Experiment
-from ..experiments.signals import Constant, Sine, pack_channels
 from ..models.actuator import Actuator
 from .plants import input_kind, input_range
 

@@ -15,8 +15,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..core.signals import Constant, Signal
 from ..errors import ExperimentError, ParameterError
-from ..experiments.signals import Constant, Signal
 from ..models.actuator import Actuator
 from ..models.channels import CHANNELS, LOOP_CHANNELS, in_order
 from ..models.component import Part
@@ -212,8 +212,8 @@ class ClosedLoop:
         bracket: the controller's limits within the plant's input range."""
         from scipy.optimize import brentq
 
+        from ..core.signals import pack_channels
         from ..experiments.actuator import Experiment
-        from ..experiments.signals import pack_channels
         from ..simulation.simulate import prepare
         from ..simulation.solvers import Rodas4
 

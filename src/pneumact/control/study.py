@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..core.signals import Constant
 from ..experiments.actuator import Experiment
-from ..experiments.signals import Constant
 from .controllers import PID
 from .loop import ClosedLoop
 

@@ -1,8 +1,8 @@
 """Experiments: what is applied to the actuator or the friction rig, and for how long."""
 
+from ..core.signals import Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
 from .actuator import QUANTITIES, CommandCycle, Experiment, PressureCycle, from_csv, from_samples
 from .setpoints import SetpointProfile, SetpointRamp, SetpointStep, SetpointTable
-from .signals import Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
 
 __all__ = [
     "QUANTITIES", "CommandCycle", "Constant", "Experiment", "PiecewiseLinear", "PressureCycle",

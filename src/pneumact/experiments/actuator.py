@@ -17,8 +17,8 @@ from ..checks import (
     check_range,
     check_type,
 )
+from ..core.signals import PiecewiseLinear, Signal, Triangle
 from ..errors import ExperimentError
-from .signals import PiecewiseLinear, Signal, Triangle
 
 QUANTITIES = {
     "pressure": "Pa", "command": "1", "force": "N", "velocity": "m/s", "position": "m",

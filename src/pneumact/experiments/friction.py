@@ -27,9 +27,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..core.signals import PiecewiseLinear, Ramp, Sine
 from ..errors import ExperimentError
 from .actuator import Experiment
-from .signals import PiecewiseLinear, Ramp, Sine
 
 __all__ = ["FRICTION_TESTS", "BreakAway", "FrictionTest", "FrictionalLag", "Presliding",
            "RigSetup", "SteadyState", "StickSlip", "friction_test"]

@@ -8,9 +8,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.signals import PiecewiseLinear, Step
 from ..errors import ExperimentError
 from .actuator import Experiment
-from .signals import PiecewiseLinear, Step
 
 __all__ = ["SetpointProfile", "SetpointRamp", "SetpointStep", "SetpointTable"]
 

@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from ..checks import as_instance, check_type
+from ..core.signals import Signal
 from ..errors import ArgumentError
-from ..experiments.signals import Signal
 from ..parameters.files import as_parameter_set
 from .channels import in_order
 from .component import Part, StateSpec

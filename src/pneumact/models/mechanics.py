@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..experiments.signals import channel_eval
+from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .channels import CH_LOAD_T, CH_LOAD_X
 from .component import Block

@@ -14,7 +14,7 @@ from typing import ClassVar
 
 from numba import njit
 
-from ..experiments.signals import channel_eval
+from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .channels import CH_DRIVE, in_order
 from .component import Block, Part, StateSpec

@@ -28,7 +28,7 @@ from typing import ClassVar
 
 from numba import njit
 
-from ..experiments.signals import Signal, channel_eval, map_eval
+from ..core.signals import Signal, channel_eval, map_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
 from .component import Block, Part, StateSpec
@@ -475,7 +475,7 @@ class PressureSource(Valve):
 @functools.cache
 def _linear_map(rising: bool) -> Signal:
     """The default area map: linear from closed to fully open over u ∈ [0, 1]."""
-    from ..experiments.signals import PiecewiseLinear
+    from ..core.signals import PiecewiseLinear
 
     return PiecewiseLinear([0.0, 1.0], [0.0, 1.0] if rising else [1.0, 0.0])
 

@@ -72,7 +72,7 @@ class OneAtATime:
             ax.set_xlim(*window)
 
     def _plot_zoomed(self, params: list[str]):
-        from ..analysis.features import hysteresis_summary
+        from ..core.features import hysteresis_summary
 
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
         p, x = self.signals["pressure"][nominal], self.signals["position"][nominal]

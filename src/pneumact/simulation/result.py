@@ -127,7 +127,7 @@ class Result:
     # -- analysis and plots --------------------------------------------------------------
     def summary(self) -> dict[str, float]:
         """Stroke, loop widths and break-away pressure (see ``pneumact.analysis``)."""
-        from ..analysis.features import hysteresis_summary
+        from ..core.features import hysteresis_summary
 
         return hysteresis_summary(self.time, self["pressure"], self["position"])
 

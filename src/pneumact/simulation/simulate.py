@@ -16,9 +16,9 @@ from ..checks import (
     check_type,
     shown,
 )
+from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
-from ..experiments.signals import pack_channels
 from ..models.channels import CH_LOAD_T
 from .assembly import Assembly, assemble
 from .memory import check_memory, simulate_bytes

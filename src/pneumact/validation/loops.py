@@ -2,7 +2,7 @@
 
 The measures actuator engineers quote: the loop width in pressure (at equal position)
 and in position (at equal pressure) over the middle of the stroke, the enclosed area, the
-break-away pressure (``analysis.features``, the same compiled code the batch engine
+break-away pressure (``core.features``, the same compiled code the batch engine
 runs), and the reversal points of the pressure with the position there.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..analysis.features import FEATURE_UNITS, hysteresis_summary, turning_points
+from ..core.features import FEATURE_UNITS, hysteresis_summary, turning_points
 
 __all__ = ["LOOP_MEASURES", "compare_loops", "loop_measures", "reversals"]
 

@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...analysis.features import FEATURE_UNITS
 from ...checks import check_bool, check_int, check_out_dir
+from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore

@@ -12,7 +12,7 @@ import threading
 
 import numpy as np
 
-from ...analysis.features import FEATURES, N_FEATURES
+from ...core.features import FEATURES, N_FEATURES
 from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
 from ...parameters.validation import row_problems

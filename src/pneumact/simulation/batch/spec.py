@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...analysis.features import FEATURE_UNITS, FEATURES, PRESSURE_FEATURES, REFERENCE_FEATURES
+from ...core.features import FEATURE_UNITS, FEATURES, PRESSURE_FEATURES, REFERENCE_FEATURES
 from ...errors import DataError, ParameterError
 from ...experiments.actuator import Experiment
 from ...models.channels import LOOP_CHANNELS

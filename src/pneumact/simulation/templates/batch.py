@@ -8,8 +8,8 @@ threads running chunks in parallel never wait on the GIL.
 
 import numpy as np
 
-from pneumact.analysis.features import N_FEATURES, all_features
 from pneumact.core import kernel
+from pneumact.core.features import N_FEATURES, all_features
 from pneumact.simulation.templates.integrators import INFO_LENGTH, INFO_STATUS
 
 # --- bound by the generator and the other templates --------------------------------------

@@ -53,7 +53,7 @@ from pneumact.control.controllers import (
     CT_VFF,
 )
 from pneumact.core import kernel
-from pneumact.experiments.signals import channel_eval
+from pneumact.core.signals import channel_eval
 from pneumact.models.channels import (
     CH_DISTURBANCE,
     CH_DRIVE,
