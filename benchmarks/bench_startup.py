@@ -40,7 +40,7 @@ start = time.perf_counter()
 launched = time.time() - float(__import__("os").environ["PNEUMACT_BENCH_LAUNCH"])
 import importlib, json, sys
 marks = {"interpreter": launched}
-codegen = importlib.import_module("pneumact.simulation.codegen")
+codegen = importlib.import_module("pneumact.core.codegen")
 simulate = importlib.import_module("pneumact.simulation.simulate")
 load, run_kernel = codegen.load, simulate.run_kernel
 

@@ -17,7 +17,8 @@ import pytest
 
 import pneumact as pa
 from conftest import load_quietly
-from pneumact.simulation import assemble, codegen
+from pneumact.core import codegen
+from pneumact.simulation import assemble
 from reference import FRICTION_RTOL
 
 SRC = str(Path(pa.__file__).resolve().parents[1])
@@ -86,7 +87,7 @@ def test_key_covers_every_source_the_kernel_imports(valve_actuator):
     # compiled code reads, so it is not followed (models/friction/base.py imports the assembly
     # there, which once pulled in nearly the whole package)
     for unused in ("cli/simulate.py", "plotting.py", "identification/fit.py",
-                   "simulation/assembly.py", "simulation/simulate.py", "io/records.py"):
+                   "core/assembly.py", "simulation/simulate.py", "io/records.py"):
         assert unused not in names, unused
 
 
@@ -155,7 +156,7 @@ def test_two_processes_generate_the_same_kernel_at_once(tmp_path):
     for proc, (out, err) in zip(procs, outputs, strict=True):
         assert proc.returncode == 0, err
         assert float(out.strip()) == pytest.approx(force, rel=FRICTION_RTOL)
-    generated = list(tmp_path.glob("pneumact_kernel_law_coulomb_viscous_*.py"))
+    generated = list(tmp_path.glob("pneumact_kernel_law_alone_coulomb_viscous_*.py"))
     assert len(generated) == 1  # one file, written once
     assert not list(tmp_path.glob(".*.tmp"))  # no temporary file left behind
 
@@ -178,7 +179,7 @@ def _templates(tmp_path, monkeypatch, **sources: str) -> None:
 
 
 MODEL = """
-    from pneumact.simulation.codegen import kernel
+    from pneumact.core.codegen import kernel
     helper = None
     SCALE = 2.0
     NOUT = 7  # a placeholder: the generated module says how many outputs there are
@@ -187,7 +188,7 @@ MODEL = """
         return SCALE * helper(x) + NOUT
 """
 DRIVER = """
-    from pneumact.simulation.codegen import kernel
+    from pneumact.core.codegen import kernel
     rhs = None
     OPTIONAL_FUNCTIONS = ("jump",)
     jump = None

@@ -1,4 +1,4 @@
-"""Channels are declared by name (``models.channels``); models name theirs and only the
+"""Channels are declared by name (``core.channels``); models name theirs and only the
 packing puts them in the declared order, which the kernels' CH_* constants index."""
 
 from __future__ import annotations
@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 import pneumact as pa
+from pneumact.core.channels import CH_DRIVE, CH_LOAD_T, CH_LOAD_X, CHANNELS, in_order
 from pneumact.core.signals import Constant
 from pneumact.errors import ExperimentError
-from pneumact.models.channels import CH_DRIVE, CH_LOAD_T, CH_LOAD_X, CHANNELS, in_order
 
 
 def test_named_channels_are_put_in_the_declared_order():

@@ -12,9 +12,9 @@ import pytest
 
 import pneumact as pa
 from pneumact.control.linear import LinearPlant, linearise, plot_bode
+from pneumact.core.assembly import assemble
 from pneumact.core.signals import Constant, pack_channels
 from pneumact.errors import ExperimentError, ParameterError
-from pneumact.simulation.assembly import assemble
 from reference import (
     LIN_B_FD_REL_STEP,
     LIN_DC_GAIN_RTOL,

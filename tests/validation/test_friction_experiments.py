@@ -22,9 +22,9 @@ from pneumact.errors import ExperimentError
 from pneumact.experiments import Experiment, PiecewiseLinear
 from pneumact.experiments.friction import FRICTION_TESTS, BreakAway, StickSlip
 from pneumact.models.friction import BoucWen, Dahl, LuGre
+from pneumact.models.friction.evaluation import friction_law_values
 from pneumact.models.rig import FrictionRig
 from pneumact.parameters import load_params
-from pneumact.simulation.assembly import friction_law_values
 from pneumact.simulation.simulate import prepare, simulate
 from reference import (
     BOUC_WEN_DAHL_ATOL,

@@ -7,7 +7,7 @@ friction compensation, set-point experiments, loop metrics and the linearised pl
     linear = linearise(plant, input_value, regime="presliding"); linear.to_control()
 """
 
-from .controllers import PID, Cascade, Controller, Dither, LuGreObserver, StaticCompensation
+from ..models.controllers import PID, Cascade, Controller, Dither, LuGreObserver, StaticCompensation
 from .drives import DriveReplay, control_law_check, drive_plant, replay_drive
 from .linear import LinearPlant, frequency_response, linearise, plot_bode
 from .loop import ClosedLoop

@@ -343,11 +343,11 @@ def replay_drive(record: Record, friction, *, gains: Mapping[str, float] | None 
     sign's rounding. ``velocity_cutoff`` [Hz]: the low-pass before the velocity's
     central difference. ``solver``: default ``Rodas4()``.
     """
+    from ..core.assembly import assemble
     from ..core.signals import Constant, PiecewiseLinear
     from ..experiments.setpoints import SetpointProfile
-    from ..simulation.assembly import assemble
+    from ..models.controllers import Cascade
     from ..simulation.simulate import simulate
-    from .controllers import Cascade
     from .loop import ClosedLoop
 
     record.require(["position", "reference", "force"], "replay_drive")

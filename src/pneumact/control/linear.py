@@ -307,7 +307,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     position. Raises ``ParameterError`` (plant, regime, velocity, outputs) or
     ``ExperimentError`` (input value) naming the field, the value and what is allowed.
     """
-    from ..simulation.assembly import assemble
+    from ..core.assembly import assemble
 
     kind = input_kind(plant, "linearise")
     if regime not in REGIMES:

@@ -15,14 +15,14 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..core.channels import CHANNELS, LOOP_CHANNELS, in_order
+from ..core.codegen import Child
+from ..core.component import Part
 from ..core.signals import Constant, Signal
 from ..errors import ExperimentError, ParameterError
 from ..models.actuator import Actuator
-from ..models.channels import CHANNELS, LOOP_CHANNELS, in_order
-from ..models.component import Part
+from ..models.controllers import Controller, LuGreObserver, StaticCompensation
 from ..models.rig import FrictionRig
-from ..simulation.codegen import Child
-from .controllers import Controller, LuGreObserver, StaticCompensation
 from .plants import input_kind, input_range
 
 __all__ = ["ClosedLoop"]
@@ -159,7 +159,7 @@ class ClosedLoop:
 
     def kernel_children(self) -> tuple[Child, ...]:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
-        from ..simulation.assembly import output_constant
+        from ..core.assembly import output_constant
 
         outputs = tuple((output_constant(name), i)
                         for i, name in enumerate(self._plant_module().OUTPUT_NAMES))
@@ -168,7 +168,7 @@ class ClosedLoop:
 
     @property
     def kernel_templates(self) -> tuple[str, ...]:
-        from ..simulation.assembly import BATCH, INTEGRATORS
+        from ..core.assembly import BATCH, INTEGRATORS
 
         return (LOOP_TEMPLATE, INTEGRATORS, BATCH)
 

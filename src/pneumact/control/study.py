@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..core.signals import Constant
 from ..experiments.actuator import Experiment
-from .controllers import PID
+from ..models.controllers import PID
 from .loop import ClosedLoop
 
 __all__ = ["TRACKING_METRICS", "LoopStudy", "canudas_hunting", "run_loop"]

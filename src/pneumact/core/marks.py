@@ -1,4 +1,4 @@
-"""The mark of a kernel template's functions (read by ``simulation.codegen``)."""
+"""The mark of a kernel template's functions (read by ``core.codegen``)."""
 
 from __future__ import annotations
 

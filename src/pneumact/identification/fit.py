@@ -252,7 +252,7 @@ def _windows_per_record(window, n: int) -> list:
 
 
 def _parameter_names(model) -> frozenset[str]:
-    from ..simulation.assembly import assemble
+    from ..core.assembly import assemble
 
     return frozenset(assemble(model).parameter_names)
 
@@ -636,8 +636,8 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     signals = tuple(signals)
     for rec, own in zip(records, models, strict=True):
         rec.require([*signals, _input_name(own)], "this fit")
+    from ..core.assembly import assemble
     from ..simulation import Rodas4
-    from ..simulation.assembly import assemble
 
     assemblies = [assemble(m) for m in dict.fromkeys(models)]
     base: dict[str, float] = {}

@@ -102,7 +102,7 @@ def amplification(model, record: Record, params, free: Sequence[str], solver) ->
 
 
 def _parameters_of(model) -> frozenset[str]:
-    from ..simulation.assembly import assemble
+    from ..core.assembly import assemble
 
     return frozenset(assemble(model).parameter_names)
 

@@ -224,7 +224,7 @@ def _knot_projector(time, knot_t, knot_v, sigma: float) -> np.ndarray:
 
 
 def _parameters_of(model) -> frozenset[str]:
-    from ..simulation.assembly import assemble
+    from ..core.assembly import assemble
 
     return frozenset(assemble(model).parameter_names)
 

@@ -6,11 +6,11 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from ..checks import as_instance, check_type
+from ..core.channels import in_order
+from ..core.component import Part, StateSpec
 from ..core.signals import Signal
 from ..errors import ArgumentError
 from ..parameters.files import as_parameter_set
-from .channels import in_order
-from .component import Part, StateSpec
 from .friction import FrictionModel, LuGre
 from .mechanics import MECHANICS_BLOCK
 from .pneumatics import ChamberLaw, Isothermal

@@ -16,10 +16,10 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..core.channels import CH_LOAD_T, CH_LOAD_X
+from ..core.component import Block
 from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
-from .channels import CH_LOAD_T, CH_LOAD_X
-from .component import Block
 
 P = ParameterSpec
 declare(

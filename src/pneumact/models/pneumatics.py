@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..core.component import Block
 from ..errors import ParameterError
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
-from .component import Block
 
 P = ParameterSpec
 declare(

@@ -14,10 +14,10 @@ from typing import ClassVar
 
 from numba import njit
 
+from ..core.channels import CH_DRIVE, in_order
+from ..core.component import Block, Part, StateSpec
 from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
-from .channels import CH_DRIVE, in_order
-from .component import Block, Part, StateSpec
 from .friction import FrictionModel, LuGre
 
 P = ParameterSpec

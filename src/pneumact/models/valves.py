@@ -28,10 +28,10 @@ from typing import ClassVar
 
 from numba import njit
 
+from ..core.channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
+from ..core.component import Block, Part, StateSpec
 from ..core.signals import Signal, channel_eval, map_eval
 from ..parameters.catalogue import ParameterSpec, declare
-from .channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
-from .component import Block, Part, StateSpec
 from .pneumatics import (
     CHAMBER_BLOCK,
     PN_AATM,

@@ -6,7 +6,7 @@ and so on), with ``declare(...)``; relations between parameters (Fs >= Fc, p_res
 p_atm) are declared the same way with ``declare_relation(...)``. The catalogue is only a
 lookup of those declarations (name -> unit, meaning, default, range): it fixes no vector
 layout. A model assembly lays out the parameters its components declare
-(``pneumact.simulation.assembly``).
+(``pneumact.core.assembly``).
 
 ``catalogue()`` imports the model modules on first use so that every declaration is
 made before a name is looked up.

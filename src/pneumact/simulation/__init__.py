@@ -5,7 +5,7 @@ forward parameter sensitivities along; ``simulate_batch`` (``simulation.batch``)
 many parameter sets on all cores or a Dask cluster.
 """
 
-from .assembly import Assembly, assemble
+from ..core.assembly import Assembly, assemble
 from .forward_sensitivity import SensitivityResult, simulate_sensitivities
 from .result import Result, SolverStats
 from .simulate import simulate

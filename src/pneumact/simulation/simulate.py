@@ -16,11 +16,11 @@ from ..checks import (
     check_type,
     shown,
 )
+from ..core.assembly import Assembly, assemble
+from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
-from ..models.channels import CH_LOAD_T
-from .assembly import Assembly, assemble
 from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .solvers import Rodas4, Solver

@@ -42,8 +42,8 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
+from ...core.component import Block, Part, StateSpec
 from ...parameters.catalogue import ParameterSpec, declare, declare_relation
-from ..component import Block, Part, StateSpec
 
 __all__ = ["RELAXED_LEVEL", "SCALAR_LAW", "STATELESS_LAW", "CoulombBristleLaw", "FrictionModel",
            "clear_block",
@@ -226,13 +226,13 @@ class FrictionModel:
         """The law at velocities ``v`` (n,) and states ``y`` (n, N), or a scalar state
         broadcast: ``force``, ``dforce_dv`` (n,); ``rates``, ``drates_dv``, ``dforce_dy``
         (n, N); ``drates_dy`` (n, N, N)."""
-        from ...simulation.assembly import friction_law_values
+        from .evaluation import friction_law_values
 
         return friction_law_values(self, v, y, params)
 
     def parameter_derivatives(self, v, y, params) -> dict[str, np.ndarray]:
         """Parameter name -> (n, N + 1) array: ∂ż_i/∂θ for each state, then ∂F/∂θ."""
-        from ...simulation.assembly import friction_law_parameter_derivatives
+        from .evaluation import friction_law_parameter_derivatives
 
         return friction_law_parameter_derivatives(self, v, y, params)
 

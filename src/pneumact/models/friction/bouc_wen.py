@@ -11,8 +11,8 @@ import math
 
 from numba import njit
 
+from ...core.component import Block
 from ...parameters.catalogue import ParameterSpec, declare, declare_relation
-from ..component import Block
 from .base import CoulombBristleLaw, clear_block, presliding_scale, sign
 
 P = ParameterSpec

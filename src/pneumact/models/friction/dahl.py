@@ -9,8 +9,8 @@ import math
 
 from numba import njit
 
+from ...core.component import Block
 from ...parameters.catalogue import ParameterSpec, declare
-from ..component import Block
 from .base import CoulombBristleLaw, clear_block, presliding_scale, sign
 
 declare(ParameterSpec("dahl_alpha", "", "Dahl shape exponent", 1.0, 0.0, True, 100.0,

@@ -17,7 +17,7 @@ from typing import ClassVar
 import numpy as np
 from numba import njit
 
-from ..component import Block
+from ...core.component import Block
 from .base import (
     RELAXED_LEVEL,
     FrictionModel,

@@ -10,7 +10,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..component import Block
+from ...core.component import Block
 from .base import STATELESS_LAW, FrictionModel, clear_block, stribeck_curve, stribeck_curve_params
 
 COULOMB_BLOCK = Block.of("Fc", "sigma2", "v_reg")

@@ -30,12 +30,12 @@ import numpy as np
 import pandas as pd
 
 from ...checks import check_bool, check_int, check_out_dir
+from ...core.assembly import assemble
 from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
 from ...io.tables import partial_folder, staged_folder
-from ..assembly import assemble
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk

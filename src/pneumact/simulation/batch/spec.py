@@ -17,10 +17,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ...core.channels import LOOP_CHANNELS
 from ...core.features import FEATURE_UNITS, FEATURES, PRESSURE_FEATURES, REFERENCE_FEATURES
 from ...errors import DataError, ParameterError
 from ...experiments.actuator import Experiment
-from ...models.channels import LOOP_CHANNELS
 from ..solvers import Solver
 
 __all__ = ["BatchSpec", "check_names", "check_reference", "check_table", "default_features"]
@@ -42,7 +42,7 @@ class BatchSpec:
 
     def describe(self) -> dict[str, Any]:
         """JSON-able description (large arrays hashed) for the manifest and caching."""
-        from ..assembly import assemble
+        from ...core.assembly import assemble
 
         model, exp, solver = self.model, self.experiment, self.solver
         assembly = assemble(model)

@@ -1,9 +1,9 @@
 """Model template: the diaphragm actuator (paper eq. 1) with a friction law and a valve.
 
-The generator (``simulation.codegen``) binds these functions into one module per
+The generator (``core.codegen``) binds these functions into one module per
 friction × valve combination, where the names below marked "bound by the generator"
 are the chosen component functions and the layout constants of the assembly
-(``simulation.assembly``): states are [position, velocity | friction states | valve
+(``core.assembly``): states are [position, velocity | friction states | valve
 states], the parameter vector is [mechanics block | friction block | valve block]. The
 friction law is called through its slice-level functions (``models.friction.base``).
 """

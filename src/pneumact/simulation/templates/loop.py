@@ -2,7 +2,7 @@
 
 The plant's own template is bound under the prefix ``plant_`` (``codegen.Child``): its
 states come first in the loop's state vector and its functions read them where they
-always do. The controller (``pneumact.control.controllers``; states after the plant's,
+always do. The controller (``pneumact.models.controllers``; states after the plant's,
 settings in the ``controller`` block) computes the plant's input from the position
 set-point (channel CH_SETPOINT), the measured position and velocity and its own states.
 Before every call of a plant function the loop writes that input into the plant's
@@ -19,7 +19,16 @@ from collections import namedtuple
 
 import numpy as np
 
-from pneumact.control.controllers import (
+from pneumact.core import kernel
+from pneumact.core.channels import (
+    CH_DISTURBANCE,
+    CH_DRIVE,
+    CH_FEEDFORWARD,
+    CH_SETPOINT,
+    INPUT_OFFSET,
+)
+from pneumact.core.signals import channel_eval
+from pneumact.models.controllers import (
     CT_ACTION,
     CT_ANTI_WINDUP,
     CT_BIAS,
@@ -51,15 +60,6 @@ from pneumact.control.controllers import (
     CT_UMAX,
     CT_UMIN,
     CT_VFF,
-)
-from pneumact.core import kernel
-from pneumact.core.signals import channel_eval
-from pneumact.models.channels import (
-    CH_DISTURBANCE,
-    CH_DRIVE,
-    CH_FEEDFORWARD,
-    CH_SETPOINT,
-    INPUT_OFFSET,
 )
 
 # --- bound by the generator --------------------------------------------------------------

@@ -38,7 +38,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..core.marks import kernel
+from .marks import kernel
 
 __all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
            "kernel_key", "load"]

@@ -10,7 +10,7 @@ layout, so no other module indexes states, parameters or outputs by position:
   ``update`` (change values by name, re-derive), ``values`` (vector -> names);
 - the state and output names with units, and their columns;
 - the kernel: generated from the model template, the integrators and the batch loop
-  with the components' compiled functions (``simulation.codegen``).
+  with the components' compiled functions (``core.codegen``).
 
 Derived quantities (orifice-flow constants, the polytropic index) are computed by the
 kernel's compiled ``derive``, which the integrators also call at the start of every run:
@@ -31,11 +31,10 @@ from types import ModuleType
 import numpy as np
 
 from ..errors import ParameterError
-from ..models.component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 from . import codegen
+from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
-__all__ = ["Assembly", "assemble", "friction_law_parameter_derivatives",
-           "friction_law_values"]
+__all__ = ["Assembly", "assemble"]
 
 INTEGRATORS = "pneumact.simulation.templates.integrators"
 BATCH = "pneumact.simulation.templates.batch"
@@ -119,22 +118,18 @@ class Assembly:
         return None
 
     def check_parameters(self, names: Sequence[str], what: str) -> list[str]:
-        """``names`` as a list, or one ParameterError naming an unknown or unused one."""
+        """``names`` as a list, or one ParameterError naming one this model does not have
+        (with the closest of its parameters, and all of them)."""
         import difflib
 
-        from ..parameters import catalogue
-
-        known = catalogue()
         for name in names:
             if name in self.slots:
                 continue
-            if name in known:
-                raise ParameterError(
-                    f"{what}: '{name}' is not a parameter of {self.describe()}; its "
-                    f"parameters are {', '.join(self.parameter_names)}")
             close = difflib.get_close_matches(name, list(self.slots), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise ParameterError(f"{what}: unknown parameter '{name}'{hint}")
+            raise ParameterError(
+                f"{what}: '{name}' is not a parameter of {self.describe()}{hint}; its "
+                f"parameters are {', '.join(self.parameter_names)}")
         return list(names)
 
     def describe(self) -> str:
@@ -253,55 +248,3 @@ def assemble(model) -> Assembly:
         if assembly is None:
             assembly = _ASSEMBLIES[model] = Assembly(model)
         return assembly
-
-
-# --------------------------------------------------------------------------- a law alone
-@dataclass(frozen=True, eq=False)
-class _Law:
-    """A friction law with nothing around it (the ``law`` template)."""
-
-    friction: object
-    params: Mapping[str, float]
-    template = "pneumact.simulation.templates.law"
-    kernel_templates = ("pneumact.simulation.templates.law",)
-
-    def parts(self):
-        return (self.friction.part(),)
-
-
-def _law_inputs(friction, v, y, params):
-    """The law's assembly, v (n,), its states y (n, N) (a scalar or an (n,) array
-    broadcast over the N states) and the packed vector."""
-    assembly = Assembly(_Law(friction, params))
-    n_states = len(assembly.states)
-    v = np.ascontiguousarray(np.atleast_1d(np.asarray(v, dtype=np.float64)))
-    y = np.asarray(y, dtype=np.float64)
-    if y.ndim < 2:
-        y = np.broadcast_to(y.reshape(-1, 1) if y.ndim == 1 else y, (v.size, n_states))
-    if y.shape != (v.size, n_states):
-        raise ValueError(f"friction states: shape {y.shape}, expected ({v.size}, "
-                         f"{n_states}) for {friction!r}")
-    return assembly, v, np.array(y, dtype=np.float64, order="C"), assembly.pack()
-
-
-def friction_law_values(friction, v, y, params) -> dict[str, np.ndarray]:
-    """The law at arrays ``v`` (n,), ``y`` (n, N): force, rates and partial derivatives
-    (see ``FrictionModel.evaluate``)."""
-    assembly, v, y, vec = _law_inputs(friction, v, y, params)
-    n = len(assembly.states)
-    force, dforce_dv, rates = np.empty(v.size), np.empty(v.size), np.empty((v.size, n))
-    jac = np.zeros((v.size, n + 1, n + 1))
-    assembly.kernel.law_values(v, y, vec, force, dforce_dv, rates, jac)
-    return {"force": force, "dforce_dv": dforce_dv, "rates": rates,
-            "drates_dv": jac[:, :n, n], "drates_dy": jac[:, :n, :n],
-            "dforce_dy": -jac[:, n, :n]}
-
-
-def friction_law_parameter_derivatives(friction, v, y, params) -> dict[str, np.ndarray]:
-    """name -> (n, N + 1) array: ∂ż_i/∂θ of each state, then ∂F/∂θ, for every parameter
-    of the law."""
-    assembly, v, y, vec = _law_inputs(friction, v, y, params)
-    n = len(assembly.states)
-    g = np.zeros((v.size, n + 1, assembly.size))
-    assembly.kernel.law_parameter_derivatives(v, y, vec, g)
-    return {name: g[:, :, k] for k, name in enumerate(friction.block.names)}

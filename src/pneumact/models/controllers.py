@@ -20,8 +20,8 @@ import math
 from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
+from ..core.component import Block, Part, StateSpec
 from ..errors import ParameterError
-from ..models.component import Block, Part, StateSpec
 
 __all__ = [
     "CONTROL_BLOCK", "PID", "Cascade", "Compensation", "Controller", "Dither", "LuGreObserver",

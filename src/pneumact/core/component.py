@@ -11,7 +11,7 @@ block lists, in order:
 - derived quantities, computed from the block by the component's compiled ``derive``
   whenever a value changes (orifice-flow constants, the polytropic index).
 
-A model assembly (``pneumact.simulation.assembly``) places the blocks of a model's
+A model assembly (``pneumact.core.assembly``) places the blocks of a model's
 components one after another and binds their compiled functions into one kernel.
 """
 
