@@ -175,7 +175,7 @@ def test_sensitivity_jacobian_matches_differences_at_the_optimum(vgt, clean_pres
     for j, name in enumerate(result.estimates.names):
         value = result.values[name]
         step = ref.JACOBIAN_FD_REL_STEP * value
-        runs = [pa.simulate(model, clean_presliding.to_experiment("pressure"), solver,
+        runs = [pa.simulate(model, pa.experiments.from_record(clean_presliding, "pressure"), solver,
                             t_eval=clean_presliding.time,
                             values={**result.values, name: value + s * step})["position"]
                 for s in (1, -1)]

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from pneumact.errors import ParameterError, PassivityWarning
+from pneumact.io.quantities import SI_PREFIXES, si_prefix_factor
 from pneumact.parameters import (
     ParameterSet,
     available_params,
@@ -22,7 +23,6 @@ from pneumact.parameters import (
     unit_registry,
     write_params,
 )
-from pneumact.parameters.units import SI_PREFIXES, si_prefix_factor
 from reference import SHIPPED_VALUE_RTOL, UNIT_CONVERSION_RTOL
 
 # Paper Table I (+ eq. 8) in SI, and the assumed values documented in vgt-paper.toml.

@@ -391,7 +391,7 @@ def parse_conditions(items: list[str], model, valve: Valve, t_end: float | None)
 
 
 def _period(text: str, model) -> float:
-    from pneumact.parameters.units import parse_value
+    from pneumact.io.quantities import parse_value
 
     value = parse_value("--conditions period", text if not _bare(text) else f"{text} s", "s")
     if not value > 0:
@@ -401,7 +401,7 @@ def _period(text: str, model) -> float:
 
 def _speed(text: str, model) -> float:
     """A sliding speed [m/s]: '2vs' (times the set's Stribeck velocity) or with a unit."""
-    from pneumact.parameters.units import parse_value
+    from pneumact.io.quantities import parse_value
 
     compact = text.replace(" ", "")
     if compact.endswith("vs"):

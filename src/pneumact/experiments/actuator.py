@@ -118,6 +118,18 @@ def from_samples(time, values, quantity: str, name: str = "measured input",
     return Experiment(sig, quantity, float(time[-1]), float(time[0]), n, name)
 
 
+def from_record(record, quantity: str, n_points: int | None = None,
+                signal: str | None = None) -> Experiment:
+    """A measured record's ``signal`` (default: ``quantity``) as a simulation input of
+    that ``quantity`` (pressure, command, ...), linear between samples; e.g. a
+    regulator's ``setpoint`` signal drives its ``pressure`` input."""
+    signal = quantity if signal is None else signal
+    record.require([signal], f"driving a simulation with its {signal}")
+    return from_samples(record.time, record.signals[signal], quantity,
+                        name=Path(record.source).name or "record",
+                        n_points=n_points or record.time.size)
+
+
 def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:
     """An input signal read from a CSV (``time [s]`` and one of pressure / command / ...);
     ``p_atm`` [Pa] turns a ``pressure_gauge`` column into absolute pressure."""

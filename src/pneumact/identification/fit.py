@@ -198,11 +198,11 @@ def experiment_for(model, record: Record, smooth: bool = False):
     """The record's measured input as the model's experiment; with ``smooth`` rebuilt
     piecewise linear (``identification.inputs``), which also leaves the integrator far
     fewer breakpoints than one per sample."""
-    from ..experiments import from_samples
+    from ..experiments import from_record, from_samples
 
     signal = _input_name(model)
     if not smooth:
-        return record.to_experiment(model.drive_quantity, signal=signal)
+        return from_record(record, model.drive_quantity, signal=signal)
     knots_t, knots_v = rebuilt_input(model, record)
     return from_samples(knots_t, knots_v, model.drive_quantity,
                         name=os.path.basename(record.source) or "record",

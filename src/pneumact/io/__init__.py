@@ -3,6 +3,7 @@
 - ``tables``: CSV with ``name [unit]`` headers and Parquet with units in the metadata,
   written atomically (``atomic_write``);
 - ``records``: measured bench records, checked and converted to SI (``read_record``);
+- ``quantities``: values with units ("60 cm^3") to SI, the one pint registry;
 - ``units``: the unit conversion of record columns (pint);
 - ``chunks``: the batch engine's resumable chunk store.
 """

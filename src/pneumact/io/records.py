@@ -144,24 +144,11 @@ class Record:
                 f"which {use} compares with an actuator of stroke 0 to {x_max * 1e3:g} mm; "
                 "check the position unit in the header (e.g. 'position [mm]')")
 
-    def to_experiment(self, quantity: str, n_points: int | None = None,
-                      signal: str | None = None):
-        """The record's ``signal`` (default: ``quantity``) as a simulation input of that
-        ``quantity`` (pressure, command, ...), linear between samples; e.g. a regulator's
-        ``setpoint`` signal drives its ``pressure`` input."""
-        from pneumact.experiments import from_samples
-
-        signal = quantity if signal is None else signal
-        self.require([signal], f"driving a simulation with its {signal}")
-        return from_samples(self.time, self.signals[signal], quantity,
-                            name=Path(self.source).name or "record",
-                            n_points=n_points or self.time.size)
-
     def save(self, path: PathLike, units: Mapping[str, str] | None = None) -> Path:
         """Write CSV or Parquet (by suffix) atomically, each column in ``units`` (e.g.
         ``{"pressure": "kPa", "position": "mm"}``; SI otherwise)."""
+        from pneumact.io.quantities import unit_registry
         from pneumact.io.tables import write_table
-        from pneumact.parameters.units import unit_registry
 
         ureg = unit_registry()
         frame, file_units = {}, {}

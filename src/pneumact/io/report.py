@@ -33,20 +33,6 @@ class Block:
     anchor: str = ""
 
 
-def parameter_notes(params) -> list[str]:
-    """What a report says about its parameter set besides the values: the LuGre passivity
-    condition it breaks, values outside the plausible ranges (warnings of their own
-    otherwise shown once per process)."""
-    from ..parameters.validation import implausible, passivity_note
-
-    values = getattr(params, "values", None)
-    if values is None:
-        return []
-    notes = [passivity_note(values, getattr(params, "name", "custom"))]
-    notes += [f"{line} (PlausibilityWarning)" for line in implausible(values)]
-    return [n for n in notes if n]
-
-
 def write_png(fig, target, dpi: int) -> None:
     """Draw ``fig`` as PNG into ``target`` (a path or a binary file). Matplotlib warns
     when placing a ``loc="best"`` legend over many points took it over a second, a
@@ -85,7 +71,8 @@ def _has_prose(frame: pd.DataFrame) -> bool:
 @dataclass
 class Report:
     """An HTML report under construction. ``call``: how it was produced (the command
-    line or the Python call); ``parameters``: the parameter set, shown with provenance."""
+    line or the Python call); ``parameters``: the parameter set (a ``ParameterSet``: its
+``to_frame()`` and its ``notes()``), shown with provenance."""
 
     title: str
     call: str = ""
@@ -136,7 +123,7 @@ class Report:
         if self.parameters is not None:
             parameters = self.parameters.to_frame().to_html(index=False, border=0,
                                                             classes="data", na_rep="")
-            notes = parameter_notes(self.parameters)
+            notes = self.parameters.notes()
         return env.get_template("report.html.j2").render(
             title=self.title, blocks=self.blocks, call=self.call, parameters=parameters,
             parameter_notes=notes,

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pneumact.errors import DataError
-from pneumact.parameters.units import unit_registry
+from pneumact.io.quantities import unit_registry
 
 if TYPE_CHECKING:
     import pint

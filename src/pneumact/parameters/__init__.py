@@ -6,6 +6,7 @@ the parameters it reads (``catalogue()`` lists them with unit, meaning and range
 model assembly lays out the ones its components need.
 """
 
+from pneumact.io.quantities import parse_value, unit_registry
 from pneumact.parameters.catalogue import ParameterSpec, catalogue, declare, declare_relation
 from pneumact.parameters.files import (
     as_parameter_set,
@@ -15,7 +16,6 @@ from pneumact.parameters.files import (
     write_params,
 )
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
-from pneumact.parameters.units import parse_value, unit_registry
 from pneumact.parameters.validation import (
     lugre_passivity_problem,
     row_problems,

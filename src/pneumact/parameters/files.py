@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Any
 
 from pneumact.errors import ArgumentTypeError, ParameterError
+from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
-from pneumact.parameters.units import parse_value
 from pneumact.parameters.validation import (
     message,
     unknown_name,

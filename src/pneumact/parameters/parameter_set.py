@@ -15,11 +15,13 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 from pneumact.errors import ParameterError
+from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
-from pneumact.parameters.units import parse_value
 from pneumact.parameters.validation import (
+    implausible,
     lugre_passivity_problem,
     message,
+    passivity_note,
     problems,
     unknown_name,
     warn_implausible,
@@ -241,6 +243,14 @@ class ParameterSet(Mapping[str, float]):
             raise ParameterError(
                 f"parameter set '{self._name}' lacks {', '.join(missing)} needed by {model} "
                 "(add them to the parameter file, or use ParameterSet.replace)")
+
+    def notes(self) -> list[str]:
+        """What a report says about this set besides its values: the LuGre passivity
+        condition it breaks and the values outside the plausible ranges (otherwise
+        warnings, shown once per process)."""
+        notes = [passivity_note(self.values, self.name)]
+        notes += [f"{line} (PlausibilityWarning)" for line in implausible(self.values)]
+        return [n for n in notes if n]
 
     def to_frame(self) -> pd.DataFrame:
         """Table of the set: given parameters, then defaults in use (source 'default')."""

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from pneumact.errors import ParameterError, PassivityWarning, PlausibilityWarning
+from pneumact.io.quantities import NUMBER_THEN_UNIT
 from pneumact.parameters.catalogue import catalogue, relations
-from pneumact.parameters.units import NUMBER_THEN_UNIT
 
 __all__ = [
     "implausible",
