@@ -8,12 +8,15 @@ matplotlib backend (the CLI selects "Agg" itself).
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pneumact.core.units import signal_unit
 from pneumact.errors import DataError
+from pneumact.files import atomic_write
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -104,12 +107,7 @@ def _unit_of(source: Any, name: str) -> str:
         units = source.attrs.get("units")
     if units and name in units:
         return str(units[name])
-    from pneumact.io import KNOWN_SIGNALS
-
-    if name.startswith("drive_"):
-        return {"force": "N", "velocity": "m/s", "position": "m", "spring": "m",
-                "pressure": "Pa", "command": "1"}.get(name[6:], "")
-    return KNOWN_SIGNALS.get(name, "")
+    return signal_unit(name)
 
 
 def display_values(source: Any, name: str) -> tuple[np.ndarray, str]:
@@ -283,12 +281,19 @@ def plot_friction_test(result: Any, kind: str) -> Figure:
 # --------------------------------------------------------------------------- saving
 
 
+def write_png(fig, target, dpi: int) -> None:
+    """Draw ``fig`` as PNG into ``target`` (a path or a binary file). Matplotlib warns
+    when placing a ``loc="best"`` legend over many points took it over a second, a
+    matter of the machine's load, not of the figure: that warning is not passed on."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message='Creating legend with loc="best"',
+                                category=UserWarning)
+        fig.savefig(target, format="png", dpi=dpi, bbox_inches="tight")
+
+
 def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike[str]:
     """Write ``fig`` (a Figure, or the Figure of an Axes) as PNG (dpi 120), atomically."""
     from pathlib import Path
-
-    from pneumact.io import atomic_write
-    from pneumact.io.report import write_png
 
     figure = getattr(fig, "figure", None) if not hasattr(fig, "savefig") else fig
     if figure is None or not hasattr(figure, "savefig"):
@@ -339,8 +344,6 @@ def figure_writer(make):
 
     def write(path):
         import matplotlib.pyplot as plt
-
-        from pneumact.io.report import write_png
 
         fig = make()
         try:

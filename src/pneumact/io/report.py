@@ -12,12 +12,12 @@ import base64
 import datetime as _dt
 import io
 import platform
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
+from ..plotting import write_png
 from .tables import PathLike, atomic_write
 
 __all__ = ["Block", "Report", "figure_png"]
@@ -31,16 +31,6 @@ class Block:
     content: str
     caption: str = ""
     anchor: str = ""
-
-
-def write_png(fig, target, dpi: int) -> None:
-    """Draw ``fig`` as PNG into ``target`` (a path or a binary file). Matplotlib warns
-    when placing a ``loc="best"`` legend over many points took it over a second, a
-    matter of the machine's load, not of the figure: that warning is not passed on."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message='Creating legend with loc="best"',
-                                category=UserWarning)
-        fig.savefig(target, format="png", dpi=dpi, bbox_inches="tight")
 
 
 def figure_png(fig, dpi: int = 110) -> bytes:

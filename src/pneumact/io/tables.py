@@ -14,7 +14,6 @@ import csv
 import json
 import os
 import re
-import secrets
 import shutil
 import tempfile
 import threading
@@ -25,6 +24,7 @@ from typing import Any
 import pandas as pd
 
 from pneumact.errors import DataError
+from pneumact.files import atomic_write
 
 __all__ = ["RUN_LISTING", "UNITS_METADATA_KEY", "atomic_write", "parse_cell", "partial_folder",
            "read_table", "staged_folder", "write_files", "write_table"]
@@ -45,31 +45,6 @@ _FLOAT_KW: dict[str, Any] = (
 
 
 # --------------------------------------------------------------------------- writing
-
-
-@contextlib.contextmanager
-def atomic_write(path: PathLike) -> Iterator[Path]:
-    """Yield a temporary path next to ``path``; move it onto ``path`` only on success.
-
-    The temporary file (``.<name>.tmp-<random>`` in the same directory, so the final
-    ``os.replace`` is atomic) is deleted if the block raises, so a failed or interrupted
-    write never leaves a half-written file at ``path`` (an existing file stays intact).
-    Parent directories are created first.
-    """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = target.with_name(f".{target.name}.tmp-{secrets.token_hex(6)}")
-    try:
-        yield tmp
-        if not tmp.exists():
-            raise FileNotFoundError(f"atomic_write: nothing was written to {tmp} for {target}")
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink(missing_ok=True)
-        raise
 
 
 #: The list of what the last run wrote into an output folder (hidden, JSON), so that the

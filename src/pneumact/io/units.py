@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pneumact.core.units import SIGNAL_UNITS
 from pneumact.errors import DataError
 from pneumact.io.quantities import unit_registry
 
@@ -23,22 +24,27 @@ if TYPE_CHECKING:
 
 __all__ = ["KNOWN_SIGNALS", "convert_column", "parse_unit", "same_unit"]
 
-#: Known signal names -> (SI unit label, pint target unit, what the user may give).
-KNOWN: dict[str, tuple[str, str, str]] = {
-    "time": ("s", "s", "a time unit such as s, ms or min"),
-    "pressure": ("Pa", "Pa", "a pressure unit (read as absolute) such as kPa, bar, mbar, psi, Pa"),
-    "pressure_gauge": ("Pa", "Pa", "a pressure unit (gauge: relative to atmosphere) such as kPa, "
-                                   "bar, mbar, psi, Pa"),
-    "setpoint": ("Pa", "Pa", "a pressure unit (read as absolute) such as kPa, bar, mbar, psi, Pa"),
-    "position": ("m", "m", "a length unit such as m, mm or um"),
-    "velocity": ("m/s", "m/s", "a velocity unit such as m/s or mm/s"),
-    "force": ("N", "N", "a force unit such as N or kN"),
-    "friction": ("N", "N", "a force unit such as N or kN"),
-    "command": ("1", "dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
+_PRESSURE = "a pressure unit (read as absolute) such as kPa, bar, mbar, psi, Pa"
+_GAUGE = "a pressure unit (gauge: relative to atmosphere) such as kPa, bar, mbar, psi, Pa"
+#: Known signal names -> (pint target unit, what the user may give).
+_TARGETS: dict[str, tuple[str, str]] = {
+    "time": ("s", "a time unit such as s, ms or min"),
+    "pressure": ("Pa", _PRESSURE),
+    "pressure_gauge": ("Pa", _GAUGE),
+    "setpoint": ("Pa", _PRESSURE),
+    "position": ("m", "a length unit such as m, mm or um"),
+    "velocity": ("m/s", "a velocity unit such as m/s or mm/s"),
+    "force": ("N", "a force unit such as N or kN"),
+    "friction": ("N", "a force unit such as N or kN"),
+    "command": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
 }
+#: Known signal names -> (SI unit label, pint target unit, what the user may give); the
+#: SI label is the one of ``core.units`` (one unit per signal name everywhere).
+KNOWN: dict[str, tuple[str, str, str]] = {
+    name: (SIGNAL_UNITS[name], *spec) for name, spec in _TARGETS.items()}
 
-#: Known signal names and the SI unit each is converted to.
-KNOWN_SIGNALS: dict[str, str] = {name: spec[0] for name, spec in KNOWN.items()}
+#: Known signal names and the SI unit each is converted to (``core.units``, one table).
+KNOWN_SIGNALS: dict[str, str] = SIGNAL_UNITS
 
 #: Coherent SI units used to label extra (unknown-name) columns; the first whose
 #: dimension matches is chosen, else the base-unit expression.
