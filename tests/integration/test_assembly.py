@@ -79,8 +79,8 @@ def test_key_covers_every_source_the_kernel_imports(valve_actuator):
     for needed in ("models/friction/lugre.py", "models/friction/scalar_law.py",
                    "models/friction/base.py", "core/marks.py", "models/valves.py",
                    "models/pneumatics.py", "models/mechanics.py", "core/signals.py",
-                   "simulation/linalg.py",
-                   "simulation/templates/integrators.py", "simulation/templates/batch.py",
+                   "core/linalg.py",
+                   "core/integrators.py", "core/batch_loop.py",
                    "core/features.py"):
         assert needed in names, needed
     # nothing the kernel does not use: an import inside a function binds no global that

@@ -27,7 +27,7 @@ from .plants import input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
-LOOP_TEMPLATE = "pneumact.simulation.templates.loop"
+LOOP_TEMPLATE = "pneumact.models.loop_template"
 #: breakpoints closer than this fraction of a period to a sample are that sample
 SNAP = 1e-6
 
@@ -132,7 +132,7 @@ class ClosedLoop:
 
     @property
     def output_names(self) -> tuple[str, ...]:
-        from ..simulation.templates.loop import LOOP_OUTPUTS
+        from ..models.loop_template import LOOP_OUTPUTS
 
         # the rig's "drive" output is the drive signal, here the controller's force
         plant = tuple("drive_input" if n == "drive" else n

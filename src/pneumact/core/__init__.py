@@ -9,9 +9,13 @@ of any model.
 - ``codegen``: the generated kernel module per component combination;
 - ``signals``: the input signals and their compiled evaluation;
 - ``features``: the hysteresis features, compiled so that the batch engine computes
-  them in its loop (``pneumact.analysis`` is their public face).
+  them in its loop (``pneumact.analysis`` is their public face);
+- ``integrators`` (with ``linalg``): RODAS4 and Dormand-Prince 5(4), one driver, with
+  forward sensitivities; ``batch_loop``: a chunk of rows simulated in one compiled call;
+- ``units``: the SI unit of each signal name.
 
-The integrators move here next (issue 20's plan, ``docs/architecture.md``).
+A model's own template (its right-hand side and Jacobian) lies beside the model in
+``pneumact.models``.
 """
 
 from .marks import kernel

@@ -36,8 +36,8 @@ from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
 __all__ = ["Assembly", "assemble"]
 
-INTEGRATORS = "pneumact.simulation.templates.integrators"
-BATCH = "pneumact.simulation.templates.batch"
+INTEGRATORS = "pneumact.core.integrators"
+BATCH = "pneumact.core.batch_loop"
 
 
 @dataclass(frozen=True)
@@ -219,7 +219,8 @@ class Assembly:
         switches = getattr(self.model, "kernel_constants", dict)()
         constants += sorted(switches.items())
         keys = [part.key for part in self.parts if part.key]
-        label = "_".join([self.template.rpartition(".")[2], *keys])
+        model = self.template.rpartition(".")[2].removesuffix("_template")
+        label = "_".join([model, *keys])
         templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS, BATCH))
         children = tuple(getattr(self.model, "kernel_children", tuple)())
         components = tuple(dict.fromkeys(t for part in self.parts for t in part.templates))

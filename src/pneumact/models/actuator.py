@@ -33,7 +33,7 @@ class Actuator:
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
     load_map: Signal | None = None
-    template: ClassVar[str] = "pneumact.simulation.templates.actuator"
+    template: ClassVar[str] = "pneumact.models.actuator_template"
 
     def __post_init__(self):
         set_ = object.__setattr__

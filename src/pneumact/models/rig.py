@@ -127,7 +127,7 @@ class FrictionRig:
     params: object
     friction: FrictionModel = field(default_factory=LuGre)
     drive: str = "force"
-    template: ClassVar[str] = "pneumact.simulation.templates.rig"
+    template: ClassVar[str] = "pneumact.models.rig_template"
 
     def __post_init__(self):
         from ..checks import as_instance

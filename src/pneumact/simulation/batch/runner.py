@@ -1,6 +1,6 @@
 """One chunk of a batch: its rows checked with numpy, then simulated in one compiled call.
 
-The compiled loop (``templates/batch.py``) sets each row's values, finds the initial
+The compiled loop (``pneumact.core.batch_loop``) sets each row's values, finds the initial
 state, integrates and computes the features inside the kernel, so a thread running a
 chunk holds no Python lock while it works. A runner is prepared once per batch (and per
 Dask worker process) and reused for every chunk.
@@ -12,13 +12,13 @@ import threading
 
 import numpy as np
 
+from ...core.batch_loop import FEATURE_SIGNALS
 from ...core.features import FEATURES, N_FEATURES
 from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
 from ...parameters.validation import row_problems
 from ..result import SolverStats
 from ..simulate import prepare
-from ..templates.batch import FEATURE_SIGNALS
 from .spec import BatchSpec
 
 __all__ = ["STATUS_ERROR", "STATUS_INVALID", "STATUS_OK", "STATUS_SOLVER", "ChunkRunner",

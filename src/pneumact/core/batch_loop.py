@@ -10,7 +10,7 @@ import numpy as np
 
 from pneumact.core import kernel
 from pneumact.core.features import N_FEATURES, all_features
-from pneumact.simulation.templates.integrators import INFO_LENGTH, INFO_STATUS
+from pneumact.core.integrators import INFO_LENGTH, INFO_STATUS
 
 # --- bound by the generator and the other templates --------------------------------------
 derive = initial_state = state_scales = integrate_rodas4 = integrate_dopri5 = None

@@ -30,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 from pneumact.core import kernel
-from pneumact.simulation.linalg import lu_det_sign, lu_factor, lu_solve
+from pneumact.core.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------
 rhs = jac = outputs = param_jac = derive = project = jump = None
