@@ -10,6 +10,7 @@ import re
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -159,6 +160,44 @@ def test_two_processes_generate_the_same_kernel_at_once(tmp_path):
     generated = list(tmp_path.glob("pneumact_kernel_law_alone_coulomb_viscous_*.py"))
     assert len(generated) == 1  # one file, written once
     assert not list(tmp_path.glob(".*.tmp"))  # no temporary file left behind
+
+
+def test_processes_needing_one_kernel_at_once_compile_it_once(tmp_path, monkeypatch, canudas):
+    """Two processes wait on the kernel's compile lock (held here); once it is released
+    one compiles, the other loads what it wrote (a numba cache hit, no compile)."""
+    import fcntl
+    import json
+
+    from pneumact.core.assembly import Assembly
+    from pneumact.models.friction.evaluation import _Law
+
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    module = codegen.load(Assembly(_Law(pa.Dahl(), canudas)).kernel_spec())
+    script = textwrap.dedent(f"""
+        import json, sys, warnings, numpy as np
+        import pneumact as pa
+        warnings.simplefilter("ignore")
+        params = pa.load_params("canudas1995")
+        print("ready", flush=True)
+        pa.Dahl().evaluate(np.array([0.01, -0.02]), 0.0, params)
+        stats = sys.modules[{module.__name__!r}].law_values.stats
+        print(json.dumps([sum(stats.cache_misses.values()), sum(stats.cache_hits.values())]))
+    """)
+    env = {**os.environ,
+           "PYTHONPATH": os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")]))}
+    with open(Path(module.__file__).with_suffix(".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        procs = [subprocess.Popen([sys.executable, "-c", script], env=env,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for _ in range(2)]
+        assert [p.stdout.readline().strip() for p in procs] == ["ready", "ready"]
+        time.sleep(1.0)  # both now wait on the lock
+        fcntl.flock(lock, fcntl.LOCK_UN)
+    outputs = [p.communicate(timeout=600) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [err for _, err in outputs]
+    compiled = sorted(json.loads(out.strip().splitlines()[-1]) for out, _ in outputs)
+    assert compiled == [[0, 1], [1, 0]]  # (compiles, cache hits): one each
 
 
 def test_parameters_not_used_by_the_model_are_refused(canudas):

@@ -39,6 +39,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .compile_lock import compile_one_process_at_a_time
 from .marks import kernel
 
 __all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
@@ -321,7 +322,8 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str,
         options = dict(fn.__kernel_options__)
         if name.startswith("_"):  # called from compiled code only: no Python wrapper
             options.setdefault("no_cpython_wrapper", True)
-        namespace[name] = numba.njit(cache=True, **options)(bound)
+        namespace[name] = compile_one_process_at_a_time(
+            numba.njit(cache=True, **options)(bound), Path(filename).with_suffix(".lock"))
         origins[name] = template.__name__
 
 

@@ -1,0 +1,76 @@
+"""One process compiles a kernel, the others wait and load it from the disk cache.
+
+numba caches compiled code on disk, but processes that need the same kernel at the same
+time (the workers of a Dask cluster or of a parallel test run, notebooks started
+together) each compile it, since none finds the cache written yet. A kernel's
+dispatchers therefore compile under an exclusive lock on a file beside the kernel
+module: the first process compiles and writes the cache, the next ones find it there
+when they get the lock and load it in a fraction of a second.
+
+The lock is taken inside numba's own compiler lock (one thread of a process compiles at
+a time, so a thread never waits on a file another thread of its process holds) and is
+re-entrant within the process: compiling a kernel function compiles the functions it
+calls, from the same module. Without ``fcntl`` (Windows) every process compiles, as
+before.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["compile_one_process_at_a_time"]
+
+#: lock file -> (descriptor, depth) of the locks this process holds
+_HELD: dict[Path, tuple[int, int]] = {}
+
+
+@contextlib.contextmanager
+def _file_lock(path: Path) -> Iterator[None]:
+    """Exclusive lock on ``path`` across processes, re-entrant within this one (called
+    under numba's compiler lock, so one thread at a time)."""
+    if fcntl is None:
+        yield
+        return
+    held = _HELD.get(path)
+    if held is None:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        _HELD[path] = (fd, 1)
+    else:
+        _HELD[path] = (held[0], held[1] + 1)
+    try:
+        yield
+    finally:
+        fd, depth = _HELD[path]
+        if depth > 1:
+            _HELD[path] = (fd, depth - 1)
+        else:
+            del _HELD[path]
+            fcntl.flock(fd, fcntl.LOCK_UN)
+            os.close(fd)
+
+
+def compile_one_process_at_a_time(dispatcher: Any, lock_path: Path) -> Any:
+    """``dispatcher`` (a numba ``@njit`` function with ``cache=True``) compiling under
+    the lock ``lock_path``: its ``compile`` (which numba calls on a call with new types,
+    and when a function calling it compiles) first looks in the disk cache, so a
+    process that waited finds what the first one wrote."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    compile_unlocked = dispatcher.compile
+
+    def compile(sig):
+        with global_compiler_lock, _file_lock(lock_path):
+            return compile_unlocked(sig)
+
+    dispatcher.compile = compile
+    return dispatcher
