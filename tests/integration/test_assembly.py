@@ -186,7 +186,7 @@ def test_processes_needing_one_kernel_at_once_compile_it_once(tmp_path, monkeypa
     """)
     env = {**os.environ,
            "PYTHONPATH": os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")]))}
-    with open(Path(module.__file__).with_suffix(".lock"), "w") as lock:
+    with open(codegen.compile_lock_path(module.__file__, "law_values"), "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         procs = [subprocess.Popen([sys.executable, "-c", script], env=env,
                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -148,14 +148,18 @@ class ClosedLoop:
     def _plant_states(self) -> int:
         return sum(len(p.states) for p in self.plant.parts())
 
+    @property
+    def has_loop_inputs(self) -> bool:
+        """A feed-forward or a disturbance signal (the kernel reads both, or neither)."""
+        return self.feedforward is not None or self.disturbance is not None
+
     def kernel_constants(self) -> dict[str, object]:
         plant = getattr(self.plant, "kernel_constants", dict)()
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
                 "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True,
-                "HAS_FEEDFORWARD": self.feedforward is not None,
-                "HAS_DISTURBANCE": self.disturbance is not None}
+                "HAS_LOOP_INPUTS": self.has_loop_inputs}
 
     def kernel_children(self) -> tuple[Child, ...]:
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
@@ -175,8 +179,13 @@ class ClosedLoop:
     def channels(self, setpoint: Signal) -> list[Signal | None]:
         held = Constant(self.drive_gain * self.bias)
         plant = dict(zip(CHANNELS, self.plant.channels(held), strict=True))
-        return in_order({**plant, "setpoint": setpoint, "feedforward": self.feedforward,
-                         "disturbance": self.disturbance}, LOOP_CHANNELS)
+        # with one of feed-forward and disturbance the other is zero: one kernel for both
+        zero = Constant(0.0) if self.has_loop_inputs else None
+        return in_order({**plant, "setpoint": setpoint,
+                         "feedforward": self.feedforward if self.feedforward is not None
+                         else zero,
+                         "disturbance": self.disturbance if self.disturbance is not None
+                         else zero}, LOOP_CHANNELS)
 
     def breakpoints(self, bp: np.ndarray, channels, t_start: float, t_end: float
                     ) -> np.ndarray:

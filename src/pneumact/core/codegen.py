@@ -42,8 +42,8 @@ from pathlib import Path
 from .compile_lock import compile_one_process_at_a_time
 from .marks import kernel
 
-__all__ = ["Child", "KernelSpec", "cache_dir", "dependency_files", "import_time_imports", "kernel",
-           "kernel_key", "load"]
+__all__ = ["Child", "KernelSpec", "cache_dir", "compile_lock_path", "dependency_files",
+           "import_time_imports", "kernel", "kernel_key", "load"]
 
 #: a template's tuple of the placeholders it can do without (called only under a switch)
 OPTIONAL = "OPTIONAL_FUNCTIONS"
@@ -271,7 +271,8 @@ def _same(a: object, b: object) -> bool:
 
 
 def _bind(namespace: dict, template: types.ModuleType, filename: str,
-          provided: frozenset[str], origins: dict[str, str], needs: dict[str, str]) -> None:
+          provided: frozenset[str], origins: dict[str, str], needs: dict[str, str],
+          prefix: str = "") -> None:
     """Bind ``template``'s ``@kernel`` functions to the generated namespace, compiled
     with disk caching, with the template's other globals beside them.
 
@@ -323,8 +324,16 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str,
         if name.startswith("_"):  # called from compiled code only: no Python wrapper
             options.setdefault("no_cpython_wrapper", True)
         namespace[name] = compile_one_process_at_a_time(
-            numba.njit(cache=True, **options)(bound), Path(filename).with_suffix(".lock"))
+            numba.njit(cache=True, **options)(bound), compile_lock_path(filename, prefix + name))
         origins[name] = template.__name__
+
+
+def compile_lock_path(filename: str, function: str) -> Path:
+    """The lock one kernel function compiles under (``core.compile_lock``): a hidden file
+    beside the kernel module, per function, so that different functions of one kernel
+    still compile at once in different processes."""
+    path = Path(filename)
+    return path.with_name(f".{path.stem}.{function}.lock")
 
 
 def _verify_needs(namespace: dict, needs: dict[str, str]) -> None:
@@ -350,7 +359,7 @@ def _bind_child(namespace: dict, child: Child, filename: str,
     template = importlib.import_module(child.template)
     needs: dict[str, str] = {}
     _bind(own, template, filename, provided | {name for name, _ in child.constants}, {},
-          needs)
+          needs, child.prefix)
     _verify_needs(own, needs)
     for name, obj in vars(template).items():
         if getattr(obj, "__kernel_options__", None) is not None and \

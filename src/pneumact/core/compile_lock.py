@@ -2,16 +2,18 @@
 
 numba caches compiled code on disk, but processes that need the same kernel at the same
 time (the workers of a Dask cluster or of a parallel test run, notebooks started
-together) each compile it, since none finds the cache written yet. A kernel's
-dispatchers therefore compile under an exclusive lock on a file beside the kernel
+together) each compile it, since none finds the cache written yet. Each function of a
+kernel therefore compiles under an exclusive lock on a file of its own beside the kernel
 module: the first process compiles and writes the cache, the next ones find it there
-when they get the lock and load it in a fraction of a second.
+when they get the lock and load it in a fraction of a second (different functions of one
+kernel still compile at once).
 
 The lock is taken inside numba's own compiler lock (one thread of a process compiles at
 a time, so a thread never waits on a file another thread of its process holds) and is
-re-entrant within the process: compiling a kernel function compiles the functions it
-calls, from the same module. Without ``fcntl`` (Windows) every process compiles, as
-before.
+re-entrant within the process. Compiling a function compiles the functions it calls,
+each under its own lock: a process holds the locks along one path of the call graph,
+which has no cycle, so two processes never wait on each other. Without ``fcntl``
+(Windows) every process compiles, as before.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ from typing import ClassVar
 from ..checks import as_instance, check_type
 from ..core.channels import in_order
 from ..core.component import Part, StateSpec
-from ..core.signals import Signal
+from ..core.signals import Constant, Signal
 from ..errors import ArgumentError
 from ..parameters.files import as_parameter_set
 from .friction import FrictionModel, LuGre
@@ -75,13 +75,22 @@ class Actuator:
                          label="diaphragm mechanics")
         return mechanics, self.friction.part(), self.valve.part(self.chamber)
 
+    @property
+    def has_load(self) -> bool:
+        return self.load is not None or self.load_map is not None
+
     def kernel_constants(self) -> dict[str, bool]:
-        """Compile-time switches of the kernel: code for absent loads is not compiled."""
-        return {"HAS_LOAD_T": self.load is not None, "HAS_LOAD_X": self.load_map is not None}
+        """Compile-time switch of the kernel: no load code without a load. With a load
+        against time or against position, both are read (the absent one is zero), so
+        that every loaded actuator of a combination shares one kernel."""
+        return {"HAS_LOAD": self.has_load}
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         res_map, atm_map = self.valve.maps()
-        return in_order({"drive": drive, "load_t": self.load, "load_x": self.load_map,
+        zero = Constant(0.0) if self.has_load else None
+        return in_order({"drive": drive,
+                         "load_t": self.load if self.load is not None else zero,
+                         "load_x": self.load_map if self.load_map is not None else zero,
                          "map_res": res_map, "map_atm": atm_map})
 
     def describe(self) -> str:

@@ -32,7 +32,7 @@ friction_project = friction_scales = friction_store = friction_store_partials = 
 valve_pressure = valve_rates = valve_partials = valve_params = valve_flows = None
 valve_derive = valve_equilibrium = valve_scales = valve_project = None
 VALVE_PRESSURE_STATE = -1
-HAS_LOAD_T = HAS_LOAD_X = True
+HAS_LOAD = True
 NSTATE = 3
 NPARAM = 0
 MECHANICS_LO = MECHANICS_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
@@ -54,14 +54,13 @@ LOAD_ITERATIONS = 20
 
 @kernel()
 def external_load(t, ts, x, sig, ptr):
-    """F_ext(t, x) = load(t) + load_map(x) and its slope; no code for an absent load."""
+    """F_ext(t, x) = load(t) + load_map(x) and its slope; no code without a load (with
+    one of the two, the other is a zero signal: one kernel for any load)."""
     f_ext = 0.0
     slope = 0.0
-    if HAS_LOAD_T:
-        f_ext += load_against_time(t, ts, sig, ptr)
-    if HAS_LOAD_X:
+    if HAS_LOAD:
         f_x, slope = load_against_position(x, sig, ptr)
-        f_ext += f_x
+        f_ext = load_against_time(t, ts, sig, ptr) + f_x
     return f_ext, slope
 
 
@@ -169,7 +168,7 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     ks = prm[MECHANICS_LO + MC_KSTOP]
     x_max = prm[MECHANICS_LO + MC_XMAX]
     x0 = rest_position(net0 - external_load(t, ts, 0.0, sig, ptr)[0], k, ks, x_max)
-    if HAS_LOAD_X:
+    if HAS_LOAD:
         for _ in range(LOAD_ITERATIONS):  # a load against position: fixed-point steps
             x0 = rest_position(net0 - external_load(t, ts, x0, sig, ptr)[0], k, ks, x_max)
     y0[S_POSITION] = x0

@@ -84,8 +84,7 @@ DIFFERENCE_VELOCITY = False
 OBSERVER = False
 #: the feed-forward and disturbance channels are read only when given: their code in
 #: the hot path costs a quarter of a closed-loop run even when it does not execute
-HAS_FEEDFORWARD = False
-HAS_DISTURBANCE = False
+HAS_LOOP_INPUTS = False
 # ------------------------------------------------------------------------------------------
 
 #: the loop's own outputs, after the plant's
@@ -156,7 +155,7 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
             terms -= prm[c + CT_KD] * v
     act = prm[c + CT_ACTION]
     u = prm[c + CT_BIAS] + act * terms
-    if HAS_FEEDFORWARD:
+    if HAS_LOOP_INPUTS:
         u += channel_eval(sig, ptr, CH_FEEDFORWARD, t, ts)[0]
     f_hat = 0.0
     if prm[c + CT_FF_FC] != 0.0 or prm[c + CT_FF_FS] != 0.0:  # static compensation
@@ -202,7 +201,7 @@ def _command(t, ts, y, prm, sig, ptr):
 @kernel()
 def _plant_input(t, ts, command, prm, sig, ptr):
     value = prm[CONTROLLER_LO + CT_GAIN] * command
-    if HAS_DISTURBANCE:
+    if HAS_LOOP_INPUTS:
         value += channel_eval(sig, ptr, CH_DISTURBANCE, t, ts)[0]
     return value
 
