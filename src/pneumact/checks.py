@@ -159,12 +159,14 @@ def check_int(name: str, value: Any, *, minimum: int | None = None,
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ArgumentTypeError(f"{_prefix(where)}{name} = {shown(value)}: must be a whole "
                                 f"number, not {type(value).__name__}")
-    if not isinstance(value, numbers.Integral):
+    if isinstance(value, numbers.Integral):
+        whole = int(value)
+    else:
         number = float(value)
         if not (math.isfinite(number) and number.is_integer()):
             raise ArgumentTypeError(f"{_prefix(where)}{name} = {number:g}: must be a whole "
                                     "number")
-    whole = int(value)
+        whole = int(number)
     if (minimum is not None and whole < minimum) or (maximum is not None and whole > maximum):
         if minimum is not None and maximum is not None:
             allowed = f"must be a whole number in [{minimum}, {maximum}]"

@@ -167,7 +167,7 @@ def plot_time_series(result: Any, signals: Sequence[str] | None = None,
     if axes is None:
         fig, axes = new_axes(len(signals))
     else:
-        axes = list(np.ravel(axes))
+        axes = list(np.ravel(np.asarray(axes, dtype=object)))  # a grid of axes too
         if len(axes) < len(signals):
             raise DataError(f"plot_time_series: {len(signals)} signals but {len(axes)} axes")
         fig = axes[0].figure

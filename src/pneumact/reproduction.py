@@ -33,9 +33,14 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
+
+if TYPE_CHECKING:
+    from .io.report import Report
+    from .parameters.parameter_set import ParameterSet
 
 __all__ = ["CYCLE_PERIOD", "Reproduction", "reproduce"]
 
@@ -88,7 +93,7 @@ class Reproduction:
     tables: dict[str, pd.DataFrame]
     wall_time: float
     quick: bool
-    identified: object = None
+    identified: ParameterSet | None = None
 
     @property
     def report(self) -> Path:
@@ -99,13 +104,13 @@ class Reproduction:
 class _Parts:
     """Tables, figures and report blocks gathered along the way."""
 
-    report: object
+    report: Report
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
     writers: dict[str, Callable[[Path], object]] = field(default_factory=dict)
 
     def table(self, name: str, frame: pd.DataFrame, caption: str, index: bool = False):
         self.tables[name] = frame
-        self.writers[f"{name}.csv"] = lambda p, f=frame: f.to_csv(p, index=index)
+        self.writers[f"{name}.csv"] = lambda p: frame.to_csv(p, index=index)
         self.report.table(frame, caption, index=index)
 
     def figure(self, name: str, make, caption: str):

@@ -125,7 +125,8 @@ def escape_help_markup(typer_app: typer.Typer, done: set[int] | None = None) -> 
                         option.parser is None and getattr(option, "click_type", None) is None:
                     option.parser = finite_float
     for group in typer_app.registered_groups:
-        escape_help_markup(group.typer_instance, done)
+        if group.typer_instance is not None:
+            escape_help_markup(group.typer_instance, done)
 
 
 escape_help_markup(app)

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, cast
 
 import typer
 from rich.console import Console
@@ -62,10 +62,18 @@ def _friction_choices() -> type[StrEnum]:
     """The ``--friction`` choices: every law the friction module registers."""
     from pneumact.models.friction import friction_models
 
-    return StrEnum("Friction", {name.replace("-", "_"): name for name in friction_models()})
+    members = {name.replace("-", "_"): name for name in friction_models()}
+    return cast("type[StrEnum]", StrEnum("Friction", members))
 
 
-Friction = _friction_choices()
+if TYPE_CHECKING:
+    class Friction(StrEnum):
+        """The choices as mypy sees them: built at run time from the registered laws, so
+        only the one the commands name (their default) is declared."""
+
+        lugre = "lugre"
+else:
+    Friction = _friction_choices()
 
 ParamsOption = Annotated[str, typer.Option(
     "--params", help="Parameter set: a shipped name or a .toml file.")]
@@ -226,7 +234,7 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             raise typer.Exit(code) from None
         except MemoryError as exc:
             _flush_warnings(caught)
-            print_error(f"not enough memory ({exc or 'the run is too large'}); keep fewer "
+            print_error(f"not enough memory ({str(exc) or 'the run is too large'}); keep fewer "
                         "output points or a shorter run")
             raise typer.Exit(code) from None
         except KeyboardInterrupt:

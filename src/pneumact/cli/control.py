@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -31,6 +31,10 @@ from pneumact.cli.common import (
     user_errors,
 )
 from pneumact.errors import ParameterError
+
+if TYPE_CHECKING:
+    from pneumact.models import Actuator, FrictionRig
+    from pneumact.models.controllers import Compensation
 
 control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting.",
                           no_args_is_help=True)
@@ -126,7 +130,7 @@ def _limits(plant: Plant, params, options: ControllerOptions) -> tuple[float, fl
 def _compensation(options: ControllerOptions, params) -> tuple:
     from pneumact.control import Dither, LuGreObserver, StaticCompensation
 
-    terms = []
+    terms: list[Compensation] = []
     if options.coulomb_ff is not None:
         terms.append(StaticCompensation(options.coulomb_ff))
     if options.dither:
@@ -148,7 +152,7 @@ def build_controller(plant: Plant, params, options: ControllerOptions):
 
     kp0, ki0 = DEFAULT_GAINS[plant.value]
     u_min, u_max = _limits(plant, params, options)
-    common = dict(u_min=u_min, u_max=u_max, anti_windup=options.anti_windup,
+    common: dict[str, Any] = dict(u_min=u_min, u_max=u_max, anti_windup=options.anti_windup,
                   tracking_time=options.tracking_time, sample_time=options.sample_time,
                   velocity_estimate=options.velocity_estimate,
                   compensation=_compensation(options, params))
@@ -168,6 +172,7 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
 
     params = load_quietly(params_name)
     law = friction_models()[str(friction)]()
+    model: FrictionRig | Actuator
     if plant is Plant.rig:
         model = FrictionRig(params, law, drive="force")
     else:
@@ -238,7 +243,8 @@ CASCADE_ONLY = ("kx", "kv")
 def _refuse_unused(ctx: typer.Context, structure: Structure, given: dict) -> None:
     """Options given on the command line that the chosen controller would ignore."""
     def on_command_line(name: str) -> bool:
-        return ctx.get_parameter_source(name).name != "DEFAULT"
+        source = ctx.get_parameter_source(name)
+        return source is not None and source.name != "DEFAULT"
 
     flag = {name: "--" + name.replace("_", "-") for name in given}
     ignored = PID_ONLY if structure is Structure.cascade else CASCADE_ONLY

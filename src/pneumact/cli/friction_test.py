@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import inspect
 import typing
+from collections.abc import Callable
 from dataclasses import MISSING, fields
 from pathlib import Path
 from typing import Annotated, Any
@@ -112,7 +113,9 @@ def _command(cls: type[FrictionTest]):
             test = cls(**_settings(cls, given))
             _run(test, params, friction, out)
 
-    command.__signature__ = inspect.Signature([*common, *settings, *aliases])
+    # typer reads the parameters from the signature built here (mypy knows no such attribute)
+    command.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+        [*common, *settings, *aliases])
     command.__annotations__ = {p.name: p.annotation for p in (*common, *settings, *aliases)}
     command.__doc__ = f"{cls.help[0].upper()}{cls.help[1:]}."
     command.__name__ = cls.kind.replace("-", "_")
@@ -152,9 +155,10 @@ def _run(test: FrictionTest, params_name: str, friction_name: str, out: Path) ->
     with err_console.status(f"running the {test.kind} test ({COMPILING})"):
         result = run_friction_test(test, params, friction=model)
     fig = plot_friction_test(result, test.kind)
-    writers = {"friction_test.csv": result.result.save}
-    if result.table is not None:
-        writers["friction_test_curve.csv"] = lambda path: save_derived_table(result.table, path)
+    writers: dict[str, Callable[[Path], object]] = {"friction_test.csv": result.result.save}
+    curve = result.table
+    if curve is not None:
+        writers["friction_test_curve.csv"] = lambda path: save_derived_table(curve, path)
     writers["friction_test.png"] = lambda path: save_figure(fig, path)
     try:
         written = write_outputs(out, writers)

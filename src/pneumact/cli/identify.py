@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.markup import escape
@@ -36,6 +37,9 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import DataError, ParameterError
+
+if TYPE_CHECKING:
+    from pneumact.identification.campaign import CampaignPlan
 
 identify_app = typer.Typer(help="Identify parameters from measured records.",
                            no_args_is_help=True)
@@ -73,6 +77,10 @@ def _status(what: str):
 #: Exit code of an identification that ran but could not identify every parameter (the
 #: report says why; identified.toml is written only with --partial).
 EXIT_NOT_IDENTIFIED = 3
+
+
+def _write_breakpoints(designed: CampaignPlan, test: str, path: Path) -> None:
+    designed.breakpoints(test).to_csv(path, index=False)
 
 
 def _plan_table(plan) -> Table:
@@ -126,15 +134,16 @@ def campaign(
         if plan:  # the tests, for a real bench
             writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
             for test in designed.tests:
-                writers[f"setpoint_{test.name}.csv"] = (
-                    lambda p, name=test.name: designed.breakpoints(name).to_csv(p, index=False))
+                writers[f"setpoint_{test.name}.csv"] = functools.partial(
+                    _write_breakpoints, designed, test.name)
         else:  # the tests simulated: a folder of records, nothing else
             noise = Noise(pressure_noise * 1e3, position_noise * 1e-6, resolution * 1e-6)
             with _status("simulating the bench campaign"):
                 records = synthetic_campaign(parameter_set, designed.tests, noise=noise,
                                              seed=seed)
             units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
-            writers = {f"{r.source}.csv": (lambda p, r=r: r.save(p, units)) for r in records}
+            writers = {f"{r.source}.csv": functools.partial(r.save, units=units)
+                       for r in records}
         written = write_outputs(out, writers)
         out_console.print(_plan_table(designed))
         for name, purpose in designed.purposes.items():
@@ -322,7 +331,7 @@ def identify_friction_command(
         out_console.print(_estimates_table(f"{model.value} friction from {record.name}", table))
         out_console.print(f"relative force error {100 * result.relative_force_error:.2f} %, "
                           f"condition number {result.condition_number:.3g}")
-        if checked is not None:
+        if checked is not None and validate is not None:
             out_console.print(f"relative force error on {validate.name}: {100 * checked:.2f} %")
         for path in written:
             out_console.print(f"wrote {path}")

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.table import Table
@@ -43,6 +43,11 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import ArgumentError, ParameterError
+
+if TYPE_CHECKING:
+    from pneumact.experiments.actuator import Experiment
+    from pneumact.models.actuator import Actuator
+    from pneumact.parameters.parameter_set import ParameterSet
 
 
 class Method(StrEnum):
@@ -205,9 +210,9 @@ class Study:
     writers of what each analysis produced."""
 
     method: Method
-    model: object
-    experiment: object
-    parameter_set: object
+    model: Actuator
+    experiment: Experiment
+    parameter_set: ParameterSet
     vary: str | None
     n: int
     second_order: bool
@@ -371,12 +376,13 @@ def parse_conditions(items: list[str], model, valve: Valve, t_end: float | None)
     for item in items:
         axis, sep, values = item.partition("=")
         axis = axis.strip()
-        if not sep or axis not in CONDITION_AXES or not names(values):
+        listed = names(values)
+        if not sep or axis not in CONDITION_AXES or not listed:
             raise ParameterError(f"--conditions {item!r}; write AXIS=V1,V2,... with AXIS one "
                                  f"of {', '.join(CONDITION_AXES)} (e.g. period=20,80,320)")
         if axis in axes:
             raise ParameterError(f"--conditions: the axis {axis} is given twice")
-        axes[axis] = [CONDITION_AXES[axis](v, model) for v in names(values)]
+        axes[axis] = [CONDITION_AXES[axis](v, model) for v in listed]
     if "period" in axes and "speed" in axes:
         raise ParameterError("--conditions: give either periods or sliding speeds, not both")
     if t_end is not None and ("period" in axes or "speed" in axes):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 from rich.table import Table
@@ -31,6 +31,9 @@ from pneumact.cli.common import (
     user_errors,
     write_outputs,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def simulate(
@@ -65,13 +68,14 @@ def simulate(
         from pneumact.plotting import plot_hysteresis, save_figure
 
         ax = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
+        figure = cast("Figure", ax.figure)  # a figure of its own, not a subfigure
         try:
             written = write_outputs(out, {
                 "simulation.csv": result.save,
-                "hysteresis.png": lambda path: save_figure(ax.figure, path),
+                "hysteresis.png": lambda path: save_figure(figure, path),
             })
         finally:
-            plt.close(ax.figure)
+            plt.close(figure)
         _print_summary(summary, result, parameter_set["p_atm"], written)
 
 

@@ -40,8 +40,15 @@ from pneumact.cli.common import (
 from pneumact.cli.identify import RecordsArgument
 from pneumact.errors import ParameterError
 
-#: ``--valve`` of validate: the command's valves, or auto (each record picks its own).
-DriveValve = StrEnum("DriveValve", {"auto": "auto", **{v.name: v.value for v in Valve}})
+
+class DriveValve(StrEnum):
+    """``--valve`` of validate: the command's valves, or auto (each record picks its own)."""
+
+    auto = "auto"
+    source = Valve.source.value
+    command = Valve.command.value
+    regulator = Valve.regulator.value
+
 VERDICT_STYLE = {"adequate": "green", "adequate, residuals not white": "yellow",
                  "inadequate": "red"}
 

@@ -60,12 +60,18 @@ import time as _time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..errors import DataError, ParameterError
 from ..io.records import Record
+
+if TYPE_CHECKING:
+    from ..core.signals import Signal
+    from ..models.friction import FrictionModel
+    from ..parameters.parameter_set import ParameterSet
 
 __all__ = ["DriveReplay", "control_law_check", "drive_plant", "replay_drive"]
 
@@ -100,7 +106,7 @@ class DriveReplay:
     frame: pd.DataFrame
     errors: dict[str, float]
     settings: dict[str, object]
-    parameters: object = None
+    parameters: ParameterSet | None = None
     notes: list[str] = field(default_factory=list)
 
     def to_pandas(self) -> pd.DataFrame:
@@ -220,7 +226,7 @@ def drive_plant(friction, v_reg: float = 1e-4):
     if friction.model == "stribeck":
         values.update(Fs=est["Fs"], vs=est["vs"],
                       delta=float(friction.options.get("delta", 2.0)))
-        law = StribeckMap()
+        law: FrictionModel = StribeckMap()
     elif friction.model == "coulomb-viscous":
         law = CoulombViscous()
     else:
@@ -379,7 +385,7 @@ def replay_drive(record: Record, friction, *, gains: Mapping[str, float] | None 
         values = np.asarray(values, dtype=float)
         return np.concatenate([values, values[-1:]])
 
-    disturbance = Constant(-offset) if offset != 0.0 else None
+    disturbance: Signal | None = Constant(-offset) if offset != 0.0 else None
     feedforward = None
     if mode == "command":
         feedforward = PiecewiseLinear(grid, held(record["pulses"]))

@@ -346,6 +346,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
                      f"(v = 0, friction at rest: {friction_words}); {_where(plant, y, names)}.")
     else:
+        assert velocity is not None  # regime 'sliding' checked it above
         v = float(velocity)
         y[iv] = v
         y[friction_states] = plant.friction.steady_states(v, plant.params)[0]

@@ -154,7 +154,7 @@ class ClosedLoop:
         return self.feedforward is not None or self.disturbance is not None
 
     def kernel_constants(self) -> dict[str, object]:
-        plant = getattr(self.plant, "kernel_constants", dict)()
+        plant: dict[str, object] = getattr(self.plant, "kernel_constants", dict)()
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
@@ -195,7 +195,7 @@ class ClosedLoop:
         extra = [c.breakpoints() for c in (self.feedforward, self.disturbance) if c is not None]
         points = np.unique(np.concatenate([bp, *extra, [t_start, t_end]]))
         points = points[(points >= t_start) & (points <= t_end)]
-        if self.controller.sampled:
+        if self.controller.sample_time is not None:  # a sampled controller
             period = float(self.controller.sample_time)
             k = np.arange(math.ceil(t_start / period - SNAP), math.floor(t_end / period + SNAP)
                           + 1)

@@ -233,7 +233,7 @@ def _read(result: Any) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, str
         k = int(np.argmin(np.diff(time)))
         raise DataError(f"loop_metrics: time must increase strictly; time[{k + 1}] = "
                         f"{float(time[k + 1])!r} s after time[{k}] = {float(time[k])!r} s")
-    out = {}
+    out: dict[str, np.ndarray] = {}
     for name in ("position", "setpoint", "velocity", "command"):
         if name in signals:
             out[name] = _floats(name, signals[name])

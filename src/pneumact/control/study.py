@@ -12,6 +12,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
@@ -19,6 +20,10 @@ from ..core.signals import Constant
 from ..experiments.actuator import Experiment
 from ..models.controllers import PID
 from .loop import ClosedLoop
+
+if TYPE_CHECKING:
+    from ..simulation.result import Result
+    from .metrics import LoopMetrics
 
 __all__ = ["TRACKING_METRICS", "LoopStudy", "canudas_hunting", "run_loop"]
 
@@ -33,8 +38,8 @@ class LoopStudy:
 
     loop: ClosedLoop
     experiment: Experiment
-    result: object
-    metrics: object
+    result: Result
+    metrics: LoopMetrics
     title: str = "Closed-loop position control"
     #: a profile to follow, not a step: the step metrics (rise, settling, overshoot)
     #: mean nothing and are left out; the tracking error is given instead

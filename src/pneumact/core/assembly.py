@@ -216,7 +216,7 @@ class Assembly:
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
         constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))
-        switches = getattr(self.model, "kernel_constants", dict)()
+        switches: dict[str, object] = getattr(self.model, "kernel_constants", dict)()
         constants += sorted(switches.items())
         keys = [part.key for part in self.parts if part.key]
         model = self.template.rpartition(".")[2].removesuffix("_template")

@@ -381,6 +381,8 @@ def load(spec: KernelSpec) -> types.ModuleType:
         path = folder / f"{name}.py"
         _write_once(path, spec.source())
         module_spec = importlib.util.spec_from_file_location(name, path)
+        if module_spec is None or module_spec.loader is None:
+            raise ImportError(f"cannot load the generated kernel module {path}")
         module = importlib.util.module_from_spec(module_spec)
         module_spec.loader.exec_module(module)
         provided = frozenset([*(alias for alias, _ in spec.imports),

@@ -21,11 +21,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
 from ..errors import ExperimentError
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 KIND_PWL = 0
 KIND_SINE = 1
@@ -185,7 +189,7 @@ class Signal:
         return f"{type(self).__name__}(terms={len(self._terms)})"
 
 
-def _pwl_term(t: Sequence[float], y: Sequence[float], what: str) -> np.ndarray:
+def _pwl_term(t: ArrayLike, y: ArrayLike, what: str) -> np.ndarray:
     t = np.asarray(t, dtype=np.float64).ravel()
     y = np.asarray(y, dtype=np.float64).ravel()
     if t.size == 0 or t.size != y.size:
@@ -210,7 +214,7 @@ def _pwl_term(t: Sequence[float], y: Sequence[float], what: str) -> np.ndarray:
 class PiecewiseLinear(Signal):
     """Linear between samples, held flat outside; a repeated time is a jump."""
 
-    def __init__(self, t: Sequence[float], y: Sequence[float]):
+    def __init__(self, t: ArrayLike, y: ArrayLike):
         super().__init__([_pwl_term(t, y, "PiecewiseLinear")])
 
 

@@ -4,9 +4,9 @@ measured profiles. Each is an ``Experiment`` of the quantity ``position`` [m].""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.signals import PiecewiseLinear, Step
 from ..errors import ExperimentError
@@ -47,7 +47,7 @@ def SetpointRamp(start: float, stop: float, duration: float, t_start: float = 0.
     return Experiment(signal, "position", end, n_points=n_points, name="SetpointRamp")
 
 
-def SetpointTable(times: Sequence[float], positions: Sequence[float],
+def SetpointTable(times: ArrayLike, positions: ArrayLike,
                   t_end: float | None = None, n_points: int = 4001) -> Experiment:
     """Piecewise-linear set-point through (time [s], position [m]) corners; a repeated
     time is a jump."""

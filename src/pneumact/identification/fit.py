@@ -25,6 +25,7 @@ import weakref
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -34,6 +35,9 @@ from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
+
+if TYPE_CHECKING:
+    from ..simulation.simulate import Model
 
 __all__ = ["FitResult", "Profile", "fit"]
 
@@ -328,7 +332,7 @@ class FitResult:
     starts: pd.DataFrame = field(default_factory=pd.DataFrame)
     profiles: dict[str, Profile] = field(default_factory=dict)
     base_values: dict[str, float] = field(default_factory=dict)
-    model: object = None
+    model: Model | None = None
     window: tuple[float, float] | None = None
     weights: dict[str, float] = field(default_factory=dict)
     #: the model of each record (one model for all, unless a joint fit mixes valves)
@@ -376,6 +380,8 @@ class FitResult:
         from ..parameters import ParameterSet
         from ..parameters.parameter_set import ParameterInfo, number_text
 
+        if self.model is None:
+            raise ParameterError("FitResult.parameters: the result has no model")
         params = self.model.params
         values, info = dict(params.values), dict(params.info)
         for j, label in enumerate(self.estimates.names):
@@ -504,7 +510,7 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
         for s in signals:
             e = sim[s] - rec[s]
             y = rec[s]
-            nrmse = float(np.linalg.norm(e) / max(np.linalg.norm(y - y.mean()), 1e-300))
+            nrmse = float(np.linalg.norm(e) / max(float(np.linalg.norm(y - y.mean())), 1e-300))
             rows.append({"record": rec.source, "signal": s, "unit": rec.units.get(s, ""),
                          "samples": e.size, "rms": float(np.sqrt(np.mean(e**2))),
                          "max_abs": float(np.max(np.abs(e))), "nrmse": nrmse,

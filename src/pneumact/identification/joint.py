@@ -140,7 +140,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                    key=lambda i: typical_speed(records[i]), reverse=True)
     used = sorted([i for i, k in enumerate(kinds) if k == "sweep"]
                   + ramps[: max(MIN_RECORDS, len(ramps) // 3)])
-    result = None
+    result: FitResult | None = None
     chaotic: list[str] = []
     options.update(screened=set(), weights={})
     for round_ in range(MAX_ROUNDS):
@@ -167,7 +167,15 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                     "it in another regime")
             break
         used = sorted(used + admitted)
+    assert result is not None  # MAX_ROUNDS >= 1: one round at least
     return result
+
+
+def _within(time: np.ndarray, window: tuple[float, float] | None) -> np.ndarray:
+    """The samples inside ``window`` (all of them without one)."""
+    if window is None:
+        return np.ones(time.size, bool)
+    return (time >= window[0]) & (time <= window[1])
 
 
 def feasible(values: dict[str, float], params) -> dict[str, float]:
@@ -230,7 +238,8 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
             records = [records[i] for i in keep]
             kinds = [kinds[i] for i in keep]
             excluded.extend(chaotic)
-    models, windows, offset_records = [], [], []
+    models, offset_records = [], []
+    windows: list[tuple[float, float] | None] = []
     for i, (record, kind) in enumerate(zip(records, kinds, strict=True)):
         models.append(bench_model(record, params, friction, chamber))
         if kind == "presliding" and "setpoint" not in record:
@@ -240,9 +249,7 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
             windows.append(None)
     new = [i for i, r in enumerate(records) if r.source not in weights]
     if new:
-        masks = [np.ones(records[i].time.size, bool) if windows[i] is None else
-                 (records[i].time >= windows[i][0]) & (records[i].time <= windows[i][1])
-                 for i in new]
+        masks = [_within(records[i].time, windows[i]) for i in new]
         found = input_noise_weights([models[i] for i in new], [records[i] for i in new],
                                     dict(params.values), masks,
                                     replicates=replicates or INPUT_REPLICATES, seed=seed,

@@ -26,6 +26,7 @@ import datetime as _dt
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -68,6 +69,9 @@ from .uncertainty import (
     prediction_band,
     with_covariance,
 )
+
+if TYPE_CHECKING:
+    from ..parameters.parameter_set import ParameterSet
 
 __all__ = ["STAGES", "PaperIdentification", "StageResult", "identify_paper", "record_kind",
            "with_estimates"]
@@ -125,11 +129,11 @@ class PaperIdentification:
     verdicts: list[Verdict]
     diagnostics: list[Diagnostic]
     residuals: pd.DataFrame
-    parameters: object
-    initial: object
+    parameters: ParameterSet
+    initial: ParameterSet
     records: list[Record]
     input_noise: InputNoise | None = None
-    staged_parameters: object = None
+    staged_parameters: ParameterSet | None = None
     extra: dict = field(default_factory=dict)
 
     # -- the verdict ------------------------------------------------------------------
@@ -642,7 +646,10 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                           "where the diaphragm slides steadily"))
             refine = False
     joint_failed = False
+    converged = False
     if refine:
+        assert joint is not None  # refine is still True: the joint fit ran
+        converged = bool(joint.success)
         misfit = [Path(r).name for r, fits in zip(residuals["record"], residuals["fits"],
                                                    strict=True) if not fits]
         lower, upper = joint.bounds
@@ -672,7 +679,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         caveat = "the joint refinement could not run: staged values, no interval holds"
     elif misfit:
         caveat = f"the model does not fit {', '.join(misfit)}, so no interval holds"
-    elif refine and not joint.success:
+    elif refine and not converged:
         caveat = "the joint fit did not converge, so no interval holds"
     judged = verdicts(names, final_values.values[idx], half, at_bound[idx], caveat)
     if refine:

@@ -282,8 +282,8 @@ def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100
                              "is not identifiable)")
     rng = np.random.default_rng(seed)
     specs = catalogue()
-    positive = np.array([specs[n].minimum is not None and specs[n].minimum >= 0
-                         for n in names])
+    minima = [specs[n].minimum for n in names]
+    positive = np.array([m is not None and m >= 0 for m in minima])
     rows: list[np.ndarray] = []
     while len(rows) < draws:
         batch = rng.multivariate_normal(mean, cov, size=draws, method="svd")

@@ -357,10 +357,11 @@ def _units_of(source: Path, final, file_names, cells, header_units, units, listi
                 used.add(key)
                 given = str(units[key]).strip() or None
                 label = _label(name, file_name)
-                if resolved[i] is None:
+                header = resolved[i]
+                if header is None:
                     resolved[i] = given
-                elif given is not None and not same_unit(source, label, resolved[i], given):
-                    raise DataError(f"{source}: {label} has unit {resolved[i]!r} in the header "
+                elif given is not None and not same_unit(source, label, header, given):
+                    raise DataError(f"{source}: {label} has unit {header!r} in the header "
                                     f"but units= says {given!r}; give one or make them agree")
                 break
     unused = sorted(set(units or {}) - used)
@@ -437,6 +438,7 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
             check_physics(source, name, values, label)
             time = values
         elif name == "pressure_gauge":
+            assert p_atm is not None  # a gauge column without p_atm was refused above
             if "pressure" in final:
                 raise DataError(f"{source}: has both 'pressure' and 'pressure_gauge'; keep one")
             signals["pressure"] = values + float(p_atm)
@@ -447,6 +449,7 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
             check_physics(source, name, values, label)
             signals[name] = values
             signal_units[name] = si
+    assert time is not None  # 'time' is a required column (checked above)
     for array in (time, *signals.values()):
         array.setflags(write=False)
     return Record(time=time, signals=signals, units=signal_units, source=str(source))

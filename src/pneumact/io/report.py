@@ -14,13 +14,14 @@ import io
 import platform
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
 
 import pandas as pd
 
 from ..plotting import write_png
 from .tables import PathLike, atomic_write
 
-__all__ = ["Block", "Report", "figure_png"]
+__all__ = ["Block", "ParameterTable", "Report", "figure_png"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,15 @@ def _has_prose(frame: pd.DataFrame) -> bool:
     return False
 
 
+class ParameterTable(Protocol):
+    """What a report shows of a parameter set (a ``ParameterSet`` is one; io sits below
+    the parameters, so it names only what it calls)."""
+
+    def to_frame(self) -> pd.DataFrame: ...
+
+    def notes(self) -> list[str]: ...
+
+
 @dataclass
 class Report:
     """An HTML report under construction. ``call``: how it was produced (the command
@@ -66,7 +76,7 @@ class Report:
 
     title: str
     call: str = ""
-    parameters: object = None
+    parameters: ParameterTable | None = None
     blocks: list[Block] = field(default_factory=list)
 
     def heading(self, text: str) -> Report:

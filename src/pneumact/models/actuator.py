@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from ..checks import as_instance, check_type
 from ..core.channels import in_order
@@ -16,6 +16,10 @@ from .mechanics import MECHANICS_BLOCK
 from .pneumatics import ChamberLaw, Isothermal
 from .valves import PressureSource, Valve
 
+if TYPE_CHECKING:
+    from ..parameters.files import ParameterSetLike
+    from ..parameters.parameter_set import ParameterSet
+
 
 @dataclass(frozen=True, eq=False)
 class Actuator:
@@ -27,13 +31,18 @@ class Actuator:
     behind a valve (with a pressure source the chamber pressure is given).
     """
 
-    params: object
+    params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     valve: Valve = field(default_factory=PressureSource)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
     load_map: Signal | None = None
     template: ClassVar[str] = "pneumact.models.actuator_template"
+
+    if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
+        def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
+                     valve: Valve = ..., chamber: ChamberLaw = ...,
+                     load: Signal | None = ..., load_map: Signal | None = ...) -> None: ...
 
     def __post_init__(self):
         set_ = object.__setattr__

@@ -158,8 +158,9 @@ class LuGreObserver(Compensation):
     @classmethod
     def from_parameters(cls, params, gain: float = 0.0) -> LuGreObserver:
         """The observer with the LuGre parameters of a parameter set."""
-        return cls(*(float(params[n]) for n in ("sigma0", "sigma1", "sigma2", "Fc", "Fs",
-                                                 "vs")), gain=gain)
+        values = {n: float(params[n]) for n in ("sigma0", "sigma1", "sigma2", "Fc", "Fs",
+                                                 "vs")}
+        return cls(**values, gain=gain)
 
     def settings(self) -> dict[str, float]:
         return {"obs_sigma0": self.sigma0, "obs_sigma1": self.sigma1,

@@ -10,7 +10,7 @@ offset ``o`` of the vector ``p``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from numba import njit
 
@@ -19,6 +19,10 @@ from ..core.component import Block, Part, StateSpec
 from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .friction import FrictionModel, LuGre
+
+if TYPE_CHECKING:
+    from ..parameters.files import ParameterSetLike
+    from ..parameters.parameter_set import ParameterSet
 
 P = ParameterSpec
 declare(
@@ -124,10 +128,14 @@ class FrictionRig:
     """A mass ``m`` with a friction law, driven by ``drive`` (force, spring, velocity or
     position) — the set-up of Canudas de Wit et al. (1995) for the classic experiments."""
 
-    params: object
+    params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     drive: str = "force"
     template: ClassVar[str] = "pneumact.models.rig_template"
+
+    if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
+        def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
+                     drive: str = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance

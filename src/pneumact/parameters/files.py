@@ -14,7 +14,7 @@ import tomllib
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeAlias
 
 from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.io.quantities import parse_value
@@ -27,8 +27,12 @@ from pneumact.parameters.validation import (
     warn_passivity,
 )
 
-__all__ = ["as_parameter_set", "available_params", "load_params", "params_to_toml",
-           "write_params"]
+__all__ = ["ParameterSetLike", "as_parameter_set", "available_params", "load_params",
+           "params_to_toml", "write_params"]
+
+#: what takes the place of a parameter set in a call: the set, a shipped set's name or the
+#: path of a .toml file (``as_parameter_set`` turns it into the set)
+ParameterSetLike: TypeAlias = ParameterSet | str | os.PathLike[str]
 
 _TOP_KEYS = ("name", "description", "provenance", "parameters")
 _ENTRY_KEYS = ("value", "source", "note")
@@ -128,7 +132,7 @@ def _looks_like_path(text: str) -> bool:
     return text.endswith(".toml") or any(s in text for s in seps)
 
 
-def _load(name_or_path: str | Path) -> ParameterSet:
+def _load(name_or_path: str | os.PathLike[str]) -> ParameterSet:
     if not isinstance(name_or_path, Path) and not _looks_like_path(str(name_or_path)):
         shipped = _shipped()
         resource = shipped.get(str(name_or_path))
@@ -149,7 +153,7 @@ def _load(name_or_path: str | Path) -> ParameterSet:
     return _from_document(doc, str(path), path.stem, path.resolve())
 
 
-def load_params(name_or_path: str | Path) -> ParameterSet:
+def load_params(name_or_path: str | os.PathLike[str]) -> ParameterSet:
     """Load a shipped set by name ("vgt-paper") or a TOML file by path, in SI, validated.
 
     Raises ParameterError for an unknown set, a malformed file, an unknown parameter, a
@@ -212,8 +216,8 @@ def params_to_toml(params: ParameterSet, provenance: Mapping[str, str] | None = 
     specs = catalogue()
     lines = [f"name = {_toml_string(params.name)}",
              f"description = {_toml_string(params.description)}", "", "[provenance]"]
-    for key, value in {**params.provenance, **dict(provenance or {})}.items():
-        lines.append(f"{key} = {_toml_string(value)}")
+    for key, text in {**params.provenance, **dict(provenance or {})}.items():
+        lines.append(f"{key} = {_toml_string(text)}")
     lines += ["", "[parameters]"]
     for name, value in params.values.items():
         unit = specs[name].unit

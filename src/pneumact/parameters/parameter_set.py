@@ -92,6 +92,14 @@ class ParameterSet(Mapping[str, float]):
 
     __slots__ = ("_description", "_info", "_name", "_provenance", "_source_path",
                  "_values")
+    # the slots' types (bare annotations create no class attribute, so no clash with
+    # __slots__); they are set once, in _init
+    _name: str
+    _description: str
+    _provenance: dict[str, str]
+    _values: dict[str, float]
+    _info: dict[str, ParameterInfo]
+    _source_path: Path | None
 
     def __init__(self, values: Mapping[str, float], *, name: str = "custom",
                  description: str = "", provenance: Mapping[str, str] | None = None,
@@ -110,7 +118,9 @@ class ParameterSet(Mapping[str, float]):
         self._init(name, description, dict(provenance or {}), ordered, full_info,
                    source_path)
 
-    def _init(self, name, description, provenance, values, info, source_path) -> None:
+    def _init(self, name: str, description: str, provenance: Mapping[str, str],
+              values: dict[str, float], info: dict[str, ParameterInfo],
+              source_path: Path | None) -> None:
         setter = object.__setattr__
         setter(self, "_name", str(name))
         setter(self, "_description", str(description))
@@ -151,7 +161,7 @@ class ParameterSet(Mapping[str, float]):
         return self._source_path
 
     @property
-    def values(self) -> _GivenValues:  # type: ignore[override]
+    def values(self) -> _GivenValues:
         """Given values only, name -> SI float (read-only; ``values()`` also works)."""
         return _GivenValues(self._values)
 
@@ -270,7 +280,9 @@ class ParameterSet(Mapping[str, float]):
                                            "description"])
 
 
-def _restore(name, description, provenance, values, info, source_path) -> ParameterSet:
+def _restore(name: str, description: str, provenance: dict[str, str],
+             values: dict[str, float], info: dict[str, ParameterInfo],
+             source_path: Path | None) -> ParameterSet:
     """Unpickle without re-validating or warning (the set was valid when pickled)."""
     ps = object.__new__(ParameterSet)
     ps._init(name, description, provenance, values, info, source_path)

@@ -92,9 +92,10 @@ def problems(values: Mapping[str, Any], where: str,
 
     for relation in relations():
         args = [current(n) for n in relation.names]
-        if all(a is not None for a in args) and not bool(relation.holds(*args)):
+        known = [a for a in args if a is not None]
+        if len(known) == len(args) and not bool(relation.holds(*known)):
             first = relation.names[0]
-            found.append(f"{_shown(first, args[0], given)}: {relation.explain(*args)}")
+            found.append(f"{_shown(first, known[0], given)}: {relation.explain(*known)}")
     return found
 
 

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from ..checks import check_int
 from ..errors import ArgumentError, ParameterError
@@ -146,7 +147,7 @@ def _bands(study: StudyResult, index: str) -> pd.DataFrame | None:
     return along_time(study, f"{index}_conf")
 
 
-def plot_along_loop(curves: pd.DataFrame, x: Sequence[float], xlabel: str):
+def plot_along_loop(curves: pd.DataFrame, x: ArrayLike, xlabel: str):
     """Index curves (rows: times) against another signal at the same times, e.g. the
     applied pressure of a cycle, so the indices are read along the hysteresis loop."""
     import matplotlib.pyplot as plt

@@ -182,7 +182,7 @@ def bootstrap_seed(seed: int) -> np.random.Generator:
 def _warn_negative(rows: list[dict], n: int) -> None:
     """One warning naming the outputs (and parameters) whose S1 or ST is negative beyond
     its confidence interval: the sample is too small for them."""
-    bad = {}
+    bad: dict[str, list[str]] = {}
     for r in rows:
         if r["S1"] + r["S1_conf"] < 0 or r["ST"] + r["ST_conf"] < 0:
             bad.setdefault(str(r["output"]), []).append(r["parameter"])
@@ -305,6 +305,10 @@ def batch_evaluate(model, experiment, problem: Problem, *, features=(), signal=N
     from ..simulation.batch import simulate_batch
 
     grid = None if times is None else np.asarray(times, dtype=float)
+    if signal and grid is None:
+        raise ArgumentError(f"batch_evaluate: signal = {signal!r} needs times= (the times "
+                            "at which it is read)")
+    time_columns = [] if grid is None else [repr(float(t)) for t in grid]
 
     def evaluate(values: np.ndarray) -> pd.DataFrame:
         table = pd.DataFrame(values, columns=problem.names)
@@ -317,7 +321,7 @@ def batch_evaluate(model, experiment, problem: Problem, *, features=(), signal=N
                 f"{failed['error'].iloc[0]}); an index cannot leave runs out: narrow the "
                 "ranges or loosen the solver")
         if signal:
-            return pd.DataFrame(result.signals[signal], columns=[repr(float(t)) for t in grid])
+            return pd.DataFrame(result.signals[signal], columns=time_columns)
         return result.table[list(features)].reset_index(drop=True)
 
     return evaluate

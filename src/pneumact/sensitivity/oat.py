@@ -144,7 +144,8 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
 
     params = model.params
     variations = PAPER_VARIATIONS if variations is None else variations
-    rows, labels = [{}], [("nominal", 0.0, np.nan)]
+    rows: list[dict[str, float]] = [{}]
+    labels = [("nominal", 0.0, np.nan)]
     for name, spec in variations.items():
         if name not in params:
             raise ParameterError(f"one_at_a_time: {name!r} is not a parameter of the model's "
@@ -171,6 +172,7 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
     x = batch.signals["position"]
     runs["rms_position_change"] = np.sqrt(np.mean((x - x[0]) ** 2, axis=1))
     runs["status"] = batch.table["status"].to_numpy()
+    assert batch.time is not None  # a batch's result has its output grid
     return OneAtATime(runs, dict(batch.signals), batch.time, tuple(features))
 
 
@@ -217,7 +219,7 @@ class FrictionCurves:
     def _plot_zoomed(self, params: list[str]):
         top = max(float(np.max(v)) for entries in self.curves.values()
                   for _, v, _ in entries) * 1e3
-        windows = {"whole curve": None}
+        windows: dict[str, tuple[float, float] | None] = {"whole curve": None}
         if np.isfinite(self.vs):
             windows["|v| ≤ 4·vs"] = (-4e3 * self.vs, 4e3 * self.vs)
         windows["fastest 20 %"] = (0.8 * top, top)

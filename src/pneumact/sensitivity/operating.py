@@ -300,9 +300,9 @@ def _study(model, condition, method, variations, features, n, seed, second_order
     actuator = condition.model(model)
     experiment = condition.experiment(model.params)
     if method == "oat":
-        study = one_at_a_time(actuator, experiment, variations or PAPER_VARIATIONS,
-                              features=features, workers=batch.get("workers"), solver=solver)
-        return study, oat_indices(study)
+        oat = one_at_a_time(actuator, experiment, variations or PAPER_VARIATIONS,
+                            features=features, workers=batch.get("workers"), solver=solver)
+        return oat, oat_indices(oat)
     problem = Problem.around(model.params, variations or DEFAULT_RANGES)
     evaluate = methods.model_outputs(actuator, experiment, problem, features,
                                      out_dir=out_dir, progress=progress, solver=solver,

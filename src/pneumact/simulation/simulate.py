@@ -6,6 +6,7 @@ import time as _time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import ModuleType
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -25,8 +26,28 @@ from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
 
-__all__ = ["Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
+if TYPE_CHECKING:
+    from ..core.component import Part
+    from ..core.signals import Signal
+    from ..parameters.parameter_set import ParameterSet
+
+__all__ = ["Model", "Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
            "model_stroke", "prepare", "run_kernel", "simulate"]
+
+
+class Model(Protocol):
+    """What the simulation asks of a model: an ``Actuator``, a ``FrictionRig`` or a
+    ``control.ClosedLoop`` has it (``check_model`` checks it at run time)."""
+
+    @property
+    def params(self) -> ParameterSet: ...
+
+    @property
+    def drive_quantity(self) -> str: ...
+
+    def parts(self) -> tuple[Part, ...]: ...
+
+    def channels(self, drive: Signal, /) -> list[Signal | None]: ...
 
 
 def check_model(model, where: str = "simulate") -> None:

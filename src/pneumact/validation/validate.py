@@ -13,10 +13,12 @@ on some records and validates on others, with both sets of metrics side by side.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -27,6 +29,10 @@ from ..models.inputs import INPUT_SIGNALS, input_signal, valve_for_signal
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
 from .verdicts import Criteria, record_verdict, worst_verdict
+
+if TYPE_CHECKING:
+    from ..identification.fit import FitResult
+    from ..simulation.result import Result
 
 __all__ = ["INPUTS", "RecordValidation", "TrainTest", "Validation", "drive_for", "train_test",
            "validate"]
@@ -79,13 +85,17 @@ def drive_for(model, record: Record, input: str = "auto"):
     return dataclasses.replace(model, valve=valve_for_signal(signal)), signal
 
 
+def _write_bytes(data: bytes, path: Path) -> None:
+    Path(path).write_bytes(data)
+
+
 @dataclass(eq=False)
 class RecordValidation:
     """One record against the model's prediction of it."""
 
     name: str
     record: Record
-    simulated: object
+    simulated: Result
     signals: tuple[str, ...]
     input: str = ""
     valve: str = ""
@@ -252,7 +262,7 @@ class Validation:
             f"{prefix}loops.csv": lambda p: self.loops().to_csv(p, index=False),
             f"{prefix}timeseries.csv": lambda p: self.to_pandas().to_csv(p, index=False)}
         for name, png in figures.items():
-            writers[f"{prefix}{name}.png"] = lambda p, png=png: Path(p).write_bytes(png)
+            writers[f"{prefix}{name}.png"] = functools.partial(_write_bytes, png)
         return writers
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "", parameters=None,
@@ -292,9 +302,10 @@ def validate(model, records: Record | Sequence[Record], *,
     records = as_records(records, "validate")
     signals = tuple(check_names("signals", signals, where="validate", what="signal name",
                                 allow_empty=False))
-    if model_stroke(model) is not None:
+    stroke = model_stroke(model)
+    if stroke is not None:
         for record in records:
-            record.check_within_stroke(model_stroke(model), "validate")
+            record.check_within_stroke(stroke, "validate")
     out = []
     for i, record in enumerate(records):
         record.require(signals, "validation")
@@ -314,7 +325,7 @@ def validate(model, records: Record | Sequence[Record], *,
 class TrainTest:
     """A fit on training records and its validation on those and on test records."""
 
-    fit: object
+    fit: FitResult
     train: Validation
     test: Validation
 

@@ -7,10 +7,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...core.assembly import Assembly
+
+if TYPE_CHECKING:
+    from ...core.component import Part
+    from .base import FrictionModel
 
 __all__ = ["friction_law_parameter_derivatives", "friction_law_values"]
 
@@ -19,12 +24,12 @@ __all__ = ["friction_law_parameter_derivatives", "friction_law_values"]
 class _Law:
     """A friction law with nothing around it (the ``law_alone`` template)."""
 
-    friction: object
+    friction: FrictionModel
     params: Mapping[str, float]
     template = "pneumact.models.friction.law_alone"
     kernel_templates = ("pneumact.models.friction.law_alone",)
 
-    def parts(self):
+    def parts(self) -> tuple[Part]:
         return (self.friction.part(),)
 
 

@@ -284,9 +284,10 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
                 store = ChunkStore(stage)
                 run.execute(store, reuse=store.open(manifest))
                 result = run.result(table)
+                assert result.time is not None  # a batch's result has its output grid
                 store.write_final(result.table, result.units, result.signals, result.time)
     finally:
-        if own_client:
+        if own_client and client is not None:
             client.close()
     result.stats = run.stats(started, client)
     return result
@@ -353,11 +354,18 @@ class _Run:
         self.compute_wall = _time.perf_counter() - compute_start
         self.compute_cpu = _time.process_time() - cpu_start
 
+    def _all_chunks(self) -> list[ChunkOutput]:
+        """Every chunk, once ``execute`` has run (each was read back or computed)."""
+        chunks = [ch for ch in self.chunks if ch is not None]
+        if len(chunks) != len(self.chunks):
+            raise RuntimeError("batch: a chunk was neither read back nor computed")
+        return chunks
+
     def result(self, table: pd.DataFrame) -> BatchResult:
-        return _assemble(table, self.spec, self.values, self.chunks, self.runner.t_out)
+        return _assemble(table, self.spec, self.values, self._all_chunks(), self.runner.t_out)
 
     def stats(self, started: float, client) -> dict[str, Any]:
-        chunks, todo = self.chunks, self.todo
+        chunks, todo = self._all_chunks(), self.todo
         computed = sum(len(chunks[c]) for c in todo)
         statuses = [s for ch in chunks for s in ch.status]
         wall = self.compute_wall

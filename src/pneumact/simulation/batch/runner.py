@@ -60,7 +60,9 @@ class ChunkRunner:
         self.y0_given = (np.asarray(spec.y0, dtype=float) if spec.y0 is not None
                          else np.empty(0))
         empty = np.empty(0)
-        self.ref_t, self.ref_x = spec.reference if spec.reference is not None else (empty, empty)
+        reference: tuple[np.ndarray, np.ndarray] = (
+            spec.reference if spec.reference is not None else (empty, empty))
+        self.ref_t, self.ref_x = reference
 
     @property
     def t_out(self) -> np.ndarray:
@@ -71,7 +73,10 @@ class ChunkRunner:
         quantity = self.spec.experiment.quantity
         if name == f"drive_{quantity}":
             name = "drive"
-        return self.prep.assembly.signal_source(name)
+        source = self.prep.assembly.signal_source(name)
+        if source is None:  # the names were checked against signal_names() before
+            raise ArgumentError(f"batch: the model has no signal {name!r}")
+        return source
 
     def run(self, start: int, values: np.ndarray) -> ChunkOutput:
         """Simulate the rows ``values`` (n × columns); row k is set ``start + k``."""
@@ -89,12 +94,13 @@ class ChunkRunner:
         except Exception:  # one row raised inside the compiled loop: run them one by one
             crashed = self._one_by_one(values, valid, features, signals, info)
         solver = spec.solver
-        status, error = [], []
-        for i in range(n):
+        status: list[str] = []
+        error: list[str] = []
+        for i, problem in enumerate(problems):
             stats = SolverStats.from_info(kernel, info[i])
-            if problems[i] is not None:
+            if problem is not None:
                 status.append(STATUS_INVALID)
-                error.append(problems[i])
+                error.append(problem)
             elif i in crashed:
                 status.append(STATUS_ERROR)
                 error.append(crashed[i])
