@@ -38,6 +38,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from .progress import ProgressCallback, check_progress, notify
+
 if TYPE_CHECKING:
     from .io.report import Report
     from .parameters.parameter_set import ParameterSet
@@ -55,6 +57,9 @@ FIG3_AMPLITUDE_VS = 10.0
 FIG3_PERIOD = 2.0
 #: The lowest speed of the identification's sliding stage, in units of vs (5 mm/s).
 STAGE_B_LOWEST_VS = 10.0
+#: the sections ``reproduce`` reports progress on, in order
+SECTIONS = ("Table I", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
+            "identification", "Fig. 6", "sensitivity", "statements", "writing")
 
 
 @dataclass(frozen=True)
@@ -124,19 +129,18 @@ class _Parts:
 
 def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = False,
               params="vgt-paper", seed: int = 0, call: str = "",
-              progress: Callable[[str], None] | None = None) -> Reproduction:
-    """Reproduce the paper into ``out_dir`` (index.html, CSV tables, PNG figures)."""
+              progress: ProgressCallback | None = None) -> Reproduction:
+    """Reproduce the paper into ``out_dir`` (index.html, CSV tables, PNG figures).
+    ``progress`` is called with a ``pneumact.progress.Progress`` as each section starts
+    (its name, sections done of all)."""
     import matplotlib
 
     from .checks import check_bool, check_out_dir, check_seed
-    from .errors import ArgumentTypeError
 
     check_out_dir("out_dir", out_dir, where="reproduce")
     check_bool("quick", quick, where="reproduce")
     check_seed("seed", seed, where="reproduce")
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"reproduce: progress = {progress!r}: must be a function "
-                                "progress(label)")
+    check_progress(progress, "reproduce")
     from .errors import PassivityWarning
     from .io.report import Report
     from .io.tables import write_files
@@ -151,7 +155,11 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
-    step = progress or (lambda label: None)
+    sections = iter(range(len(SECTIONS)))
+
+    def step(label: str) -> None:
+        notify(progress, label, next(sections), len(SECTIONS))
+
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
                     call=call or f"pneumact.reproduce(quick={quick}, seed={seed})",
                     parameters=params)
@@ -177,6 +185,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     step("writing")
     parts.writers["index.html"] = report.write
     files = write_files(out_dir, parts.writers)
+    notify(progress, "done", len(SECTIONS), len(SECTIONS))
     return Reproduction(Path(out_dir), files, parts.tables, time.perf_counter() - started,
                         quick, identified.parameters)
 

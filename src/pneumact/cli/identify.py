@@ -31,6 +31,7 @@ from pneumact.cli.common import (
     load_quietly,
     names,
     out_console,
+    progress_display,
     the_call,
     use_agg,
     user_errors,
@@ -213,13 +214,13 @@ def identify_paper_command(
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
-        with _status("identifying") as status:
+        with progress_display("identifying") as progress:
             result = identify_paper(
                 recs, parameter_set, fit_delta=fit_delta, prior_spread=spread / 100,
                 sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,
                 chamber=Adiabatic() if chamber is Chamber.adiabatic else Isothermal(),
                 refine=not staged_only, seed=seed, workers=workers,
-                progress=lambda stage, fraction: status.update(f"identifying: {stage}"))
+                progress=progress)
         use_agg()
         written = write_outputs(out, result.writers(call=the_call(ctx), partial=partial))
         out_console.print(_verdict_table(result))

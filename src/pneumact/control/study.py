@@ -9,7 +9,6 @@ Canudas de Wit et al. (1995) exactly as published.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,6 +18,7 @@ import pandas as pd
 from ..core.signals import Constant
 from ..experiments.actuator import Experiment
 from ..models.controllers import PID
+from ..progress import ProgressCallback
 from .loop import ClosedLoop
 
 if TYPE_CHECKING:
@@ -107,7 +107,7 @@ class LoopStudy:
 
 
 def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
-             progress: Callable[[float], None] | None = None, title: str | None = None,
+             progress: ProgressCallback | None = None, title: str | None = None,
              tracking: bool = False, **metric_options) -> LoopStudy:
     """Simulate ``loop`` under the set-point ``experiment`` and measure it
     (``metric_options`` go to ``loop_metrics``); ``tracking``: the set-point is a profile

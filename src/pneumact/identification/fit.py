@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from ..progress import ProgressCallback, notify
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
@@ -588,7 +589,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         profile: Sequence[str] = (), profile_points: int = 8, max_nfev: int | None = None,
         offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
         smooth_input: bool = True, covariance: str = "hac",
-        progress: Callable[[str, float], None] | None = None,
+        progress: ProgressCallback | None = None,
         offset_records: Sequence[int] | None = None,
         record_weights: Sequence[float] | None = None) -> FitResult:
     """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
@@ -615,7 +616,9 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     "iid" (see ``estimates.covariance_from_jacobian``). ``offset_records`` limits the
     ``offsets`` to those record indices (default: every record). ``record_weights``
     multiply each record's residuals (default 1): records whose measurement carries
-    more noise than others (a noisy measured input) count for less.
+    more noise than others (a noisy measured input) count for less. ``progress`` is
+    called with a ``pneumact.progress.Progress``: stage "fit" (started, done), then
+    "multistart" (starts done of all) and "profile <name>" (points done).
     """
     records = fit_records(records)
     models = _models_per_record(model, len(records))
@@ -679,6 +682,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     problem.workers = 1 if multistart else max(1, int(workers or os.cpu_count() or 1))
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
+    notify(progress, "fit", 0, 1)
     starts = [problem.phi(theta0)]
     if multistart:  # an offset has no bounds: each start begins it where the fit does
         offset = np.array([c.offset for c in columns])
@@ -687,6 +691,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
                             scheduler, progress)
     best = min(solutions, key=lambda s: s.cost)
+    notify(progress, "fit", 1, 1)
     theta = problem.theta(best.x)
     r, jac, simulated = problem.evaluate(theta, True)
     groups = [int(m.sum()) for m in problem.masks for _ in signals]
@@ -742,8 +747,7 @@ def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, sched
         for k, fut in enumerate(futures):
             done.append(fut.result())
             problem.simulations += done[-1].simulations
-            if progress:
-                progress("multistart", (k + 1) / len(futures))
+            notify(progress, "multistart", k + 1, len(futures))
     return done
 
 
@@ -803,8 +807,7 @@ def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -
             delta = max(n * np.log(max(ssr, 1e-300) / ssr_min), 0.0)
             points[float(target)] = delta
             count += 1
-            if progress:
-                progress(f"profile {name}", min(1.0, count / (2 * n_points)))
+            notify(progress, f"profile {name}", min(count, 2 * n_points), 2 * n_points)
             if at_bound or delta > 2 * CHI2_95:
                 break
     grid_phi = np.array(sorted(points))

@@ -23,7 +23,7 @@ parameter is identified, unless a partial result is asked for.
 from __future__ import annotations
 
 import datetime as _dt
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -33,6 +33,7 @@ import pandas as pd
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
     MODEL_FIDELITY,
     POORLY,
@@ -591,7 +592,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                    prior_spread: float = 0.5, refine: bool = True,
                    replicates: int | None = None, seed: int = 0, workers: int | None = None,
                    max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
-                   progress: Callable[[str, float], None] | None = None
+                   progress: ProgressCallback | None = None
                    ) -> PaperIdentification:
     """Identify the actuator from bench ``records`` (sweeps, ramps, presliding tests; see
     ``record_kind``) and the ``params`` a user knows (see the module docstring).
@@ -604,7 +605,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     ``refine=False`` stops after the stages (fast; their intervals are conditional on
     the earlier stages). ``replicates`` of the input-noise bootstrap (default
     ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads; each round of the joint
-    fit gives up after ``max_evaluations``. ``progress(stage, fraction)`` is called as
+    fit gives up after ``max_evaluations``. ``progress`` is called with a
+    ``pneumact.progress.Progress`` (the stage's name, the fraction of the whole done) as
     the work goes on.
     """
     from ..io.records import as_records
@@ -615,7 +617,11 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")
-    step = progress or (lambda label, fraction: None)
+    check_progress(progress, "identify_paper")
+
+    def step(label: str, fraction: float) -> None:
+        notify(progress, label, fraction, 1.0)
+
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)

@@ -17,6 +17,7 @@ import pandas as pd
 
 from ..checks import check_int, check_range, check_seed, check_type
 from ..errors import ArgumentError, ArgumentTypeError, PneumactError
+from ..progress import ProgressCallback
 from .problem import Problem
 
 __all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_fast",
@@ -289,7 +290,7 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
                   workers=None, scheduler=None, out_dir=None, resume=False, overwrite=False,
-                  progress=None, solver=None) -> Evaluate:
+                  progress: ProgressCallback | None = None, solver=None) -> Evaluate:
     """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
     Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
     are reported with their errors, never dropped."""

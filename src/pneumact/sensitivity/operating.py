@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..progress import Progress, ProgressCallback, notify
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -226,8 +227,7 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
                       variations: Mapping[str, object] | None = None,
                       features: Sequence[str] = ("loop_width_pressure", "breakaway_pressure"),
                       n: int = 256, seed: int = 0, second_order: bool = False,
-                      out_dir=None, progress: Callable[[int, int, int], None] | None = None,
-                      on_condition: Callable[[int, int, str], None] | None = None,
+                      out_dir=None, progress: ProgressCallback | None = None,
                       solver=None, **batch) -> ConditionStudy:
     """Run the ``method`` study (oat, sobol, morris, src or fast) of ``model`` (an
     ``Actuator``: its parameters, friction and chamber) at each condition.
@@ -235,8 +235,9 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
     ``variations``: the paper's amounts for oat, ``DEFAULT_RANGES`` otherwise; ``n``: base
     sample (sobol, src, fast) or trajectories (morris). ``out_dir``: each condition's runs
     are kept in ``out_dir/<condition>`` (resumable, see ``model_outputs``). ``progress``:
-    (done, failed, total) over all conditions; ``on_condition``: (i, count, label) as each
-    starts. ``batch``: more ``simulate_batch`` options (workers, scheduler, ...).
+    called with a ``pneumact.progress.Progress`` (stage "across conditions", the sets
+    done of all conditions' sets). ``batch``: more ``simulate_batch``
+    options (workers, scheduler, ...).
     """
     if method not in METHODS:
         raise ParameterError(f"across_conditions: method = {method!r}; allowed: "
@@ -249,8 +250,6 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
         raise ParameterError(f"across_conditions: conditions repeat: {', '.join(labels)}")
     rows, frames, results = [], [], []
     for i, condition in enumerate(conditions):
-        if on_condition is not None:
-            on_condition(i, len(conditions), condition.label)
         row = _describe(model, condition, solver)
         relay = _relay(progress, i, len(conditions))
         where_runs = None if out_dir is None else Path(out_dir) / _folder(condition)
@@ -279,13 +278,15 @@ def _folder(condition: Condition) -> str:
     return f"{condition.valve}-{condition.period:g}s-a{condition.amplitude:g}"
 
 
-def _relay(progress, i: int, count: int):
+def _relay(progress: ProgressCallback | None, i: int, count: int
+           ) -> ProgressCallback | None:
     """A batch progress callback of condition ``i`` that reports over all conditions."""
     if progress is None:
         return None
 
-    def relay(done: int, failed: int, total: int) -> None:
-        progress(i * total + done, failed, count * total)
+    def relay(batch: Progress) -> None:
+        notify(progress, "across conditions", i * batch.total + batch.done, count * batch.total,
+               batch.failed)
 
     return relay
 

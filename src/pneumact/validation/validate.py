@@ -26,6 +26,7 @@ import pandas as pd
 from ..errors import DataError
 from ..io.records import Record
 from ..models.inputs import INPUT_SIGNALS, input_signal, valve_for_signal
+from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
 from .verdicts import Criteria, record_verdict, worst_verdict
@@ -283,7 +284,7 @@ def validate(model, records: Record | Sequence[Record], *,
              signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
              solver=None, smooth_input: bool = False, label: str = "validation",
              input: str = "auto", criteria: Criteria | None = None,
-             progress: Callable[[int, int], None] | None = None) -> Validation:
+             progress: ProgressCallback | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
     measured input and compare ``signals`` with the measurement.
 
@@ -291,6 +292,8 @@ def validate(model, records: Record | Sequence[Record], *,
     regulator, else its pressure as a pressure source, else its command through the
     valve; the model's valve is kept when it is that kind), ``model`` keeps the model's
     valve, or name the signal (``INPUTS``). ``criteria``: the thresholds of the verdicts.
+    ``progress`` is called with a ``pneumact.progress.Progress`` (stage "validate",
+    records done of all).
     """
     from ..checks import check_names
     from ..identification import experiment_for
@@ -299,6 +302,7 @@ def validate(model, records: Record | Sequence[Record], *,
     from ..simulation.simulate import check_model, model_stroke
 
     check_model(model, "validate")
+    check_progress(progress, "validate")
     records = as_records(records, "validate")
     signals = tuple(check_names("signals", signals, where="validate", what="signal name",
                                 allow_empty=False))
@@ -316,8 +320,7 @@ def validate(model, records: Record | Sequence[Record], *,
                              values=dict(values or {}))
         valve = getattr(getattr(driven, "valve", None), "name", "")
         out.append(RecordValidation(name, record, simulated, signals, signal, valve))
-        if progress is not None:
-            progress(i + 1, len(records))
+        notify(progress, "validate", i + 1, len(records))
     return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
 

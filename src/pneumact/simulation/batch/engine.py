@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 import os
 import time as _time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -36,6 +36,7 @@ from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
 from ...io.tables import partial_folder, staged_folder
+from ...progress import ProgressCallback, check_progress, notify
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
@@ -224,7 +225,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
                    out_dir: str | os.PathLike | None = None, resume: bool = False,
                    overwrite: bool = False, chunk_size: int | None = None,
                    workers: int | None = None,
-                   progress: Callable[[int, int, int], None] | None = None,
+                   progress: ProgressCallback | None = None,
                    reference=None, y0=None) -> BatchResult:
     """Simulate ``model`` under ``experiment`` once per row of ``table``.
 
@@ -235,8 +236,9 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     the experiment's grid, on which features are computed too). ``workers`` threads
     locally (default all cores), or a Dask ``scheduler`` (address or
     ``distributed.Client``). ``out_dir`` makes the batch resumable: ``resume=True``
-    continues it, ``overwrite=True`` starts it again. ``progress(done, failed, total)``
-    is called after each chunk. ``y0`` fixes the initial state of every run.
+    continues it, ``overwrite=True`` starts it again. ``progress`` is called with a
+    ``pneumact.progress.Progress`` (stage "batch", sets done of all, failed sets) after
+    each chunk. ``y0`` fixes the initial state of every run.
     """
     started = _time.perf_counter()
     solver = _checked_solver(solver)
@@ -252,9 +254,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
         workers = check_int("workers", workers, minimum=1, where="simulate_batch")
     if chunk_size is not None:
         chunk_size = check_int("chunk_size", chunk_size, minimum=1, where="simulate_batch")
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"simulate_batch: progress = {progress!r}: must be a "
-                                "function progress(done, failed, total)")
+    check_progress(progress, "simulate_batch")
     out = None if out_dir is None else check_out_dir("out_dir", out_dir,
                                                       where="simulate_batch")
     spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
@@ -329,8 +329,7 @@ class _Run:
         done = sum(len(ch) for ch in chunks if ch is not None)
         failed = sum(sum(st != STATUS_OK for st in ch.status) for ch in chunks if ch is not None)
         progress = self.progress
-        if progress is not None:
-            progress(done, failed, n)
+        notify(progress, "batch", done, n, failed)
 
         def finished(c: int, chunk: ChunkOutput) -> None:
             nonlocal done, failed
@@ -339,8 +338,7 @@ class _Run:
                 store.write_chunk(c, chunk, spec.features, spec.signals, runner.t_out)
             done += len(chunk)
             failed += sum(st != STATUS_OK for st in chunk.status)
-            if progress is not None:
-                progress(done, failed, n)
+            notify(progress, "batch", done, n, failed)
 
         compute_start, cpu_start = _time.perf_counter(), _time.process_time()
         rows_of = {c: values[starts[c]:starts[c] + chunk_size] for c in todo}
