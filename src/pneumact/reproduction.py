@@ -413,7 +413,7 @@ def _statements(parts: _Parts, across, global_study, effects, bias) -> None:
 
 
 def _table_one(parts: _Parts, params, passivity: list[str]) -> None:
-    frame = params.to_frame()
+    frame = params.to_pandas()
     paper = frame["source"].str.startswith("paper")
     table = frame[paper | (frame["source"] == "assumed")][
         ["name", "value", "unit", "given", "source"]].copy()
