@@ -17,13 +17,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
-import pandas as pd
-
 from ..errors import ArgumentError
+from ..files import PathLike, atomic_write
 from ..plotting import PNG_DPI, write_png
-from .tables import PathLike, atomic_write, write_files
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # pandas is imported on use: a result class costs nothing to import
+    import pandas as pd
     from matplotlib.figure import Figure
 
 __all__ = ["Block", "ParameterTable", "Report", "ResultVocabulary", "figure_png",
@@ -60,6 +59,7 @@ PROSE_LENGTH = 40  # a text cell longer than this many characters is a sentence
 
 def _has_prose(frame: pd.DataFrame) -> bool:
     """Whether a text column of ``frame`` holds a sentence."""
+    import pandas as pd
     for column in frame.columns:
         values = frame[column]
         if not pd.api.types.is_numeric_dtype(values) and len(values) and \
@@ -153,8 +153,14 @@ class Report:
 def table_writer(frame: pd.DataFrame) -> Callable[[Path], object]:
     """A ``write_files`` writer of ``frame`` as CSV (its index too when it carries
     information: named, or not the plain row numbers)."""
-    plain = frame.index.name is None and isinstance(frame.index, pd.RangeIndex)
-    return lambda path: frame.to_csv(path, index=not plain)
+    return lambda path: frame.to_csv(path, index=not _plain_index(frame))
+
+
+def _plain_index(frame: pd.DataFrame) -> bool:
+    """Whether the index of ``frame`` is only the row numbers."""
+    import pandas as pd
+
+    return frame.index.name is None and isinstance(frame.index, pd.RangeIndex)
 
 
 class ResultVocabulary:
@@ -207,13 +213,14 @@ class ResultVocabulary:
             cut = len(frame) > REPORT_ROWS
             report.table(frame.head(REPORT_ROWS), f"{name.replace('_', ' ')}" + (
                 f" (first {REPORT_ROWS} of {len(frame)} rows; all in {name}.csv)"
-                if cut else ""), index=not (frame.index.name is None and
-                                            isinstance(frame.index, pd.RangeIndex)))
+                if cut else ""), index=not _plain_index(frame))
         return report
 
     def write(self, out_dir: PathLike, *, call: str = "") -> list[Path]:
         """``<table>.csv`` for each table, ``<figure>.png`` and ``report.html`` in
         ``out_dir``, all or nothing (``pneumact.io.tables.write_files``)."""
+        from .tables import write_files
+
         png = figure_png(self.plot(), dpi=PNG_DPI)
         writers: dict[str, Callable[[Path], object]] = {
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
