@@ -461,7 +461,7 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
         f"{len(sizes.ramp_speeds)} ramp pairs from {1e3 * min(sizes.ramp_speeds):g} to "
         f"{1e3 * max(sizes.ramp_speeds):g} mm/s, a presliding test) with measurement noise "
         f"(pressure {noise.pressure:g} Pa, position {1e6 * noise.position:g} µm, seed {seed}).")
-    table = identified.table(params).reset_index()
+    table = identified.to_pandas(truth=params).reset_index()
     parts.table("identification", table, "Identified parameters beside Table I (truth), "
                 "with standard errors and 95 % intervals")
     missed = table.loc[~table["truth_in_ci95"], "parameter"].tolist()
@@ -479,8 +479,8 @@ def ranking_table(oat, src, sobol) -> pd.DataFrame:
     rows = []
     for feature in FEATURES:
         per_method = {"one at a time |Δ|": oat.ranking(feature),
-                      "SRC²": src.table(feature)["SRC2"],
-                      "Sobol ST": sobol.table(feature)["ST"]}
+                      "SRC²": src.to_pandas(output=feature)["SRC2"],
+                      "Sobol ST": sobol.to_pandas(output=feature)["ST"]}
         for method, values in per_method.items():
             ordered = values.abs().sort_values(ascending=False)
             for rank, (name, value) in enumerate(ordered.items(), start=1):

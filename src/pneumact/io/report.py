@@ -194,6 +194,10 @@ class ResultVocabulary:
     def plot(self) -> Figure:
         raise NotImplementedError
 
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        """The figures ``write`` draws, by file name (default: ``plot()`` alone)."""
+        return {self.figure_name: self.plot}
+
     def report_text(self) -> str:
         return ""
 
@@ -202,13 +206,14 @@ class ResultVocabulary:
         return None
 
     def report(self, call: str = "", png: bytes | None = None) -> Report:
-        """The HTML report (the figure, as ``png`` if already drawn, and the tables), not
-        yet written."""
+        """The HTML report (the figures, the first as ``png`` if already drawn, and the
+        tables), not yet written."""
         report = Report(self.report_title, call=call, parameters=self.report_parameters())
         if self.report_text():
             report.text(self.report_text())
-        report.image(png or figure_png(self.plot(), dpi=PNG_DPI),
-                     self.figure_name.replace("_", " "))
+        for i, (name, make) in enumerate(self.figures().items()):
+            report.image(png if png is not None and i == 0 else
+                         figure_png(make(), dpi=PNG_DPI), name.replace("_", " "))
         for name, frame in self.tables().items():
             cut = len(frame) > REPORT_ROWS
             report.table(frame.head(REPORT_ROWS), f"{name.replace('_', ' ')}" + (
@@ -221,9 +226,11 @@ class ResultVocabulary:
         ``out_dir``, all or nothing (``pneumact.io.tables.write_files``)."""
         from .tables import write_files
 
-        png = figure_png(self.plot(), dpi=PNG_DPI)
+        pngs = {name: figure_png(make(), dpi=PNG_DPI) for name, make in
+                self.figures().items()}
         writers: dict[str, Callable[[Path], object]] = {
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
-        writers[f"{self.figure_name}.png"] = lambda path: Path(path).write_bytes(png)
-        writers["report.html"] = self.report(call, png).write
+        for name, png in pngs.items():
+            writers[f"{name}.png"] = lambda path, png=png: Path(path).write_bytes(png)
+        writers["report.html"] = self.report(call, next(iter(pngs.values()), None)).write
         return write_files(out_dir, writers)

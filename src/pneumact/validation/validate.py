@@ -362,7 +362,7 @@ class TrainTest:
         writers = {**self.train.writers("train_", train_figures),
                    **self.test.writers("test_", test_figures),
                    "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
-                   "estimates.csv": lambda p: self.fit.table().to_csv(p),
+                   "estimates.csv": lambda p: self.fit.to_pandas().to_csv(p),
                    "report.html": report.write}
         return write_files(out_dir, writers)
 

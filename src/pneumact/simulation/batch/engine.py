@@ -24,7 +24,7 @@ import time as _time
 from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -35,8 +35,12 @@ from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
+from ...io.report import ResultVocabulary
 from ...io.tables import partial_folder, staged_folder
 from ...progress import ProgressCallback, check_progress, notify
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
@@ -57,10 +61,18 @@ MAX_DEFAULT_CHUNK = 250  # rows; keeps progress and checkpoints frequent on big 
 
 
 @dataclass
-class BatchResult:
+class BatchResult(ResultVocabulary):
     """Results of a batch: ``table`` (parameters + features + status/error, one row per
     set, in input order), ``signals`` (name -> N × len(time) array, NaN for failed sets),
-    ``time`` (the output grid), ``stats`` (wall time, sims/s, computed/reused counts)."""
+    ``time`` (the output grid), ``stats`` (wall time, sims/s, computed/reused counts).
+
+    ``to_pandas()``: the table (``"stats"``: the run's statistics); ``plot()``: each
+    feature against each parameter that varies (or the kept signals over time);
+    ``write(folder)``: the tables, the figure and report.html. (``simulate_batch(...,
+    out_dir=...)`` keeps its own resumable folder with every signal in Parquet.)"""
+
+    report_title = "Batch of simulations"
+    figure_name = "batch"
 
     table: pd.DataFrame
     signals: dict[str, np.ndarray] = field(default_factory=dict)
@@ -73,8 +85,50 @@ class BatchResult:
         """The rows whose status is not 'ok' (with their error message)."""
         return self.table[self.table["status"] != STATUS_OK]
 
-    def to_pandas(self) -> pd.DataFrame:
-        """A copy of ``table`` (units in ``attrs['units']``)."""
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"results": self.to_pandas(),
+                "stats": pd.DataFrame({"value": [str(v) for v in self.stats.values()]},
+                                      index=pd.Index(list(self.stats), name="statistic"))}
+
+    def report_text(self) -> str:
+        return f"{len(self.table)} parameter sets, {len(self.failed)} failed."
+
+    def plot(self) -> Figure:
+        """Each feature (rows) against each parameter that varies (columns), failed sets
+        left out; a batch of signals alone: every set's first signal over time."""
+        import matplotlib.pyplot as plt
+
+        ok = self.table[self.table["status"] == STATUS_OK]
+        features = [c for c in self.table.columns if c in FEATURE_UNITS]
+        varied = [c for c in self.table.columns if c not in features and c not in
+                  ("status", "error") and pd.api.types.is_numeric_dtype(self.table[c])
+                  and self.table[c].nunique() > 1]
+        if not features and self.signals and self.time is not None:
+            name, values = next(iter(self.signals.items()))
+            fig, ax = plt.subplots(figsize=(7.0, 3.8))
+            ax.plot(self.time, values.T, lw=0.8)
+            ax.set_xlabel("time [s]")
+            ax.set_ylabel(f"{name} [{self.units.get(name, '')}]")
+            return fig
+        columns = varied or ["set"]
+        fig, axes = plt.subplots(max(1, len(features)), len(columns), squeeze=False,
+                                 figsize=(3.2 * len(columns) + 1, 2.4 * max(1, len(features))))
+        for i, feature in enumerate(features):
+            for j, column in enumerate(columns):
+                x = ok.index if column == "set" else ok[column]
+                axes[i, j].plot(x, ok[feature], ".", ms=4)
+                axes[i, j].set_xlabel(f"{column} [{self.units.get(column, '')}]"
+                                      if column != "set" else "set")
+                axes[i, j].set_ylabel(f"{feature} [{FEATURE_UNITS[feature]}]", fontsize=8)
+                axes[i, j].grid(True, alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """A copy of ``table`` (units in ``attrs['units']``); ``name="stats"``: the run's
+        statistics."""
+        if name is not None:
+            return super().to_pandas(name)
         frame = self.table.copy()
         frame.attrs["units"] = dict(self.units)
         return frame
