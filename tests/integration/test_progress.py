@@ -22,7 +22,7 @@ import pneumact as pa
 from pneumact.progress import Progress
 
 
-class Stop(Exception):
+class StopReportsError(Exception):
     """Raised by a callback to end a long call at its first report."""
 
 
@@ -63,9 +63,9 @@ def _first(call) -> list:
 
     def stop(report) -> None:
         seen.append(report)
-        raise Stop
+        raise StopReportsError
 
-    with pytest.raises(Stop):
+    with pytest.raises(StopReportsError):
         call(stop)
     return seen
 

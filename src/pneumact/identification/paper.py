@@ -196,9 +196,9 @@ class PaperIdentification(ResultVocabulary):
         """(``name`` None) Per parameter: the staged estimate and its (conditional)
         standard error, the final (joint) estimate, its standard error and 95 % interval,
         the verdict and its reason (with the truth and the errors in % when ``truth`` is
-        given). Where the model does not fit the records (``intervals_hold`` is False) no standard error or
-        interval is reported: they would not hold. ``name``: "verdicts", "diagnostics"
-        or "residuals" for those tables."""
+        given). Where the model does not fit the records (``intervals_hold`` is False)
+        no standard error or interval is reported: they would not hold. ``name``:
+        "verdicts", "diagnostics" or "residuals" for those tables."""
         if name is not None:
             return super().to_pandas(name)
         ci = self.estimates.interval(0.95)

@@ -22,15 +22,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..io.report import ResultVocabulary
 from ..progress import Progress, ProgressCallback, notify
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -145,11 +150,29 @@ def at_speeds(model, speeds: Sequence[float], *, amplitude: float = 1.0,
 
 # --------------------------------------------------------------------------- the study
 @dataclass(eq=False)
-class ConditionStudy:
+class ConditionStudy(ResultVocabulary):
     """Indices at each condition. ``conditions``: one row per condition (valve, period,
     amplitude, measured sliding speed and v/vs, nominal features); ``indices``: the long
     table of every study (condition columns, output, parameter, the method's indices);
-    ``results``: the study object of each condition."""
+    ``results``: the study object of each condition.
+
+    ``to_pandas()``: the indices (``"conditions"``: the conditions); ``plot(output)``: an
+    index against v/vs (default the first output); ``write(folder)``: both tables, the
+    figure of every output and report.html."""
+
+    report_title = "Sensitivity across operating conditions"
+    figure_name = "indices_by_speed"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"indices": self.indices, "conditions": self.conditions}
+
+    @property
+    def output_names(self) -> list[str]:
+        return list(dict.fromkeys(self.indices["output"]))
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        return {f"indices_{output}_by_speed": lambda o=output: self.plot(o)
+                for output in self.output_names}
 
     method: str
     conditions: pd.DataFrame
@@ -181,12 +204,14 @@ class ConditionStudy:
         speeds = self.conditions.set_index("condition")["speed_vs"]
         return ranked.assign(speed_vs=speeds.loc[ranked.index].to_numpy())
 
-    def plot(self, output: str, index: str | None = None):
-        """The index of ``output`` against v/vs (log axis), a line per parameter and a
-        panel per valve and amplitude, with the confidence band where there is one."""
+    def plot(self, output: str | None = None, index: str | None = None) -> Figure:
+        """The index of ``output`` (default: the first) against v/vs (log axis), a line
+        per parameter and a panel per valve and amplitude, with the confidence band where
+        there is one."""
         import matplotlib.pyplot as plt
         from matplotlib.ticker import FuncFormatter, NullFormatter
 
+        output = output or self.output_names[0]
         key = self._key(index)
         groups = list(self.conditions.groupby(["valve", "amplitude"], sort=False))
         fig, axes = plt.subplots(1, len(groups), squeeze=False,
