@@ -41,6 +41,8 @@ import pandas as pd
 from .progress import ProgressCallback, check_progress, notify
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from .io.report import Report
     from .parameters.parameter_set import ParameterSet
 
@@ -91,7 +93,12 @@ class Sizes:
 
 @dataclass(eq=False)
 class Reproduction:
-    """What ``reproduce`` computed (tables in SI) and the files it wrote."""
+    """What ``reproduce`` computed (tables in SI) and the files it wrote.
+
+    ``to_pandas(name)``: a table by name (default "paper_statements": where each of the
+    paper's statements holds); ``plot(name)``: a figure it wrote (default Fig. 5's
+    loops), shown in a matplotlib Figure; ``write(folder)``: every file again in
+    ``folder``, with report.html (the same page as index.html)."""
 
     out_dir: Path
     files: list[Path]
@@ -103,6 +110,50 @@ class Reproduction:
     @property
     def report(self) -> Path:
         return self.out_dir / "index.html"
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The table ``name`` (default "paper_statements"; ``tables`` has them all)."""
+        from .errors import ArgumentError
+
+        name = name or "paper_statements"
+        if name not in self.tables:
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: "
+                                f"{', '.join(self.tables)}")
+        return self.tables[name]
+
+    def figure_names(self) -> list[str]:
+        """The figures it wrote (their file names without .png)."""
+        return [f.stem for f in self.files if f.suffix == ".png"]
+
+    def plot(self, name: str | None = None) -> Figure:
+        """The figure ``name`` it wrote (default "fig5_loops"), read back from its PNG
+        file into a matplotlib Figure (the data behind it are in ``tables``)."""
+        import matplotlib.image
+        import matplotlib.pyplot as plt
+
+        from .errors import ArgumentError
+
+        name = name or "fig5_loops"
+        if name not in self.figure_names():
+            raise ArgumentError(f"plot: name = {name!r}; allowed: "
+                                f"{', '.join(self.figure_names())}")
+        image = matplotlib.image.imread(self.out_dir / f"{name}.png")
+        fig, ax = plt.subplots(figsize=(image.shape[1] / 100, image.shape[0] / 100))
+        ax.imshow(image)
+        ax.set_axis_off()
+        return fig
+
+    def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
+        """Every file of the reproduction again in ``out_dir``, and report.html (the
+        page index.html is), all or nothing; ``call`` is not used (the page records the
+        call that made it)."""
+        import shutil
+
+        from .io.tables import write_files
+
+        writers = {f.name: (lambda p, f=f: shutil.copyfile(f, p)) for f in self.files}
+        writers["report.html"] = lambda p: shutil.copyfile(self.report, p)
+        return write_files(out_dir, writers)
 
 
 @dataclass(eq=False)

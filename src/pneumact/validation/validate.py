@@ -403,7 +403,7 @@ class TrainTest:
         from ..io.report import Report
         from ..io.tables import write_files
 
-        parameters = self.fit.parameters()
+        parameters = self.fit.report_parameters()
         report = Report("Identification and validation on held-out records", call=call,
                         parameters=parameters)
         report.heading("Fitted parameters")
