@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -152,7 +152,7 @@ def plot_hysteresis(result_or_frame: Any, ax: Axes | None = None, label: str | N
     ax.grid(True, alpha=0.3)
     if label is not None or reference is not None:
         ax.legend()
-    return ax.get_figure()
+    return cast("Figure", ax.figure)  # the figure the axes were drawn on
 
 
 def plot_time_series(result: Any, signals: Sequence[str] | None = None,

@@ -48,7 +48,7 @@ def check_progress(progress: object, where: str) -> ProgressCallback | None:
     if progress is not None and not callable(progress):
         raise ArgumentTypeError(f"{where}: progress = {progress!r}: must be a function "
                         "progress(report) taking a pneumact.progress.Progress")
-    return progress  # type: ignore[return-value]
+    return progress
 
 
 def notify(progress: ProgressCallback | None, stage: str, done: float, total: float = 1.0,

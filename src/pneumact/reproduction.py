@@ -27,6 +27,7 @@ every figure and table is still produced.
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 import warnings
@@ -151,8 +152,8 @@ class Reproduction:
 
         from .io.tables import write_files
 
-        writers = {f.name: (lambda p, f=f: shutil.copyfile(f, p)) for f in self.files}
-        writers["report.html"] = lambda p: shutil.copyfile(self.report, p)
+        writers = {f.name: functools.partial(shutil.copyfile, f) for f in self.files}
+        writers["report.html"] = functools.partial(shutil.copyfile, self.report)
         return write_files(out_dir, writers)
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 import datetime as _dt
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -384,7 +385,7 @@ class PaperIdentification(ResultVocabulary):
             report.figure(stage.plot(), stage.title)
         return report
 
-    def write(self, out_dir: str | Path, truth=None, call: str = "",
+    def write(self, out_dir: str | PathLike[str], truth=None, *, call: str = "",
               partial: bool = False) -> list[Path]:
         """Write every file of ``writers`` into ``out_dir``, all or none."""
         from ..io.tables import write_files

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import datetime as _dt
+import functools
 import io
 import platform
 from collections.abc import Callable
@@ -150,6 +151,10 @@ class Report:
         return path
 
 
+def _write_bytes(data: bytes, path: Path) -> None:
+    Path(path).write_bytes(data)
+
+
 def table_writer(frame: pd.DataFrame) -> Callable[[Path], object]:
     """A ``write_files`` writer of ``frame`` as CSV (its index too when it carries
     information: named, or not the plain row numbers)."""
@@ -231,6 +236,6 @@ class ResultVocabulary:
         writers: dict[str, Callable[[Path], object]] = {
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
         for name, png in pngs.items():
-            writers[f"{name}.png"] = lambda path, png=png: Path(path).write_bytes(png)
+            writers[f"{name}.png"] = functools.partial(_write_bytes, png)
         writers["report.html"] = self.report(call, next(iter(pngs.values()), None)).write
         return write_files(out_dir, writers)

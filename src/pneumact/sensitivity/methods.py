@@ -8,6 +8,7 @@ with known indices and the actuator on the batch engine (``model_outputs``).
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -91,7 +92,7 @@ class StudyResult(ResultVocabulary):
     figure_name = "indices"
 
     def figures(self) -> dict[str, Callable[[], Figure]]:
-        return {f"indices_{output}": lambda o=output: self.plot(o)
+        return {f"indices_{output}": functools.partial(self.plot, output)
                 for output in self.output_names}
 
     method: str

@@ -21,6 +21,7 @@ positive, with the boundaries interpolated between conditions.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -171,7 +172,7 @@ class ConditionStudy(ResultVocabulary):
         return list(dict.fromkeys(self.indices["output"]))
 
     def figures(self) -> dict[str, Callable[[], Figure]]:
-        return {f"indices_{output}_by_speed": lambda o=output: self.plot(o)
+        return {f"indices_{output}_by_speed": functools.partial(self.plot, output)
                 for output in self.output_names}
 
     method: str
