@@ -282,13 +282,15 @@ def figure_writer(make):
 
 
 @contextlib.contextmanager
-def progress_display(label: str = "", *, counts: bool = False, transient: bool = True
-                     ) -> Iterator[ProgressCallback]:
+def progress_display(label: str = "", *, counts: bool = False, transient: bool = True,
+                     bar_per_stage: bool = True) -> Iterator[ProgressCallback]:
     """The one adapter from ``pneumact.progress.Progress`` reports to rich progress bars:
     yields a ``progress`` callback for any public function. A spinner says the kernel is
     compiling until the first report; then one bar per stage (``label: stage``), done of
-    total. ``counts``: the bar counts items (a batch's sets: ``done/total``, the failed
-    ones and the rate of this session; reused chunks do not count) instead of a percentage.
+    total, or (``bar_per_stage=False``, for stages that are parts of one whole: the
+    sections of a reproduction) one bar that names the current stage. ``counts``: the
+    bar counts items (a batch's sets: ``done/total``, the failed ones and the rate of
+    this session; reused chunks do not count) instead of a percentage.
     """
     import time
 
@@ -317,12 +319,12 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         first: dict[str, float] = {}
 
         def update(report: ProgressReport) -> None:
-            task = tasks.get(report.stage)
+            task = tasks.get(report.stage if bar_per_stage else "")
             if task is None:
                 task = waiting if not tasks else bar.add_task("", total=None, failed=0,
                                                                rate="-")
-                tasks[report.stage] = task
-                first[report.stage] = report.done
+                tasks[report.stage if bar_per_stage else ""] = task
+            first.setdefault(report.stage, report.done)
             elapsed = time.perf_counter() - started
             rate = (report.done - first[report.stage]) / elapsed if elapsed > 0 else 0.0
             shown = (report.stage if not label else label

@@ -214,7 +214,7 @@ def identify_paper_command(
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
-        with progress_display("identifying") as progress:
+        with progress_display("identifying", bar_per_stage=False) as progress:
             result = identify_paper(
                 recs, parameter_set, fit_delta=fit_delta, prior_spread=spread / 100,
                 sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,

@@ -38,7 +38,7 @@ def reproduce_command(
         check_seed("--seed", seed)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
-        with progress_display("reproducing") as progress:
+        with progress_display("reproducing", bar_per_stage=False) as progress:
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,
                                call=the_call(ctx), progress=progress)
     statements = result.tables["paper_statements"]
