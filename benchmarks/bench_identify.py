@@ -71,7 +71,7 @@ def main() -> None:
     print(f"whole procedure (stages, joint refinement, input-noise intervals, checks): "
           f"{wall:.2f} s (median of {args.repeats}), {result.joint.simulations} "
           f"simulations in the joint fit; {result.summary()}")
-    table = result.table(truth)
+    table = result.to_pandas(truth=truth)
     print(table[["stage", "staged", "value", "stderr", "truth", "error_%",
                  "truth_in_ci95", "verdict"]].to_string())
     print(f"  -> target < 30 s on 2 cores: {'MET' if wall < 30 else 'NOT MET'}")

@@ -58,7 +58,7 @@ def run_one(job):
                                  seed=seed)
     result = identify_paper(records, prior, seed=seed, workers=1)
     wall = time.perf_counter() - tic
-    table = result.table(truth)
+    table = result.to_pandas(truth=truth)
     rows = []
     for name in FREE:
         row = table.loc[name]

@@ -56,7 +56,7 @@ def main() -> None:
         if second_order:
             print(f"  -> target 14 336 runs < 30 s: {'MET' if wall < 30 else 'NOT MET'}")
     for feature in FEATURES:
-        table = study.table(feature)["ST"].sort_values(ascending=False)
+        table = study.to_pandas(output=feature)["ST"].sort_values(ascending=False)
         print(f"  ST of {feature}: " + ", ".join(f"{n} {v:.3f}" for n, v in table.items()))
 
     rates = {1: 0.0, 2: 0.0}

@@ -1,8 +1,9 @@
 """Plots of results and records, in display units (kPa, mm, mm/s, µm, N).
 
-Files and results stay SI; only the axes convert. Functions return the matplotlib
-Axes or Figure and never call ``plt.show()``. Importing this module does not choose a
-matplotlib backend (the CLI selects "Agg" itself).
+Files and results stay SI; only the axes convert. Every plot returns the matplotlib
+``Figure`` (one convention across pneumact; a function that takes ``ax`` or ``axes``
+draws on them and returns their Figure) and never calls ``plt.show()``. Importing
+this module does not choose a matplotlib backend (the CLI selects "Agg" itself).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -132,10 +133,11 @@ def new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
 
 
 def plot_hysteresis(result_or_frame: Any, ax: Axes | None = None, label: str | None = None,
-                    reference: Any = None, **line_kw) -> Axes:
+                    reference: Any = None, **line_kw) -> Figure:
     """Applied pressure [kPa abs] (x) against position [mm] (y), like the paper's
-    Figs. 5-6; ``reference`` (a Result, Record or DataFrame, e.g. a measurement) is
-    overlaid as a dashed black line. Returns the Axes."""
+    Figs. 5-6, on ``ax`` (a new figure when None); ``reference`` (a Result, Record or
+    DataFrame, e.g. a measurement) is overlaid as a dashed black line. Returns the
+    Figure (``fig.axes[0]`` is the Axes drawn on)."""
     if ax is None:
         _, (ax,) = new_axes()
     pressure = signal_values(result_or_frame, "pressure") * 1e-3
@@ -150,7 +152,7 @@ def plot_hysteresis(result_or_frame: Any, ax: Axes | None = None, label: str | N
     ax.grid(True, alpha=0.3)
     if label is not None or reference is not None:
         ax.legend()
-    return ax
+    return cast("Figure", ax.figure)  # the figure the axes were drawn on
 
 
 def plot_time_series(result: Any, signals: Sequence[str] | None = None,

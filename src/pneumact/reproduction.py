@@ -27,6 +27,7 @@ every figure and table is still produced.
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 import warnings
@@ -38,7 +39,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from .progress import ProgressCallback, check_progress, notify
+
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from .io.report import Report
     from .parameters.parameter_set import ParameterSet
 
@@ -55,6 +60,9 @@ FIG3_AMPLITUDE_VS = 10.0
 FIG3_PERIOD = 2.0
 #: The lowest speed of the identification's sliding stage, in units of vs (5 mm/s).
 STAGE_B_LOWEST_VS = 10.0
+#: the sections ``reproduce`` reports progress on, in order
+SECTIONS = ("Table I", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
+            "identification", "Fig. 6", "sensitivity", "statements", "writing")
 
 
 @dataclass(frozen=True)
@@ -86,7 +94,12 @@ class Sizes:
 
 @dataclass(eq=False)
 class Reproduction:
-    """What ``reproduce`` computed (tables in SI) and the files it wrote."""
+    """What ``reproduce`` computed (tables in SI) and the files it wrote.
+
+    ``to_pandas(name)``: a table by name (default "paper_statements": where each of the
+    paper's statements holds); ``plot(name)``: a figure it wrote (default Fig. 5's
+    loops), shown in a matplotlib Figure; ``write(folder)``: every file again in
+    ``folder``, with report.html (the same page as index.html)."""
 
     out_dir: Path
     files: list[Path]
@@ -98,6 +111,50 @@ class Reproduction:
     @property
     def report(self) -> Path:
         return self.out_dir / "index.html"
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The table ``name`` (default "paper_statements"; ``tables`` has them all)."""
+        from .errors import ArgumentError
+
+        name = name or "paper_statements"
+        if name not in self.tables:
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: "
+                                f"{', '.join(self.tables)}")
+        return self.tables[name]
+
+    def figure_names(self) -> list[str]:
+        """The figures it wrote (their file names without .png)."""
+        return [f.stem for f in self.files if f.suffix == ".png"]
+
+    def plot(self, name: str | None = None) -> Figure:
+        """The figure ``name`` it wrote (default "fig5_loops"), read back from its PNG
+        file into a matplotlib Figure (the data behind it are in ``tables``)."""
+        import matplotlib.image
+        import matplotlib.pyplot as plt
+
+        from .errors import ArgumentError
+
+        name = name or "fig5_loops"
+        if name not in self.figure_names():
+            raise ArgumentError(f"plot: name = {name!r}; allowed: "
+                                f"{', '.join(self.figure_names())}")
+        image = matplotlib.image.imread(self.out_dir / f"{name}.png")
+        fig, ax = plt.subplots(figsize=(image.shape[1] / 100, image.shape[0] / 100))
+        ax.imshow(image)
+        ax.set_axis_off()
+        return fig
+
+    def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
+        """Every file of the reproduction again in ``out_dir``, and report.html (the
+        page index.html is), all or nothing; ``call`` is not used (the page records the
+        call that made it)."""
+        import shutil
+
+        from .io.tables import write_files
+
+        writers = {f.name: functools.partial(shutil.copyfile, f) for f in self.files}
+        writers["report.html"] = functools.partial(shutil.copyfile, self.report)
+        return write_files(out_dir, writers)
 
 
 @dataclass(eq=False)
@@ -124,19 +181,18 @@ class _Parts:
 
 def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = False,
               params="vgt-paper", seed: int = 0, call: str = "",
-              progress: Callable[[str], None] | None = None) -> Reproduction:
-    """Reproduce the paper into ``out_dir`` (index.html, CSV tables, PNG figures)."""
+              progress: ProgressCallback | None = None) -> Reproduction:
+    """Reproduce the paper into ``out_dir`` (index.html, CSV tables, PNG figures).
+    ``progress`` is called with a ``pneumact.progress.Progress`` as each section starts
+    (its name, sections done of all)."""
     import matplotlib
 
     from .checks import check_bool, check_out_dir, check_seed
-    from .errors import ArgumentTypeError
 
     check_out_dir("out_dir", out_dir, where="reproduce")
     check_bool("quick", quick, where="reproduce")
     check_seed("seed", seed, where="reproduce")
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"reproduce: progress = {progress!r}: must be a function "
-                                "progress(label)")
+    check_progress(progress, "reproduce")
     from .errors import PassivityWarning
     from .io.report import Report
     from .io.tables import write_files
@@ -151,7 +207,11 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
-    step = progress or (lambda label: None)
+    sections = iter(range(len(SECTIONS)))
+
+    def step(label: str) -> None:
+        notify(progress, label, next(sections), len(SECTIONS))
+
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
                     call=call or f"pneumact.reproduce(quick={quick}, seed={seed})",
                     parameters=params)
@@ -177,6 +237,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     step("writing")
     parts.writers["index.html"] = report.write
     files = write_files(out_dir, parts.writers)
+    notify(progress, "done", len(SECTIONS), len(SECTIONS))
     return Reproduction(Path(out_dir), files, parts.tables, time.perf_counter() - started,
                         quick, identified.parameters)
 
@@ -404,7 +465,7 @@ def _statements(parts: _Parts, across, global_study, effects, bias) -> None:
 
 
 def _table_one(parts: _Parts, params, passivity: list[str]) -> None:
-    frame = params.to_frame()
+    frame = params.to_pandas()
     paper = frame["source"].str.startswith("paper")
     table = frame[paper | (frame["source"] == "assumed")][
         ["name", "value", "unit", "given", "source"]].copy()
@@ -452,7 +513,7 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
         f"{len(sizes.ramp_speeds)} ramp pairs from {1e3 * min(sizes.ramp_speeds):g} to "
         f"{1e3 * max(sizes.ramp_speeds):g} mm/s, a presliding test) with measurement noise "
         f"(pressure {noise.pressure:g} Pa, position {1e6 * noise.position:g} µm, seed {seed}).")
-    table = identified.table(params).reset_index()
+    table = identified.to_pandas(truth=params).reset_index()
     parts.table("identification", table, "Identified parameters beside Table I (truth), "
                 "with standard errors and 95 % intervals")
     missed = table.loc[~table["truth_in_ci95"], "parameter"].tolist()
@@ -470,8 +531,8 @@ def ranking_table(oat, src, sobol) -> pd.DataFrame:
     rows = []
     for feature in FEATURES:
         per_method = {"one at a time |Δ|": oat.ranking(feature),
-                      "SRC²": src.table(feature)["SRC2"],
-                      "Sobol ST": sobol.table(feature)["ST"]}
+                      "SRC²": src.to_pandas(output=feature)["SRC2"],
+                      "Sobol ST": sobol.to_pandas(output=feature)["ST"]}
         for method, values in per_method.items():
             ordered = values.abs().sort_values(ascending=False)
             for rank, (name, value) in enumerate(ordered.items(), start=1):

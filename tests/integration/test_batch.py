@@ -77,7 +77,7 @@ def test_batch_equals_simulate_one_by_one():
     table = random_table(N_SETS, seed=1, spread=SPREAD)
     seen = []
     batch = simulate_batch(MODEL, EXPERIMENT, table,
-                           progress=lambda d, f, t: seen.append((d, f, t)))
+                           progress=lambda p: seen.append((p.done, p.failed, p.total)))
     assert isinstance(batch, BatchResult)
     assert (batch.table["status"] == "ok").all(), batch.failed
     assert batch.failed.empty

@@ -55,7 +55,7 @@ def test_the_procedure_recovers_table_one_and_says_so(identified, vgt, tmp_path)
     """Staged estimates near Table I, then joint ones nearer, every one identified with
     the truth inside its 95 % interval, and the identified set written with its
     provenance."""
-    table = identified.table(truth=vgt)
+    table = identified.to_pandas(truth=vgt)
     for name, rtol in ref.IDENT_RTOL.items():
         assert table.loc[name, "staged"] == pytest.approx(vgt[name], rel=rtol), name
         assert table.loc[name, "value"] == pytest.approx(vgt[name],
@@ -102,7 +102,7 @@ def test_the_joint_fit_checks_every_record(identified):
 def test_staged_only_is_the_paper_and_fast(campaign, start, vgt):
     staged = identify_paper(campaign, start, refine=False)
     assert staged.joint is None
-    table = staged.table(truth=vgt)
+    table = staged.to_pandas(truth=vgt)
     assert table.loc["Fc", "value"] == pytest.approx(vgt["Fc"], rel=ref.IDENT_RTOL["Fc"])
     assert table["stage"].tolist()[:2] == ["(a)", "(a)"]
 

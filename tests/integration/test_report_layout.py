@@ -32,7 +32,7 @@ def test_identification_report_fits_the_page(vgt, records, tmp_path):
 def test_fit_report_fits_the_page(vgt, records, tmp_path):
     model = pa.Actuator(vgt, valve=pa.PressureRegulator())
     result = fit(model, records[:1], ["Fc", "F0"])
-    result.html_report("pa.fit(...)").write(tmp_path / "fit.html")
+    result.report("pa.fit(...)").write(tmp_path / "fit.html")
     assert_fits_the_page(tmp_path / "fit.html")
 
 

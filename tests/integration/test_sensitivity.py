@@ -109,7 +109,7 @@ def test_dgsm_of_the_actuator_from_forward_sensitivities(vgt):
     gradient = sa.model_gradient(model, pa.CommandCycle(period=20.0), problem, "position",
                                  [8.0, 12.0])
     study = sa.dgsm(problem, gradient, n=8)
-    table = study.table("8.0")
+    table = study.to_pandas(output="8.0")
     assert table.loc["Fc", "nu_scaled"] > 100 * table.loc["sigma1", "nu_scaled"]
 
 

@@ -343,7 +343,7 @@ def test_row_problems_check_ranges_and_relations_by_column() -> None:
 
 def test_to_frame() -> None:
     ps = _load_quietly("canudas1995")
-    frame = ps.to_frame()
+    frame = ps.to_pandas()
     assert list(frame.columns) == ["name", "value", "unit", "given", "source", "description"]
     given = frame.iloc[: len(ps)]
     assert set(given["name"]) == set(ps)

@@ -28,7 +28,7 @@ def test_sobol_matches_the_ishigami_indices():
     v13 = b**2 * np.pi**8 * (1 / 18 - 1 / 50)
     var = v1 + v2 + v13
     problem = _uniform(["x1", "x2", "x3"], -np.pi, np.pi)
-    table = sobol(problem, ishigami, n=ref.SOBOL_N).table("y")
+    table = sobol(problem, ishigami, n=ref.SOBOL_N).to_pandas(output="y")
     assert table["S1"].to_numpy() == pytest.approx([v1 / var, v2 / var, 0.0],
                                                    abs=ref.SOBOL_ATOL)
     assert table["ST"].to_numpy() == pytest.approx([(v1 + v13) / var, v2 / var, v13 / var],
@@ -44,7 +44,7 @@ def test_sobol_matches_the_g_function_indices():
     def g_function(x):
         return pd.DataFrame({"y": np.prod((np.abs(4 * x - 2) + a) / (1 + a), axis=1)})
 
-    table = sobol(problem, g_function, n=ref.SOBOL_N).table("y")
+    table = sobol(problem, g_function, n=ref.SOBOL_N).to_pandas(output="y")
     expected_st = partial * np.prod(1.0 + partial) / (1.0 + partial) / total
     assert table["S1"].to_numpy() == pytest.approx(partial / total, abs=ref.SOBOL_ATOL)
     assert table["ST"].to_numpy() == pytest.approx(expected_st, abs=ref.SOBOL_ATOL)
@@ -60,7 +60,7 @@ def test_src_of_a_linear_model_is_exact():
     coefficients = np.array([3.0, -1.0, 0.5])
     problem = Problem((Factor("a", 0, 1, 0.5), Factor("b", 0, 2, 1), Factor("c", -1, 1, 0)))
     result = src(problem, lambda x: pd.DataFrame({"y": x @ coefficients}), n=400)
-    table = result.table("y")
+    table = result.to_pandas(output="y")
     x = result.sample.to_numpy()
     y = x @ coefficients
     expected = coefficients**2 * x.var(axis=0) / y.var()
@@ -81,7 +81,7 @@ def test_morris_ranks_inputs_in_their_known_order():
     result = morris(problem, lambda x: pd.DataFrame({"y": x @ weights + x[:, 0] ** 2}),
                     trajectories=ref.MORRIS_TRAJECTORIES)
     assert result.ranking("y") == ["w10", "w3", "w1", "w0"]
-    assert result.table("y").loc["w0", "mu_star"] == pytest.approx(0.0, abs=1e-12)
+    assert result.to_pandas(output="y").loc["w0", "mu_star"] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_failed_runs_are_reported_not_dropped():
@@ -166,11 +166,11 @@ def test_dgsm_of_known_derivatives_and_the_sobol_bound():
                          axis=1)
         return pd.DataFrame({"y": y}), grads[:, None, :]
 
-    table = dgsm(problem, gradient, n=20_000).table("y")
+    table = dgsm(problem, gradient, n=20_000).to_pandas(output="y")
     e_cos2 = 0.5 + np.sin(2.0) / 4
     expected = [4.0, e_cos2 / 3, 1 - e_cos2]
     assert table["nu"].to_numpy() == pytest.approx(expected, rel=0.02)
-    st = sobol(problem, lambda x: gradient(x)[0], n=2048).table("y")["ST"].to_numpy()
+    st = sobol(problem, lambda x: gradient(x)[0], n=2048).to_pandas(output="y")["ST"].to_numpy()
     assert np.all(table["ST_bound"].to_numpy() >= st - ref.SOBOL_ATOL)
 
 

@@ -72,7 +72,7 @@ def family_results():
 def family_table(results) -> pd.DataFrame:
     rows = []
     for truth, result in results:
-        table = result.table(truth)
+        table = result.to_pandas(truth=truth)
         for name in FREE:
             row = table.loc[name]
             rows.append({"actuator": truth.name, "parameter": name,
@@ -119,7 +119,7 @@ def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():
         result = identify_paper(records, prior, seed=ref.THIN_ACTUATOR, workers=1,
                                 replicates=ref.FAMILY_REPLICATES,
                                 max_evaluations=ref.FAMILY_EVALUATIONS)
-    table = result.table(truth)
+    table = result.to_pandas(truth=truth)
     assert set(table.loc[["Fs", "vs"], "verdict"]) == {"poorly identified"}, table
     assert "slower than vs" in table.loc["Fs", "reason"]
     trusted = table[table["verdict"] == "identified"]

@@ -38,7 +38,7 @@ def test_a_richer_truth_is_flagged_not_trusted(case, vgt):
         result = _mismatched(vgt, start, truth=vgt.replace(delta=2.0))
     assert not result.ok
     assert any(d.severity == "error" for d in result.diagnostics), result.summary()
-    table = result.table(vgt if case != "delta" else vgt.replace(delta=2.0))
+    table = result.to_pandas(truth=vgt if case != "delta" else vgt.replace(delta=2.0))
     if case in ("adiabatic", "sensor lag", "delta"):  # the truth's parameters exist
         trusted = table[table["verdict"] == "identified"]
         tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in trusted.index])

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -26,19 +27,28 @@ from ..experiments.friction import (
     StickSlip,
     friction_test,
 )
+from ..io.report import ResultVocabulary
 from ..models.friction import FrictionModel, LuGre
 from ..models.rig import FrictionRig
 from ..simulation.result import Result
 from ..simulation.simulate import simulate
 from ..simulation.solvers import Rodas4
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 __all__ = ["FrictionTestResult", "break_away_force", "first_crossing", "lag_loop_width",
            "run_friction_test", "slip_onsets", "solver_for"]
 
 
 @dataclass(eq=False)
-class FrictionTestResult:
+class FrictionTestResult(ResultVocabulary):
     """Outcome of one friction experiment.
+
+    ``to_pandas()``: the derived numbers (``table``; the signals when there are none),
+    ``"signals"``: the representative run's signals; ``plot()``: the axes that suit the
+    experiment (``plotting.plot_friction_test``); ``write(folder)``: the tables, the
+    figure and report.html.
 
     ``result`` is the simulation (for multi-run experiments a representative run: the
     slowest force rate of break-away, the fastest frequency of frictional lag; every run is
@@ -52,6 +62,23 @@ class FrictionTestResult:
     drive_quantity: str
     runs: dict[float, Result] = field(default_factory=dict)
     test: FrictionTest | None = None
+
+    report_title = "Friction experiment"
+    figure_name = "friction_test"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        tables = {} if self.table is None else {"results": self.table}
+        tables["signals"] = self.result.to_pandas()
+        return tables
+
+    def report_text(self) -> str:
+        return f"{self.kind} experiment ({self.test!r}), driven by {self.drive_quantity}."
+
+    def plot(self) -> Figure:
+        """The axes that suit this experiment (``plotting.plot_friction_test``)."""
+        from ..plotting import plot_friction_test
+
+        return plot_friction_test(self, self.kind)
 
 
 def solver_for(test: FrictionTest, params, friction: FrictionModel | None = None) -> Rodas4:

@@ -42,6 +42,8 @@ EXIT_INTERRUPTED = 130
 DEFAULT_LOW_PRESSURE = 20e3
 DEFAULT_PERIOD = 20.0
 COMPILING = "compiling kernel (first use; cached afterwards)"
+#: progress stages that are the whole run: a bar shows the command's label alone
+WHOLE_RUN_STAGES = ("simulate", "batch", "fit", "validate")
 
 out_console = Console(highlight=False)
 err_console = Console(stderr=True, highlight=False)
@@ -67,6 +69,9 @@ def _friction_choices() -> type[StrEnum]:
 
 
 if TYPE_CHECKING:
+    from pneumact.progress import Progress as ProgressReport
+    from pneumact.progress import ProgressCallback
+
     class Friction(StrEnum):
         """The choices as mypy sees them: built at run time from the registered laws, so
         only the one the commands name (their default) is declared."""
@@ -276,62 +281,75 @@ def figure_writer(make):
     return writer(make)
 
 
-def run_with_progress(run: Callable[[Callable[[float], None] | None], Any],
-                      what: str = "simulating") -> Any:
-    """Call ``run(progress)`` under a rich progress bar; a spinner says the kernel is
-    compiling until the first progress report arrives."""
-    from rich.progress import (
-        BarColumn,
-        Progress,
-        SpinnerColumn,
-        TaskProgressColumn,
-        TextColumn,
-        TimeElapsedColumn,
-    )
-
-    columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
-               TaskProgressColumn(), TimeElapsedColumn())
-    with Progress(*columns, console=err_console, transient=True) as bar:
-        task = bar.add_task(COMPILING, total=None)
-
-        def report(fraction: float) -> None:
-            bar.update(task, description=what, total=1.0, completed=fraction)
-
-        return run(report)
-
-
 @contextlib.contextmanager
-def batch_progress(label: str = "batch") -> Iterator[Callable[[int, int, int], None]]:
-    """A rich progress bar for the batch engine: yields ``progress(done, failed, total)``
-    (sets done and failed, and the rate of this session: reused chunks do not count)."""
+def progress_display(label: str = "", *, counts: bool = False, transient: bool = True,
+                     bar_per_stage: bool = True) -> Iterator[ProgressCallback]:
+    """The one adapter from ``pneumact.progress.Progress`` reports to rich progress bars:
+    yields a ``progress`` callback for any public function. A spinner says the kernel is
+    compiling until the first report; then one bar per stage (``label: stage``), done of
+    total, or (``bar_per_stage=False``, for stages that are parts of one whole: the
+    sections of a reproduction) one bar that names the current stage. ``counts``: the
+    bar counts items (a batch's sets: ``done/total``, the failed ones and the rate of
+    this session; reused chunks do not count) instead of a percentage.
+    """
     import time
 
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
         Progress,
+        SpinnerColumn,
+        TaskProgressColumn,
         TextColumn,
         TimeElapsedColumn,
         TimeRemainingColumn,
     )
 
+    columns: list[Any] = [SpinnerColumn(), TextColumn("{task.description}"), BarColumn()]
+    if counts:
+        columns += [MofNCompleteColumn(), TextColumn("failed {task.fields[failed]}"),
+                    TextColumn("{task.fields[rate]} sims/s"), TimeElapsedColumn(),
+                    TextColumn("left"), TimeRemainingColumn()]
+    else:
+        columns += [TaskProgressColumn(), TimeElapsedColumn()]
     started = time.perf_counter()
-    with Progress(TextColumn(f"[bold]{label}"), BarColumn(), MofNCompleteColumn(),
-                  TextColumn("failed {task.fields[failed]}"),
-                  TextColumn("{task.fields[rate]} sims/s"),
-                  TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
-                  console=err_console) as bar:
-        task = bar.add_task(label, total=None, failed=0, rate="-")
-        first: list[int] = []
+    with Progress(*columns, console=err_console, transient=transient) as bar:
+        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-")
+        tasks: dict[str, Any] = {}
+        first: dict[str, float] = {}
 
-        def progress(done: int, failed: int, total: int) -> None:
-            if not first:
-                first.append(done)
+        def update(report: ProgressReport) -> None:
+            task = tasks.get(report.stage if bar_per_stage else "")
+            if task is None:
+                task = waiting if not tasks else bar.add_task("", total=None, failed=0,
+                                                               rate="-")
+                tasks[report.stage if bar_per_stage else ""] = task
+            first.setdefault(report.stage, report.done)
             elapsed = time.perf_counter() - started
-            rate = (done - first[0]) / elapsed if elapsed > 0 else 0.0
-            bar.update(task, completed=done, total=total, failed=failed, rate=f"{rate:.0f}")
+            rate = (report.done - first[report.stage]) / elapsed if elapsed > 0 else 0.0
+            shown = (report.stage if not label else label
+                     if report.stage in WHOLE_RUN_STAGES else f"{label}: {report.stage}")
+            bar.update(task, description=shown, completed=report.done, total=report.total,
+                       failed=report.failed, rate=f"{rate:.0f}")
 
-        yield progress
+        yield update
+
+
+def run_with_progress(run: Callable[[ProgressCallback], Any], what: str = "simulating") -> Any:
+    """Call ``run(progress)`` under ``progress_display(what)``."""
+    with progress_display(what) as progress:
+        return run(progress)
+
+
+def batch_progress(label: str = "batch") -> contextlib.AbstractContextManager[ProgressCallback]:
+    """``progress_display`` for the batch engine: counts sets, failed sets and the rate."""
+    return progress_display(label, counts=True, transient=False)
+
+
+def fit_with_progress(run: Callable[[ProgressCallback], Any]) -> Any:
+    """Run a fit under ``progress_display("fitting")``: a bar per stage that reports
+    (the fit, multistart starts, profile points)."""
+    return run_with_progress(run, "fitting")
 
 
 def the_call(ctx) -> str:
@@ -354,23 +372,6 @@ def the_call(ctx) -> str:
             for item in values:
                 words += [flag, str(getattr(item, "value", item))]
     return " ".join(shlex.quote(w) for w in words)
-
-
-def fit_with_progress(run):
-    """Run a fit under a progress display: a spinner while fitting, a bar per stage that
-    reports progress (multistart starts, profile points)."""
-    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
-                  TimeElapsedColumn(), console=err_console, transient=True) as bar:
-        tasks = {"fit": bar.add_task("fitting", total=None)}
-
-        def report(label: str, fraction: float) -> None:
-            if label not in tasks:
-                tasks[label] = bar.add_task(label, total=1.0)
-            bar.update(tasks[label], completed=fraction)
-
-        return run(report)
 
 
 def fmt(value: float | None, digits: int = 4) -> str:

@@ -205,7 +205,7 @@ def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
         tracking=tracking))
     use_agg()
     written = study.write(out, call=the_call(ctx))
-    _print_metrics(study.metrics_table())
+    _print_metrics(study.to_pandas("metrics"))
     for path in written:
         out_console.print(f"wrote {path}")
 

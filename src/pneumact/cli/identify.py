@@ -31,6 +31,7 @@ from pneumact.cli.common import (
     load_quietly,
     names,
     out_console,
+    progress_display,
     the_call,
     use_agg,
     user_errors,
@@ -159,7 +160,7 @@ def _verdict_table(result) -> Table:
     table = Table(title="identification: " + result.summary())
     for column in ("parameter", "value", "95 % interval", "unit", "verdict", "reason"):
         table.add_column(column, overflow="fold")
-    estimates = result.table()
+    estimates = result.to_pandas()
     for name, row in estimates.iterrows():
         style = {"identified": "green", "poorly identified": "yellow"}.get(row["verdict"],
                                                                             "red")
@@ -213,13 +214,13 @@ def identify_paper_command(
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
-        with _status("identifying") as status:
+        with progress_display("identifying", bar_per_stage=False) as progress:
             result = identify_paper(
                 recs, parameter_set, fit_delta=fit_delta, prior_spread=spread / 100,
                 sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,
                 chamber=Adiabatic() if chamber is Chamber.adiabatic else Isothermal(),
                 refine=not staged_only, seed=seed, workers=workers,
-                progress=lambda stage, fraction: status.update(f"identifying: {stage}"))
+                progress=progress)
         use_agg()
         written = write_outputs(out, result.writers(call=the_call(ctx), partial=partial))
         out_console.print(_verdict_table(result))
@@ -316,7 +317,7 @@ def identify_friction_command(
                 page.figure(validation.plot(), "Measured and predicted force")
             page.write(path)
 
-        table = result.table()
+        table = result.to_pandas()
         summary = {"relative_force_error": result.relative_force_error,
                    "condition_number": result.condition_number}
         if checked is not None:
@@ -399,20 +400,9 @@ def fit_command(
             profile=names(profile, "--profile") or (), loss=loss.value, seed=seed,
             solver=pa.Rodas4(rtol=rtol), progress=report))
         use_agg()
-        writers = {"estimates.csv": lambda p: result.table().to_csv(p),
-                   "statistics.csv": lambda p: result.statistics.to_csv(p, index=False),
-                   "correlation.csv": lambda p: result.correlation.to_csv(p),
-                   "fit.png": figure_writer(result.plot_fit)}
-        if multistart:
-            writers["starts.csv"] = lambda p: result.starts.to_csv(p, index=False)
-            writers["waterfall.png"] = figure_writer(result.plot_waterfall)
-        if result.profiles:
-            writers["profiles.png"] = figure_writer(result.plot_profiles)
-        writers["report.html"] = lambda p: result.html_report(the_call(ctx)).write(p)
-        if not per_record:
-            writers["fitted.toml"] = lambda p: pa.write_params(result.parameters(), p)
+        writers = result.writers(the_call(ctx))
         written = write_outputs(out, writers)
-        out_console.print(_estimates_table("fitted parameters", result.table()))
+        out_console.print(_estimates_table("fitted parameters", result.to_pandas()))
         for _, row in result.statistics.iterrows():
             out_console.print(f"{Path(row['record']).name} {row['signal']}: fit "
                               f"{row['fit_percent']:.2f} %, RMS {row['rms']:.4g} {row['unit']}")

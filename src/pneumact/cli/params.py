@@ -36,7 +36,7 @@ def params_show(
         from pneumact.parameters import load_params
 
         parameter_set = load_params(name)
-        frame = parameter_set.to_frame()
+        frame = parameter_set.to_pandas()
         table = Table(title=f"{parameter_set.name}: {parameter_set.description}")
         for column in ("name", "given", "SI value", "source", "description"):
             table.add_column(column, overflow="fold")

@@ -9,7 +9,13 @@ import typer
 from rich.text import Text
 
 from pneumact.checks import check_out_dir, check_seed
-from pneumact.cli.common import ParamsOption, err_console, out_console, the_call, user_errors
+from pneumact.cli.common import (
+    ParamsOption,
+    out_console,
+    progress_display,
+    the_call,
+    user_errors,
+)
 
 
 def reproduce_command(
@@ -32,10 +38,9 @@ def reproduce_command(
         check_seed("--seed", seed)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
-        with err_console.status("reproducing") as status:
+        with progress_display("reproducing", bar_per_stage=False) as progress:
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,
-                               call=the_call(ctx),
-                               progress=lambda label: status.update(f"reproducing: {label}"))
+                               call=the_call(ctx), progress=progress)
     statements = result.tables["paper_statements"]
     styles = {"holds": "green", "does not hold": "red"}
     for _, row in statements.iterrows():

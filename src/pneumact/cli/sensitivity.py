@@ -456,7 +456,7 @@ CONDITION_AXES = {"period": _period, "speed": _speed, "amplitude": _amplitude,
 
 
 def _print_indices(study, feature: str) -> None:
-    frame = study.table(feature)
+    frame = study.to_pandas(output=feature)
     table = Table(title=f"{study.method}: {feature}")
     table.add_column("parameter")
     for column in frame.columns:

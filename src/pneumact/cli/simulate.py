@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, cast
+from typing import Annotated
 
 import typer
 from rich.table import Table
@@ -31,9 +31,6 @@ from pneumact.cli.common import (
     user_errors,
     write_outputs,
 )
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 
 def simulate(
@@ -67,8 +64,7 @@ def simulate(
 
         from pneumact.plotting import plot_hysteresis, save_figure
 
-        ax = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
-        figure = cast("Figure", ax.figure)  # a figure of its own, not a subfigure
+        figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
         try:
             written = write_outputs(out, {
                 "simulation.csv": result.save,

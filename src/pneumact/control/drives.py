@@ -69,6 +69,8 @@ from ..errors import DataError, ParameterError
 from ..io.records import Record
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from ..core.signals import Signal
     from ..models.friction import FrictionModel
     from ..parameters.parameter_set import ParameterSet
@@ -109,8 +111,12 @@ class DriveReplay:
     parameters: ParameterSet | None = None
     notes: list[str] = field(default_factory=list)
 
-    def to_pandas(self) -> pd.DataFrame:
-        """The frame (a copy)."""
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The frame (a copy); ``name="metrics"``: the errors (``metrics()``)."""
+        if name == "metrics":
+            return self.metrics()
+        if name is not None:
+            raise ParameterError(f"to_pandas: name = {name!r}; allowed: metrics")
         return self.frame.copy()
 
     def metrics(self) -> pd.DataFrame:
@@ -123,7 +129,7 @@ class DriveReplay:
             "tracking_relative_error": e["tracking"], "velocity_relative_error": e["velocity"],
             "force_relative_error": e["force"], "force_rms_N": e["force_rms_N"]}])
 
-    def plot(self):
+    def plot(self) -> Figure:
         """Position, velocity and motor force, measured against simulated, and the
         position error (with the measured tracking error for scale)."""
         import matplotlib.pyplot as plt

@@ -38,6 +38,7 @@ import numpy as np
 from ..core.signals import Constant, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import QUANTITIES, Experiment
+from ..io.report import ResultVocabulary
 from ..models.actuator import Actuator
 from .plants import input_kind, input_range
 
@@ -162,8 +163,11 @@ def _where(plant, y, names) -> str:
 
 
 @dataclass(frozen=True, eq=False)
-class LinearPlant:
+class LinearPlant(ResultVocabulary):
     """A linearised plant: dΔy/dt = A·Δy + B·Δu, Δx = C·Δy + D·Δu (single input).
+
+    ``to_pandas()``: the system matrix; ``plot()``: its Bode plot (``plot_bode``);
+    ``write(folder)``: system.csv, bode.png and report.html.
 
     ``operating_point``: state name -> value, and the input's name -> its value.
     ``rates``: f at the point (zero at an equilibrium; the sliding point moves).
@@ -272,12 +276,27 @@ class LinearPlant:
                           inputs=[self.input_name], outputs=list(self.output_names),
                           name=f"linearised plant ({self.regime})")
 
-    def to_pandas(self) -> pd.DataFrame:
+    report_title = "Linearised plant"
+    figure_name = "bode"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"system": self.to_pandas()}
+
+    def report_text(self) -> str:
+        return self.statement
+
+    def plot(self) -> Figure:
+        """The Bode plot of the first output (``plot_bode``)."""
+        return plot_bode(self)
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
         """The system matrix [[A, B], [C, D]] as a DataFrame: rows ("d/dt", state) then
         ("output", name); columns ("state", name) then ("input", name). The operating point
         and the statement are in ``.attrs``."""
         import pandas as pd
 
+        if name not in (None, "system"):
+            raise ParameterError(f"to_pandas: name = {name!r}; allowed: system")
         rows = pd.MultiIndex.from_tuples(
             [("d/dt", n) for n in self.state_names] + [("output", n) for n in self.output_names])
         cols = pd.MultiIndex.from_tuples(

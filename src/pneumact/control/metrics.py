@@ -59,11 +59,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import DataError
+from ..io.report import ResultVocabulary
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 __all__ = ["LoopMetrics", "loop_metrics"]
 
@@ -110,11 +115,23 @@ _DESCRIPTIONS: dict[str, tuple[str, str]] = {
 }
 
 
+#: the settings the metrics were measured with (rows of ``LoopMetrics.to_pandas`` after
+#: the metrics)
+_SETTINGS = ("t_step", "start", "target", "band", "stick_speed", "window", "min_stick")
+
+
 @dataclass(frozen=True)
-class LoopMetrics:
+class LoopMetrics(ResultVocabulary):
     """Metrics of one closed-loop run, SI (see the module docstring for the
     definitions), with the settings they were measured with (``t_step`` ...
-    ``min_stick``). ``position_unit`` and ``command_unit`` name the signals' units."""
+    ``min_stick``). ``position_unit`` and ``command_unit`` name the signals' units.
+
+    ``to_pandas()``: metric, value, unit, description; ``plot()``: the metrics that are
+    numbers, a panel per unit; ``write(folder)``: metrics.csv, the figure and
+    report.html."""
+
+    report_title = "Closed-loop metrics"
+    figure_name = "metrics"
 
     rise_time: float
     settling_time: float
@@ -166,10 +183,41 @@ class LoopMetrics:
             out[name] = unit.replace("{x}", x).replace("{u}", u)
         return out
 
-    def to_pandas(self):
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"metrics": self.to_pandas()}
+
+    def report_text(self) -> str:
+        return self.summary()
+
+    def plot(self) -> Figure:
+        """The metrics with a finite value (not the settings), as bars, a panel per
+        unit (s, the position's unit, ...)."""
+        import matplotlib.pyplot as plt
+
+        frame = self.to_pandas()
+        metrics = frame[~frame["metric"].isin(_SETTINGS)]
+        values = metrics["value"].map(lambda v: float(v) if not isinstance(v, bool) else
+                                      math.nan)
+        shown = metrics.assign(value=values)[np.isfinite(values)]
+        groups = list(shown.groupby("unit", sort=False))
+        fig, axes = plt.subplots(1, max(1, len(groups)), squeeze=False,
+                                 figsize=(3.4 * max(1, len(groups)), 3.6))
+        for ax, (unit, rows) in zip(axes[0], groups, strict=False):
+            ax.barh(rows["metric"], rows["value"], color="C0")
+            ax.set_xlabel(f"[{unit}]" if unit else "[1]")
+            ax.invert_yaxis()
+            ax.grid(True, axis="x", alpha=0.3)
+        fig.suptitle(self.summary(), fontsize=8)
+        fig.tight_layout()
+        return fig
+
+    def to_pandas(self, name: str | None = None):
         """A DataFrame with the columns metric, value, unit, description (one row per
         metric, then the settings)."""
         import pandas as pd
+
+        if name not in (None, "metrics"):
+            raise DataError(f"to_pandas: name = {name!r}; allowed: metrics")
 
         units = self.units()
         rows = [(name, value, units[name], _DESCRIPTIONS[name][1])

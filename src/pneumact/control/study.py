@@ -9,7 +9,6 @@ Canudas de Wit et al. (1995) exactly as published.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -17,11 +16,15 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from ..core.signals import Constant
+from ..errors import ArgumentError
 from ..experiments.actuator import Experiment
 from ..models.controllers import PID
+from ..progress import ProgressCallback
 from .loop import ClosedLoop
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from ..simulation.result import Result
     from .metrics import LoopMetrics
 
@@ -34,7 +37,11 @@ TRACKING_METRICS = ("iae", "ise", "control_effort", "command_variation", "stick_
 
 @dataclass(eq=False)
 class LoopStudy:
-    """A closed-loop run: the loop, its experiment, the result and its metrics."""
+    """A closed-loop run: the loop, its experiment, the result and its metrics.
+
+    ``to_pandas()``: the signals (``"metrics"``: the loop metrics, ``"controller"``: its
+    settings); ``plot()``: set-point and position, command, friction and velocity;
+    ``write(folder)``: signals.csv, metrics.csv, loop.png and report.html."""
 
     loop: ClosedLoop
     experiment: Experiment
@@ -45,7 +52,7 @@ class LoopStudy:
     #: mean nothing and are left out; the tracking error is given instead
     tracking: bool = False
 
-    def metrics_table(self) -> pd.DataFrame:
+    def _metrics_table(self) -> pd.DataFrame:
         """The metrics as a table (metric, value, unit, description): a step's all of
         them, a tracked profile's the error, effort and stick ones plus the RMS and
         largest tracking error."""
@@ -64,10 +71,19 @@ class LoopStudy:
         keep = frame[frame["metric"].isin(TRACKING_METRICS)]
         return pd.concat([extra, keep], ignore_index=True)
 
-    def to_pandas(self) -> pd.DataFrame:
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The run's signals over time; ``name``: "metrics" (a step's metrics, or a
+        tracked profile's error, effort and stick ones) or "controller"."""
+        if name == "metrics":
+            return self._metrics_table()
+        if name == "controller":
+            return self.controller_table()
+        if name is not None:
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: metrics, controller")
         return self.result.to_pandas()
 
-    def figure(self):
+    def plot(self) -> Figure:
+        """Set-point and position, command, friction and velocity, with the metrics."""
         from .plots import plot_loop
 
         return plot_loop(self.result, self.metrics)
@@ -85,8 +101,8 @@ class LoopStudy:
         from ..io.tables import write_files
         from ..plotting import PNG_DPI
 
-        png = figure_png(self.figure(), dpi=PNG_DPI)
-        metrics = self.metrics_table()
+        png = figure_png(self.plot(), dpi=PNG_DPI)
+        metrics = self._metrics_table()
         report = Report(self.title, call=call, parameters=self.loop.params)
         report.text(f"Model: {self.loop.describe()}. Experiment: {self.experiment.name}, "
                     f"{self.experiment.t_start:g} to {self.experiment.t_end:g} s. "
@@ -107,7 +123,7 @@ class LoopStudy:
 
 
 def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
-             progress: Callable[[float], None] | None = None, title: str | None = None,
+             progress: ProgressCallback | None = None, title: str | None = None,
              tracking: bool = False, **metric_options) -> LoopStudy:
     """Simulate ``loop`` under the set-point ``experiment`` and measure it
     (``metric_options`` go to ``loop_metrics``); ``tracking``: the set-point is a profile

@@ -18,6 +18,7 @@ from ..checks import (
 )
 from ..errors import ArgumentError, ArgumentTypeError
 from ..io.records import Record, as_records
+from ..progress import check_progress
 
 __all__ = ["LOSSES", "check_fit_arguments", "check_window", "fit_records"]
 
@@ -101,9 +102,7 @@ def check_fit_arguments(model, records: list[Record], free, *, per_record, start
     if max_nfev is not None:
         check_int("max_nfev", max_nfev, minimum=1, where=WHERE)
     check_bool("smooth_input", smooth_input, where=WHERE)
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"{WHERE}: progress = {progress!r}: must be a function "
-                                "progress(stage, fraction)")
+    check_progress(progress, WHERE)
     if solver is not None:
         solver = as_instance("solver", solver, Solver, where=WHERE,
                              examples="pa.Rodas4(rtol=1e-6)")

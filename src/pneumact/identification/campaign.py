@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -36,6 +37,10 @@ import pandas as pd
 from ..errors import ExperimentError
 from ..experiments import Experiment, PiecewiseLinear
 from ..io.records import Record
+from ..io.report import ResultVocabulary
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
            "paper_campaign", "synthetic_campaign"]
@@ -172,8 +177,38 @@ PRESLIDING_STEP = 0.35
 
 
 @dataclass(frozen=True)
-class CampaignPlan:
-    """The tests of a designed campaign and why each is there (see ``design_campaign``)."""
+class CampaignPlan(ResultVocabulary):
+    """The tests of a designed campaign and why each is there (see ``design_campaign``).
+
+    ``to_pandas()``: one row per test; ``plot()``: each test's drive against time;
+    ``write(folder)``: plan.csv, drives.png and report.html."""
+
+    report_title = "Identification campaign"
+    figure_name = "drives"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"plan": self.to_pandas()}
+
+    def report_text(self) -> str:
+        return " ".join(self.notes)
+
+    def plot(self) -> Figure:
+        """Each test's drive (kPa abs) against time, a panel per test."""
+        import matplotlib.pyplot as plt
+
+        n = max(1, len(self.tests))
+        fig, axes = plt.subplots(n, 1, squeeze=False, figsize=(7.0, 1.6 * n + 0.8))
+        for ax, test in zip(axes[:, 0], self.tests, strict=False):
+            drive = test.experiment.drive
+            times = np.asarray(drive.breakpoints(), dtype=float)
+            ax.plot(times, drive(times) * 1e-3, "C0-")
+            ax.set_ylabel("kPa abs")
+            ax.set_title(f"{test.name}: {self.purposes.get(test.name, test.kind)}",
+                         fontsize=8)
+            ax.grid(True, alpha=0.3)
+        axes[-1, 0].set_xlabel("time [s]")
+        fig.tight_layout()
+        return fig
 
     tests: list[BenchTest]
     purposes: dict[str, str]
@@ -182,9 +217,11 @@ class CampaignPlan:
     spread: float
     notes: list[str]
 
-    def to_pandas(self) -> pd.DataFrame:
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
         """One row per test, in the units a bench technician sets: kPa, kPa/s, mm/s, s,
         Hz."""
+        if name not in (None, "plan"):
+            raise ExperimentError(f"to_pandas: name = {name!r}; allowed: plan")
         rows = []
         for test in self.tests:
             drive = test.experiment.drive

@@ -8,11 +8,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..errors import DataError
+from ..io.report import ResultVocabulary
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["Estimates", "covariance_from_jacobian", "linear_least_squares"]
 
@@ -23,8 +28,38 @@ RANK_TOLERANCE = 1e-10
 
 
 @dataclass(frozen=True, eq=False)
-class Estimates:
-    """Named estimates (SI) with standard errors, covariance and degrees of freedom."""
+class Estimates(ResultVocabulary):
+    """Named estimates (SI) with standard errors, covariance and degrees of freedom.
+
+    ``to_pandas()``: value, standard error and interval per estimate
+    (``"correlation"``: the correlation matrix); ``plot()``: each estimate's interval
+    relative to its value; ``write(folder)``: both tables, the figure and report.html."""
+
+    report_title = "Estimates"
+    figure_name = "intervals"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        names = list(self.names)
+        return {"estimates": self.to_pandas(),
+                "correlation": pd.DataFrame(self.correlation, index=names, columns=names)}
+
+    def plot(self, level: float = 0.95) -> Figure:
+        """The ``level`` interval of each estimate, in % of its value."""
+        import matplotlib.pyplot as plt
+
+        ci = self.interval(level)
+        scale = np.where(self.values != 0, np.abs(self.values), 1.0)
+        low, high = 100 * (ci[:, 0] - self.values) / scale, 100 * (ci[:, 1] - self.values) / scale
+        fig, ax = plt.subplots(figsize=(6.5, 0.3 * len(self.names) + 1.4))
+        y = np.arange(len(self.names))
+        ax.errorbar(np.zeros(len(y)), y, xerr=np.vstack([-low, high]), fmt="o", capsize=3)
+        ax.set_yticks(y, list(self.names))
+        ax.invert_yaxis()
+        ax.axvline(0.0, color="k", lw=0.6)
+        ax.set_xlabel(f"{100 * level:g} % interval [% of the estimate]")
+        ax.grid(True, axis="x", alpha=0.3)
+        fig.tight_layout()
+        return fig
 
     names: tuple[str, ...]
     values: np.ndarray
@@ -57,7 +92,11 @@ class Estimates:
         d = np.where(self.stderr > 0, self.stderr, np.nan)
         return self.covariance / np.outer(d, d)
 
-    def to_pandas(self, level: float = 0.95) -> pd.DataFrame:
+    def to_pandas(self, name: str | None = None, level: float = 0.95) -> pd.DataFrame:
+        """value, stderr, relative stderr and the ``level`` interval per estimate (SI);
+        ``name="correlation"``: the correlation matrix."""
+        if name is not None:
+            return super().to_pandas(name)
         ci = self.interval(level)
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = 100 * self.stderr / np.abs(self.values)

@@ -25,6 +25,7 @@ import weakref
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,10 +34,15 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from ..io.report import ResultVocabulary
+from ..progress import ProgressCallback, notify
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..io.report import Report
     from ..simulation.simulate import Model
 
 __all__ = ["FitResult", "Profile", "fit"]
@@ -312,8 +318,16 @@ class Profile:
 
 
 @dataclass(eq=False)
-class FitResult:
-    """Estimates with standard errors, fit statistics, the simulations at the optimum."""
+class FitResult(ResultVocabulary):
+    """Estimates with standard errors, fit statistics, the simulations at the optimum.
+
+    ``to_pandas()``: the estimates (``"statistics"``, ``"correlation"``, ``"starts"``:
+    the others); ``plot()``: measured and fitted signals with residuals; ``write(folder)``:
+    the tables, the figures, fitted.toml (when every estimate is shared) and report.html.
+    """
+
+    report_title = "Parameter fit"
+    figure_name = "fit"
 
     estimates: Estimates
     records: list[Record]
@@ -371,8 +385,21 @@ class FitResult:
         names = list(self.estimates.names)
         return pd.DataFrame(self.estimates.correlation, index=names, columns=names)
 
-    def table(self) -> pd.DataFrame:
-        return self.estimates.to_pandas()
+    def tables(self) -> dict[str, pd.DataFrame]:
+        tables = {"estimates": self.estimates.to_pandas(), "statistics": self.statistics,
+                  "correlation": self.correlation}
+        if len(self.starts) > 1:
+            tables["starts"] = self.starts
+        return tables
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The estimates with standard errors, 95 % intervals and verdicts (SI); ``name``:
+        "statistics", "correlation" or "starts" (a multistart fit)."""
+        return self.estimates.to_pandas() if name is None else super().to_pandas(name)
+
+    def plot(self) -> Figure:
+        """Measured and fitted signals per record, with residuals (``plot_fit``)."""
+        return self.plot_fit()
 
     def parameters(self, name: str = "fitted"):
         """The model's parameter set with the shared estimates, each value's source
@@ -395,22 +422,61 @@ class FitResult:
         return ParameterSet(values, name=name, provenance=params.provenance, info=info,
                             description=f"fitted from {len(self.records)} record(s)")
 
-    def html_report(self, call: str = ""):
-        """Estimates, statistics, correlation and the fit figures as an HTML ``Report``."""
-        from ..io.report import Report
+    def shared(self) -> bool:
+        """Whether every estimate is one value for all records (then it makes a
+        parameter set)."""
+        return all("[" not in n for n in self.estimates.names)
 
-        report = Report("Parameter fit", call=call, parameters=self.parameters()
-                        if all("[" not in n for n in self.estimates.names) else None)
+    def report_parameters(self):
+        return self.parameters() if self.shared() and self.model is not None else None
+
+    def report(self, call: str = "", png: bytes | None = None) -> Report:
+        """Estimates, statistics, correlation and the fit figures as an HTML ``Report``
+        (not yet written; ``png``: the fit figure if already drawn)."""
+        from ..io.report import Report, figure_png
+
+        report = Report(self.report_title, call=call, parameters=self.report_parameters())
         report.text(f"{len(self.records)} record(s), signals {', '.join(self.signals)}; "
                     f"{self.iterations} iterations, {self.simulations} simulations, "
                     f"{self.wall_time:.1f} s; {self.message}")
-        report.table(self.table(), "Estimates with standard errors and 95 % intervals (SI)")
+        report.table(self.to_pandas(), "Estimates with standard errors and 95 % intervals "
+                                       "(SI)")
         report.table(self.statistics, "Fit statistics per record and signal", index=False)
         report.table(self.correlation, "Correlation of the estimates")
-        report.figure(self.plot_fit(), "Measured and fitted signals, residuals")
+        report.image(png or figure_png(self.plot_fit()),
+                     "Measured and fitted signals, residuals")
         if self.profiles:
             report.figure(self.plot_profiles(), "Profile likelihoods")
         return report
+
+    def writers(self, call: str = "") -> dict[str, Callable[[Path], object]]:
+        """The files of ``write``, by name: each a function writing to a path."""
+        from ..io.report import figure_png, table_writer
+        from ..plotting import figure_writer
+
+        png = figure_png(self.plot_fit())
+        writers: dict[str, Callable[[Path], object]] = {
+            f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
+        writers["fit.png"] = lambda p: Path(p).write_bytes(png)
+        if len(self.starts) > 1:
+            writers["waterfall.png"] = figure_writer(self.plot_waterfall)
+        if self.profiles:
+            writers["profiles.png"] = figure_writer(self.plot_profiles)
+        writers["report.html"] = self.report(call, png).write
+        if self.model is not None and not any("[" in n and not n.startswith("offset_")
+                                              for n in self.estimates.names):
+            from ..parameters import write_params
+
+            writers["fitted.toml"] = lambda p: write_params(self.parameters(), p)
+        return writers
+
+    def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
+        """estimates.csv, statistics.csv, correlation.csv (starts.csv), fit.png
+        (waterfall.png, profiles.png), fitted.toml (no per-record parameter) and report.html:
+        all or nothing."""
+        from ..io.tables import write_files
+
+        return write_files(out_dir, self.writers(call))
 
     def plot_fit(self):
         """Measured and simulated signals per record, with residuals."""
@@ -588,7 +654,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         profile: Sequence[str] = (), profile_points: int = 8, max_nfev: int | None = None,
         offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
         smooth_input: bool = True, covariance: str = "hac",
-        progress: Callable[[str, float], None] | None = None,
+        progress: ProgressCallback | None = None,
         offset_records: Sequence[int] | None = None,
         record_weights: Sequence[float] | None = None) -> FitResult:
     """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
@@ -615,7 +681,9 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     "iid" (see ``estimates.covariance_from_jacobian``). ``offset_records`` limits the
     ``offsets`` to those record indices (default: every record). ``record_weights``
     multiply each record's residuals (default 1): records whose measurement carries
-    more noise than others (a noisy measured input) count for less.
+    more noise than others (a noisy measured input) count for less. ``progress`` is
+    called with a ``pneumact.progress.Progress``: stage "fit" (started, done), then
+    "multistart" (starts done of all) and "profile <name>" (points done).
     """
     records = fit_records(records)
     models = _models_per_record(model, len(records))
@@ -679,6 +747,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     problem.workers = 1 if multistart else max(1, int(workers or os.cpu_count() or 1))
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
+    notify(progress, "fit", 0, 1)
     starts = [problem.phi(theta0)]
     if multistart:  # an offset has no bounds: each start begins it where the fit does
         offset = np.array([c.offset for c in columns])
@@ -687,6 +756,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
                             scheduler, progress)
     best = min(solutions, key=lambda s: s.cost)
+    notify(progress, "fit", 1, 1)
     theta = problem.theta(best.x)
     r, jac, simulated = problem.evaluate(theta, True)
     groups = [int(m.sum()) for m in problem.masks for _ in signals]
@@ -742,8 +812,7 @@ def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, sched
         for k, fut in enumerate(futures):
             done.append(fut.result())
             problem.simulations += done[-1].simulations
-            if progress:
-                progress("multistart", (k + 1) / len(futures))
+            notify(progress, "multistart", k + 1, len(futures))
     return done
 
 
@@ -803,8 +872,7 @@ def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -
             delta = max(n * np.log(max(ssr, 1e-300) / ssr_min), 0.0)
             points[float(target)] = delta
             count += 1
-            if progress:
-                progress(f"profile {name}", min(1.0, count / (2 * n_points)))
+            notify(progress, f"profile {name}", min(count, 2 * n_points), 2 * n_points)
             if at_bound or delta > 2 * CHI2_95:
                 break
     grid_phi = np.array(sorted(points))

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -20,7 +21,11 @@ from scipy.signal import butter, sosfiltfilt
 
 from ..errors import DataError, ParameterError
 from ..io.records import Record
+from ..io.report import ResultVocabulary
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["InverseFriction", "inverse_friction"]
 
@@ -56,8 +61,15 @@ def _motion(time, position, force, cutoff, decimate) -> _Motion:
 
 
 @dataclass(eq=False)
-class InverseFriction:
-    """Estimates of the inverse model, with its fit quality and the data it used."""
+class InverseFriction(ResultVocabulary):
+    """Estimates of the inverse model, with its fit quality and the data it used.
+
+    ``to_pandas()``: the estimates (``"data"``: the processed motion and forces);
+    ``plot()``: force against velocity and time; ``write(folder)``: both tables, the
+    figure and report.html."""
+
+    report_title = "Inverse friction model"
+    figure_name = "inverse_model"
 
     model: str
     estimates: Estimates
@@ -93,10 +105,15 @@ class InverseFriction:
         return float(np.linalg.norm(frame["measured"] - frame["predicted"]) /
                      np.linalg.norm(frame["measured"]))
 
-    def table(self) -> pd.DataFrame:
-        return self.estimates.to_pandas()
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"estimates": self.estimates.to_pandas(), "data": self.data}
 
-    def plot(self):
+    def report_text(self) -> str:
+        return (f"{self.model} friction from the motion's inverse model: relative force "
+                f"error {100 * self.relative_force_error:.2f} %, condition number "
+                f"{self.condition_number:.3g}.")
+
+    def plot(self) -> Figure:
         """Force against velocity (data and model), and the force over time."""
         import matplotlib.pyplot as plt
 

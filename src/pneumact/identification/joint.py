@@ -23,13 +23,14 @@ and vs of a drawn actuator by tens of their standard errors.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import DataError, SolverError
 from ..io.records import Record
+from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import FitResult, fit
 from .stages import presliding_window, prior_bounds, within
@@ -112,7 +113,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      solver=None, replicates: int | None = None, seed: int = 0,
                      workers: int | None = None, max_evaluations: int = MAX_EVALUATIONS,
                      prior=None, drop_chaotic: bool = True, excluded: list | None = None,
-                     progress: Callable[[str, float], None] | None = None) -> FitResult:
+                     progress: ProgressCallback | None = None) -> FitResult:
     """Fit ``free`` to all ``records`` at once from the values of ``params`` (the staged
     estimates), within ``stages.prior_bounds`` of ``prior`` (default ``params``);
     ``kinds`` says which records are presliding tests.
@@ -144,9 +145,8 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
     chaotic: list[str] = []
     options.update(screened=set(), weights={})
     for round_ in range(MAX_ROUNDS):
-        if progress:
-            progress(f"joint refinement: {len(used)} of {len(records)} records",
-                     len(used) / len(records))
+        notify(progress, f"joint refinement: {len(used)} of {len(records)} records",
+               len(used), len(records))
         result = _fit_records([records[i] for i in used], [kinds[i] for i in used], params,
                               excluded=chaotic, **options)
         used = [i for i in used if records[i].source not in chaotic]

@@ -23,8 +23,9 @@ parameter is identified, unless a partial result is asked for.
 from __future__ import annotations
 
 import datetime as _dt
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -33,6 +34,8 @@ import pandas as pd
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from ..io.report import ResultVocabulary
+from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
     MODEL_FIDELITY,
     POORLY,
@@ -71,6 +74,9 @@ from .uncertainty import (
 )
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..io.report import Report
     from ..parameters.parameter_set import ParameterSet
 
 __all__ = ["STAGES", "PaperIdentification", "StageResult", "identify_paper", "record_kind",
@@ -119,9 +125,18 @@ def with_estimates(params, estimates: Estimates, sources: dict[str, str], name: 
 
 
 @dataclass(eq=False)
-class PaperIdentification:
+class PaperIdentification(ResultVocabulary):
     """The stages, the joint refinement, the final estimates with their verdicts, and
-    the identified parameter set (see the module docstring)."""
+    the identified parameter set (see the module docstring).
+
+    ``to_pandas(truth=None)``: the estimates (``"verdicts"``, ``"diagnostics"``,
+    ``"residuals"``: the others); ``plot()``: the joint fit (the first stage's fit when
+    there is none); ``write(folder)``: every table and figure, report.md, report.html
+    and identified.toml (see ``writers``)."""
+
+    report_title = ("Identification of the actuator (paper section III.2, then a joint "
+                    "refinement)")
+    figure_name = "joint_fit"
 
     stages: dict[str, StageResult]
     joint: FitResult | None
@@ -167,12 +182,26 @@ class PaperIdentification:
                                                       else ""), *errors])
 
     # -- tables ------------------------------------------------------------------------
-    def table(self, truth=None) -> pd.DataFrame:
-        """Per parameter: the staged estimate and its (conditional) standard error, the
-        final (joint) estimate, its standard error and 95 % interval, the verdict and its
-        reason (with the truth and the errors in % when ``truth`` is given). Where the
-        model does not fit the records (``intervals_hold`` is False) no standard error or
-        interval is reported: they would not hold."""
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"estimates": self.to_pandas(), "verdicts": self.verdicts_table(),
+                "diagnostics": self.diagnostics_table(), "residuals": self.residuals}
+
+    def plot(self) -> Figure:
+        """Measured and fitted position of the joint refinement (of the first stage when
+        the identification stopped after the stages)."""
+        if self.joint is not None:
+            return self.joint.plot_fit()
+        return next(iter(self.stages.values())).plot()
+
+    def to_pandas(self, name: str | None = None, truth=None) -> pd.DataFrame:
+        """(``name`` None) Per parameter: the staged estimate and its (conditional)
+        standard error, the final (joint) estimate, its standard error and 95 % interval,
+        the verdict and its reason (with the truth and the errors in % when ``truth`` is
+        given). Where the model does not fit the records (``intervals_hold`` is False)
+        no standard error or interval is reported: they would not hold. ``name``:
+        "verdicts", "diagnostics" or "residuals" for those tables."""
+        if name is not None:
+            return super().to_pandas(name)
         ci = self.estimates.interval(0.95)
         if not self.intervals_hold:
             ci = np.full_like(ci, np.nan)
@@ -285,7 +314,7 @@ class PaperIdentification:
         writers: dict = {}
         if self.ok or partial:
             writers["identified.toml"] = lambda p: write_params(self.parameter_set(partial), p)
-        writers["estimates.csv"] = lambda p: self.table(truth).to_csv(p)
+        writers["estimates.csv"] = lambda p: self.to_pandas(truth=truth).to_csv(p)
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
         writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
@@ -294,9 +323,9 @@ class PaperIdentification:
         if self.joint is not None:
             writers["joint_fit.png"] = figure_writer(self.joint.plot_fit)
             writers["band.png"] = figure_writer(self.plot_band)
-        writers["report.md"] = lambda p: Path(p).write_text(self.report(truth),
+        writers["report.md"] = lambda p: Path(p).write_text(self.markdown(truth),
                                                             encoding="utf-8")
-        writers["report.html"] = lambda p: self.html_report(truth, call).write(p)
+        writers["report.html"] = lambda p: self.report(call, truth=truth).write(p)
         return writers
 
     def parameter_set(self, partial: bool = False):
@@ -322,18 +351,18 @@ class PaperIdentification:
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
 
-    def html_report(self, truth=None, call: str = ""):
+    def report(self, call: str = "", png: bytes | None = None, truth=None) -> Report:
         """Verdicts, estimates (staged and joint), diagnostics, residual checks and the
-        figures as a self-contained HTML ``Report``."""
+        figures as a self-contained HTML ``Report`` (not yet written; ``png``: the joint
+        fit's figure if already drawn)."""
         from ..io.report import Report
 
-        report = Report("Identification of the actuator (paper section III.2, then a joint "
-                        "refinement)", call=call, parameters=self.parameters)
+        report = Report(self.report_title, call=call, parameters=self.parameters)
         report.text(("Result: " if self.ok else "Result NOT usable as it is: ")
                     + self.summary())
         report.text("Records: " + ", ".join(Path(r.source).name for r in self.records))
         report.table(self.verdicts_table(), "Verdict per parameter")
-        report.table(self.table(truth), "Staged and joint estimates, standard errors and "
+        report.table(self.to_pandas(truth=truth), "Staged and joint estimates, standard errors and "
                      "95 % intervals (SI; the joint ones include the input noise)")
         if len(self.diagnostics):
             report.table(self.diagnostics_table(), "Diagnostics", index=False)
@@ -346,22 +375,26 @@ class PaperIdentification:
                           "the parameter uncertainty leaves")
         if self.joint is not None:
             report.heading("Joint refinement")
-            report.figure(self.joint.plot_fit(), "Measured and fitted position, all records")
+            if png is None:
+                report.figure(self.joint.plot_fit(), "Measured and fitted position, all "
+                              "records")
+            else:
+                report.image(png, "Measured and fitted position, all records")
         for stage in self.stages.values():
             report.heading(stage.title)
             report.figure(stage.plot(), stage.title)
         return report
 
-    def write(self, out_dir: str | Path, truth=None, call: str = "",
+    def write(self, out_dir: str | PathLike[str], truth=None, *, call: str = "",
               partial: bool = False) -> list[Path]:
         """Write every file of ``writers`` into ``out_dir``, all or none."""
         from ..io.tables import write_files
 
         return write_files(out_dir, self.writers(truth, call, partial))
 
-    def report(self, truth=None) -> str:
+    def markdown(self, truth=None) -> str:
         """A short Markdown report: the verdict, the estimates table, the figures."""
-        table = self.table(truth)
+        table = self.to_pandas(truth=truth)
         lines = ["# Identification of the actuator (paper section III.2)", "",
                  ("**Result:** " if self.ok else "**Result NOT usable as it is:** ")
                  + self.summary(), "",
@@ -591,7 +624,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                    prior_spread: float = 0.5, refine: bool = True,
                    replicates: int | None = None, seed: int = 0, workers: int | None = None,
                    max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
-                   progress: Callable[[str, float], None] | None = None
+                   progress: ProgressCallback | None = None
                    ) -> PaperIdentification:
     """Identify the actuator from bench ``records`` (sweeps, ramps, presliding tests; see
     ``record_kind``) and the ``params`` a user knows (see the module docstring).
@@ -604,7 +637,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     ``refine=False`` stops after the stages (fast; their intervals are conditional on
     the earlier stages). ``replicates`` of the input-noise bootstrap (default
     ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads; each round of the joint
-    fit gives up after ``max_evaluations``. ``progress(stage, fraction)`` is called as
+    fit gives up after ``max_evaluations``. ``progress`` is called with a
+    ``pneumact.progress.Progress`` (the stage's name, the fraction of the whole done) as
     the work goes on.
     """
     from ..io.records import as_records
@@ -615,7 +649,11 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")
-    step = progress or (lambda label, fraction: None)
+    check_progress(progress, "identify_paper")
+
+    def step(label: str, fraction: float) -> None:
+        notify(progress, label, fraction, 1.0)
+
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)

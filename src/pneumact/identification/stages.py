@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -29,9 +30,13 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError
 from ..io.records import Record
+from ..io.report import ResultVocabulary
 from .bench import drive_force, kinematics, moving_threshold, steady_segments
 from .diagnostics import Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range", "presliding_window",
            "prior_bounds", "segments_of", "sliding_and_stribeck", "stage_presliding",
@@ -66,9 +71,22 @@ APPROACH_FRACTION = 0.1
 
 
 @dataclass(eq=False)
-class StageResult:
+class StageResult(ResultVocabulary):
     """One stage: estimates, the records used, data with the fitted curve, and what the
-    stage found worth saying (``diagnostics``)."""
+    stage found worth saying (``diagnostics``).
+
+    ``to_pandas()``: the estimates (``"data"``: the data and the fitted curve); ``plot()``:
+    data, fit and residuals; ``write(folder)``: both tables, the figure and report.html."""
+
+    report_title = "Identification stage"
+    figure_name = "stage"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"estimates": self.estimates.to_pandas(), "data": self.data}
+
+    def report_text(self) -> str:
+        return (f"{self.title}, from {', '.join(self.records)}. "
+                + " ".join(d.line() for d in self.diagnostics))
 
     name: str
     estimates: Estimates
@@ -83,7 +101,7 @@ class StageResult:
     def title(self) -> str:
         return STAGES[self.name]
 
-    def plot(self):
+    def plot(self) -> Figure:
         """Data and fitted curve (top), residuals (bottom), against the stage's x."""
         import matplotlib.pyplot as plt
 

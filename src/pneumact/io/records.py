@@ -14,12 +14,14 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from pneumact.checks import check_atmosphere, check_names, check_path
 from pneumact.errors import ArgumentTypeError, DataError
+from pneumact.io.report import ResultVocabulary
 from pneumact.io.tables import (
     PathLike,
     check_unique,
@@ -30,6 +32,9 @@ from pneumact.io.tables import (
 )
 from pneumact.io.units import KNOWN, convert_column, same_unit
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 __all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv"]
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
@@ -38,8 +43,12 @@ _NA_STRINGS = {"nan", "na", "n/a", "#n/a", "null", "none", "-nan"}
 
 
 @dataclass(frozen=True, eq=False)
-class Record:
+class Record(ResultVocabulary):
     """A measured record in SI: ``time`` (s) and named ``signals`` with their ``units``.
+
+    Like every result: ``to_pandas()``, ``plot()`` (a Figure) and ``write(folder)``
+    (signals.csv, signals.png and report.html). ``save(path)`` stays the file-level
+    saver: one CSV or Parquet file in chosen units, the form ``read_record`` reads back.
 
     Known signals are converted to: pressure and setpoint Pa absolute, position m,
     velocity m/s, force and friction N, command dimensionless ("1"). Arrays are
@@ -166,7 +175,30 @@ class Record:
             file_units[name] = unit
         return write_table(pd.DataFrame(frame), path, file_units)
 
-    def plot(self, signals: Sequence[str] | None = None):
+    report_title = "Record"
+    figure_name = "signals"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"signals": self.to_pandas()}
+
+    def report_text(self) -> str:
+        return (f"{self.source or 'record'}: {len(self)} samples over "
+                f"{self.time[0]:g}..{self.time[-1]:g} s; signals (SI): "
+                f"{', '.join(f'{n} [{u}]' for n, u in self.units.items())}.")
+
+    def write(self, out_dir: PathLike, *, call: str = "") -> list[Path]:
+        """signals.csv (SI, header ``name [unit]``, readable by ``read_record``),
+        signals.png and report.html in ``out_dir``, all or nothing."""
+        from pneumact.io.report import figure_png
+        from pneumact.io.tables import write_files
+
+        png = figure_png(self.plot())
+        return write_files(out_dir, {
+            "signals.csv": self.save,
+            f"{self.figure_name}.png": lambda p: Path(p).write_bytes(png),
+            "report.html": self.report(call, png).write})
+
+    def plot(self, signals: Sequence[str] | None = None) -> Figure:
         """One panel per signal against time, in display units (kPa, mm, N)."""
         from pneumact.plotting import plot_time_series
 
@@ -189,8 +221,11 @@ class Record:
         """Number of samples."""
         return len(self.time)
 
-    def to_pandas(self) -> pd.DataFrame:
-        """Signals as columns over a ``time`` index (s); units in ``frame.attrs["units"]``."""
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """Signals as columns over a ``time`` index (s); units in ``frame.attrs["units"]``
+        (``name``: "signals", the one table, or None)."""
+        if name not in (None, "signals"):
+            raise DataError(f"to_pandas: name = {name!r}; allowed: signals")
         frame = pd.DataFrame({name: np.array(values) for name, values in self.signals.items()},
                              index=pd.Index(np.array(self.time), name="time"))
         frame.attrs["units"] = {"time": "s", **self.units}

@@ -10,18 +10,27 @@ from __future__ import annotations
 
 import base64
 import datetime as _dt
+import functools
 import io
 import platform
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
-import pandas as pd
+from ..errors import ArgumentError
+from ..files import PathLike, atomic_write
+from ..plotting import PNG_DPI, write_png
 
-from ..plotting import write_png
-from .tables import PathLike, atomic_write
+if TYPE_CHECKING:  # pandas is imported on use: a result class costs nothing to import
+    import pandas as pd
+    from matplotlib.figure import Figure
 
-__all__ = ["Block", "ParameterTable", "Report", "figure_png"]
+__all__ = ["Block", "ParameterTable", "Report", "ResultVocabulary", "figure_png",
+           "table_writer"]
+
+#: a table longer than this is cut in a report (its CSV file has every row)
+REPORT_ROWS = 40
 
 
 @dataclass(frozen=True)
@@ -51,6 +60,7 @@ PROSE_LENGTH = 40  # a text cell longer than this many characters is a sentence
 
 def _has_prose(frame: pd.DataFrame) -> bool:
     """Whether a text column of ``frame`` holds a sentence."""
+    import pandas as pd
     for column in frame.columns:
         values = frame[column]
         if not pd.api.types.is_numeric_dtype(values) and len(values) and \
@@ -63,7 +73,7 @@ class ParameterTable(Protocol):
     """What a report shows of a parameter set (a ``ParameterSet`` is one; io sits below
     the parameters, so it names only what it calls)."""
 
-    def to_frame(self) -> pd.DataFrame: ...
+    def to_pandas(self) -> pd.DataFrame: ...
 
     def notes(self) -> list[str]: ...
 
@@ -72,7 +82,7 @@ class ParameterTable(Protocol):
 class Report:
     """An HTML report under construction. ``call``: how it was produced (the command
     line or the Python call); ``parameters``: the parameter set (a ``ParameterSet``: its
-``to_frame()`` and its ``notes()``), shown with provenance."""
+``to_pandas()`` and its ``notes()``), shown with provenance."""
 
     title: str
     call: str = ""
@@ -121,7 +131,7 @@ class Report:
         parameters = None
         notes: list[str] = []
         if self.parameters is not None:
-            parameters = self.parameters.to_frame().to_html(index=False, border=0,
+            parameters = self.parameters.to_pandas().to_html(index=False, border=0,
                                                             classes="data", na_rep="")
             notes = self.parameters.notes()
         return env.get_template("report.html.j2").render(
@@ -139,3 +149,93 @@ class Report:
         with atomic_write(path) as tmp:
             Path(tmp).write_text(text, encoding="utf-8")
         return path
+
+
+def _write_bytes(data: bytes, path: Path) -> None:
+    Path(path).write_bytes(data)
+
+
+def table_writer(frame: pd.DataFrame) -> Callable[[Path], object]:
+    """A ``write_files`` writer of ``frame`` as CSV (its index too when it carries
+    information: named, or not the plain row numbers)."""
+    return lambda path: frame.to_csv(path, index=not _plain_index(frame))
+
+
+def _plain_index(frame: pd.DataFrame) -> bool:
+    """Whether the index of ``frame`` is only the row numbers."""
+    import pandas as pd
+
+    return frame.index.name is None and isinstance(frame.index, pd.RangeIndex)
+
+
+class ResultVocabulary:
+    """What every result of pneumact speaks: ``to_pandas(name=None)`` (the main table,
+    or the one named), ``plot()`` (a matplotlib ``Figure``) and ``write(folder)`` (each
+    table as CSV, the figure as PNG, and ``report.html`` with both, all or nothing: a
+    failed write leaves the previous results in place).
+
+    A result names its tables in ``tables()`` (the first is the main one) and draws its
+    figure in ``plot()``; ``report_title``, ``report_text()`` and ``report_parameters()``
+    dress the report. A result with more to say overrides ``report()`` or ``write()``.
+    """
+
+    __slots__ = ()
+    report_title: ClassVar[str] = "pneumact result"
+    figure_name: ClassVar[str] = "figure"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        """The result's tables by name, the main one first."""
+        raise NotImplementedError
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """The main table, or the one ``name``d (see ``tables()``)."""
+        tables = self.tables()
+        if name is None:
+            return next(iter(tables.values()))
+        if name not in tables:
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: {', '.join(tables)}")
+        return tables[name]
+
+    def plot(self) -> Figure:
+        raise NotImplementedError
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        """The figures ``write`` draws, by file name (default: ``plot()`` alone)."""
+        return {self.figure_name: self.plot}
+
+    def report_text(self) -> str:
+        return ""
+
+    def report_parameters(self) -> Any:
+        """The parameter set shown at the end of the report (None: none)."""
+        return None
+
+    def report(self, call: str = "", png: bytes | None = None) -> Report:
+        """The HTML report (the figures, the first as ``png`` if already drawn, and the
+        tables), not yet written."""
+        report = Report(self.report_title, call=call, parameters=self.report_parameters())
+        if self.report_text():
+            report.text(self.report_text())
+        for i, (name, make) in enumerate(self.figures().items()):
+            report.image(png if png is not None and i == 0 else
+                         figure_png(make(), dpi=PNG_DPI), name.replace("_", " "))
+        for name, frame in self.tables().items():
+            cut = len(frame) > REPORT_ROWS
+            report.table(frame.head(REPORT_ROWS), f"{name.replace('_', ' ')}" + (
+                f" (first {REPORT_ROWS} of {len(frame)} rows; all in {name}.csv)"
+                if cut else ""), index=not _plain_index(frame))
+        return report
+
+    def write(self, out_dir: PathLike, *, call: str = "") -> list[Path]:
+        """``<table>.csv`` for each table, ``<figure>.png`` and ``report.html`` in
+        ``out_dir``, all or nothing (``pneumact.io.tables.write_files``)."""
+        from .tables import write_files
+
+        pngs = {name: figure_png(make(), dpi=PNG_DPI) for name, make in
+                self.figures().items()}
+        writers: dict[str, Callable[[Path], object]] = {
+            f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
+        for name, png in pngs.items():
+            writers[f"{name}.png"] = functools.partial(_write_bytes, png)
+        writers["report.html"] = self.report(call, next(iter(pngs.values()), None)).write
+        return write_files(out_dir, writers)

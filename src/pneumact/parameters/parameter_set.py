@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from pneumact.errors import ParameterError
 from pneumact.io.quantities import parse_value
+from pneumact.io.report import ResultVocabulary
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.validation import (
     implausible,
@@ -29,7 +30,10 @@ from pneumact.parameters.validation import (
 )
 
 if TYPE_CHECKING:
+    import os
+
     import pandas as pd
+    from matplotlib.figure import Figure
 
 __all__ = ["ParameterInfo", "ParameterSet"]
 
@@ -80,7 +84,7 @@ def number_text(name: str, value: float) -> str:
     return f"{float(value)!r} {catalogue()[name].unit}".rstrip()
 
 
-class ParameterSet(Mapping[str, float]):
+class ParameterSet(ResultVocabulary, Mapping[str, float]):
     """An immutable, validated parameter set in SI units.
 
     As a Mapping it holds the GIVEN values only (``len``, iteration, ``in``), but
@@ -88,6 +92,10 @@ class ParameterSet(Mapping[str, float]):
     KeyError) when there is neither. ``info[name]`` tells where a given value came from.
     The constructor takes SI numbers and validates them; it does not warn about
     passivity (``load_params``, ``from_dict`` and ``replace`` do).
+
+    Like every result: ``to_pandas()`` (the table of values with provenance), ``plot()``
+    (each value within its plausible range) and ``write(folder)`` (the TOML file, the
+    table, the figure and report.html).
     """
 
     __slots__ = ("_description", "_info", "_name", "_provenance", "_source_path",
@@ -262,9 +270,62 @@ class ParameterSet(Mapping[str, float]):
         notes += [f"{line} (PlausibilityWarning)" for line in implausible(self.values)]
         return [n for n in notes if n]
 
-    def to_frame(self) -> pd.DataFrame:
-        """Table of the set: given parameters, then defaults in use (source 'default')."""
+    report_title = "Parameter set"
+    figure_name = "plausible_ranges"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"parameters": self.to_pandas()}
+
+    def report_text(self) -> str:
+        return f"{self._name}: {self._description}".rstrip(": ")
+
+    def report_parameters(self) -> ParameterSet:
+        return self
+
+    def plot(self) -> Figure:
+        """Each given value with a plausible range (``catalogue``), placed within it on a
+        log scale: 0 at the range's low end, 1 at its high end (outside: implausible)."""
+        import matplotlib.pyplot as plt
+        import numpy as np
+
+        rows = []
+        for name, value in self._values.items():
+            plausible = catalogue()[name].plausible
+            if plausible and value > 0 and plausible[0] > 0:
+                low, high = np.log(plausible)
+                rows.append((name, (np.log(value) - low) / (high - low)))
+        fig, ax = plt.subplots(figsize=(6.5, 0.25 * len(rows) + 1.2))
+        ax.barh([r[0] for r in rows], [r[1] for r in rows], color="C0")
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.axvline(1.0, color="k", lw=0.8)
+        ax.invert_yaxis()
+        ax.set_xlabel("position in the plausible range (log scale; 0 low end, 1 high end)")
+        ax.set_title(self._name, fontsize=10)
+        ax.grid(True, axis="x", alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
+        """parameters.toml (the parameter file), parameters.csv, the figure and
+        report.html, all or nothing."""
+        from pneumact.io.report import figure_png, table_writer
+        from pneumact.io.tables import write_files
+        from pneumact.parameters.files import write_params
+
+        png = figure_png(self.plot())
+        return write_files(out_dir, {
+            "parameters.toml": lambda p: write_params(self, p),
+            "parameters.csv": table_writer(self.to_pandas()),
+            f"{self.figure_name}.png": lambda p: Path(p).write_bytes(png),
+            "report.html": self.report(call, png).write})
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """Table of the set: given parameters, then defaults in use (source 'default');
+        ``name``: "parameters" (the one table) or None."""
         import pandas as pd
+
+        if name not in (None, "parameters"):
+            raise ParameterError(f"to_pandas: name = {name!r}; allowed: parameters")
 
         rows = []
         for spec in catalogue().values():

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 
 from ..checks import check_int
 from ..errors import ArgumentError, ParameterError
+from ..progress import ProgressCallback
 from .methods import (
     Evaluate,
     SensitivityWarning,
@@ -35,7 +36,8 @@ __all__ = ["along_time", "local_along_time", "model_signal", "plot_along_loop",
 
 def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
                  *, workers=None, scheduler=None, out_dir=None, resume=False,
-                 overwrite=False, progress=None, solver=None) -> Evaluate:
+                 overwrite=False, progress: ProgressCallback | None = None,
+                 solver=None) -> Evaluate:
     """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
     by the time) from the batch engine; resumable from ``out_dir`` like ``model_outputs``."""
     return batch_evaluate(model, experiment, problem, signal=signal, times=times,

@@ -8,16 +8,23 @@ with known indices and the actuator on the batch engine (``model_outputs``).
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..checks import check_int, check_range, check_seed, check_type
 from ..errors import ArgumentError, ArgumentTypeError, PneumactError
+from ..io.report import ResultVocabulary
+from ..progress import ProgressCallback
 from .problem import Problem
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_fast",
            "sobol", "src"]
@@ -72,9 +79,21 @@ class SensitivityWarning(UserWarning):
 
 
 @dataclass(eq=False)
-class StudyResult:
+class StudyResult(ResultVocabulary):
     """Indices per output (``indices``: long table output × parameter × index), the
-    sample and the outputs it gave."""
+    sample and the outputs it gave.
+
+    ``to_pandas()``: the indices, long (``to_pandas(output=...)``: one output's, a row
+    per parameter; ``"sample"``, ``"outputs"``: the others); ``plot(output)``: the bar
+    chart of an output's index (default the first output); ``write(folder)``: the
+    tables, the figure of every output and report.html."""
+
+    report_title = "Global sensitivity study"
+    figure_name = "indices"
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        return {f"indices_{output}": functools.partial(self.plot, output)
+                for output in self.output_names}
 
     method: str
     indices: pd.DataFrame
@@ -82,23 +101,43 @@ class StudyResult:
     outputs: pd.DataFrame
     extra: dict = field(default_factory=dict)
 
-    def table(self, output: str) -> pd.DataFrame:
-        """The indices of one output, one row per parameter."""
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"indices": self.indices, "sample": self.sample, "outputs": self.outputs}
+
+    def report_text(self) -> str:
+        return (f"{self.method} indices of {', '.join(self.output_names)} over "
+                f"{len(self.sample)} runs.")
+
+    @property
+    def output_names(self) -> list[str]:
+        return list(dict.fromkeys(self.indices["output"]))
+
+    def to_pandas(self, name: str | None = None, output: str | None = None
+                  ) -> pd.DataFrame:
+        """The indices (long: output, parameter, indices), or one ``output``'s, one row
+        per parameter; ``name``: "sample" or "outputs" for those tables."""
+        if output is None:
+            return super().to_pandas(name)
+        if output not in self.output_names:
+            raise ArgumentError(f"to_pandas: output = {output!r}; allowed: "
+                                f"{', '.join(self.output_names)}")
         sub = self.indices[self.indices["output"] == output]
         return sub.drop(columns="output").set_index("parameter")
 
     def ranking(self, output: str, by: str | None = None) -> list[str]:
         """Parameters from most to least influential on ``output``."""
-        table = self.table(output)
+        table = self.to_pandas(output=output)
         key = by or {"sobol": "ST", "morris": "mu_star", "src": "SRC2", "rbd_fast": "S1",
                      "dgsm": "ST_bound"}.get(self.method, table.columns[0])
         return list(table[key].abs().sort_values(ascending=False).index)
 
-    def plot(self, output: str, index: str | None = None):
-        """Bar chart of an index (with its confidence interval where there is one)."""
+    def plot(self, output: str | None = None, index: str | None = None) -> Figure:
+        """Bar chart of an index (with its confidence interval where there is one) of
+        ``output`` (default: the first)."""
         import matplotlib.pyplot as plt
 
-        table = self.table(output)
+        output = output or self.output_names[0]
+        table = self.to_pandas(output=output)
         keys = {"sobol": ["S1", "ST"], "morris": ["mu_star"], "src": ["SRC"],
                 "rbd_fast": ["S1"], "dgsm": ["ST_bound"]}.get(self.method,
                                                               [table.columns[0]])
@@ -289,7 +328,7 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
                   workers=None, scheduler=None, out_dir=None, resume=False, overwrite=False,
-                  progress=None, solver=None) -> Evaluate:
+                  progress: ProgressCallback | None = None, solver=None) -> Evaluate:
     """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
     Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
     are reported with their errors, never dropped."""

@@ -5,11 +5,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..io.report import ResultVocabulary
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["PAPER_VARIATIONS", "FrictionCurves", "OneAtATime", "friction_velocity",
            "one_at_a_time"]
@@ -23,9 +28,15 @@ DEFAULT_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
 
 
 @dataclass(eq=False)
-class OneAtATime:
+class OneAtATime(ResultVocabulary):
     """Runs of the study: ``runs`` (parameter, change, value, features, Δ vs nominal,
-    RMS position change), the position and pressure of every run for the loop plots."""
+    RMS position change), the position and pressure of every run for the loop plots.
+
+    ``to_pandas()``: the runs; ``plot()``: the loops (``plot_loops``); ``write(folder)``:
+    runs.csv, loops.png and report.html."""
+
+    report_title = "One-at-a-time sensitivity (paper eq. 15)"
+    figure_name = "loops"
 
     runs: pd.DataFrame
     signals: dict[str, np.ndarray]
@@ -39,7 +50,14 @@ class OneAtATime:
         return varied.groupby("parameter")[column].apply(lambda c: c.abs().max()) \
             .sort_values(ascending=False)
 
-    def plot_loops(self, zoom: bool = False):
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"runs": self.runs}
+
+    def plot(self, zoom: bool = False) -> Figure:
+        """The loops of every run (``plot_loops``)."""
+        return self.plot_loops(zoom)
+
+    def plot_loops(self, zoom: bool = False) -> Figure:
         """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5);
         with ``zoom`` a row per parameter: the whole loop, the break-away (where the
         diaphragm leaves rest) and the low-pressure reversal, where σ0, σ1 and vs act."""
@@ -182,14 +200,27 @@ def _is_pair(spec) -> bool:
 
 
 @dataclass(eq=False)
-class FrictionCurves:
+class FrictionCurves(ResultVocabulary):
     """Friction against velocity of a prescribed-velocity run, per parameter variation
-    (the paper's Fig. 3): ``curves[parameter]`` is a list of (label, velocity, friction)."""
+    (the paper's Fig. 3): ``curves[parameter]`` is a list of (label, velocity, friction).
+
+    ``to_pandas()``: the curves, long (parameter, variation, velocity, friction);
+    ``plot()``: a panel per parameter; ``write(folder)``: curves.csv, the figure and
+    report.html."""
+
+    report_title = "Friction against velocity per parameter variation (paper Fig. 3)"
+    figure_name = "friction_velocity"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        frames = [pd.DataFrame({"parameter": name, "variation": label, "velocity": v,
+                                "friction": f})
+                  for name, entries in self.curves.items() for label, v, f in entries]
+        return {"curves": pd.concat(frames, ignore_index=True)}
 
     curves: dict[str, list[tuple[str, np.ndarray, np.ndarray]]]
     vs: float = float("nan")
 
-    def plot(self, zoom: bool = False):
+    def plot(self, zoom: bool = False) -> Figure:
         """One panel per parameter; with ``zoom`` a row per parameter: the whole curve,
         low speeds (|v| ≤ 4·vs: presliding and the Stribeck drop, where σ0, σ1 and vs
         act) and the fastest 20 % (the sliding level, where Fc, Fs and σ2 act)."""

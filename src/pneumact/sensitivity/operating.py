@@ -21,15 +21,22 @@ positive, with the boundaries interpolated between conditions.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..io.report import ResultVocabulary
+from ..progress import Progress, ProgressCallback, notify
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -144,11 +151,29 @@ def at_speeds(model, speeds: Sequence[float], *, amplitude: float = 1.0,
 
 # --------------------------------------------------------------------------- the study
 @dataclass(eq=False)
-class ConditionStudy:
+class ConditionStudy(ResultVocabulary):
     """Indices at each condition. ``conditions``: one row per condition (valve, period,
     amplitude, measured sliding speed and v/vs, nominal features); ``indices``: the long
     table of every study (condition columns, output, parameter, the method's indices);
-    ``results``: the study object of each condition."""
+    ``results``: the study object of each condition.
+
+    ``to_pandas()``: the indices (``"conditions"``: the conditions); ``plot(output)``: an
+    index against v/vs (default the first output); ``write(folder)``: both tables, the
+    figure of every output and report.html."""
+
+    report_title = "Sensitivity across operating conditions"
+    figure_name = "indices_by_speed"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"indices": self.indices, "conditions": self.conditions}
+
+    @property
+    def output_names(self) -> list[str]:
+        return list(dict.fromkeys(self.indices["output"]))
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        return {f"indices_{output}_by_speed": functools.partial(self.plot, output)
+                for output in self.output_names}
 
     method: str
     conditions: pd.DataFrame
@@ -180,12 +205,14 @@ class ConditionStudy:
         speeds = self.conditions.set_index("condition")["speed_vs"]
         return ranked.assign(speed_vs=speeds.loc[ranked.index].to_numpy())
 
-    def plot(self, output: str, index: str | None = None):
-        """The index of ``output`` against v/vs (log axis), a line per parameter and a
-        panel per valve and amplitude, with the confidence band where there is one."""
+    def plot(self, output: str | None = None, index: str | None = None) -> Figure:
+        """The index of ``output`` (default: the first) against v/vs (log axis), a line
+        per parameter and a panel per valve and amplitude, with the confidence band where
+        there is one."""
         import matplotlib.pyplot as plt
         from matplotlib.ticker import FuncFormatter, NullFormatter
 
+        output = output or self.output_names[0]
         key = self._key(index)
         groups = list(self.conditions.groupby(["valve", "amplitude"], sort=False))
         fig, axes = plt.subplots(1, len(groups), squeeze=False,
@@ -226,8 +253,7 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
                       variations: Mapping[str, object] | None = None,
                       features: Sequence[str] = ("loop_width_pressure", "breakaway_pressure"),
                       n: int = 256, seed: int = 0, second_order: bool = False,
-                      out_dir=None, progress: Callable[[int, int, int], None] | None = None,
-                      on_condition: Callable[[int, int, str], None] | None = None,
+                      out_dir=None, progress: ProgressCallback | None = None,
                       solver=None, **batch) -> ConditionStudy:
     """Run the ``method`` study (oat, sobol, morris, src or fast) of ``model`` (an
     ``Actuator``: its parameters, friction and chamber) at each condition.
@@ -235,8 +261,9 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
     ``variations``: the paper's amounts for oat, ``DEFAULT_RANGES`` otherwise; ``n``: base
     sample (sobol, src, fast) or trajectories (morris). ``out_dir``: each condition's runs
     are kept in ``out_dir/<condition>`` (resumable, see ``model_outputs``). ``progress``:
-    (done, failed, total) over all conditions; ``on_condition``: (i, count, label) as each
-    starts. ``batch``: more ``simulate_batch`` options (workers, scheduler, ...).
+    called with a ``pneumact.progress.Progress`` (stage "across conditions", the sets
+    done of all conditions' sets). ``batch``: more ``simulate_batch``
+    options (workers, scheduler, ...).
     """
     if method not in METHODS:
         raise ParameterError(f"across_conditions: method = {method!r}; allowed: "
@@ -249,8 +276,6 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
         raise ParameterError(f"across_conditions: conditions repeat: {', '.join(labels)}")
     rows, frames, results = [], [], []
     for i, condition in enumerate(conditions):
-        if on_condition is not None:
-            on_condition(i, len(conditions), condition.label)
         row = _describe(model, condition, solver)
         relay = _relay(progress, i, len(conditions))
         where_runs = None if out_dir is None else Path(out_dir) / _folder(condition)
@@ -279,13 +304,15 @@ def _folder(condition: Condition) -> str:
     return f"{condition.valve}-{condition.period:g}s-a{condition.amplitude:g}"
 
 
-def _relay(progress, i: int, count: int):
+def _relay(progress: ProgressCallback | None, i: int, count: int
+           ) -> ProgressCallback | None:
     """A batch progress callback of condition ``i`` that reports over all conditions."""
     if progress is None:
         return None
 
-    def relay(done: int, failed: int, total: int) -> None:
-        progress(i * total + done, failed, count * total)
+    def relay(batch: Progress) -> None:
+        notify(progress, "across conditions", i * batch.total + batch.done, count * batch.total,
+               batch.failed)
 
     return relay
 

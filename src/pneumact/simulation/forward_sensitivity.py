@@ -18,10 +18,16 @@ import functools
 import time as _time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ParameterError
+from ..io.report import ResultVocabulary
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 from .result import Result, SolverStats
 from .simulate import Prepared, failure, prepare
 from .solvers import Rodas4
@@ -30,8 +36,12 @@ __all__ = ["SensitivityResult", "simulate_sensitivities"]
 
 
 @dataclass(eq=False)
-class SensitivityResult:
+class SensitivityResult(ResultVocabulary):
     """The simulation and, per signal, an array (n_time × n_parameters) of ∂signal/∂θ.
+
+    ``to_pandas()``: the long table (``"simulation"``: the run's signals); ``plot()``:
+    the relative sensitivities θ·∂y/∂θ of position (or the first signal) over time;
+    ``write(folder)``: both tables, the figure and report.html.
 
     State sensitivities come from the integration; those of derived outputs (friction,
     pressure of a source, flows) are computed by the chain rule on first access only.
@@ -61,10 +71,40 @@ class SensitivityResult:
         """θ·∂signal/∂θ: the change of the signal per relative change of each parameter."""
         return self[signal] * self.values[None, :]
 
-    def to_pandas(self):
-        """Long table: time, signal, parameter, sensitivity (SI units of signal/parameter)."""
+    report_title = "Forward sensitivities"
+    figure_name = "relative_sensitivities"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"sensitivities": self.to_pandas(), "simulation": self.result.to_pandas()}
+
+    def report_text(self) -> str:
+        return (f"∂signal/∂θ along {self.result.meta.get('experiment', 'the run')} for "
+                f"{', '.join(self.parameters)}; the figure shows θ·∂y/∂θ (the change per "
+                "relative change of each parameter).")
+
+    def plot(self, signal: str | None = None) -> Figure:
+        """θ·∂signal/∂θ over time, one line per parameter (default signal: position)."""
+        import matplotlib.pyplot as plt
+
+        signal = signal or ("position" if "position" in self.signals else self.signals[0])
+        fig, ax = plt.subplots(figsize=(7.0, 3.8))
+        relative = self.relative(signal)
+        for k, name in enumerate(self.parameters):
+            ax.plot(self.result.time, relative[:, k], label=name)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel(f"θ·∂{signal}/∂θ [{self.result.units.get(signal, '')}]")
+        ax.legend(fontsize=8)
+        ax.grid(True, alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def to_pandas(self, name: str | None = None):
+        """Long table: time, signal, parameter, sensitivity (SI units of signal/parameter);
+        ``name="simulation"``: the run's signals."""
         import pandas as pd
 
+        if name is not None:
+            return super().to_pandas(name)
         frames = []
         for name in self.signals:
             arr = self[name]

@@ -5,8 +5,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ..io.report import ResultVocabulary, table_writer
+
+if TYPE_CHECKING:
+    import os
+
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -39,11 +48,14 @@ class SolverStats:
 
 
 @dataclass(eq=False)
-class Result:
+class Result(ResultVocabulary):
     """Signals of one simulation on a common time grid, in SI units.
 
     ``result["position"]`` gives an array; ``result.units["position"]`` its unit.
-    ``to_pandas()`` gives a DataFrame indexed by time (units in ``attrs["units"]``).
+    ``to_pandas()`` gives a DataFrame indexed by time (units in ``attrs["units"]``);
+    ``plot()`` the time series; ``write(folder)`` signals.csv, parameters.csv,
+    signals.png and report.html; ``save(path)`` the signals alone, as one CSV or
+    Parquet file (the file-level saver, like ``Record.save``).
     ``parameters`` holds every parameter value the run used (SI), ``components`` the
     model's components (friction law, valve, ...), ``meta`` the solver's report.
     """
@@ -105,10 +117,29 @@ class Result:
     def names(self) -> list[str]:
         return list(self.signals)
 
-    def to_pandas(self):
-        """A DataFrame indexed by time; units, parameters and components in ``attrs``."""
+    report_title = "Simulation"
+    figure_name = "signals"
+
+    def tables(self) -> dict[str, pd.DataFrame]:
         import pandas as pd
 
+        return {"signals": self.to_pandas(),
+                "parameters": pd.DataFrame({"value": self.parameters}).rename_axis("name")}
+
+    def report_text(self) -> str:
+        meta = self.meta
+        return (f"Model {meta.get('model', '?')} with parameters {meta.get('params', '?')} "
+                f"under {meta.get('experiment', '?')}; {meta.get('solver', '')}, "
+                f"{meta.get('steps', '?')} steps. Components: "
+                f"{', '.join(f'{k} {v}' for k, v in self.components.items())}.")
+
+    def to_pandas(self, name: str | None = None):
+        """A DataFrame indexed by time; units, parameters and components in ``attrs``
+        (``name="parameters"``: the parameter values the run used)."""
+        import pandas as pd
+
+        if name is not None:
+            return super().to_pandas(name)
         frame = pd.DataFrame(self.signals, index=pd.Index(self.time, name="time"))
         frame.attrs["units"] = {"time": "s", **self.units}
         frame.attrs["parameters"] = dict(self.parameters)
@@ -131,13 +162,27 @@ class Result:
 
         return hysteresis_summary(self.time, self["pressure"], self["position"])
 
-    def plot_hysteresis(self, ax=None, **kwargs):
-        """Pressure [kPa] against position [mm], like the paper's Figs. 5-6."""
+    def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
+        """signals.csv (header ``name [unit]``), parameters.csv, signals.png and
+        report.html in ``out_dir``, all or nothing."""
+        from ..io.report import figure_png
+        from ..io.tables import write_files
+
+        png = figure_png(self.plot())
+        return write_files(out_dir, {
+            "signals.csv": self.save,
+            "parameters.csv": table_writer(self.to_pandas("parameters")),
+            f"{self.figure_name}.png": lambda p: Path(p).write_bytes(png),
+            "report.html": self.report(call, png).write})
+
+    def plot_hysteresis(self, ax=None, **kwargs) -> Figure:
+        """Pressure [kPa] against position [mm], like the paper's Figs. 5-6 (on ``ax``
+        when given); returns the Figure."""
         from ..plotting import plot_hysteresis
 
         return plot_hysteresis(self, ax=ax, **kwargs)
 
-    def plot(self, signals=None, axes=None):
+    def plot(self, signals=None, axes=None) -> Figure:
         """Time series of the chosen signals, one panel each, in display units."""
         from ..plotting import plot_time_series
 

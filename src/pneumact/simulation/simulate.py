@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time as _time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Protocol
@@ -22,6 +22,7 @@ from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
+from ..progress import ProgressCallback, check_progress, notify
 from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
@@ -250,7 +251,7 @@ def compiled(fn, *args):
 
 
 def run_kernel(prep: Prepared, solver: Solver,
-               progress: Callable[[float], None] | None = None, chunks: int = 1):
+               progress: ProgressCallback | None = None, chunks: int = 1):
     """Call the compiled integrator, optionally in chunks to report progress; returns
     (final state, states at t_out, outputs at t_out, solver info)."""
     kernel = prep.kernel
@@ -284,8 +285,7 @@ def run_kernel(prep: Prepared, solver: Solver,
             total[index] = info[index]
         h = info[kernel.INFO_H]
         j0 = j1
-        if progress is not None:
-            progress((c + 1) / chunks)
+        notify(progress, "simulate", c + 1, chunks)
         if info[kernel.INFO_STATUS] != 0:
             break
     return y, y_out, out, total
@@ -301,13 +301,14 @@ def failure(prep: Prepared, solver: Solver, stats: SolverStats, y_end) -> Solver
 
 
 def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_eval=None,
-             y0=None, progress: Callable[[float], None] | None = None,
+             y0=None, progress: ProgressCallback | None = None,
              values: Mapping[str, float] | None = None) -> Result:
     """Simulate ``model`` (an ``Actuator`` or a ``FrictionRig``) under ``experiment``.
 
     Returns a ``Result`` with named, unit-tagged signals at ``t_eval`` (default: the
-    experiment's uniform output grid). ``progress`` is called with the completed fraction
-    (the run is then split into chunks). Raises ``SolverError`` saying when and in which
+    experiment's uniform output grid). ``progress`` is called with a
+    ``pneumact.progress.Progress`` (stage "simulate", chunks done of 50: the run is then
+    split into chunks). Raises ``SolverError`` saying when and in which
     state the integrator failed. ``values`` changes parameter values (SI, by name) for
     this run without building a new parameter set (fitting loops use it; ranges and
     relations are not re-checked). ``y0`` starts the run elsewhere than at the model's
@@ -315,9 +316,7 @@ def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_e
     equilibrium).
     """
     solver = checked_solver(solver)
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"simulate: progress = {shown(progress)}: must be a function "
-                                "progress(fraction)")
+    check_progress(progress, "simulate")
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     n_t = prep.t_out.size
     compiled(getattr(prep.kernel, solver.kernel_function), prep.y0, prep.vector, prep.sig,

@@ -13,13 +13,17 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from ..errors import DataError
+from ..errors import ArgumentError, DataError
 from ..io.records import Record
 from .metrics import METRIC_NAMES, error_metrics
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["FrictionValidation", "friction_across_levels", "validate_friction"]
 
@@ -27,7 +31,11 @@ __all__ = ["FrictionValidation", "friction_across_levels", "validate_friction"]
 @dataclass(eq=False)
 class FrictionValidation:
     """Predicted against measured force per record (``predictions[name]``: time,
-    velocity, measured, predicted, SI) and the parameters each prediction used."""
+    velocity, measured, predicted, SI) and the parameters each prediction used.
+
+    ``to_pandas()``: the predictions, long (``"metrics"``, ``"parameters"``: the
+    others); ``plot()``: measured and predicted force; ``write(folder)``: the tables,
+    force.png and report.html."""
 
     model: str
     identified_on: list[str]
@@ -48,7 +56,19 @@ class FrictionValidation:
         return pd.DataFrame(rows, columns=["record", "role", *METRIC_NAMES,
                                            "relative_force_error"])
 
-    def plot(self):
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """record, time, velocity, measured, predicted (SI); ``name``: "metrics" or
+        "parameters" for those tables."""
+        if name == "metrics":
+            return self.metrics()
+        if name == "parameters":
+            return self.parameters
+        if name is not None:
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: metrics, parameters")
+        return pd.concat([frame.assign(record=record)[["record", *frame.columns]]
+                          for record, frame in self.predictions.items()], ignore_index=True)
+
+    def plot(self) -> Figure:
         """Per record: measured and predicted force against time, and against velocity."""
         import matplotlib.pyplot as plt
 
@@ -73,7 +93,8 @@ class FrictionValidation:
         return fig
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "", title: str = "") -> list[Path]:
-        """metrics.csv, parameters.csv, force.png and report.html, all or nothing."""
+        """predictions.csv, metrics.csv, parameters.csv, force.png and report.html, all
+        or nothing."""
         from ..io.report import Report
         from ..io.tables import write_files
         from ..plotting import figure_writer
@@ -87,6 +108,7 @@ class FrictionValidation:
         report.table(self.parameters, "Parameters of each prediction (SI)")
         report.figure(self.plot(), "Measured and predicted force")
         return write_files(out_dir, {
+            "predictions.csv": lambda p: self.to_pandas().to_csv(p, index=False),
             "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
             "parameters.csv": lambda p: self.parameters.to_csv(p),
             "force.png": figure_writer(self.plot),

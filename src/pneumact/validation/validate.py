@@ -23,14 +23,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from ..errors import DataError
+from ..errors import ArgumentError, DataError
 from ..io.records import Record
 from ..models.inputs import INPUT_SIGNALS, input_signal, valve_for_signal
+from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
 from .verdicts import Criteria, record_verdict, worst_verdict
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from ..identification.fit import FitResult
     from ..simulation.result import Result
 
@@ -91,7 +94,9 @@ def _write_bytes(data: bytes, path: Path) -> None:
 
 @dataclass(eq=False)
 class RecordValidation:
-    """One record against the model's prediction of it."""
+    """One record against the model's prediction of it: ``metrics()`` and
+    ``to_pandas()`` (tables), ``plot()`` (a Figure) and ``write(folder)`` as those of a
+    ``Validation`` of this record alone."""
 
     name: str
     record: Record
@@ -110,9 +115,28 @@ class RecordValidation:
         """Measured − predicted, on the record's time grid."""
         return self.measured(signal) - self.predicted(signal)
 
-    def metrics(self) -> dict[str, dict[str, float]]:
-        return {s: error_metrics(self.measured(s), self.predicted(s), f"{self.name}: {s}")
-                for s in self.signals}
+    def metrics(self) -> pd.DataFrame:
+        """Per signal: RMS, max, NRMSE, fit %, R², n (``validation.metrics``)."""
+        return pd.DataFrame(
+            [{"record": self.name, "signal": s,
+              **error_metrics(self.measured(s), self.predicted(s), f"{self.name}: {s}")}
+             for s in self.signals], columns=["record", "signal", *METRIC_NAMES])
+
+    def alone(self) -> Validation:
+        """A ``Validation`` of this record alone."""
+        return Validation([self], self.signals, label=self.name)
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """Long table: time, signal, measured, model, residual (see
+        ``Validation.to_pandas``)."""
+        return self.alone().to_pandas(name)
+
+    def plot(self) -> Figure:
+        return self.alone().plot()
+
+    def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:
+        """The files of ``Validation.write`` for this record alone."""
+        return self.alone().write(out_dir, call=call, title=f"Validation on {self.name}")
 
     @property
     def has_loop(self) -> bool:
@@ -144,7 +168,11 @@ class RecordValidation:
 
 @dataclass(eq=False)
 class Validation:
-    """Validation of one model on a set of records; ``label`` names the set (e.g. test)."""
+    """Validation of one model on a set of records; ``label`` names the set (e.g. test).
+
+    ``to_pandas()``: the time series, long (``"metrics"``, ``"verdicts"``, ``"loops"``:
+    the others); ``plot()``: the loops (the time series without a loop); ``write(folder)``:
+    every table, every figure and report.html."""
 
     records: list[RecordValidation]
     signals: tuple[str, ...]
@@ -158,9 +186,8 @@ class Validation:
         verdicts = self.verdicts().set_index("record")["verdict"]
         rows = []
         for rv in self.records:
-            for signal, m in rv.metrics().items():
-                rows.append({"record": rv.name, "signal": signal, **m,
-                             "verdict": verdicts[rv.name]})
+            for row in rv.metrics().to_dict("records"):
+                rows.append({**row, "verdict": verdicts[rv.name]})
         for signal in self.signals:
             measured = np.concatenate([rv.measured(signal) for rv in self.records])
             predicted = np.concatenate([rv.predicted(signal) for rv in self.records])
@@ -203,8 +230,15 @@ class Validation:
                                           "band": band}))
         return pd.concat(rows, ignore_index=True)
 
-    def to_pandas(self) -> pd.DataFrame:
-        """Long table: record, time, signal, measured, model, residual (SI)."""
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """Long table: record, time, signal, measured, model, residual (SI); ``name``:
+        "metrics", "verdicts" or "loops" for those tables."""
+        others = {"metrics": self.metrics, "verdicts": self.verdicts, "loops": self.loops}
+        if name is not None:
+            if name not in others:
+                raise ArgumentError(f"to_pandas: name = {name!r}; allowed: "
+                                    f"{', '.join(others)}")
+            return others[name]()
         frames = []
         for rv in self.records:
             for s in self.signals:
@@ -215,6 +249,13 @@ class Validation:
         return pd.concat(frames, ignore_index=True)
 
     # ----------------------------------------------------------------------- plots
+    def plot(self) -> Figure:
+        """The loops (``plot_loops``) when a record has pressure and position, else the
+        time series (``plot_time``)."""
+        if any(rv.has_loop for rv in self.records):
+            return self.plot_loops()
+        return self.plot_time()
+
     def plot_loops(self):
         """Measured and predicted pressure–position loops per record (the paper's Fig. 6)."""
         from .plots import plot_loops
@@ -234,7 +275,7 @@ class Validation:
         return plot_residuals(self)
 
     # ----------------------------------------------------------------------- output
-    def figures(self) -> dict[str, bytes]:
+    def figure_pngs(self) -> dict[str, bytes]:
         """The figures as PNG, rendered once for both the files and the report: time,
         residuals, and loops when a record has pressure and position."""
         from ..io.report import figure_png
@@ -247,16 +288,16 @@ class Validation:
 
     def add_to(self, report, title: str | None = None,
                figures: dict[str, bytes] | None = None) -> None:
-        """This validation's tables and figures (``figures()`` unless given) as sections
-        of a ``Report``."""
+        """This validation's tables and figures (``figure_pngs()`` unless given) as
+        sections of a ``Report``."""
         from .plots import add_to_report
 
-        add_to_report(self, report, title, self.figures() if figures is None else figures)
+        add_to_report(self, report, title, self.figure_pngs() if figures is None else figures)
 
     def writers(self, prefix: str = "", figures: dict[str, bytes] | None = None
                 ) -> dict[str, Callable[[Path], object]]:
         """Files of this validation: metrics, loops and the time series (CSV), figures."""
-        figures = self.figures() if figures is None else figures
+        figures = self.figure_pngs() if figures is None else figures
         writers: dict[str, Callable[[Path], object]] = {
             f"{prefix}metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
             f"{prefix}loops.csv": lambda p: self.loops().to_csv(p, index=False),
@@ -271,7 +312,7 @@ class Validation:
         from ..io.report import Report
         from ..io.tables import write_files
 
-        figures = self.figures()
+        figures = self.figure_pngs()
         report = Report(title, call=call, parameters=parameters)
         self.add_to(report, figures=figures)
         writers = self.writers(figures=figures)
@@ -283,7 +324,7 @@ def validate(model, records: Record | Sequence[Record], *,
              signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
              solver=None, smooth_input: bool = False, label: str = "validation",
              input: str = "auto", criteria: Criteria | None = None,
-             progress: Callable[[int, int], None] | None = None) -> Validation:
+             progress: ProgressCallback | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
     measured input and compare ``signals`` with the measurement.
 
@@ -291,6 +332,8 @@ def validate(model, records: Record | Sequence[Record], *,
     regulator, else its pressure as a pressure source, else its command through the
     valve; the model's valve is kept when it is that kind), ``model`` keeps the model's
     valve, or name the signal (``INPUTS``). ``criteria``: the thresholds of the verdicts.
+    ``progress`` is called with a ``pneumact.progress.Progress`` (stage "validate",
+    records done of all).
     """
     from ..checks import check_names
     from ..identification import experiment_for
@@ -299,6 +342,7 @@ def validate(model, records: Record | Sequence[Record], *,
     from ..simulation.simulate import check_model, model_stroke
 
     check_model(model, "validate")
+    check_progress(progress, "validate")
     records = as_records(records, "validate")
     signals = tuple(check_names("signals", signals, where="validate", what="signal name",
                                 allow_empty=False))
@@ -316,14 +360,17 @@ def validate(model, records: Record | Sequence[Record], *,
                              values=dict(values or {}))
         valve = getattr(getattr(driven, "valve", None), "name", "")
         out.append(RecordValidation(name, record, simulated, signals, signal, valve))
-        if progress is not None:
-            progress(i + 1, len(records))
+        notify(progress, "validate", i + 1, len(records))
     return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
 
 @dataclass(eq=False)
 class TrainTest:
-    """A fit on training records and its validation on those and on test records."""
+    """A fit on training records and its validation on those and on test records.
+
+    ``to_pandas()``: training and test metrics (``metrics()``; ``"summary"``: pooled,
+    side by side); ``plot()``: the test records' loops or time series; ``write(folder)``:
+    both validations, the estimates and report.html."""
 
     fit: FitResult
     train: Validation
@@ -334,6 +381,16 @@ class TrainTest:
         a test fit % well below the training one."""
         return pd.concat([self.train.metrics().assign(set="training"),
                           self.test.metrics().assign(set="test")], ignore_index=True)
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """``metrics()`` (``name`` None or "metrics"), or "summary"."""
+        if name not in (None, "metrics", "summary"):
+            raise ArgumentError(f"to_pandas: name = {name!r}; allowed: metrics, summary")
+        return self.summary() if name == "summary" else self.metrics()
+
+    def plot(self) -> Figure:
+        """The test validation's figure (``Validation.plot``)."""
+        return self.test.plot()
 
     def summary(self) -> pd.DataFrame:
         """Pooled metrics of each set side by side, one row per signal."""
@@ -346,20 +403,20 @@ class TrainTest:
         from ..io.report import Report
         from ..io.tables import write_files
 
-        parameters = self.fit.parameters()
+        parameters = self.fit.report_parameters()
         report = Report("Identification and validation on held-out records", call=call,
                         parameters=parameters)
         report.heading("Fitted parameters")
-        report.table(self.fit.table(), "Estimates with standard errors (training records)")
+        report.table(self.fit.to_pandas(), "Estimates with standard errors (training records)")
         report.heading("Training against test")
         report.table(self.metrics(), "Error metrics per record and pooled", index=False)
-        train_figures, test_figures = self.train.figures(), self.test.figures()
+        train_figures, test_figures = self.train.figure_pngs(), self.test.figure_pngs()
         self.train.add_to(report, "Training records", train_figures)
         self.test.add_to(report, "Test records", test_figures)
         writers = {**self.train.writers("train_", train_figures),
                    **self.test.writers("test_", test_figures),
                    "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
-                   "estimates.csv": lambda p: self.fit.table().to_csv(p),
+                   "estimates.csv": lambda p: self.fit.to_pandas().to_csv(p),
                    "report.html": report.write}
         return write_files(out_dir, writers)
 

@@ -95,7 +95,7 @@ def _lags_outside(residual) -> float:
 def record_verdict(rv, criteria: Criteria) -> dict:
     """The verdict of one ``RecordValidation``, with every check's value and the reasons
     for it."""
-    fits = {s: m["fit_percent"] for s, m in rv.metrics().items()}
+    fits = dict(zip(rv.signals, rv.metrics()["fit_percent"], strict=True))
     reasons = [f"fit of {s} {fit:.3g} % (at least {criteria.min_fit_percent:g} % needed)"
                for s, fit in fits.items() if not fit >= criteria.min_fit_percent]
     loop_values, loop_reasons = _loop_checks(rv, criteria)

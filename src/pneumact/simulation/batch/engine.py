@@ -21,10 +21,10 @@ from __future__ import annotations
 import math
 import os
 import time as _time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -35,7 +35,12 @@ from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
+from ...io.report import ResultVocabulary
 from ...io.tables import partial_folder, staged_folder
+from ...progress import ProgressCallback, check_progress, notify
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
@@ -56,10 +61,18 @@ MAX_DEFAULT_CHUNK = 250  # rows; keeps progress and checkpoints frequent on big 
 
 
 @dataclass
-class BatchResult:
+class BatchResult(ResultVocabulary):
     """Results of a batch: ``table`` (parameters + features + status/error, one row per
     set, in input order), ``signals`` (name -> N × len(time) array, NaN for failed sets),
-    ``time`` (the output grid), ``stats`` (wall time, sims/s, computed/reused counts)."""
+    ``time`` (the output grid), ``stats`` (wall time, sims/s, computed/reused counts).
+
+    ``to_pandas()``: the table (``"stats"``: the run's statistics); ``plot()``: each
+    feature against each parameter that varies (or the kept signals over time);
+    ``write(folder)``: the tables, the figure and report.html. (``simulate_batch(...,
+    out_dir=...)`` keeps its own resumable folder with every signal in Parquet.)"""
+
+    report_title = "Batch of simulations"
+    figure_name = "batch"
 
     table: pd.DataFrame
     signals: dict[str, np.ndarray] = field(default_factory=dict)
@@ -72,8 +85,50 @@ class BatchResult:
         """The rows whose status is not 'ok' (with their error message)."""
         return self.table[self.table["status"] != STATUS_OK]
 
-    def to_pandas(self) -> pd.DataFrame:
-        """A copy of ``table`` (units in ``attrs['units']``)."""
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"results": self.to_pandas(),
+                "stats": pd.DataFrame({"value": [str(v) for v in self.stats.values()]},
+                                      index=pd.Index(list(self.stats), name="statistic"))}
+
+    def report_text(self) -> str:
+        return f"{len(self.table)} parameter sets, {len(self.failed)} failed."
+
+    def plot(self) -> Figure:
+        """Each feature (rows) against each parameter that varies (columns), failed sets
+        left out; a batch of signals alone: every set's first signal over time."""
+        import matplotlib.pyplot as plt
+
+        ok = self.table[self.table["status"] == STATUS_OK]
+        features = [c for c in self.table.columns if c in FEATURE_UNITS]
+        varied = [c for c in self.table.columns if c not in features and c not in
+                  ("status", "error") and pd.api.types.is_numeric_dtype(self.table[c])
+                  and self.table[c].nunique() > 1]
+        if not features and self.signals and self.time is not None:
+            name, values = next(iter(self.signals.items()))
+            fig, ax = plt.subplots(figsize=(7.0, 3.8))
+            ax.plot(self.time, values.T, lw=0.8)
+            ax.set_xlabel("time [s]")
+            ax.set_ylabel(f"{name} [{self.units.get(name, '')}]")
+            return fig
+        columns = varied or ["set"]
+        fig, axes = plt.subplots(max(1, len(features)), len(columns), squeeze=False,
+                                 figsize=(3.2 * len(columns) + 1, 2.4 * max(1, len(features))))
+        for i, feature in enumerate(features):
+            for j, column in enumerate(columns):
+                x = ok.index if column == "set" else ok[column]
+                axes[i, j].plot(x, ok[feature], ".", ms=4)
+                axes[i, j].set_xlabel(f"{column} [{self.units.get(column, '')}]"
+                                      if column != "set" else "set")
+                axes[i, j].set_ylabel(f"{feature} [{FEATURE_UNITS[feature]}]", fontsize=8)
+                axes[i, j].grid(True, alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def to_pandas(self, name: str | None = None) -> pd.DataFrame:
+        """A copy of ``table`` (units in ``attrs['units']``); ``name="stats"``: the run's
+        statistics."""
+        if name is not None:
+            return super().to_pandas(name)
         frame = self.table.copy()
         frame.attrs["units"] = dict(self.units)
         return frame
@@ -224,7 +279,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
                    out_dir: str | os.PathLike | None = None, resume: bool = False,
                    overwrite: bool = False, chunk_size: int | None = None,
                    workers: int | None = None,
-                   progress: Callable[[int, int, int], None] | None = None,
+                   progress: ProgressCallback | None = None,
                    reference=None, y0=None) -> BatchResult:
     """Simulate ``model`` under ``experiment`` once per row of ``table``.
 
@@ -235,8 +290,9 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     the experiment's grid, on which features are computed too). ``workers`` threads
     locally (default all cores), or a Dask ``scheduler`` (address or
     ``distributed.Client``). ``out_dir`` makes the batch resumable: ``resume=True``
-    continues it, ``overwrite=True`` starts it again. ``progress(done, failed, total)``
-    is called after each chunk. ``y0`` fixes the initial state of every run.
+    continues it, ``overwrite=True`` starts it again. ``progress`` is called with a
+    ``pneumact.progress.Progress`` (stage "batch", sets done of all, failed sets) after
+    each chunk. ``y0`` fixes the initial state of every run.
     """
     started = _time.perf_counter()
     solver = _checked_solver(solver)
@@ -252,9 +308,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
         workers = check_int("workers", workers, minimum=1, where="simulate_batch")
     if chunk_size is not None:
         chunk_size = check_int("chunk_size", chunk_size, minimum=1, where="simulate_batch")
-    if progress is not None and not callable(progress):
-        raise ArgumentTypeError(f"simulate_batch: progress = {progress!r}: must be a "
-                                "function progress(done, failed, total)")
+    check_progress(progress, "simulate_batch")
     out = None if out_dir is None else check_out_dir("out_dir", out_dir,
                                                       where="simulate_batch")
     spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
@@ -329,8 +383,7 @@ class _Run:
         done = sum(len(ch) for ch in chunks if ch is not None)
         failed = sum(sum(st != STATUS_OK for st in ch.status) for ch in chunks if ch is not None)
         progress = self.progress
-        if progress is not None:
-            progress(done, failed, n)
+        notify(progress, "batch", done, n, failed)
 
         def finished(c: int, chunk: ChunkOutput) -> None:
             nonlocal done, failed
@@ -339,8 +392,7 @@ class _Run:
                 store.write_chunk(c, chunk, spec.features, spec.signals, runner.t_out)
             done += len(chunk)
             failed += sum(st != STATUS_OK for st in chunk.status)
-            if progress is not None:
-                progress(done, failed, n)
+            notify(progress, "batch", done, n, failed)
 
         compute_start, cpu_start = _time.perf_counter(), _time.process_time()
         rows_of = {c: values[starts[c]:starts[c] + chunk_size] for c in todo}
