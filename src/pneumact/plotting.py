@@ -9,6 +9,7 @@ this module does not choose a matplotlib backend (the CLI selects "Agg" itself).
 from __future__ import annotations
 
 import os
+import sys
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, cast
@@ -61,9 +62,8 @@ def signal_values(source: Any, name: str) -> np.ndarray:
     if hasattr(source, "result") and hasattr(source, "kind"):  # a FrictionTestResult
         source = source.result
     try:
-        import pandas as pd
-
-        if isinstance(source, pd.DataFrame):
+        pd = sys.modules.get("pandas")  # not imported: ``source`` is no DataFrame
+        if pd is not None and isinstance(source, pd.DataFrame):
             if name in source.columns:
                 return source[name].to_numpy(dtype=float)
             if name == "time" and source.index.name == "time":

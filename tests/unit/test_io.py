@@ -19,6 +19,7 @@ from pneumact.io import (
     read_table,
     write_table,
 )
+from pneumact.io.tables import write_columns
 from reference import IO_ROUND_TRIP_RTOL
 
 SHARED = Path(__file__).parents[2].parent / "shared"
@@ -85,6 +86,30 @@ def test_named_index_is_written_as_a_column(tmp_path, frame):
     assert back.columns[0] == "time" and units["time"] == "s"
 
 
+def test_a_csv_written_without_pandas_is_byte_for_byte_pandas_to_csv(tmp_path):
+    """``write_columns`` (a run's CSV, no pandas import) and pandas' ``to_csv`` are two paths
+    to one file: special values, 30 decades of magnitude, integers and flags."""
+    rng = np.random.default_rng(3)
+    n = 500
+    columns = {
+        "time": np.linspace(0.0, 20.0, n),
+        "wide": rng.normal(size=n) * 10.0 ** rng.integers(-30, 30, n),
+        "special": np.r_[np.nan, np.inf, -np.inf, -0.0, 1e16, 1e-5, 0.1, rng.random(n - 7)],
+        "count": np.arange(n), "flag": np.arange(n) % 3 == 0,
+        "single": rng.random(n).astype(np.float32),  # written by pandas itself
+    }
+    units = {"time": "s", "wide": "Pa"}
+    ours = write_columns(columns, tmp_path / "ours.csv", units)
+    pd.DataFrame(columns).to_csv(tmp_path / "pandas.csv", index=False, lineterminator="\n",
+                                 header=["time [s]", "wide [Pa]", *list(columns)[2:]])
+    assert ours.read_bytes() == (tmp_path / "pandas.csv").read_bytes()
+    columns.pop("single")
+    write_columns(columns, ours, units)
+    pd.DataFrame(columns).to_csv(tmp_path / "pandas.csv", index=False, lineterminator="\n",
+                                 header=["time [s]", "wide [Pa]", *list(columns)[2:]])
+    assert ours.read_bytes() == (tmp_path / "pandas.csv").read_bytes()
+
+
 def test_unsupported_suffix_is_refused_and_writes_nothing(tmp_path, frame):
     path = tmp_path / "out" / "run.xlsx"
     with pytest.raises(DataError, match=r"'\.xlsx'.*\.csv, \.parquet"):
@@ -112,8 +137,17 @@ def test_atomic_write_leaves_nothing_when_the_writer_fails(tmp_path):
     assert _siblings(path) == []
 
 
-def test_atomic_write_keeps_the_old_file_when_the_writer_fails(tmp_path, frame):
-    path = write_table(frame, tmp_path / "run.csv", UNITS)
+@pytest.mark.parametrize("writer", ["numbers", "pandas"])
+def test_atomic_write_keeps_the_old_file_when_the_writer_fails(tmp_path, frame, writer,
+                                                               monkeypatch):
+    """Both CSV writers (numbers without pandas; pandas' for a text column) fail after
+    opening the file: the previous file stays, nothing else is left."""
+    import pneumact.io.tables as tables
+
+    if writer == "pandas":
+        frame = frame.assign(note="x")
+    units = {k: v for k, v in UNITS.items() if k in frame.columns}
+    path = write_table(frame, tmp_path / "run.csv", units)
     before = path.read_bytes()
 
     class Boom(pd.DataFrame):
@@ -121,8 +155,12 @@ def test_atomic_write_keeps_the_old_file_when_the_writer_fails(tmp_path, frame):
             Path(args[0]).write_text("time [s]\n0.0\n")  # a partial write, then failure
             raise OSError("no space left on device")
 
+    def header_then_failure(cells):
+        raise OSError("no space left on device")
+
+    monkeypatch.setattr(tables, "_csv_line", header_then_failure)
     with pytest.raises(OSError, match="no space"):
-        write_table(Boom(frame), path, UNITS)
+        write_table(Boom(frame), path, units)
     assert path.read_bytes() == before
     assert _siblings(path) == ["run.csv"]
 

@@ -19,15 +19,18 @@ import tempfile
 import threading
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
+import numpy as np
 
 from pneumact.errors import DataError
 from pneumact.files import atomic_write
 
+if TYPE_CHECKING:  # pandas is imported where a table is read or a frame written: a
+    import pandas as pd  # simulation's CSV is written without it (start-up, issue 20)
+
 __all__ = ["RUN_LISTING", "UNITS_METADATA_KEY", "atomic_write", "parse_cell", "partial_folder",
-           "read_table", "staged_folder", "write_files", "write_table"]
+           "read_table", "staged_folder", "write_columns", "write_files", "write_table"]
 
 PathLike = str | os.PathLike[str]
 
@@ -38,10 +41,12 @@ _SUFFIXES = (".csv", ".parquet")
 _CELL_RE = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[(?P<u1>[^\[\]]*)\]|\((?P<u2>[^()]*)\))\s*$")
 _WS_TOKEN_RE = re.compile(r"\s*([^\s\[\]()]+(?:\s*(?:\[[^\[\]]*\]|\([^()]*\)))?)")
 
-# pandas >= 3 parses floats round-trip exactly by default and deprecates the option.
-_FLOAT_KW: dict[str, Any] = (
-    {"float_precision": "round_trip"} if int(pd.__version__.split(".")[0]) < 3 else {}
-)
+
+def _float_kw() -> dict[str, Any]:
+    """pandas >= 3 parses floats round-trip exactly by default and deprecates the option."""
+    import pandas as pd
+
+    return {"float_precision": "round_trip"} if int(pd.__version__.split(".")[0]) < 3 else {}
 
 
 # --------------------------------------------------------------------------- writing
@@ -271,6 +276,61 @@ def write_table(frame: pd.DataFrame, path: PathLike, units: Mapping[str, str]) -
     if frame.index.name is not None or any(n is not None for n in frame.index.names[1:]):
         frame = frame.reset_index()
     names = list(frame.columns)
+    unit_of = _checked_units(target, names, units)
+    if suffix == ".csv":
+        cells = _csv_header(target, names, unit_of)
+        if all(_plain_number(dtype) for dtype in frame.dtypes):
+            _write_csv_numbers(target, cells, [frame[n].to_numpy() for n in names])
+        else:
+            with atomic_write(target) as tmp:
+                frame.to_csv(tmp, index=False, header=cells, lineterminator="\n",
+                             encoding="utf-8")
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        metadata = dict(table.schema.metadata or {})
+        metadata[UNITS_METADATA_KEY] = json.dumps(unit_of).encode("utf-8")
+        table = table.replace_schema_metadata(metadata)
+        with atomic_write(target) as tmp:
+            pq.write_table(table, tmp)
+    return target
+
+
+def write_columns(columns: Mapping[str, np.ndarray], path: PathLike,
+                  units: Mapping[str, str]) -> Path:
+    """``write_table`` for numeric columns given as arrays (``time`` first, say): a CSV is
+    written without pandas, byte for byte as ``write_table`` writes it, so that a run's
+    CSV costs no pandas import (start-up of ``pneumact simulate``)."""
+    target = Path(path)
+    if _check_suffix(target) != ".csv":
+        import pandas as pd
+
+        return write_table(pd.DataFrame(dict(columns)), target, units)
+    names = list(columns)
+    arrays = [np.asarray(columns[n]) for n in names]
+    if len({a.shape for a in arrays}) > 1 or any(a.ndim != 1 for a in arrays):
+        raise DataError(f"{target}: columns must be 1-D arrays of one length; got "
+                        + ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays,
+                                                                     strict=True)))
+    if not all(_plain_number(a.dtype) for a in arrays):
+        import pandas as pd
+
+        return write_table(pd.DataFrame(dict(zip(names, arrays, strict=True))), target, units)
+    cells = _csv_header(target, names, _checked_units(target, names, units))
+    _write_csv_numbers(target, cells, arrays)
+    return target
+
+
+def _plain_number(dtype) -> bool:
+    """A column ``_write_csv_numbers`` writes as pandas does: float64, integers, bools."""
+    return dtype == np.float64 or getattr(dtype, "kind", "") in "iub"
+
+
+def _checked_units(target: Path, names: Sequence[Any], units: Mapping[str, str]) -> dict:
+    """The unit of each named column, after checking names are unique non-empty strings
+    and that every unit names a column."""
     for name in names:
         if not isinstance(name, str) or not name.strip():
             raise DataError(f"{target}: column name {name!r} is not a non-empty string")
@@ -283,32 +343,46 @@ def write_table(frame: pd.DataFrame, path: PathLike, units: Mapping[str, str]) -
             f"{target}: units given for {unknown} but the table has no such column; "
             f"columns are {names}"
         )
-    unit_of = {n: str(units[n]).strip() for n in names if n in units and str(units[n]).strip()}
+    return {n: str(units[n]).strip() for n in names if n in units and str(units[n]).strip()}
 
-    if suffix == ".csv":
-        cells = []
-        for name in names:
-            unit = unit_of.get(name)
-            bad = [c for c in "[]()" if c in name] + [c for c in "[]" if unit and c in unit]
-            if bad:
-                raise DataError(
-                    f"{target}: column {name!r} (unit {unit!r}) contains {bad[0]!r}, which "
-                    "would make the CSV header 'name [unit]' ambiguous; rename it"
-                )
-            cells.append(f"{name} [{unit}]" if unit else name)
-        with atomic_write(target) as tmp:
-            frame.to_csv(tmp, index=False, header=cells, lineterminator="\n", encoding="utf-8")
-    else:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
 
-        table = pa.Table.from_pandas(frame, preserve_index=False)
-        metadata = dict(table.schema.metadata or {})
-        metadata[UNITS_METADATA_KEY] = json.dumps(unit_of).encode("utf-8")
-        table = table.replace_schema_metadata(metadata)
-        with atomic_write(target) as tmp:
-            pq.write_table(table, tmp)
-    return target
+def _csv_header(target: Path, names: Sequence[str], unit_of: Mapping[str, str]) -> list[str]:
+    cells = []
+    for name in names:
+        unit = unit_of.get(name)
+        bad = [c for c in "[]()" if c in name] + [c for c in "[]" if unit and c in unit]
+        if bad:
+            raise DataError(
+                f"{target}: column {name!r} (unit {unit!r}) contains {bad[0]!r}, which "
+                "would make the CSV header 'name [unit]' ambiguous; rename it"
+            )
+        cells.append(f"{name} [{unit}]" if unit else name)
+    return cells
+
+
+def _write_csv_numbers(target: Path, cells: Sequence[str], arrays: Sequence[np.ndarray]):
+    """Numeric columns as pandas' ``to_csv`` writes them: the shortest text that reads back
+    exactly (Python's ``repr`` of each float), NaN as an empty cell."""
+    def text(array: np.ndarray) -> list[str]:
+        out = [repr(v) for v in array.tolist()]
+        if array.dtype.kind == "f":
+            for i in np.flatnonzero(np.isnan(array)):
+                out[i] = ""
+        return out
+
+    rows = zip(*(text(a) for a in arrays), strict=True)
+    with atomic_write(target) as tmp, open(tmp, "w", encoding="utf-8", newline="") as f:
+        f.write(_csv_line(cells))
+        f.writelines(",".join(row) + "\n" for row in rows)
+
+
+def _csv_line(cells: Sequence[str]) -> str:
+    """One CSV line, quoted as pandas quotes (minimal quoting)."""
+    import io
+
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow(cells)
+    return buffer.getvalue()
 
 
 # --------------------------------------------------------------------------- reading
@@ -368,6 +442,8 @@ def read_text(
     With ``numeric`` the fast path parses floats; if a cell is not a number it rereads
     everything as text so the caller can report exactly which cell is wrong.
     """
+    import pandas as pd
+
     first, line = _first_line(path)
     sep = "," if "," in line else r"\s+"
     if names is None:
@@ -390,7 +466,7 @@ def read_text(
         index_col=False,
         encoding="utf-8-sig",
         skipinitialspace=True,
-        **_FLOAT_KW,
+        **_float_kw(),
     )
     try:
         if numeric:

@@ -148,12 +148,10 @@ class Result(ResultVocabulary):
 
     def save(self, path: str | Path) -> Path:
         """Write all signals to CSV (header ``name [unit]``) or Parquet, atomically."""
-        import pandas as pd
+        from ..io.tables import write_columns
 
-        from ..io.tables import write_table
-
-        frame = pd.DataFrame(self.signals, index=pd.Index(self.time, name="time"))
-        return write_table(frame, path, {"time": "s", **self.units})
+        return write_columns({"time": self.time, **self.signals}, path,
+                             {"time": "s", **self.units})
 
     # -- analysis and plots --------------------------------------------------------------
     def summary(self) -> dict[str, float]:
