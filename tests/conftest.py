@@ -39,9 +39,11 @@ def pytest_collection_modifyitems(config, items):
         tier = Path(str(item.fspath)).parent.name
         if tier in TIERS:
             item.add_marker(getattr(pytest.mark, tier))
-    # long tests first (a stable sort keeps the rest in order): with one process per
-    # core they run beside the others instead of ending the run alone
-    items.sort(key=lambda item: item.get_closest_marker("long") is None)
+    # long tests first, the unit tier's small files last (a stable sort keeps the rest in
+    # order): with one process per core and a file per process at a time, big files
+    # first and small ones to fill the end leave no process waiting on another at the end
+    items.sort(key=lambda item: (item.get_closest_marker("long") is None,
+                                 item.get_closest_marker("unit") is not None))
 
 
 def load_quietly(name: str):
