@@ -261,13 +261,9 @@ def _parameter_names(model) -> frozenset[str]:
     return frozenset(assemble(model).parameter_names)
 
 
-def _input_name(model) -> str:
-    """The record signal that drives ``model``: its valve's (``models.inputs``), or its
-    drive quantity (a rig's force)."""
-    from ..models.inputs import input_signal
-
-    valve = getattr(model, "valve", None)
-    return input_signal(valve) if valve is not None else model.drive_quantity
+def _input_name(model: Model) -> str:
+    """The record signal that drives ``model`` (its valve's, or a rig's drive)."""
+    return model.input_signal
 
 
 # --------------------------------------------------------------------------- results
