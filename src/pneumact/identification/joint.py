@@ -110,7 +110,7 @@ def _parameters_of(model) -> frozenset[str]:
 def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      friction=None, chamber=None, free: Sequence[str] = SPRING_AND_FRICTION,
                      solver=None, replicates: int | None = None, seed: int = 0,
-                     workers: int | None = None, max_evaluations: int = MAX_EVALUATIONS,
+                     executor=None, max_evaluations: int = MAX_EVALUATIONS,
                      prior=None, drop_chaotic: bool = True, excluded: list | None = None,
                      progress: Callable[[str, float], None] | None = None) -> FitResult:
     """Fit ``free`` to all ``records`` at once from the values of ``params`` (the staged
@@ -131,7 +131,10 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
     - With ``drop_chaotic`` a record whose motion is chaotic in the parameters at the
       start of a round (``amplification`` above ``CHAOS_AMPLIFICATION``) is left out.
     """
+    from ..simulation.options import Executor
+
     excluded = [] if excluded is None else excluded
+    workers = Executor.of(executor, "joint_refinement").workers
     options = dict(friction=friction, chamber=chamber, free=free, solver=solver,
                    replicates=replicates, seed=seed, workers=workers,
                    max_evaluations=max_evaluations, prior=params if prior is None else prior,
@@ -220,6 +223,7 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     the records not yet in ``screened`` are screened for chaos, and the input-noise
     weight of a record is computed once (``weights``, by source)."""
     from ..simulation import Rodas4
+    from .options import Offsets, Optimizer, Weights
     from .uncertainty import INPUT_REPLICATES, input_noise_weights
 
     solver = Rodas4(rtol=JOINT_RTOL) if solver is None else solver
@@ -258,7 +262,7 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     record_weights = [weights[r.source] for r in records]
     bounds = prior_bounds(params if prior is None else prior, free)
     return fit(models, list(records), list(free), window=windows,
-               offsets=["position"] if offset_records else (),
-               offset_records=offset_records, solver=solver,
-               record_weights=record_weights, max_nfev=max_evaluations, bounds=bounds,
+               offsets=Offsets(["position"] if offset_records else (), offset_records),
+               solver=solver, weights=Weights(records=record_weights),
+               optimizer=Optimizer(max_nfev=max_evaluations), bounds=bounds,
                start=within({n: params[n] for n in free}, bounds))

@@ -494,7 +494,7 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     step("joint refinement", 0.3)
     chaotic: list[str] = []
     joint = joint_refinement(records, kinds, staged, friction=friction, chamber=chamber,
-                             free=free, replicates=replicates, seed=seed, workers=workers,
+                             free=free, replicates=replicates, seed=seed, executor=workers,
                              prior=prior, excluded=chaotic,
                              max_evaluations=max_evaluations)
     for name in chaotic:
@@ -589,7 +589,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
 def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
-                   replicates: int | None = None, seed: int = 0, workers: int | None = None,
+                   replicates: int | None = None, seed: int = 0, executor=None,
                    max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
                    progress: Callable[[str, float], None] | None = None
                    ) -> PaperIdentification:
@@ -603,15 +603,18 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     threshold of eq. 13 instead of deriving it from vs (it is then only checked).
     ``refine=False`` stops after the stages (fast; their intervals are conditional on
     the earlier stages). ``replicates`` of the input-noise bootstrap (default
-    ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads; each round of the joint
+    ``uncertainty.INPUT_REPLICATES``, drawn with ``seed``) run on the ``executor``'s
+    threads (an ``Executor`` or a number of threads); each round of the joint
     fit gives up after ``max_evaluations``. ``progress(stage, fraction)`` is called as
     the work goes on.
     """
     from ..io.records import as_records
     from ..parameters import as_parameter_set
+    from ..simulation.options import Executor
 
     records = as_records(records, "identify_paper")
     params = as_parameter_set(params, "identify_paper")
+    workers = Executor.of(executor, "identify_paper").workers
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")

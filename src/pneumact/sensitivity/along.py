@@ -34,13 +34,12 @@ __all__ = ["along_time", "local_along_time", "model_signal", "plot_along_loop",
 
 
 def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
-                 *, workers=None, scheduler=None, out_dir=None, resume=False,
-                 overwrite=False, progress=None, solver=None) -> Evaluate:
+                 *, executor=None, checkpoint=None, progress=None, solver=None) -> Evaluate:
     """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
-    by the time) from the batch engine; resumable from ``out_dir`` like ``model_outputs``."""
+    by the time) from the batch engine; resumable from a ``checkpoint`` like
+    ``model_outputs``."""
     return batch_evaluate(model, experiment, problem, signal=signal, times=times,
-                          workers=workers, scheduler=scheduler, out_dir=out_dir,
-                          resume=resume, overwrite=overwrite, progress=progress,
+                          executor=executor, checkpoint=checkpoint, progress=progress,
                           solver=solver)
 
 

@@ -288,14 +288,13 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
-                  workers=None, scheduler=None, out_dir=None, resume=False, overwrite=False,
-                  progress=None, solver=None) -> Evaluate:
-    """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
-    Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
-    are reported with their errors, never dropped."""
-    return batch_evaluate(model, experiment, problem, features=list(features), workers=workers,
-                          scheduler=scheduler, out_dir=out_dir, resume=resume,
-                          overwrite=overwrite, progress=progress, solver=solver)
+                  executor=None, checkpoint=None, progress=None, solver=None) -> Evaluate:
+    """An ``evaluate`` that runs the sample on the batch engine (an ``Executor``: all
+    local cores by default, or a Dask scheduler; resumable from a ``Checkpoint``) and
+    returns the features. Failed runs are reported with their errors, never dropped."""
+    return batch_evaluate(model, experiment, problem, features=list(features),
+                          executor=executor, checkpoint=checkpoint, progress=progress,
+                          solver=solver)
 
 
 def batch_evaluate(model, experiment, problem: Problem, *, features=(), signal=None,

@@ -24,12 +24,12 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..simulation.options import Checkpoint, Executor
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -40,13 +40,13 @@ FULL_CYCLE_LOW_PRESSURE = 20e3
 #: Valves a condition can name (as on the command line).
 VALVE_NAMES = ("source", "command", "regulator")
 #: Study methods ``across_conditions`` runs.
-METHODS = ("oat", "sobol", "morris", "src", "fast")
+METHODS = ("oat", "sobol", "morris", "src", "rbd_fast")
 #: Columns of ``ConditionStudy.conditions`` that describe a condition.
 CONDITION_COLUMNS = ("condition", "valve", "period", "amplitude", "sliding_speed",
                      "speed_vs")
 #: Index plotted by default per method.
 DEFAULT_INDEX = {"oat": "relative_change", "sobol": "ST", "morris": "mu_star",
-                 "src": "SRC2", "fast": "S1"}
+                 "src": "SRC2", "rbd_fast": "S1"}
 #: ``at_speeds``: iterations of the period search and the accepted relative speed error.
 SPEED_ITERATIONS = 8
 SPEED_RTOL = 0.02
@@ -226,21 +226,24 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
                       variations: Mapping[str, object] | None = None,
                       features: Sequence[str] = ("loop_width_pressure", "breakaway_pressure"),
                       n: int = 256, seed: int = 0, second_order: bool = False,
-                      out_dir=None, progress: Callable[[int, int, int], None] | None = None,
+                      checkpoint=None, progress: Callable[[int, int, int], None] | None = None,
                       on_condition: Callable[[int, int, str], None] | None = None,
-                      solver=None, **batch) -> ConditionStudy:
-    """Run the ``method`` study (oat, sobol, morris, src or fast) of ``model`` (an
+                      solver=None, executor=None) -> ConditionStudy:
+    """Run the ``method`` study (oat, sobol, morris, src or rbd_fast) of ``model`` (an
     ``Actuator``: its parameters, friction and chamber) at each condition.
 
     ``variations``: the paper's amounts for oat, ``DEFAULT_RANGES`` otherwise; ``n``: base
-    sample (sobol, src, fast) or trajectories (morris). ``out_dir``: each condition's runs
-    are kept in ``out_dir/<condition>`` (resumable, see ``model_outputs``). ``progress``:
-    (done, failed, total) over all conditions; ``on_condition``: (i, count, label) as each
-    starts. ``batch``: more ``simulate_batch`` options (workers, scheduler, ...).
+    sample (sobol, src, rbd_fast) or trajectories (morris). ``checkpoint``: a
+    ``Checkpoint`` (or a folder): each condition's runs are kept in
+    ``<folder>/<condition>`` (resumable, see ``model_outputs``). ``progress``: (done,
+    failed, total) over all conditions; ``on_condition``: (i, count, label) as each
+    starts. ``executor``: where the runs go (an ``Executor``, or a number of threads).
     """
     if method not in METHODS:
         raise ParameterError(f"across_conditions: method = {method!r}; allowed: "
                              f"{', '.join(METHODS)}")
+    checkpoint = Checkpoint.of(checkpoint, "across_conditions")
+    executor = Executor.of(executor, "across_conditions")
     conditions = list(conditions)
     if not conditions:
         raise ParameterError("across_conditions: give at least one condition")
@@ -253,9 +256,9 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
             on_condition(i, len(conditions), condition.label)
         row = _describe(model, condition, solver)
         relay = _relay(progress, i, len(conditions))
-        where_runs = None if out_dir is None else Path(out_dir) / _folder(condition)
+        where_runs = None if checkpoint is None else checkpoint.within(_folder(condition))
         result, table = _study(model, condition, method, variations, list(features), n,
-                               seed, second_order, where_runs, relay, solver, batch)
+                               seed, second_order, where_runs, relay, solver, executor)
         rows.append(row)
         frames.append(table.assign(**{k: row[k] for k in CONDITION_COLUMNS}))
         results.append(result)
@@ -290,8 +293,8 @@ def _relay(progress, i: int, count: int):
     return relay
 
 
-def _study(model, condition, method, variations, features, n, seed, second_order, out_dir,
-           progress, solver, batch) -> tuple[object, pd.DataFrame]:
+def _study(model, condition, method, variations, features, n, seed, second_order, checkpoint,
+           progress, solver, executor) -> tuple[object, pd.DataFrame]:
     """(study object, its long index table: output, parameter, indices) at one condition."""
     from . import methods
     from .oat import PAPER_VARIATIONS, one_at_a_time
@@ -301,16 +304,16 @@ def _study(model, condition, method, variations, features, n, seed, second_order
     experiment = condition.experiment(model.params)
     if method == "oat":
         oat = one_at_a_time(actuator, experiment, variations or PAPER_VARIATIONS,
-                            features=features, workers=batch.get("workers"), solver=solver)
+                            features=features, executor=executor, solver=solver)
         return oat, oat_indices(oat)
     problem = Problem.around(model.params, variations or DEFAULT_RANGES)
     evaluate = methods.model_outputs(actuator, experiment, problem, features,
-                                     out_dir=out_dir, progress=progress, solver=solver,
-                                     **batch)
+                                     checkpoint=checkpoint, progress=progress,
+                                     solver=solver, executor=executor)
     run = {"sobol": lambda: methods.sobol(problem, evaluate, n, second_order, seed),
            "morris": lambda: methods.morris(problem, evaluate, n, seed=seed),
            "src": lambda: methods.src(problem, evaluate, n, seed),
-           "fast": lambda: methods.rbd_fast(problem, evaluate, n, seed)}[method]
+           "rbd_fast": lambda: methods.rbd_fast(problem, evaluate, n, seed)}[method]
     study = run()
     return study, study.indices
 
