@@ -23,25 +23,18 @@ from .campaign import (
 from .estimates import Estimates, linear_least_squares
 from .fit import FitResult, ProfileLikelihood, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
-from .options import Bounds, Multistart, Offsets, Optimizer, Profile, Weights
 from .paper import PaperIdentification, StageResult, identify_paper, record_kind
 
 __all__ = [
     "BenchTest",
-    "Bounds",
     "CampaignPlan",
     "Estimates",
     "FitResult",
     "InverseFriction",
-    "Multistart",
     "Noise",
-    "Offsets",
-    "Optimizer",
     "PaperIdentification",
-    "Profile",
     "ProfileLikelihood",
     "StageResult",
-    "Weights",
     "design_campaign",
     "experiment_for",
     "fit",

@@ -33,10 +33,9 @@ from scipy.optimize import least_squares
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
-from ..simulation.options import Executor
+from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
-from .options import Bounds, Multistart, Offsets, Optimizer, Profile, Weights
 
 if TYPE_CHECKING:
     from ..simulation.simulate import Model

@@ -131,7 +131,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
     - With ``drop_chaotic`` a record whose motion is chaotic in the parameters at the
       start of a round (``amplification`` above ``CHAOS_AMPLIFICATION``) is left out.
     """
-    from ..simulation.options import Executor
+    from ..options import Executor
 
     excluded = [] if excluded is None else excluded
     workers = Executor.of(executor, "joint_refinement").workers
@@ -222,8 +222,8 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     """One output-error fit of ``free`` to ``records`` (see ``joint_refinement``). Only
     the records not yet in ``screened`` are screened for chaos, and the input-noise
     weight of a record is computed once (``weights``, by source)."""
+    from ..options import Offsets, Optimizer, Weights
     from ..simulation import Rodas4
-    from .options import Offsets, Optimizer, Weights
     from .uncertainty import INPUT_REPLICATES, input_noise_weights
 
     solver = Rodas4(rtol=JOINT_RTOL) if solver is None else solver

@@ -609,8 +609,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     the work goes on.
     """
     from ..io.records import as_records
+    from ..options import Executor
     from ..parameters import as_parameter_set
-    from ..simulation.options import Executor
 
     records = as_records(records, "identify_paper")
     params = as_parameter_set(params, "identify_paper")

@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from ..simulation.options import Checkpoint, Executor
+from ..options import Checkpoint, Executor
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",

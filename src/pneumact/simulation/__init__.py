@@ -7,11 +7,9 @@ many parameter sets on all cores or a Dask cluster.
 
 from ..core.assembly import Assembly, assemble
 from .forward_sensitivity import SensitivityResult, simulate_sensitivities
-from .options import Checkpoint, Executor
 from .result import Result, SolverStats
 from .simulate import simulate
 from .solvers import DormandPrince, Rodas4, Solver
 
-__all__ = ["Assembly", "Checkpoint", "DormandPrince", "Executor", "Result", "Rodas4",
-           "SensitivityResult", "Solver", "SolverStats", "assemble", "simulate",
-           "simulate_sensitivities"]
+__all__ = ["Assembly", "DormandPrince", "Result", "Rodas4", "SensitivityResult", "Solver",
+           "SolverStats", "assemble", "simulate", "simulate_sensitivities"]

@@ -35,8 +35,8 @@ from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
 from ...io.tables import partial_folder, staged_folder
+from ...options import Checkpoint, Executor, check_scheduler_address
 from ..memory import batch_bytes, check_memory
-from ..options import Checkpoint, Executor, check_scheduler_address
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
 from .spec import (

@@ -1,36 +1,157 @@
-"""The options of ``fit``, grouped as small frozen objects shared by the API and the
-command line (which builds the same objects, its defaults taken from theirs).
+"""Option objects: small frozen dataclasses that group the options of the orchestrators
+(``simulate_batch``, ``fit``, the sensitivity studies, ``identify_paper``) and that the
+command line builds too, its defaults taken from theirs.
 
 Each checks itself when built: a wrong value is refused with the field, the value and
-what is allowed. ``fit`` takes a plain value wherever it means one thing:
-``multistart=4`` is ``Multistart(starts=4)``, ``profile=["sigma0"]`` is
-``Profile(names=("sigma0",))``, ``bounds={"Fc": (1, 5)}`` is ``Bounds({"Fc": (1, 5)})``,
-``optimizer="soft_l1"`` is ``Optimizer(loss="soft_l1")``, ``offsets=["position"]`` is
-``Offsets(signals=("position",))``, ``weights={"position": 2.0}`` is
-``Weights(signals={...})``.
+what is allowed. A function that takes one accepts a plain value wherever it means one
+thing: ``executor=4`` is ``Executor(workers=4)``, ``checkpoint="runs"`` is
+``Checkpoint("runs")``, ``multistart=4`` is ``Multistart(starts=4)``,
+``profile=["sigma0"]`` is ``Profile(names=("sigma0",))``, ``bounds={"Fc": (1, 5)}`` is
+``Bounds({"Fc": (1, 5)})``, ``optimizer="soft_l1"`` is ``Optimizer(loss="soft_l1")``,
+``offsets=["position"]`` is ``Offsets(signals=("position",))``,
+``weights={"position": 2.0}`` is ``Weights(signals={...})``.
+
+- where many simulations run: ``Executor`` (threads or a Dask cluster, chunk size) and
+  ``Checkpoint`` (the folder that keeps finished runs, to resume);
+- how ``fit`` searches: ``Bounds``, ``Weights``, ``Optimizer``, ``Multistart``,
+  ``Profile``, ``Offsets``.
+
+This module imports nothing from pneumact but its checks and errors (no numpy): the
+command line reads the defaults from here without paying for the library.
 """
 
 from __future__ import annotations
 
+import os
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from ..checks import (
+from .checks import (
     as_option,
+    check_bool,
     check_choice,
     check_finite,
     check_int,
     check_names,
+    check_out_dir,
     check_positive,
     check_seed,
 )
-from ..errors import ArgumentError, ArgumentTypeError
+from .errors import ArgumentError, ArgumentTypeError
 
-__all__ = ["JACOBIANS", "LOSSES", "Bounds", "Multistart", "Offsets", "Optimizer", "Profile",
-           "Weights"]
+__all__ = ["JACOBIANS", "LOSSES", "SCHEDULER_PROTOCOLS", "Bounds", "Checkpoint", "Executor",
+           "Multistart", "Offsets", "Optimizer", "Profile", "Weights",
+           "check_scheduler_address"]
 
+SCHEDULER_PROTOCOLS = ("tcp", "tls", "ucx", "ws", "wss", "inproc")
+
+
+def check_scheduler_address(address: str, name: str = "scheduler") -> str:
+    """A Dask scheduler address 'tcp://host:port' (or 'host:port'), checked before any
+    connection is tried: what is not an address is refused at once, not after a timeout."""
+    text = address.strip()
+    protocol, sep, rest = text.partition("://")
+    if not sep:
+        protocol, rest = "tcp", text
+    match = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d{1,5})", rest)
+    if protocol not in SCHEDULER_PROTOCOLS or (protocol != "inproc" and (
+            match is None or not 0 < int(match[2]) < 65536)):
+        raise ArgumentError(
+            f"{name} = {address!r}: not a Dask scheduler address; write "
+            "'tcp://HOST:PORT' (e.g. 'tcp://127.0.0.1:8786', as printed by dask-scheduler)")
+    return f"{protocol}://{rest}"
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where many simulations run: ``workers`` threads on this machine (None: every
+    core), or a Dask ``scheduler`` (an address 'tcp://host:port' or a
+    ``distributed.Client``; its workers then count); ``chunk_size`` runs per task (None:
+    about four tasks per worker)."""
+
+    workers: int | None = None
+    scheduler: Any = None
+    chunk_size: int | None = None
+
+    def __post_init__(self):
+        if self.workers is not None:
+            object.__setattr__(self, "workers", check_int("workers", self.workers, minimum=1,
+                                                          where="Executor"))
+        if self.chunk_size is not None:
+            object.__setattr__(self, "chunk_size", check_int(
+                "chunk_size", self.chunk_size, minimum=1, where="Executor"))
+        if isinstance(self.scheduler, str):
+            check_scheduler_address(self.scheduler, "Executor: scheduler")
+        elif self.scheduler is not None and not hasattr(self.scheduler, "submit"):
+            raise ArgumentTypeError(f"Executor: scheduler = {self.scheduler!r:.60}: must be "
+                                    "an address string ('tcp://host:8786') or a "
+                                    "distributed.Client")
+
+    @property
+    def threads(self) -> int:
+        """The local threads it runs on: ``workers``, else every core."""
+        return self.workers or os.cpu_count() or 1
+
+    @classmethod
+    def of(cls, value, where: str = "", name: str = "executor") -> Executor:
+        """An Executor from itself, None (the defaults), a number of worker threads, or a
+        Dask scheduler address."""
+        def plain(v):
+            if isinstance(v, int) and not isinstance(v, bool):
+                return cls(workers=v)
+            if isinstance(v, str):
+                return cls(scheduler=v)
+            return None
+
+        return as_option(name, value, cls, where=where, plain=plain,
+                         accepts="a number of worker threads or a Dask scheduler address")
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """The folder that keeps a long run's finished work: an interrupted run is kept
+    there and continued with ``resume=True``; ``overwrite=True`` starts it again
+    (discarding what the folder holds). The folder is replaced only by a complete run."""
+
+    folder: str | os.PathLike
+    resume: bool = False
+    overwrite: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "folder", check_out_dir("folder", self.folder,
+                                                         where="Checkpoint"))
+        for name in ("resume", "overwrite"):
+            check_bool(name, getattr(self, name), where="Checkpoint")
+        if self.resume and self.overwrite:
+            raise ArgumentError("Checkpoint: resume=True and overwrite=True contradict each "
+                                "other: continue the kept runs, or start them again, not both")
+
+    @property
+    def path(self) -> Path:
+        return Path(self.folder)
+
+    def within(self, name: str) -> Checkpoint:
+        """The same checkpoint for a sub-folder ``name`` (one study of several)."""
+        return Checkpoint(self.path / name, self.resume, self.overwrite)
+
+    @classmethod
+    def of(cls, value, where: str = "", name: str = "checkpoint") -> Checkpoint | None:
+        """A Checkpoint from itself, a folder path (no resume, no overwrite), or None
+        (no checkpoint)."""
+        if value is None:
+            return None
+
+        def plain(v):
+            return cls(v) if isinstance(v, (str, os.PathLike)) else None
+
+        return as_option(name, value, cls, where=where, plain=plain, accepts="a folder path")
+
+
+# --------------------------------------------------------------------------- fit
 #: the robust losses of scipy's least_squares
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
 #: how the Jacobian is computed: forward sensitivities, or finite differences
