@@ -1,4 +1,4 @@
-"""``pneumact sensitivity oat|sobol|morris|src|fast``: sensitivity studies of the actuator,
+"""``pneumact sensitivity oat|sobol|morris|src|rbd_fast``: sensitivity studies of the actuator,
 at one operating condition or across several (``--conditions``)."""
 
 from __future__ import annotations
@@ -13,9 +13,15 @@ from rich.table import Table
 
 from pneumact.checks import check_int, check_out_dir, check_seed
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    ChunkSizeOption,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     ModelOptions,
     OverwriteOption,
@@ -29,9 +35,9 @@ from pneumact.cli.common import (
     batch_progress,
     build_experiment,
     build_model,
-    check_batch_flags,
-    check_workers,
+    checkpoint_of,
     err_console,
+    executor_of,
     figure_writer,
     fmt,
     names,
@@ -43,6 +49,7 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import ArgumentError, ParameterError
+from pneumact.options import Checkpoint, Executor
 
 if TYPE_CHECKING:
     from pneumact.experiments.actuator import Experiment
@@ -55,7 +62,7 @@ class Method(StrEnum):
     sobol = "sobol"
     morris = "morris"
     src = "src"
-    fast = "fast"
+    rbd_fast = "rbd_fast"
 
 
 def _variations(text: str | None) -> dict[str, str] | None:
@@ -83,11 +90,13 @@ ConditionsOption = Annotated[list[str] | None, typer.Option(
 def sensitivity(
     ctx: typer.Context,
     method: Annotated[Method, typer.Argument(help="oat (paper eq. 15), sobol, morris, src "
-                                                  "(eq. 14) or fast (RBD-FAST).")],
+                                                  "(eq. 14) or rbd_fast.")],
     params: ParamsOption = "vgt-paper",
-    valve: ValveOption = Valve.command,
-    friction: FrictionOption = Friction.lugre,
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
     vary: Annotated[str | None, typer.Option(
         help="name=N% list; default: the paper's amounts (oat), else ±20 % of sigma0, "
@@ -100,7 +109,7 @@ def sensitivity(
     times: Annotated[int, typer.Option(help="Points of the time grid of --signals.")] = 41,
     n: Annotated[int | None, typer.Option("--n", help=(
         "Base sample size: sobol a power of two >= 8 (default 256), src >= 2·(k + 1) for k "
-        "parameters, fast >= 40, or trajectories (morris, >= 2); not for oat."),
+        "parameters, rbd_fast >= 40, or trajectories (morris, >= 2); not for oat."),
         show_default=False)] = None,
     second_order: Annotated[bool, typer.Option("--second-order",
                                                help="Sobol second-order indices.")] = False,
@@ -109,10 +118,11 @@ def sensitivity(
                               "same sample.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sample (>= 0).")] = 0,
     conditions: ConditionsOption = None,
-    scheduler: SchedulerOption = None,
-    workers: WorkersOption = None,
-    resume: ResumeOption = False,
-    overwrite: OverwriteOption = False,
+    scheduler: SchedulerOption = Executor.scheduler,
+    workers: WorkersOption = Executor.workers,
+    chunk_size: ChunkSizeOption = Executor.chunk_size,
+    resume: ResumeOption = Checkpoint.resume,
+    overwrite: OverwriteOption = Checkpoint.overwrite,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-sensitivity"),
 ) -> None:
     """Sensitivity of the actuator's features (and signals) to its parameters, on the
@@ -120,15 +130,17 @@ def sensitivity(
     with user_errors():
         import numpy as np
 
-        check_batch_flags(resume, overwrite, scheduler)
-        check_workers(workers)
+        executor = executor_of(workers, scheduler, chunk_size)
         check_seed("--seed", seed)
         check_int("--times", times, minimum=2)
-        out = check_out_dir("--out", out)
+        out = checkpoint_of(check_out_dir("--out", out), resume, overwrite).path
         _check_method_options(method, n, second_order, convergence,
                               resume=resume, overwrite=overwrite,
-                              scheduler=scheduler is not None, workers=workers is not None)
-        options = ModelOptions(params, valve, friction, chamber, t_end)
+                              scheduler=scheduler is not None, workers=workers is not None,
+                              chunk_size=chunk_size is not None)
+        options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
+                               t_end=t_end, exponent=exponent,
+                               decaying_damping=decaying_damping)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         feature_names = names(features, "--features") or []
@@ -141,9 +153,8 @@ def sensitivity(
                                  "run --signals and --convergence without it")
         use_agg()
         study = Study(method, actuator, experiment, parameter_set, vary,
-                      DEFAULT_N if n is None else n, second_order, seed,
-                      dict(scheduler=scheduler, workers=workers, resume=resume,
-                           overwrite=overwrite))
+                      DEFAULT_N if n is None else n, second_order, seed, executor,
+                      resume)
         try:
             factors = study.problem().names
         except ParameterError as exc:
@@ -206,8 +217,9 @@ def check_sample_size(method: Method, n: int, k: int) -> None:
 
 @dataclass
 class Study:
-    """One sensitivity command: the method, the model and the batch options, and the
-    writers of what each analysis produced."""
+    """One sensitivity command: the method, the model, where the runs go (``executor``;
+    kept resumable beside the outputs, continued with ``resume``), and the writers of
+    what each analysis produced."""
 
     method: Method
     model: Actuator
@@ -217,7 +229,13 @@ class Study:
     n: int
     second_order: bool
     seed: int
-    batch: dict
+    executor: Executor
+    resume: bool = False
+
+    def checkpoint(self, folder: Path) -> Checkpoint:
+        """Where a study's runs are kept (inside the staged output folder, which the
+        --overwrite of the command already emptied)."""
+        return Checkpoint(folder, resume=self.resume)
 
     def problem(self):
         from pneumact import sensitivity as sa
@@ -234,7 +252,7 @@ class Study:
         run = {Method.sobol: lambda: sa.sobol(problem, evaluate, n, self.second_order, seed),
                Method.morris: lambda: sa.morris(problem, evaluate, n, seed=seed),
                Method.src: lambda: sa.src(problem, evaluate, n, seed),
-               Method.fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[self.method]
+               Method.rbd_fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[self.method]
         return run(), None
 
     def features(self, feature_names: list[str], out: Path, convergence: bool) -> dict:
@@ -244,7 +262,7 @@ class Study:
         if self.method is Method.oat:
             with err_console.status("oat: simulating"):
                 study = sa.one_at_a_time(self.model, self.experiment, _variations(self.vary),
-                                         features=feature_names)
+                                         features=feature_names, executor=self.executor)
             curves = sa.friction_velocity(self.parameter_set, _variations(self.vary))
             _print_oat(study, feature_names)
             return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
@@ -253,7 +271,8 @@ class Study:
         problem = self.problem()
         with batch_progress(f"{self.method.value}: features") as progress:
             evaluate = sa.model_outputs(self.model, self.experiment, problem, feature_names,
-                                        out_dir=out / "runs", progress=progress, **self.batch)
+                                        checkpoint=self.checkpoint(out / "runs"),
+                                        progress=progress, executor=self.executor)
             study, table = self._run(evaluate, convergence)
         writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),
                    "sample.csv": lambda p: study.sample.to_csv(p, index=False),
@@ -278,8 +297,9 @@ class Study:
             study = sa.across_conditions(
                 self.model, chosen, self.method.value, variations=variations,
                 features=feature_names, n=self.n, seed=self.seed,
-                second_order=self.second_order, out_dir=out / "runs",
-                progress=None if self.method is Method.oat else progress, **self.batch)
+                second_order=self.second_order, checkpoint=self.checkpoint(out / "runs"),
+                progress=None if self.method is Method.oat else progress,
+                executor=self.executor)
         for feature in feature_names:
             _print_across(study, feature)
         writers = {"conditions.csv": lambda p: study.conditions.to_csv(p, index=False),
@@ -307,8 +327,8 @@ class Study:
             return writers
         with batch_progress(f"{self.method.value}: {signal}") as progress:
             evaluate = sa.model_signal(self.model, self.experiment, problem, signal, grid,
-                                       out_dir=out / f"runs-{signal}", progress=progress,
-                                       **self.batch)
+                                       checkpoint=self.checkpoint(out / f"runs-{signal}"),
+                                       progress=progress, executor=self.executor)
             study, _ = self._run(evaluate)
         curves = sa.along_time(study)
         writers.update({

@@ -56,7 +56,7 @@ class Actuator:
             examples="pa.PressureSource(), pa.CommandValve() or pa.PressureRegulator()"))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Actuator",
-            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(n)"))
+            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
         for name in ("load", "load_map"):
             value = getattr(self, name)
             if value is not None:

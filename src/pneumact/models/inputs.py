@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..errors import DataError
 from .valves import VALVES, PressureRegulator, PressureSource, Valve
 
-__all__ = ["INPUT_SIGNALS", "input_signal", "valve_for_signal"]
+__all__ = ["DEFAULT_INPUT", "INPUTS", "INPUT_SIGNALS", "input_signal", "valve_for_signal"]
 
 #: The record signal that drives each valve (by its ``cli_name``), in the order a record's
 #: input is chosen when it carries several: a logged set-point first (the record was made
@@ -17,6 +17,14 @@ __all__ = ["INPUT_SIGNALS", "input_signal", "valve_for_signal"]
 INPUT_SIGNALS: dict[str, str] = {
     cls.cli_name: cls.input_signal for cls in sorted(
         VALVES.values(), key=lambda c: (c is not PressureRegulator, c is not PressureSource))}
+
+
+#: How a record's input is chosen (``validate``'s ``input``): ``auto`` (the first of
+#: setpoint, pressure, command the record carries, the model's valve changed to the one
+#: it drives), ``model`` (the model's own valve, whose input the record must carry), or
+#: one signal name.
+INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
+DEFAULT_INPUT = "auto"
 
 
 def input_signal(valve: Valve) -> str:

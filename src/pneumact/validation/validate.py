@@ -24,7 +24,7 @@ import pandas as pd
 
 from ..errors import DataError
 from ..io.records import Record
-from ..models.inputs import INPUT_SIGNALS, valve_for_signal
+from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS, valve_for_signal
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
 from .verdicts import Criteria, record_verdict, worst_verdict
@@ -38,10 +38,6 @@ __all__ = ["INPUTS", "RecordValidation", "TrainTest", "Validation", "drive_for",
            "validate"]
 
 ALL_RECORDS = "all records"
-#: How ``validate`` picks each record's input: ``auto`` (the first of setpoint, pressure,
-#: command the record carries, the model's valve changed to the one it drives), ``model``
-#: (the model's own valve, whose input the record must carry), or one signal name.
-INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
 
 
 def _can_drive(record: Record) -> str:
@@ -53,7 +49,7 @@ def _can_drive(record: Record) -> str:
     return f"it carries {', '.join(carried)}, so it can drive {' or '.join(valves)}"
 
 
-def drive_for(model: Model, record: Record, input: str = "auto") -> tuple[Model, str]:
+def drive_for(model: Model, record: Record, input: str = DEFAULT_INPUT) -> tuple[Model, str]:
     """(the model driven the way ``record`` was made, the record signal that drives it),
     as ``input`` says (see ``INPUTS``): an actuator goes behind the valve the chosen
     signal drives; a model with one input (a rig, a closed loop) is driven by it."""
@@ -279,7 +275,7 @@ class Validation:
 def validate(model, records: Record | Sequence[Record], *,
              signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
              solver=None, smooth_input: bool = False, label: str = "validation",
-             input: str = "auto", criteria: Criteria | None = None,
+             input: str = DEFAULT_INPUT, criteria: Criteria | None = None,
              progress: Callable[[int, int], None] | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
     measured input and compare ``signals`` with the measurement.
@@ -362,7 +358,7 @@ class TrainTest:
 
 
 def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Sequence[str],
-               *, signals: Sequence[str] = ("position",), input: str = "auto",
+               *, signals: Sequence[str] = ("position",), input: str = DEFAULT_INPUT,
                **fit_options) -> TrainTest:
     """Fit ``free`` parameters on ``train`` (``identification.fit`` options), then
     validate the fitted model on both sets. With ``input='auto'`` the fit drives the
