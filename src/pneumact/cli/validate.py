@@ -4,7 +4,8 @@ Each record drives the model the way it was made (``--input auto``, the default:
 logged set-point through the regulator, else its pressure as a pressure source, else
 its command through the valve); ``--input model`` keeps the model's ``--valve``. With
 ``--train`` records and ``--free`` parameters, fits on the training records first and
-validates on both sets, with the metrics side by side. Every record gets a verdict that combines fit % with the loop measures and the residuals.
+validates on both sets, with the metrics side by side. Every record gets a verdict that
+combines fit % with the loop measures and the residuals.
 """
 
 from __future__ import annotations
