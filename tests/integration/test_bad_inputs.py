@@ -64,7 +64,7 @@ BAD_VALUES: dict[str, list[str]] = {
                  str(BAD / "p_atm_in_kpa_as_pa.toml"), str(BAD / "p_atm_nan.toml"),
                  str(BAD / "fs_below_fc.toml"), str(BAD / "not_toml.toml")],
     "--out": [str(GOOD / "record.csv")],  # a file where a folder is expected
-    "--input": [str(BAD / "negative_pressure.csv"), str(BAD / "huge_pressure.csv"),
+    "--input-csv": [str(BAD / "negative_pressure.csv"), str(BAD / "huge_pressure.csv"),
                 str(BAD / "kpa_as_pa.csv"), str(BAD / "negative_time.csv"),
                 str(BAD / "missing.csv")],
     "--valve": ["butterfly"],
@@ -164,7 +164,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "hunting --kp": ["-3"],
     "hunting --kv": ["-6"],
     "hunting --ki": ["-4"],
-    "--setpoint": [],
+    "--position-setpoint": [],
     "hunting --t-end": ["0"],
 }
 #: arguments (not options) and the bad values each command must refuse

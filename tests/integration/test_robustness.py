@@ -192,7 +192,7 @@ def test_friction_experiments_on_a_frictionless_rig(canudas):
     from pneumact.experiments.friction import Presliding, StickSlip
 
     params = canudas.replace(Fc=0.0, Fs=0.0)
-    run = run_friction_test(StickSlip(duration=2.0, samples_per_second=100), params)
+    run = run_friction_test(StickSlip(t_end=2.0, samples_per_second=100), params)
     assert np.all(np.isfinite(run.result["position"]))
     with pytest.raises(PneumactError, match="measures friction"):
-        run_friction_test(Presliding(duration=1.0), params)
+        run_friction_test(Presliding(t_end=1.0), params)

@@ -1,8 +1,9 @@
 """What every command shares: consoles, one-line errors, atomic multi-file output,
 progress display, and the options that build a model and its experiment.
 
-``simulate``, ``batch`` (and the commands that come after them) take the same
-``--params --valve --friction --chamber --t-end --low --high --input --rtol`` options,
+``simulate``, ``simulate-batch`` (and the commands that come after them) take the same
+``--params --valve --friction --decaying-damping --chamber --exponent --t-end --low
+--input-csv --rtol`` options,
 defined once here (``ModelOptions``) and turned into library objects by one function
 (``build_model``, ``build_experiment``). Nothing here imports numpy, pandas or numba at
 module level: a command pays for what it uses.
@@ -98,9 +99,9 @@ TEndOption = Annotated[float | None, typer.Option(
                     "to stop the input.")]
 LowOption = Annotated[float | None, typer.Option(
     "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
-                  "not with --valve command or --input).")]
+                  "not with --valve command or --input-csv).")]
 InputOption = Annotated[Path | None, typer.Option(
-    "--input", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
+    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
 # the options of pneumact.options.Executor and Checkpoint (their defaults are the
 # objects'), shared by every command that runs batches
@@ -179,7 +180,7 @@ def check_model_options(options: ModelOptions) -> None:
             "a valve (--valve command or regulator)")
     if options.low_kpa is not None:
         if options.input_csv is not None:
-            raise ArgumentError("--low sets the default pressure cycle, which --input "
+            raise ArgumentError("--low sets the default pressure cycle, which --input-csv "
                                 "replaces; drop one of them")
         if options.valve is Valve.command:
             raise ArgumentError("--low sets the lowest pressure of the default pressure "

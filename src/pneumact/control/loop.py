@@ -3,7 +3,7 @@
 ``ClosedLoop(plant, controller)`` is simulated like any model:
 ``simulate(loop, step_setpoint(...))``. Its experiment is the position set-point; its
 states are the plant's then the controller's; its outputs are the plant's then
-``setpoint``, ``error``, ``command`` (the controller output), ``plant_input`` (what the
+``position_setpoint``, ``error``, ``command`` (the controller output), ``plant_input`` (what the
 plant receives: drive_gain·command + disturbance) and ``friction_compensation`` (F̂).
 """
 
