@@ -312,7 +312,8 @@ def test_no_command_gives_nan_effort():
 def test_missing_signal_is_named(drop, missing):
     t, _, x, r, _ = _first_order()
     frame = _frame(t, x, r).drop(columns=drop)
-    with pytest.raises(DataError, match=f"no {missing} signal; needed: position, position_setpoint"):
+    with pytest.raises(DataError,
+                       match=f"no {missing} signal; needed: position, position_setpoint"):
         loop_metrics(frame)
     result = Result(t, {"position": x, "position_setpoint": r}, {})
     del result.signals[drop]

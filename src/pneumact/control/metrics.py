@@ -220,7 +220,8 @@ def _read(result: Any) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, str
         units = dict(getattr(result, "units", None) or {})
     else:
         raise DataError(f"loop_metrics: result = {type(result).__name__}; allowed: a pneumact "
-                        "Result or a pandas DataFrame with columns time, position, position_setpoint")
+                        "Result or a pandas DataFrame with columns time, position, "
+                        "position_setpoint")
     missing = [name for name in _REQUIRED if name not in signals]
     if missing:
         raise DataError(f"loop_metrics: the data has no {' and no '.join(map(repr, missing))} "
