@@ -73,7 +73,7 @@ def _variations(text: str | None) -> dict[str, str] | None:
     for item in names(text) or []:
         name, sep, amount = item.partition("=")
         if not sep or not amount.strip():
-            raise ParameterError(f"--vary item {item!r}; write name=N% (e.g. sigma0=50%)")
+            raise ParameterError(f"--variations item {item!r}; write name=N% (e.g. sigma0=50%)")
         out[name.strip()] = amount.strip()
     return out
 
@@ -98,7 +98,7 @@ def sensitivity(
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
-    vary: Annotated[str | None, typer.Option(
+    variations: Annotated[str | None, typer.Option(
         help="name=N% list; default: the paper's amounts (oat), else ±20 % of sigma0, "
              "sigma1, sigma2, vs and ±10 % of Fc, Fs (so that Fs >= Fc in every run).")] = None,
     features: Annotated[str, typer.Option(help="Features to analyse.")] = (
@@ -108,8 +108,9 @@ def sensitivity(
              "the loop, and local normalised sensitivities.")] = None,
     times: Annotated[int, typer.Option(help="Points of the time grid of --signals.")] = 41,
     n: Annotated[int | None, typer.Option("--n", help=(
-        "Base sample size: sobol a power of two >= 8 (default 256), src >= 2·(k + 1) for k "
-        "parameters, rbd_fast >= 40, or trajectories (morris, >= 2); not for oat."),
+        "Base sample size: sobol a power of two >= 8, src >= 2·(k + 1) for k parameters, "
+        "rbd_fast >= 40, or trajectories (morris, >= 2); not for oat. Default: the API's "
+        "(sobol 1024, src 500, rbd_fast 1000, morris 20; 256 with --conditions)."),
         show_default=False)] = None,
     second_order: Annotated[bool, typer.Option("--second-order",
                                                help="Sobol second-order indices.")] = False,
@@ -152,13 +153,14 @@ def sensitivity(
             raise ParameterError("--conditions runs the feature study at each condition; "
                                  "run --signals and --convergence without it")
         use_agg()
-        study = Study(method, actuator, experiment, parameter_set, vary,
-                      DEFAULT_N if n is None else n, second_order, seed, executor,
+        study = Study(method, actuator, experiment, parameter_set, variations,
+                      api_sample_size(method, bool(conditions)) if n is None else n,
+                      second_order, seed, executor,
                       resume)
         try:
             factors = study.problem().names
         except ParameterError as exc:
-            raise ParameterError(f"--vary: {exc.message}") from None
+            raise ParameterError(f"--variations: {exc.message}") from None
         if method is not Method.oat:
             check_sample_size(method, study.n, len(factors))
         from pneumact.io.tables import staged_folder
@@ -179,8 +181,22 @@ def sensitivity(
             out_console.print(f"wrote {shown_path(path, stage, out)}")
 
 
-#: default --n of the sample-based methods
-DEFAULT_N = 256
+def api_sample_size(method: Method, across: bool) -> int:
+    """--n when not given: the API's default sample size of the method (of
+    ``across_conditions`` across conditions; morris: its trajectories)."""
+    import inspect
+
+    from pneumact import sensitivity as sa
+
+    if across:
+        function, name = sa.across_conditions, "n"
+    elif method is Method.morris:
+        function, name = sa.morris, "trajectories"
+    elif method is Method.oat:
+        return 0
+    else:
+        function, name = getattr(sa, method.value), "n"
+    return int(inspect.signature(function).parameters[name].default)
 
 
 def _check_method_options(method: Method, n, second_order: bool, convergence: bool,
@@ -225,7 +241,7 @@ class Study:
     model: Actuator
     experiment: Experiment
     parameter_set: ParameterSet
-    vary: str | None
+    variations: str | None
     n: int
     second_order: bool
     seed: int
@@ -240,7 +256,7 @@ class Study:
     def problem(self):
         from pneumact import sensitivity as sa
 
-        return sa.Problem.around(self.parameter_set, _variations(self.vary) or sa.DEFAULT_RANGES)
+        return sa.Problem.around(self.parameter_set, _variations(self.variations) or sa.DEFAULT_RANGES)
 
     def _run(self, evaluate, convergence: bool = False):
         from pneumact import sensitivity as sa
@@ -261,9 +277,9 @@ class Study:
 
         if self.method is Method.oat:
             with err_console.status("oat: simulating"):
-                study = sa.one_at_a_time(self.model, self.experiment, _variations(self.vary),
+                study = sa.one_at_a_time(self.model, self.experiment, _variations(self.variations),
                                          features=feature_names, executor=self.executor)
-            curves = sa.friction_velocity(self.parameter_set, _variations(self.vary))
+            curves = sa.friction_velocity(self.parameter_set, _variations(self.variations))
             _print_oat(study, feature_names)
             return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
                     "loops.png": figure_writer(study.plot_loops),
@@ -292,7 +308,7 @@ class Study:
         against them and one plot per feature (index against v/vs)."""
         from pneumact import sensitivity as sa
 
-        variations = _variations(self.vary)
+        variations = _variations(self.variations)
         with batch_progress(f"{self.method.value}: {len(chosen)} conditions") as progress:
             study = sa.across_conditions(
                 self.model, chosen, self.method.value, variations=variations,

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import DataError, SolverError
 from ..io.records import Record
+from ..options import Executor, Offsets, Optimizer, Weights
 from .bench import typical_speed
 from .fit import FitResult, fit
 from .stages import presliding_window, prior_bounds, within
@@ -110,7 +111,8 @@ def _parameters_of(model) -> frozenset[str]:
 def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      friction=None, chamber=None, free: Sequence[str] = SPRING_AND_FRICTION,
                      solver=None, replicates: int | None = None, seed: int = 0,
-                     executor=None, max_evaluations: int = MAX_EVALUATIONS,
+                     executor: Executor | int | None = None,
+                     max_evaluations: int = MAX_EVALUATIONS,
                      prior=None, drop_chaotic: bool = True, excluded: list | None = None,
                      progress: Callable[[str, float], None] | None = None) -> FitResult:
     """Fit ``free`` to all ``records`` at once from the values of ``params`` (the staged
@@ -131,8 +133,6 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
     - With ``drop_chaotic`` a record whose motion is chaotic in the parameters at the
       start of a round (``amplification`` above ``CHAOS_AMPLIFICATION``) is left out.
     """
-    from ..options import Executor
-
     excluded = [] if excluded is None else excluded
     workers = Executor.of(executor, "joint_refinement").workers
     options = dict(friction=friction, chamber=chamber, free=free, solver=solver,
@@ -222,7 +222,6 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     """One output-error fit of ``free`` to ``records`` (see ``joint_refinement``). Only
     the records not yet in ``screened`` are screened for chaos, and the input-noise
     weight of a record is computed once (``weights``, by source)."""
-    from ..options import Offsets, Optimizer, Weights
     from ..simulation import Rodas4
     from .uncertainty import INPUT_REPLICATES, input_noise_weights
 

@@ -33,6 +33,7 @@ import pandas as pd
 
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
+from ..options import Executor
 from .diagnostics import (
     MODEL_FIDELITY,
     POORLY,
@@ -589,7 +590,8 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
 def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
-                   replicates: int | None = None, seed: int = 0, executor=None,
+                   replicates: int | None = None, seed: int = 0,
+                   executor: Executor | int | None = None,
                    max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
                    progress: Callable[[str, float], None] | None = None
                    ) -> PaperIdentification:
@@ -609,7 +611,6 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     the work goes on.
     """
     from ..io.records import as_records
-    from ..options import Executor
     from ..parameters import as_parameter_set
 
     records = as_records(records, "identify_paper")

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError, SolverError
+from ..options import Executor
 from .estimates import Estimates
 from .fit import FitResult, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
@@ -261,8 +262,8 @@ class PredictionBand:
 
 def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100,
                     level: float = 0.95, signals: Sequence[str] = ("position", "pressure"),
-                    t_eval=None, seed: int = 0, solver=None, executor=None
-                    ) -> PredictionBand:
+                    t_eval=None, seed: int = 0, solver=None,
+                    executor: Executor | int | str | None = None) -> PredictionBand:
     """The band of ``signals`` under ``experiment`` that the uncertainty of
     ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets with
     a non-positive value of a positive parameter are drawn again), simulated on the

@@ -9,6 +9,7 @@ sample once and analyses its growing prefixes.
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Sequence
 
@@ -18,6 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..checks import check_int
 from ..errors import ArgumentError, ParameterError
+from ..options import Checkpoint, Executor
 from .methods import (
     Evaluate,
     SensitivityWarning,
@@ -34,7 +36,9 @@ __all__ = ["along_time", "local_along_time", "model_signal", "plot_along_loop",
 
 
 def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
-                 *, executor=None, checkpoint=None, progress=None, solver=None) -> Evaluate:
+                 *, executor: Executor | int | str | None = None,
+                 checkpoint: Checkpoint | str | os.PathLike | None = None, progress=None,
+                 solver=None) -> Evaluate:
     """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
     by the time) from the batch engine; resumable from a ``checkpoint`` like
     ``model_outputs``."""

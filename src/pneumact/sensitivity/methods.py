@@ -8,6 +8,7 @@ with known indices and the actuator on the batch engine (``model_outputs``).
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -17,6 +18,7 @@ import pandas as pd
 
 from ..checks import check_int, check_range, check_seed, check_type
 from ..errors import ArgumentError, ArgumentTypeError, PneumactError
+from ..options import Checkpoint, Executor
 from .problem import Problem
 
 __all__ = ["SensitivityWarning", "StudyResult", "model_outputs", "morris", "rbd_fast",
@@ -288,7 +290,9 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
-                  executor=None, checkpoint=None, progress=None, solver=None) -> Evaluate:
+                  executor: Executor | int | str | None = None,
+                  checkpoint: Checkpoint | str | os.PathLike | None = None,
+                  progress=None, solver=None) -> Evaluate:
     """An ``evaluate`` that runs the sample on the batch engine (an ``Executor``: all
     local cores by default, or a Dask scheduler; resumable from a ``Checkpoint``) and
     returns the features. Failed runs are reported with their errors, never dropped."""

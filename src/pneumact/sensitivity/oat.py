@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ..options import Executor
 
 __all__ = ["PAPER_VARIATIONS", "FrictionCurves", "OneAtATime", "friction_velocity",
            "one_at_a_time"]
@@ -134,7 +135,8 @@ def _finish(fig, axes, n: int):
 
 
 def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = None, *,
-                  features: Sequence[str] = DEFAULT_FEATURES, executor=None,
+                  features: Sequence[str] = DEFAULT_FEATURES,
+                  executor: Executor | int | str | None = None,
                   solver=None) -> OneAtATime:
     """Vary each parameter of ``variations`` (fractions, "N%" strings, or lists of them;
     default ``PAPER_VARIATIONS``, both directions) with the others nominal, on the batch

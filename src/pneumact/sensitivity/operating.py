@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -226,9 +227,11 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
                       variations: Mapping[str, object] | None = None,
                       features: Sequence[str] = ("loop_width_pressure", "breakaway_pressure"),
                       n: int = 256, seed: int = 0, second_order: bool = False,
-                      checkpoint=None, progress: Callable[[int, int, int], None] | None = None,
+                      checkpoint: Checkpoint | str | os.PathLike | None = None,
+                      progress: Callable[[int, int, int], None] | None = None,
                       on_condition: Callable[[int, int, str], None] | None = None,
-                      solver=None, executor=None) -> ConditionStudy:
+                      solver=None, executor: Executor | int | str | None = None
+                      ) -> ConditionStudy:
     """Run the ``method`` study (oat, sobol, morris, src or rbd_fast) of ``model`` (an
     ``Actuator``: its parameters, friction and chamber) at each condition.
 
