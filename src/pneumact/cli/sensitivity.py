@@ -256,7 +256,8 @@ class Study:
     def problem(self):
         from pneumact import sensitivity as sa
 
-        return sa.Problem.around(self.parameter_set, _variations(self.variations) or sa.DEFAULT_RANGES)
+        return sa.Problem.around(self.parameter_set,
+                                 _variations(self.variations) or sa.DEFAULT_RANGES)
 
     def _run(self, evaluate, convergence: bool = False):
         from pneumact import sensitivity as sa

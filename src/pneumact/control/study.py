@@ -128,7 +128,8 @@ def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
 
 
 def canudas_hunting(params: ParameterSetLike = "canudas1995", *, kp: float = 3.0,
-                    ki: float = 4.0, kv: float = 6.0, position_setpoint: float = 1.0, t_end: float = 100.0, n_points: int = 10001,
+                    ki: float = 4.0, kv: float = 6.0, position_setpoint: float = 1.0,
+                    t_end: float = 100.0, n_points: int = 10001,
                     sample_time: float | None = None) -> tuple[ClosedLoop, Experiment]:
     """The hunting experiment of Canudas de Wit et al. (1995, §4): a unit mass with
     LuGre friction (``canudas1995``) under u = −Kv·v − Kp·(x − xd) − Ki·∫(x − xd) dt,
