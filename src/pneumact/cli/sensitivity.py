@@ -3,6 +3,7 @@ at one operating condition or across several (``--conditions``)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -188,6 +189,7 @@ def api_sample_size(method: Method, across: bool) -> int:
 
     from pneumact import sensitivity as sa
 
+    function: Callable[..., object]
     if across:
         function, name = sa.across_conditions, "n"
     elif method is Method.morris:
