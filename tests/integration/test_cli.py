@@ -229,7 +229,7 @@ def test_every_friction_test_setting_is_an_option():
 
 
 def test_simulate_and_batch_share_model_options_and_defaults():
-    simulate, batch = _options(_command(["simulate"])), _options(_command(["batch"]))
+    simulate, batch = _options(_command(["simulate"])), _options(_command(["simulate-batch"]))
     shared = ("--params", "--valve", "--friction", "--chamber", "--t-end", "--low", "--input-csv",
               "--rtol")
     for option in shared:
