@@ -103,12 +103,13 @@ class Executor:
         def plain(v):
             if isinstance(v, int) and not isinstance(v, bool):
                 return cls(workers=v)
-            if isinstance(v, str):
+            if isinstance(v, str) or hasattr(v, "submit"):  # an address, a Client
                 return cls(scheduler=v)
             return None
 
         return as_option(name, value, cls, where=where, plain=plain,
-                         accepts="a number of worker threads or a Dask scheduler address")
+                         accepts="a number of worker threads, or a Dask scheduler address "
+                                 "or distributed.Client")
 
 
 @dataclass(frozen=True)

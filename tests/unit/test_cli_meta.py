@@ -205,3 +205,29 @@ def test_the_declared_targets_exist():
     (False, True, 1.0, False), (0, 0.0, 1.0, True)])
 def test_defaults_are_compared_in_the_api_units(cli, api, factor, same):
     assert same_default(cli, api, factor) is same
+
+
+def test_chamber_laws_and_friction_options_are_reachable():
+    """--chamber polytropic --exponent and --decaying-damping build the API's objects
+    (the options ``simulate``, ``simulate-batch``, ``fit``, ``sensitivity`` and
+    ``validate`` share)."""
+    import pneumact as pa
+    from conftest import load_quietly
+    from pneumact.cli.common import Chamber, ModelOptions, Valve, build_model
+    from pneumact.errors import ArgumentError
+
+    options = ModelOptions(valve=Valve.command, chamber=Chamber.polytropic, exponent=1.3,
+                           decaying_damping=True)
+    _, actuator = build_model(options, load_quietly("vgt-paper"))
+    assert actuator.chamber == pa.Polytropic(1.3)
+    assert actuator.friction == pa.LuGre(decaying_damping=True)
+    for chamber in Chamber:  # every chamber law of the API has its choice
+        assert type(build_model(ModelOptions(valve=Valve.command, chamber=chamber),
+                                load_quietly("vgt-paper"))[1].chamber).__name__.lower() \
+            == chamber.value
+    with pytest.raises(ArgumentError, match=r"--exponent 1\.3 is the exponent of --chamber "
+                                            "polytropic"):
+        build_model(ModelOptions(valve=Valve.command, exponent=1.3))
+    with pytest.raises(ArgumentError, match="--decaying-damping is an option of --friction "
+                                            "lugre"):
+        build_model(ModelOptions(friction="dahl", decaying_damping=True))

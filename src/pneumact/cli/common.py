@@ -173,11 +173,17 @@ def load_quietly(name: str):
 
 def check_model_options(options: ModelOptions) -> None:
     """Refuse options that would do nothing with the others given."""
-    if options.chamber is Chamber.adiabatic and options.valve is Valve.source:
+    if options.chamber is not Chamber.isothermal and options.valve is Valve.source:
         raise ArgumentError(
-            "--chamber adiabatic has no effect with --valve source: the pressure is "
-            "prescribed, so the chamber's gas law never enters; drop --chamber, or drive "
-            "a valve (--valve command or regulator)")
+            f"--chamber {options.chamber.value} has no effect with --valve source: the "
+            "pressure is prescribed, so the chamber's gas law never enters; drop --chamber, "
+            "or drive a valve (--valve command or regulator)")
+    if options.exponent != DEFAULT_EXPONENT and options.chamber is not Chamber.polytropic:
+        raise ArgumentError(f"--exponent {options.exponent:g} is the exponent of --chamber "
+                            f"polytropic, not of --chamber {options.chamber.value}")
+    if options.decaying_damping and str(options.friction) != LuGre.cli_name:
+        raise ArgumentError(f"--decaying-damping is an option of --friction lugre, not of "
+                            f"--friction {options.friction}")
     if options.low_kpa is not None:
         if options.input_csv is not None:
             raise ArgumentError("--low sets the default pressure cycle, which --input-csv "
