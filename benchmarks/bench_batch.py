@@ -140,7 +140,7 @@ def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int,
     experiment = pa.CommandCycle(0.0, 1.0, period=20.0)
     solver = pa.Rodas4(rtol=1e-6)
     n_small, n_big = sizes
-    simulate_batch(model, experiment, random_sets(params, 4, seed=0), workers=1)  # warm-up
+    simulate_batch(model, experiment, random_sets(params, 4, seed=0), executor=1)  # warm-up
     small = random_sets(params, n_small, seed=1)
     big = random_sets(params, n_big, seed=2)
     res = {}
@@ -148,8 +148,8 @@ def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int,
     # machine steal a core now and then, which would fake a poor speed-up.
     rates1, rates2 = [], []
     for _ in range(repeats):
-        one = simulate_batch(model, experiment, small, workers=1)
-        two = simulate_batch(model, experiment, small, workers=2)
+        one = simulate_batch(model, experiment, small, executor=1)
+        two = simulate_batch(model, experiment, small, executor=2)
         rates1.append(one.stats["sims_per_s"])
         rates2.append(two.stats["sims_per_s"])
     res["rate_small_1"] = max(rates1)
@@ -159,9 +159,9 @@ def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int,
     res["cpu_ms_2"] = two.stats["compute_cpu_s"] / n_small * 1e3
     bare1, bare2 = [], []
     for _ in range(repeats):
-        bare1.append(simulate_batch(model, experiment, small, workers=1,
+        bare1.append(simulate_batch(model, experiment, small, executor=1,
                                     features=[]).stats["sims_per_s"])
-        bare = simulate_batch(model, experiment, small, workers=2, features=[])
+        bare = simulate_batch(model, experiment, small, executor=2, features=[])
         bare2.append(bare.stats["sims_per_s"])
     res["rate_bare"] = max(bare2)
     res["speedup_bare"] = max(bare2) / max(bare1)
@@ -182,7 +182,7 @@ def bench(delta: float, sizes: tuple[int, int], n_lsoda: int, n_trace: int,
     tracemalloc.stop()
     # LSODA on a sample vs the batch kernel on one thread (same sets, same tolerances)
     sample = small.iloc[:n_lsoda]
-    kernel_batch = simulate_batch(model, experiment, sample, workers=1, signals=["position"],
+    kernel_batch = simulate_batch(model, experiment, sample, executor=1, signals=["position"],
                                   features=[])
     per_kernel = kernel_batch.stats["compute_time_s"] / n_lsoda
     walls, diffs = [], []

@@ -86,7 +86,7 @@ def main() -> None:
         wall, res = timed(lambda j=jacobian: fit(
             model, fresh([presliding])[0], ["sigma0", "sigma1"], start=begin,
             offsets=["position"],
-            window=window, jacobian=j), args.repeats)
+            window=window, optimizer=pa.Optimizer(jacobian=j)), args.repeats)
         rows.append((jacobian, wall, res))
         print(f"fit sigma0, sigma1 with {jacobian:13s} Jacobian: {1e3 * wall:8.1f} ms, "
               f"{res.simulations:3d} simulations, {res.iterations:3d} evaluations, "

@@ -56,7 +56,7 @@ def run_one(job):
     tic = time.perf_counter()
     records = synthetic_campaign(truth, design_campaign(prior, spread=SPREAD).tests,
                                  seed=seed)
-    result = identify_paper(records, prior, seed=seed, workers=1)
+    result = identify_paper(records, prior, seed=seed, executor=1)
     wall = time.perf_counter() - tic
     table = result.to_pandas(truth=truth)
     rows = []

@@ -63,7 +63,7 @@ def main() -> None:
     x = study.sample.to_numpy()[: args.scaling_runs]
     for _ in range(3):  # alternate 1 and 2 workers so that drifts of the VM hit both
         for workers in (1, 2):
-            evaluate = sa.model_outputs(model, experiment, problem, FEATURES, workers=workers)
+            evaluate = sa.model_outputs(model, experiment, problem, FEATURES, executor=workers)
             start = time.perf_counter()
             evaluate(x)
             rates[workers] = max(rates[workers], len(x) / (time.perf_counter() - start))

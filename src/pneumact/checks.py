@@ -22,14 +22,17 @@ import numbers
 import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from pneumact.errors import ArgumentError, ArgumentTypeError, PneumactError
+
+_Option = TypeVar("_Option")
 
 __all__ = [
     "ATMOSPHERE_PLAUSIBLE",
     "MAX_ABSOLUTE_PRESSURE",
     "as_instance",
+    "as_option",
     "check_absolute_pressure",
     "check_atmosphere",
     "check_bool",
@@ -280,6 +283,24 @@ def as_instance(name: str, value: Any, base: type, *, examples: str, where: str 
     raise ArgumentTypeError(f"{_prefix(where)}{name} = {shown(value)}: must be a "
                             f"{base.__name__} object such as {examples}, not "
                             f"{type(value).__name__}{hint}")
+
+
+def as_option(name: str, value: Any, option: type[_Option], *, where: str = "",
+              plain: Any = None, accepts: str = "") -> _Option:
+    """An option object (a frozen dataclass that checks itself): ``value`` when it is one,
+    its defaults for None, or what ``plain(value)`` makes of a plain value that means one
+    thing (``multistart=4`` reads as ``Multistart(starts=4)``; ``plain`` returns None
+    for a value it does not take). ``accepts`` says which plain values are taken."""
+    if value is None:
+        return option()
+    if isinstance(value, option):
+        return value
+    made = plain(value) if plain is not None else None
+    if made is not None:
+        return made
+    also = f" or {accepts}" if accepts else ""
+    raise ArgumentTypeError(f"{_prefix(where)}{name} = {shown(value)}: must be a "
+                            f"{option.__name__}(...){also}, not {type(value).__name__}")
 
 
 # --------------------------------------------------------------------------- physics

@@ -35,7 +35,7 @@ runner = CliRunner()
 #: output folder of the case)
 BASE = {
     "simulate": ["--out", "OUT"],
-    "batch": [str(GOOD / "table.csv"), "--out", "OUT"],
+    "simulate-batch": [str(GOOD / "table.csv"), "--out", "OUT"],
     "campaign": ["--out", "OUT"],
     "fit": [str(GOOD / "record.csv"), "--free", "Fc", "--out", "OUT"],
     "sensitivity": ["sobol", "--n", "8", "--t-end", "2", "--out", "OUT"],
@@ -64,14 +64,15 @@ BAD_VALUES: dict[str, list[str]] = {
                  str(BAD / "p_atm_in_kpa_as_pa.toml"), str(BAD / "p_atm_nan.toml"),
                  str(BAD / "fs_below_fc.toml"), str(BAD / "not_toml.toml")],
     "--out": [str(GOOD / "record.csv")],  # a file where a folder is expected
-    "--input": [str(BAD / "negative_pressure.csv"), str(BAD / "huge_pressure.csv"),
-                str(BAD / "kpa_as_pa.csv"), str(BAD / "negative_time.csv"),
-                str(BAD / "missing.csv")],
+    "--input-csv": [str(BAD / "negative_pressure.csv"), str(BAD / "huge_pressure.csv"),
+                    str(BAD / "kpa_as_pa.csv"), str(BAD / "negative_time.csv"),
+                    str(BAD / "missing.csv")],
     "--valve": ["butterfly"],
     "--friction": ["lugree"],
     "--chamber": ["adiabatic"],  # with the default pressure source: it would do nothing
-    "sensitivity --chamber": [],  # behind the default command valve: legal
-    "validate --chamber": [],  # behind the default regulator: legal
+    "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
+    "--decaying-damping": [],
+    "--chunk-size": ["0"],
     "--t-end": ["0", "-1"],
     "--low": ["0", "-50", "200", "20000"],
     "--rtol": ["0", "-1e-6", "1"],
@@ -97,7 +98,10 @@ BAD_VALUES: dict[str, list[str]] = {
     "--multistart": ["-1"],
     "--profile": ["sigma1"],  # not free
     "--loss": ["foo"],
-    "sensitivity --vary": ["sigma0=abc%", "sigma0"],
+    "--points": ["2"],
+    "--f-scale": ["0", "-1"],
+    "validate --input": ["butterfly"],
+    "sensitivity --variations": ["sigma0=abc%", "sigma0"],
     "sensitivity --conditions": ["period=0", "valve=butterfly", "period", "colour=red"],
     "--times": ["1"],
     "--n": ["3", "100"],
@@ -130,7 +134,6 @@ BAD_VALUES: dict[str, list[str]] = {
     "--samples-per-second": ["0"],
     "--sliding-speed": ["0", "-5"],
     "--fit-delta": [],
-    "--model": ["coulomb"],
     "--format": ["matlab"],
     "--force": ["torque"],
     "--mass": [],
@@ -164,13 +167,13 @@ BAD_VALUES: dict[str, list[str]] = {
     "hunting --kp": ["-3"],
     "hunting --kv": ["-6"],
     "hunting --ki": ["-4"],
-    "--setpoint": [],
+    "--position-setpoint": [],
     "hunting --t-end": ["0"],
 }
 #: arguments (not options) and the bad values each command must refuse
 BAD_ARGUMENTS: dict[str, list[str]] = {
-    "batch": [str(BAD / "table_text_cell.csv"), str(BAD / "table_unknown_column.csv"),
-              str(BAD / "missing.csv")],
+    "simulate-batch": [str(BAD / "table_text_cell.csv"),
+                       str(BAD / "table_unknown_column.csv"), str(BAD / "missing.csv")],
     "fit": [str(BAD / name) for name in (
         "negative_pressure.csv", "huge_pressure.csv", "kpa_as_pa.csv", "negative_time.csv",
         "nan_cell.csv", "time_backwards.csv", "no_header.csv", "position_in_metres.csv",
@@ -332,7 +335,7 @@ def test_batch_row_with_an_impossible_value_fails_alone(workdir):
     mistake; the batch itself finishes."""
     table = workdir / "table.csv"
     table.write_text("p_atm [Pa]\n100\n1e5\n", encoding="utf-8")
-    result = _invoke(["batch", str(table), "--t-end", "2", "--out", "OUT"], workdir)
+    result = _invoke(["simulate-batch", str(table), "--t-end", "2", "--out", "OUT"], workdir)
     assert result.exit_code == 0, result.output
     rows = pd.read_csv(workdir / "out" / "summary.csv")
     assert rows["status"].tolist() == ["invalid", "ok"]
@@ -474,18 +477,22 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("replace p_atm=nan", lambda: vgt.replace(p_atm=nan)),
         ("replace p_atm=100", lambda: vgt.replace(p_atm=100.0)),
         ("simulate_batch table=dict", lambda: pa.simulate_batch(actuator, cycle, {"Fc": 1})),
-        ("simulate_batch workers=0", lambda: pa.simulate_batch(actuator, cycle, table,
-                                                               workers=0)),
-        ("simulate_batch resume+overwrite", lambda: pa.simulate_batch(
-            actuator, cycle, table, out_dir=folder / "b", resume=True, overwrite=True)),
-        ("simulate_batch out_dir=a file", lambda: pa.simulate_batch(
-            actuator, cycle, table, out_dir=a_file)),
+        ("simulate_batch executor=0", lambda: pa.simulate_batch(actuator, cycle, table,
+                                                                executor=0)),
+        ("Executor(workers=0)", lambda: pa.Executor(workers=0)),
+        ("Executor(workers=1.5)", lambda: pa.Executor(workers=1.5)),
+        ("simulate_batch executor=[]", lambda: pa.simulate_batch(actuator, cycle, table,
+                                                                 executor=[])),
+        ("Checkpoint resume+overwrite", lambda: pa.Checkpoint(folder / "b", resume=True,
+                                                              overwrite=True)),
+        ("Checkpoint(resume='yes')", lambda: pa.Checkpoint(folder / "b", resume="yes")),
+        ("simulate_batch checkpoint=a file", lambda: pa.simulate_batch(
+            actuator, cycle, table, checkpoint=a_file)),
         ("simulate_batch scheduler", lambda: pa.simulate_batch(
-            actuator, cycle, table, scheduler="not-an-address")),
+            actuator, cycle, table, executor="not-an-address")),
         ("simulate_batch signals", lambda: pa.simulate_batch(actuator, cycle, table,
                                                              signals=["positon"])),
-        ("simulate_batch chunk_size", lambda: pa.simulate_batch(actuator, cycle, table,
-                                                                chunk_size=0)),
+        ("Executor(chunk_size=0)", lambda: pa.Executor(chunk_size=0)),
         ("simulate_sensitivities names", lambda: pa.simulate_sensitivities(
             actuator, cycle, ["Fcc"])),
         ("sobol(n=8.5)", lambda: sa.sobol(problem, lambda x: x, n=8.5)),
@@ -502,12 +509,19 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("fit(records=5)", lambda: pa.fit(actuator, 5, ["Fc"])),
         ("fit(free=[])", lambda: pa.fit(actuator, record, [])),
         ("fit(free twice)", lambda: pa.fit(actuator, record, ["Fc", "Fc"])),
-        ("fit(loss='foo')", lambda: pa.fit(actuator, record, ["Fc"], loss="foo")),
+        ("fit(optimizer='foo')", lambda: pa.fit(actuator, record, ["Fc"], optimizer="foo")),
+        ("Optimizer(jacobian='exact')", lambda: pa.Optimizer(jacobian="exact")),
+        ("Optimizer(max_nfev=0)", lambda: pa.Optimizer(max_nfev=0)),
         ("fit(multistart=-1)", lambda: pa.fit(actuator, record, ["Fc"], multistart=-1)),
-        ("fit(seed=-1)", lambda: pa.fit(actuator, record, ["Fc"], seed=-1)),
+        ("Multistart(seed=-1)", lambda: pa.Multistart(2, seed=-1)),
+        ("fit(multistart='4')", lambda: pa.fit(actuator, record, ["Fc"], multistart="4")),
+        ("Profile(points=2)", lambda: pa.Profile(["Fc"], points=2)),
+        ("Offsets(records=[-1])", lambda: pa.Offsets(["position"], records=[-1])),
+        ("Weights(records=[0])", lambda: pa.Weights(records=[0.0])),
         ("fit(window=(5, 1))", lambda: pa.fit(actuator, record, ["Fc"], window=(5.0, 1.0))),
         ("fit(window=(0, nan))", lambda: pa.fit(actuator, record, ["Fc"], window=(0.0, nan))),
-        ("fit(f_scale=0)", lambda: pa.fit(actuator, record, ["Fc"], f_scale=0.0)),
+        ("Optimizer(f_scale=0)", lambda: pa.Optimizer(f_scale=0.0)),
+        ("Bounds(log=5)", lambda: pa.Bounds(log=5)),
         ("fit(bounds bad)", lambda: pa.fit(actuator, record, ["Fc"], bounds={"Fc": (3, 1)})),
         ("fit(weights<0)", lambda: pa.fit(actuator, record, ["Fc"],
                                           weights={"position": -1.0})),

@@ -98,7 +98,7 @@ def test_signals_on_requested_grid_match_simulate():
     table = random_table(3, seed=2)
     t_eval = np.linspace(0.0, 2.0, 201)
     batch = simulate_batch(MODEL, EXPERIMENT, table, signals=["position", "pressure"],
-                           features=["stroke"], t_eval=t_eval, workers=1)
+                           features=["stroke"], t_eval=t_eval, executor=1)
     assert batch.signals["position"].shape == (3, t_eval.size)
     np.testing.assert_array_equal(batch.time, t_eval)
     with warnings.catch_warnings():
@@ -146,7 +146,7 @@ def test_reference_enables_rms_error():
         warnings.simplefilter("ignore", PassivityWarning)
         ref = pa.simulate(MODEL, EXPERIMENT)
     batch = simulate_batch(MODEL, EXPERIMENT, table, reference=(ref.time, ref["position"]),
-                           workers=1)
+                           executor=1)
     assert batch.table["rms_error"].iloc[0] == 0.0  # the reference itself
     assert batch.table["rms_error"].iloc[1] > 0.0
 
@@ -157,7 +157,7 @@ def test_dask_local_cluster_gives_identical_results(dask_client):
                            features=["stroke", "loop_area", "breakaway_pressure"])
     remote = simulate_batch(MODEL, EXPERIMENT, table, signals=["position"],
                             features=["stroke", "loop_area", "breakaway_pressure"],
-                            scheduler=dask_client)
+                            executor=pa.Executor(scheduler=dask_client))
     assert remote.stats["workers"] == 2 and remote.stats["chunks"] > 1
     pd.testing.assert_frame_equal(remote.table, local.table, check_exact=True)
     np.testing.assert_array_equal(remote.signals["position"], local.signals["position"])
@@ -171,9 +171,11 @@ def test_killed_batch_resumes_and_matches(tmp_path):
     out = tmp_path / "run"
     script = SETUP + f"""
 import time
+from pneumact.options import Executor
 from pneumact.simulation.batch import simulate_batch
-simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), out_dir={str(out)!r},
-               chunk_size={RESUME_CHUNK}, workers=1, progress=lambda *a: time.sleep(0.5))
+simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), checkpoint={str(out)!r},
+               executor=Executor(workers=1, chunk_size={RESUME_CHUNK}),
+               progress=lambda *a: time.sleep(0.5))
 """
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [
         SRC, os.environ.get("PYTHONPATH")]))}
@@ -194,7 +196,8 @@ simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), out_dir={str
     assert not out.exists()  # only a complete batch takes the folder
 
     table = random_table(N_RESUME, seed=5)
-    resumed = simulate_batch(MODEL, EXPERIMENT, table, out_dir=out, resume=True, workers=1)
+    resumed = simulate_batch(MODEL, EXPERIMENT, table,
+                             checkpoint=pa.Checkpoint(out, resume=True), executor=1)
     assert resumed.stats["reused_chunks"] == len(before)
     assert resumed.stats["computed_chunks"] == n_chunks - len(before)
     assert resumed.stats["computed"] == N_RESUME - RESUME_CHUNK * len(before)
@@ -209,18 +212,19 @@ simulate_batch(model, experiment, random_table({N_RESUME}, seed=5), out_dir={str
     summary = pd.read_csv(out / "summary.csv")
     assert len(summary) == N_RESUME and "status" in summary.columns
 
-    again = simulate_batch(MODEL, EXPERIMENT, table, out_dir=out, resume=True)  # all reused
+    again = simulate_batch(MODEL, EXPERIMENT, table,  # all reused
+                           checkpoint=pa.Checkpoint(out, resume=True))
     assert again.stats["computed"] == 0
     pd.testing.assert_frame_equal(again.table, fresh.table, check_exact=True)
 
 
 def test_existing_batch_is_not_reused_without_resume(tmp_path):
     table = random_table(4, seed=7)
-    first = simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, workers=1)
+    first = simulate_batch(MODEL, EXPERIMENT, table, checkpoint=tmp_path, executor=1)
     with pytest.raises(DataError, match=r"already holds this batch.*resume.*overwrite"):
-        simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, workers=1)
-    again = simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, overwrite=True,
-                           workers=1)
+        simulate_batch(MODEL, EXPERIMENT, table, checkpoint=tmp_path, executor=1)
+    again = simulate_batch(MODEL, EXPERIMENT, table,
+                           checkpoint=pa.Checkpoint(tmp_path, overwrite=True), executor=1)
     assert again.stats["computed"] == 4 and again.stats["reused_chunks"] == 0
     pd.testing.assert_frame_equal(again.table, first.table, check_exact=True)
 
@@ -231,7 +235,7 @@ def test_gamma_column_with_adiabatic_chamber_equals_one_by_one(vgt):
     model = pa.Actuator(vgt, valve=pa.CommandValve(), chamber=pa.Adiabatic())
     experiment = pa.CommandCycle(period=2.0, n_points=501)
     table = pd.DataFrame({"gamma": [1.2, 1.4, 1.6]})
-    batch = simulate_batch(model, experiment, table, signals=["pressure"], workers=1)
+    batch = simulate_batch(model, experiment, table, signals=["pressure"], executor=1)
     for i, gamma in enumerate(table["gamma"]):
         one = pa.simulate(pa.Actuator(vgt.replace(gamma=gamma), valve=pa.CommandValve(),
                                       chamber=pa.Adiabatic()), experiment)
@@ -241,13 +245,14 @@ def test_gamma_column_with_adiabatic_chamber_equals_one_by_one(vgt):
 
 def test_manifest_mismatch_is_refused(tmp_path):
     table = random_table(4, seed=6)
-    simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, workers=1)
+    simulate_batch(MODEL, EXPERIMENT, table, checkpoint=tmp_path, executor=1)
     changed = table.copy()
     changed.loc[0, "Fc"] *= 1.01
     with pytest.raises(DataError, match=r"different batch.*table"):
-        simulate_batch(MODEL, EXPERIMENT, changed, out_dir=tmp_path, resume=True)
+        simulate_batch(MODEL, EXPERIMENT, changed,
+                       checkpoint=pa.Checkpoint(tmp_path, resume=True))
     with pytest.raises(DataError, match=r"different batch.*features"):
-        simulate_batch(MODEL, EXPERIMENT, table, out_dir=tmp_path, features=["stroke"])
+        simulate_batch(MODEL, EXPERIMENT, table, checkpoint=tmp_path, features=["stroke"])
 
 
 def test_cli_end_to_end(tmp_path):
@@ -258,7 +263,7 @@ def test_cli_end_to_end(tmp_path):
     csv = tmp_path / "sets.csv"
     csv.write_text("Fc [N],Fs [N],sigma1\n2.6,3.2,214\n2.0,3.0,100\n3.0,2.0,214\n")
     out = tmp_path / "out"
-    result = CliRunner().invoke(app, ["batch", str(csv), "--out", str(out), "--t-end", "2",
+    result = CliRunner().invoke(app, ["simulate-batch", str(csv), "--out", str(out), "--t-end", "2",
                                       "--features", "stroke,loop_width_pressure",
                                       "--signals", "position", "--workers", "2"])
     assert result.exit_code == 0, result.output
@@ -272,6 +277,6 @@ def test_cli_end_to_end(tmp_path):
 
     bad = tmp_path / "bad.csv"
     bad.write_text("Fcc\n2.0\n")
-    result = CliRunner().invoke(app, ["batch", str(bad), "--out", str(tmp_path / "o2")])
+    result = CliRunner().invoke(app, ["simulate-batch", str(bad), "--out", str(tmp_path / "o2")])
     assert result.exit_code == 2
     assert "did you mean 'Fc'" in result.output

@@ -67,7 +67,7 @@ def test_pressure_input_csv(tmp_path):
     csv = tmp_path / "pressure.csv"
     csv.write_text("time [s],pressure [kPa]\n0,100\n2.5,20\n5,100\n", encoding="utf-8")
     out = tmp_path / "out"
-    result = invoke("simulate", "--input", str(csv), "--out", str(out))
+    result = invoke("simulate", "--input-csv", str(csv), "--out", str(out))
     assert result.exit_code == 0, result.output
     lines = (out / "simulation.csv").read_text(encoding="utf-8").splitlines()
     last_time = float(lines[-1].split(",")[0])
@@ -155,7 +155,7 @@ def test_bad_input_csv(tmp_path, case):
     csv = tmp_path / "input.csv"
     csv.write_text(text, encoding="utf-8")
     out = tmp_path / "out"
-    result = invoke("simulate", "--input", str(csv), "--out", str(out))
+    result = invoke("simulate", "--input-csv", str(csv), "--out", str(out))
     assert_user_error(result, message, out)
 
 
@@ -163,13 +163,13 @@ def test_t_end_beyond_input_data(tmp_path):
     csv = tmp_path / "input.csv"
     csv.write_text("time [s],pressure [kPa]\n0,100\n1,90\n", encoding="utf-8")
     out = tmp_path / "out"
-    result = invoke("simulate", "--input", str(csv), "--t-end", "3", "--out", str(out))
+    result = invoke("simulate", "--input-csv", str(csv), "--t-end", "3", "--out", str(out))
     assert_user_error(result, "beyond the input data", out)
 
 
 def test_missing_input_file(tmp_path):
     out = tmp_path / "out"
-    result = invoke("simulate", "--input", str(tmp_path / "nope.csv"), "--out", str(out))
+    result = invoke("simulate", "--input-csv", str(tmp_path / "nope.csv"), "--out", str(out))
     assert_user_error(result, "not found", out)
 
 
@@ -229,8 +229,8 @@ def test_every_friction_test_setting_is_an_option():
 
 
 def test_simulate_and_batch_share_model_options_and_defaults():
-    simulate, batch = _options(_command(["simulate"])), _options(_command(["batch"]))
-    shared = ("--params", "--valve", "--friction", "--chamber", "--t-end", "--low", "--input",
+    simulate, batch = _options(_command(["simulate"])), _options(_command(["simulate-batch"]))
+    shared = ("--params", "--valve", "--friction", "--chamber", "--t-end", "--low", "--input-csv",
               "--rtol")
     for option in shared:
         assert option in simulate and option in batch, option
@@ -250,7 +250,7 @@ def test_friction_test_options_reach_the_api(tmp_path):
                     "--n-points", "101", "--rtol", "1e-6", "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     frame = pd.read_csv(tmp_path / "friction_test.csv")
-    api = run_friction_test(Presliding(amplitude=0.5, duration=1.0, n_points=101, rtol=1e-6),
+    api = run_friction_test(Presliding(amplitude=0.5, t_end=1.0, n_points=101, rtol=1e-6),
                             load_quietly("canudas1995"))
     np.testing.assert_array_equal(frame["position [m]"].to_numpy(), api.result["position"])
 

@@ -65,7 +65,7 @@ def test_profile_command_follows_a_csv_profile(tmp_path):
     result = invoke("control", "profile", str(profile), "--out", str(out))
     assert result.exit_code == 0, result.output
     signals = pd.read_csv(out / "signals.csv")
-    assert np.allclose(signals["setpoint [m]"].iloc[0], 0.004)
+    assert np.allclose(signals["position_setpoint [m]"].iloc[0], 0.004)
     assert abs(signals["position [m]"].iloc[-1] - 0.005) < ref.CLI_STEP_FINAL_ERROR
     metrics = pd.read_csv(out / "metrics.csv")["metric"].tolist()  # a profile, not a step:
     assert "rms_tracking_error" in metrics and "overshoot" not in metrics  # no step metrics

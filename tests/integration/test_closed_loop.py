@@ -100,7 +100,7 @@ def test_batch_engine_equals_single_runs_for_a_closed_loop(canudas):
     loop, experiment = canudas_hunting(canudas, t_end=20.0, n_points=201)
     values = [0.8, 1.0, 1.2]
     batch = pa.simulate_batch(loop, experiment, pd.DataFrame({"m": values}),
-                              signals=["position"], workers=2)
+                              signals=["position"], executor=2)
     for row, mass in enumerate(values):
         single = pa.simulate(loop, experiment, values={"m": mass})
         np.testing.assert_allclose(batch.signals["position"][row], single.signals["position"],

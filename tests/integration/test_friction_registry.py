@@ -150,7 +150,7 @@ def test_a_run_carries_the_law_states_and_a_batch_equals_single_runs(actuator, p
     assert np.ptp(run["position"]) > 0.0
     fc = params["Fc"]
     table = pd.DataFrame({"Fc": [0.8 * fc, fc, 1.2 * fc]})
-    batch = simulate_batch(model, CYCLE, table, signals=["position"], workers=1)
+    batch = simulate_batch(model, CYCLE, table, signals=["position"], executor=1)
     assert (batch.table["status"] == "ok").all(), batch.failed
     for row, value in enumerate(table["Fc"]):
         single = pa.simulate(model, CYCLE, values={"Fc": value})

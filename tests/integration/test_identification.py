@@ -169,8 +169,8 @@ def test_shared_and_per_record_parameters(vgt):
 def test_sensitivity_jacobian_matches_differences_at_the_optimum(vgt, clean_presliding):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     solver = pa.Rodas4(rtol=ref.JACOBIAN_SOLVER_RTOL)
-    result = fit(model, clean_presliding, ["sigma0", "sigma1", "Fs"], log=False,
-                 solver=solver)
+    result = fit(model, clean_presliding, ["sigma0", "sigma1", "Fs"],
+                 bounds=pa.Bounds(log=False), solver=solver)
     weight = result.weights["position"]
     for j, name in enumerate(result.estimates.names):
         value = result.values[name]
@@ -203,7 +203,7 @@ def test_profile_tells_identifiable_from_not(vgt, clean_presliding):
 
 def test_multistart_runs_every_start_and_keeps_the_best(vgt, clean_presliding):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
-    result = fit(model, clean_presliding, ["sigma0", "sigma1"], multistart=3, workers=2,
+    result = fit(model, clean_presliding, ["sigma0", "sigma1"], multistart=3, executor=2,
                  bounds={"sigma0": (3e4, 3e5), "sigma1": (50.0, 800.0)})
     assert len(result.starts) == 4
     assert result.cost == pytest.approx(result.starts["cost"].min())
@@ -299,8 +299,8 @@ def test_multistart_on_dask_equals_local(vgt, clean_presliding, dask_client):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     options = dict(multistart=2, bounds={"sigma0": (3e4, 3e5), "sigma1": (50.0, 800.0)})
     local = fit(model, clean_presliding, ["sigma0", "sigma1"], **options)
-    remote = fit(model, clean_presliding, ["sigma0", "sigma1"], scheduler=dask_client,
-                 **options)
+    remote = fit(model, clean_presliding, ["sigma0", "sigma1"],
+                 executor=pa.Executor(scheduler=dask_client), **options)
     np.testing.assert_array_equal(remote.estimates.values, local.estimates.values)
     assert remote.simulations == local.simulations
 

@@ -68,7 +68,7 @@ def test_frictionless_row_of_a_batch_runs(vgt):
     model = pa.Actuator(vgt.replace(delta=2.0))
     table = pd.DataFrame({"Fc": [2.6, 0.0], "Fs": [3.2, 0.0]})
     batch = pa.simulate_batch(model, pa.PressureCycle(period=2.0, n_points=201), table,
-                              features=["stroke", "loop_width_pressure"], workers=1)
+                              features=["stroke", "loop_width_pressure"], executor=1)
     assert batch.table["status"].tolist() == ["ok", "ok"]
     width = batch.table["loop_width_pressure"]
     # without Coulomb friction only the viscous (and inertial) loop is left: at most a
@@ -82,7 +82,7 @@ def test_a_row_that_raises_is_that_row_s_error(vgt, monkeypatch):
     model = pa.Actuator(vgt.replace(delta=2.0))
     experiment = pa.PressureCycle(period=2.0, n_points=101)
     table = pd.DataFrame({"Fc": [2.4, 2.5, 2.6]})
-    plain = pa.simulate_batch(model, experiment, table, features=["stroke"], workers=1)
+    plain = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
     real = batch_runner.ChunkRunner._rows
 
     def flaky(self, values, valid, *arrays):
@@ -91,7 +91,7 @@ def test_a_row_that_raises_is_that_row_s_error(vgt, monkeypatch):
         return real(self, values, valid, *arrays)
 
     monkeypatch.setattr(batch_runner.ChunkRunner, "_rows", flaky)
-    batch = pa.simulate_batch(model, experiment, table, features=["stroke"], workers=1)
+    batch = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
     assert batch.table["status"].tolist() == ["ok", "error", "ok"]
     assert "ZeroDivisionError" in batch.table["error"].iloc[1]
     np.testing.assert_array_equal(batch.table["stroke"].iloc[[0, 2]],
@@ -109,7 +109,8 @@ def test_failed_overwrite_keeps_the_batch_exactly_and_resumable(vgt, tmp_path, m
     experiment = pa.PressureCycle(period=2.0, n_points=101)
     table = pd.DataFrame({"Fc": [2.3, 2.4, 2.5, 2.6]})
     out = tmp_path / "batch"
-    first = pa.simulate_batch(model, experiment, table, out_dir=out, chunk_size=1, workers=1)
+    first = pa.simulate_batch(model, experiment, table, checkpoint=out,
+                              executor=pa.Executor(workers=1, chunk_size=1))
     before = _tree(out)
     calls = []
     real = batch_runner.ChunkRunner.run
@@ -122,19 +123,21 @@ def test_failed_overwrite_keeps_the_batch_exactly_and_resumable(vgt, tmp_path, m
 
     monkeypatch.setattr(batch_runner.ChunkRunner, "run", fails_on_the_third_chunk)
     with pytest.raises(DataError, match="disk is full"):
-        pa.simulate_batch(model, experiment, table, out_dir=out, overwrite=True,
-                          chunk_size=1, workers=1)
+        pa.simulate_batch(model, experiment, table,
+                          checkpoint=pa.Checkpoint(out, overwrite=True),
+                          executor=pa.Executor(workers=1, chunk_size=1))
     monkeypatch.undo()
     assert _tree(out) == before  # not one byte or time stamp changed
     assert not partial_folder(out).exists()
-    again = pa.simulate_batch(model, experiment, table, out_dir=out, resume=True, workers=1)
+    again = pa.simulate_batch(model, experiment, table,
+                              checkpoint=pa.Checkpoint(out, resume=True), executor=1)
     assert again.stats["computed"] == 0 and again.stats["reused_chunks"] == 4
     pd.testing.assert_frame_equal(again.table, first.table)
 
 
 def test_failed_sensitivity_overwrite_keeps_the_runs_resumable(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    args = ["sensitivity", "sobol", "--n", "8", "--t-end", "2", "--vary",
+    args = ["sensitivity", "sobol", "--n", "8", "--t-end", "2", "--variations",
             "Fc=10%,sigma2=20%", "--features", "loop_width_pressure", "--out", "study"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -171,7 +174,7 @@ def test_offsets_with_multistart_fit(vgt):
     instead of refusing the multistart."""
     record = pa.read_record(DATA / "good" / "record.csv")
     result = pa.fit(pa.Actuator(vgt), record, ["Fc"], offsets=["position"], multistart=1,
-                    workers=1)
+                    executor=1)
     assert len(result.starts) == 2 and result.success
     assert set(result.starts["offset_position[0]_start"]) == {0.0}
 
@@ -192,7 +195,7 @@ def test_friction_experiments_on_a_frictionless_rig(canudas):
     from pneumact.experiments.friction import Presliding, StickSlip
 
     params = canudas.replace(Fc=0.0, Fs=0.0)
-    run = run_friction_test(StickSlip(duration=2.0, samples_per_second=100), params)
+    run = run_friction_test(StickSlip(t_end=2.0, samples_per_second=100), params)
     assert np.all(np.isfinite(run.result["position"]))
     with pytest.raises(PneumactError, match="measures friction"):
-        run_friction_test(Presliding(duration=1.0), params)
+        run_friction_test(Presliding(t_end=1.0), params)

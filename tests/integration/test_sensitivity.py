@@ -41,7 +41,7 @@ def test_cli_sensitivity_oat_and_sobol(tmp_path, monkeypatch):
     result = runner.invoke(app, ["sensitivity", "sobol", "--n", "16", "--out", "sobol"])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "sobol" / "indices.csv").exists()
-    result = runner.invoke(app, ["sensitivity", "sobol", "--vary", "Fc=30%,Fs=30%",
+    result = runner.invoke(app, ["sensitivity", "sobol", "--variations", "Fc=30%,Fs=30%",
                                  "--n", "16", "--out", "bad"])
     assert result.exit_code == EXIT_USER_ERROR
     assert "Fs" in result.output and "runs failed" in result.output
@@ -52,7 +52,7 @@ def test_cli_signals_convergence_and_resume(tmp_path, monkeypatch):
     import pandas as pd
 
     monkeypatch.chdir(tmp_path)
-    args = ["sensitivity", "sobol", "--vary", "Fc=10%,sigma2=20%", "--n", "16",
+    args = ["sensitivity", "sobol", "--variations", "Fc=10%,sigma2=20%", "--n", "16",
             "--features", "loop_width_pressure", "--signals", "position", "--times", "11",
             "--convergence", "--out", "study"]
     result = runner.invoke(app, args)
@@ -97,7 +97,7 @@ def test_sobol_on_dask_equals_local(vgt, dask_client):
     features = ["loop_width_pressure"]
     local = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features), n=8)
     remote = sa.sobol(problem, sa.model_outputs(model, experiment, problem, features,
-                                                scheduler=dask_client), n=8)
+                                                executor=pa.Executor(scheduler=dask_client)), n=8)
     np.testing.assert_array_equal(remote.outputs.to_numpy(), local.outputs.to_numpy())
 
 

@@ -70,7 +70,8 @@ def test_cli_validate_writes_a_report_and_refuses_bad_records(vgt, sweep, tmp_pa
     assert set(metrics["signal"]) == {"position", "pressure"}
     pd.DataFrame({"time [s]": [0.0, 1.0], "pressure [kPa]": [100.0, 90.0]}).to_csv(
         tmp_path / "nopos.csv", index=False)
-    result = runner.invoke(app, ["validate", "nopos.csv", "--valve", "source", "--out", "bad"])
+    result = runner.invoke(app, ["validate", "nopos.csv", "--valve", "source", "--input", "model",
+                                 "--out", "bad"])
     assert result.exit_code == EXIT_USER_ERROR
     assert "position" in result.output
     assert not (tmp_path / "bad").exists()
@@ -135,7 +136,8 @@ def test_cli_validate_drives_each_record_its_own_way_and_flags_verdicts(
     assert "driven by its setpoint, PressureRegulator" in result.output
     metrics = pd.read_csv(tmp_path / "val" / "metrics.csv")
     assert "verdict" in metrics.columns
-    result = runner.invoke(app, ["validate", "bench", "--valve", "regulator", "--out", "bad"])
+    result = runner.invoke(app, ["validate", "bench", "--valve", "regulator", "--input", "model",
+                                 "--out", "bad"])
     assert result.exit_code == EXIT_USER_ERROR
     assert "--valve source" in result.output
     assert not (tmp_path / "bad").exists()

@@ -166,5 +166,5 @@ def test_inverse_model_stribeck_and_asymmetric():
     assert asym.estimates["Fc_neg"] == pytest.approx(20.0, rel=ref.INVERSE_RTOL)
     with pytest.raises(ParameterError, match="offset"):
         inverse_friction(_motion_record(), asymmetric=True, offset=True)
-    with pytest.raises(ParameterError, match="model = 'dahl'"):
+    with pytest.raises(ParameterError, match="friction = 'dahl'"):
         inverse_friction(_motion_record(), "dahl")

@@ -19,7 +19,7 @@ TAU, ZETA, OMEGA_N = ref.LOOP_TAU, ref.LOOP_ZETA, ref.LOOP_OMEGA_N
 
 
 def _frame(t, x, r, v=None, u=None, units=None) -> pd.DataFrame:
-    columns = {"time": t, "position": x, "setpoint": r}
+    columns = {"time": t, "position": x, "position_setpoint": r}
     if v is not None:
         columns["velocity"] = v
     if u is not None:
@@ -268,8 +268,8 @@ def test_velocity_from_the_position_when_absent():
 def test_result_and_frame_give_the_same_metrics():
     t, _, x, r, v = _first_order()
     u = 3.0 + 2.0 * (r - x)
-    result = Result(t, {"position": x, "velocity": v, "setpoint": r, "command": u},
-                    {"position": "m", "velocity": "m/s", "setpoint": "m", "command": "N"})
+    result = Result(t, {"position": x, "velocity": v, "position_setpoint": r, "command": u},
+                    {"position": "m", "velocity": "m/s", "position_setpoint": "m", "command": "N"})
     from_result = loop_metrics(result)
     from_frame = loop_metrics(result.to_pandas())  # time as the index, units in attrs
     a, b = from_result.as_dict(), from_frame.as_dict()
@@ -307,14 +307,15 @@ def test_no_command_gives_nan_effort():
     assert math.isnan(m.control_effort) and math.isnan(m.command_variation)
 
 
-@pytest.mark.parametrize(("drop", "missing"), [("setpoint", "'setpoint'"),
+@pytest.mark.parametrize(("drop", "missing"), [("position_setpoint", "'position_setpoint'"),
                                                ("position", "'position'")])
 def test_missing_signal_is_named(drop, missing):
     t, _, x, r, _ = _first_order()
     frame = _frame(t, x, r).drop(columns=drop)
-    with pytest.raises(DataError, match=f"no {missing} signal; needed: position, setpoint"):
+    with pytest.raises(DataError,
+                       match=f"no {missing} signal; needed: position, position_setpoint"):
         loop_metrics(frame)
-    result = Result(t, {"position": x, "setpoint": r}, {})
+    result = Result(t, {"position": x, "position_setpoint": r}, {})
     del result.signals[drop]
     with pytest.raises(DataError, match=missing):
         loop_metrics(result)
@@ -342,7 +343,7 @@ def test_bad_data_is_named():
     with pytest.raises(DataError, match=r"position\[1\] = nan"):
         loop_metrics(_frame(np.arange(3.0), [0.0, np.nan, 1.0], np.ones(3)))
     with pytest.raises(DataError, match="no column 'time'"):
-        loop_metrics(pd.DataFrame({"position": [0.0, 1.0], "setpoint": [1.0, 1.0]}))
+        loop_metrics(pd.DataFrame({"position": [0.0, 1.0], "position_setpoint": [1.0, 1.0]}))
     with pytest.raises(DataError, match="time has 1 sample"):
         loop_metrics(_frame([0.0], [0.0], [1.0]))
     with pytest.raises(DataError, match="result = dict; allowed: a pneumact Result"):
@@ -362,9 +363,9 @@ def test_plot_loop_smoke():
     from pneumact.control.plots import plot_loop
 
     t, _, x, r, v = _first_order()
-    result = Result(t, {"position": x, "velocity": v, "setpoint": r, "command": r - x,
+    result = Result(t, {"position": x, "velocity": v, "position_setpoint": r, "command": r - x,
                         "friction": 0.1 * np.sign(v), "friction_compensation": 0.0 * t},
-                    {"position": "m", "velocity": "m/s", "setpoint": "m", "command": "Pa",
+                    {"position": "m", "velocity": "m/s", "position_setpoint": "m", "command": "Pa",
                      "friction": "N", "friction_compensation": "N"})
     fig = plot_loop(result, loop_metrics(result))
     try:

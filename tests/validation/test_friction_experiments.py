@@ -208,7 +208,7 @@ def test_break_away_force_falls_with_force_rate(params, all_runs):
 
 
 def test_stick_slip_is_periodic_with_slip_at_static_friction(params):
-    outcome = run_friction_test("stick-slip", params, duration=STICK_SLIP_DURATION)
+    outcome = run_friction_test("stick-slip", params, t_end=STICK_SLIP_DURATION)
     r = outcome.result
     assert outcome.table is None and outcome.drive_quantity == "spring"
     onsets = slip_onsets(r, 10 * params["vs"])
@@ -226,7 +226,7 @@ def test_stick_slip_is_periodic_with_slip_at_static_friction(params):
 
 
 def test_stick_slip_rodas4_agrees_with_scipy_radau(params):
-    test = StickSlip(duration=RADAU_SPAN)
+    test = StickSlip(t_end=RADAU_SPAN)
     (setup,) = test.setups(params, LuGre())
     rig = FrictionRig(params, LuGre(), "spring")
     solver = solver_for(test, params)

@@ -55,7 +55,7 @@ def identify_one(args):
         prior = prior_of(truth, rng)
         plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.FAMILY_RAMPS)
         records = synthetic_campaign(truth, plan.tests, seed=index)
-        return truth, identify_paper(records, prior, seed=index, workers=1,
+        return truth, identify_paper(records, prior, seed=index, executor=1,
                                      replicates=ref.FAMILY_REPLICATES,
                                      max_evaluations=ref.FAMILY_EVALUATIONS)
 
@@ -116,7 +116,7 @@ def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():
     records = synthetic_campaign(truth, plan.tests, seed=ref.THIN_ACTUATOR)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pa.PassivityWarning)
-        result = identify_paper(records, prior, seed=ref.THIN_ACTUATOR, workers=1,
+        result = identify_paper(records, prior, seed=ref.THIN_ACTUATOR, executor=1,
                                 replicates=ref.FAMILY_REPLICATES,
                                 max_evaluations=ref.FAMILY_EVALUATIONS)
     table = result.to_pandas(truth=truth)

@@ -21,7 +21,7 @@ from reference import (
 
 @pytest.fixture(scope="module")
 def stick_slip(canudas):
-    (setup,) = StickSlip(duration=20.0).setups(canudas, pa.LuGre())
+    (setup,) = StickSlip(t_end=20.0).setups(canudas, pa.LuGre())
     rig = pa.FrictionRig(canudas, drive="spring")
     reference = pa.simulate(rig, setup.experiment, pa.Rodas4(rtol=CONVERGED_RTOL))
     return rig, setup.experiment, reference

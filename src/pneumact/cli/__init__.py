@@ -3,7 +3,7 @@
     pneumact simulate                         # vgt-paper, slow pressure cycle -> pneumact-out/
     pneumact simulate --valve command --t-end 10 --out run1
     pneumact friction-test stick-slip --t-end 5
-    pneumact batch table.csv --out batch1
+    pneumact simulate-batch table.csv --out batch1
     pneumact params list | show NAME|FILE | check FILE
     pneumact campaign --out bench                # synthetic bench records (CSV)
     pneumact identify paper bench --out ident    # the paper's staged procedure
@@ -26,7 +26,6 @@ from typing import Annotated
 
 import typer
 
-from pneumact.cli.batch import batch
 from pneumact.cli.common import out_console
 from pneumact.cli.control import control_app
 from pneumact.cli.friction_test import friction_test_app
@@ -35,6 +34,7 @@ from pneumact.cli.params import params_app
 from pneumact.cli.reproduce import reproduce_command
 from pneumact.cli.sensitivity import sensitivity
 from pneumact.cli.simulate import simulate
+from pneumact.cli.simulate_batch import simulate_batch
 from pneumact.cli.validate import validate_command
 from pneumact.version import __version__
 
@@ -62,7 +62,7 @@ def main(
 
 
 app.command()(simulate)
-app.command("batch")(batch)
+app.command("simulate-batch")(simulate_batch)
 app.add_typer(friction_test_app, name="friction-test")
 app.add_typer(params_app, name="params")
 app.command("campaign")(campaign)

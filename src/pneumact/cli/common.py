@@ -1,8 +1,9 @@
 """What every command shares: consoles, one-line errors, atomic multi-file output,
 progress display, and the options that build a model and its experiment.
 
-``simulate``, ``batch`` (and the commands that come after them) take the same
-``--params --valve --friction --chamber --t-end --low --high --input --rtol`` options,
+``simulate``, ``simulate-batch`` (and the commands that come after them) take the same
+``--params --valve --friction --decaying-damping --chamber --exponent --t-end --low
+--input-csv --rtol`` options,
 defined once here (``ModelOptions``) and turned into library objects by one function
 (``build_model``, ``build_experiment``). Nothing here imports numpy, pandas or numba at
 module level: a command pays for what it uses.
@@ -26,6 +27,9 @@ from rich.text import Text
 
 from pneumact.checks import check_int, check_names, check_range
 from pneumact.errors import ArgumentError, ExperimentError, PassivityWarning, PneumactError
+from pneumact.models.friction import LuGre
+from pneumact.models.pneumatics import Polytropic
+from pneumact.models.valves import PressureSource
 
 #: Exit code of a user's mistake (bad option, bad file, invalid parameters); also that of
 #: ``params check`` when the file is not valid.
@@ -56,8 +60,11 @@ class Valve(StrEnum):
 
 
 class Chamber(StrEnum):
+    """The chamber laws (``pneumact.models``): Isothermal, Adiabatic, Polytropic."""
+
     isothermal = "isothermal"
     adiabatic = "adiabatic"
+    polytropic = "polytropic"
 
 
 def _friction_choices() -> type[StrEnum]:
@@ -87,23 +94,37 @@ ValveOption = Annotated[Valve, typer.Option(
          "pressure set-point.")]
 FrictionOption = Annotated[Friction, typer.Option(help="Friction model.")]
 ChamberOption = Annotated[Chamber, typer.Option(help="Chamber gas law (behind a valve).")]
+ExponentOption = Annotated[float, typer.Option(
+    help="Polytropic exponent n of --chamber polytropic, between 1 (isothermal) and γ.")]
+DecayingDampingOption = Annotated[bool, typer.Option(
+    "--decaying-damping", help="LuGre: σ1(v) = σ1·exp(−(v/vs)²) instead of a constant "
+                               "σ1.")]
 TEndOption = Annotated[float | None, typer.Option(
     "--t-end", help="Duration [s]: the period of the default cycle (default 20), or where "
                     "to stop the input.")]
 LowOption = Annotated[float | None, typer.Option(
     "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
-                  "not with --valve command or --input).")]
+                  "not with --valve command or --input-csv).")]
 InputOption = Annotated[Path | None, typer.Option(
-    "--input", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
+    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
-# the batch engine's options, shared by every command that runs batches
+# the options of pneumact.options.Executor and Checkpoint (their defaults are the
+# objects'), shared by every command that runs batches
 SchedulerOption = Annotated[str | None, typer.Option(help="Dask scheduler address.")]
 WorkersOption = Annotated[int | None, typer.Option(
     help="Local threads, >= 1 (default all cores).")]
+ChunkSizeOption = Annotated[int | None, typer.Option(
+    "--chunk-size", help="Runs per task (default: about four tasks per worker).")]
 ResumeOption = Annotated[bool, typer.Option(
     "--resume", help="Continue the runs kept in the output directory after an interruption.")]
 OverwriteOption = Annotated[bool, typer.Option(
     "--overwrite", help="Start the runs kept in the output directory again.")]
+
+#: the defaults of the model options: the library's own
+DEFAULT_VALVE = Valve(PressureSource.cli_name)
+DEFAULT_FRICTION = Friction(LuGre.cli_name)
+DEFAULT_DECAYING_DAMPING: bool = LuGre.decaying_damping
+DEFAULT_EXPONENT: float = Polytropic.exponent
 
 
 @dataclass(frozen=True)
@@ -111,13 +132,40 @@ class ModelOptions:
     """The model and experiment options of a command, as given."""
 
     params: str = "vgt-paper"
-    valve: Valve = Valve.source
-    friction: str = "lugre"
+    valve: Valve = DEFAULT_VALVE
+    friction: str = DEFAULT_FRICTION
     chamber: Chamber = Chamber.isothermal
     t_end: float | None = None
     low_kpa: float | None = None
     input_csv: Path | None = None
     rtol: float = 1e-6
+    exponent: float = DEFAULT_EXPONENT
+    decaying_damping: bool = DEFAULT_DECAYING_DAMPING
+
+
+def executor_of(workers: int | None, scheduler: str | None, chunk_size: int | None = None):
+    """The ``Executor`` of --workers, --scheduler and --chunk-size (checked by it, the
+    message naming the options)."""
+    from pneumact.options import Executor
+
+    for option, value in (("--workers", workers), ("--chunk-size", chunk_size)):
+        if value is not None:
+            check_int(option, value, minimum=1)
+    if scheduler is not None:
+        from pneumact.options import check_scheduler_address
+
+        check_scheduler_address(scheduler, "--scheduler")
+    return Executor(workers=workers, scheduler=scheduler, chunk_size=chunk_size)
+
+
+def checkpoint_of(folder: Path, resume: bool, overwrite: bool):
+    """The ``Checkpoint`` of --out, --resume and --overwrite."""
+    from pneumact.options import Checkpoint
+
+    if resume and overwrite:
+        raise ArgumentError("--resume and --overwrite contradict each other: continue the "
+                            "kept runs, or start them again; give one")
+    return Checkpoint(folder, resume=resume, overwrite=overwrite)
 
 
 def load_quietly(name: str):
@@ -130,14 +178,20 @@ def load_quietly(name: str):
 
 def check_model_options(options: ModelOptions) -> None:
     """Refuse options that would do nothing with the others given."""
-    if options.chamber is Chamber.adiabatic and options.valve is Valve.source:
+    if options.chamber is not Chamber.isothermal and options.valve is Valve.source:
         raise ArgumentError(
-            "--chamber adiabatic has no effect with --valve source: the pressure is "
-            "prescribed, so the chamber's gas law never enters; drop --chamber, or drive "
-            "a valve (--valve command or regulator)")
+            f"--chamber {options.chamber.value} has no effect with --valve source: the "
+            "pressure is prescribed, so the chamber's gas law never enters; drop --chamber, "
+            "or drive a valve (--valve command or regulator)")
+    if options.exponent != DEFAULT_EXPONENT and options.chamber is not Chamber.polytropic:
+        raise ArgumentError(f"--exponent {options.exponent:g} is the exponent of --chamber "
+                            f"polytropic, not of --chamber {options.chamber.value}")
+    if options.decaying_damping and str(options.friction) != LuGre.cli_name:
+        raise ArgumentError(f"--decaying-damping is an option of --friction lugre, not of "
+                            f"--friction {options.friction}")
     if options.low_kpa is not None:
         if options.input_csv is not None:
-            raise ArgumentError("--low sets the default pressure cycle, which --input "
+            raise ArgumentError("--low sets the default pressure cycle, which --input-csv "
                                 "replaces; drop one of them")
         if options.valve is Valve.command:
             raise ArgumentError("--low sets the lowest pressure of the default pressure "
@@ -150,20 +204,24 @@ def check_model_options(options: ModelOptions) -> None:
 
 def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
-    from pneumact.models import (
-        VALVES,
-        Actuator,
-        Adiabatic,
-        Isothermal,
-        friction_models,
-    )
+    from pneumact.models import VALVES, Actuator, friction_models
 
     check_model_options(options)
     params = load_quietly(options.params) if params is None else params
-    friction = friction_models()[str(options.friction)]()
-    chamber = Adiabatic() if options.chamber is Chamber.adiabatic else Isothermal()
+    law = friction_models()[str(options.friction)]
+    friction = (law(decaying_damping=True) if options.decaying_damping  # type: ignore[call-arg]
+                else law())
     return params, Actuator(params, friction=friction, valve=VALVES[options.valve.value](),
-                            chamber=chamber)
+                            chamber=build_chamber(options.chamber, options.exponent))
+
+
+def build_chamber(chamber: Chamber, exponent: float = DEFAULT_EXPONENT):
+    """The chamber law --chamber (and --exponent) name."""
+    from pneumact.models import Adiabatic, Isothermal, Polytropic
+
+    if chamber is Chamber.polytropic:
+        return Polytropic(exponent)
+    return Adiabatic() if chamber is Chamber.adiabatic else Isothermal()
 
 
 def build_experiment(options: ModelOptions, params):
@@ -390,23 +448,6 @@ def names(text: str | None, option: str = "") -> list[str] | None:
                                 "commas")
         check_names(option, items)
     return items
-
-
-def check_workers(workers: int | None) -> None:
-    if workers is not None:
-        check_int("--workers", workers, minimum=1)
-
-
-def check_batch_flags(resume: bool, overwrite: bool, scheduler: str | None) -> None:
-    """--resume and --overwrite exclude each other; a scheduler address is checked
-    before anything runs."""
-    if resume and overwrite:
-        raise ArgumentError("--resume and --overwrite contradict each other: continue the "
-                            "kept runs, or start them again; give one")
-    if scheduler is not None:
-        from pneumact.simulation.batch.engine import check_scheduler_address
-
-        check_scheduler_address(scheduler, "--scheduler")
 
 
 def shown_path(path: Path, stage: Path, out: Path) -> Path:

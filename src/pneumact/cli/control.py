@@ -355,7 +355,8 @@ def hunting_command(
     kp: Annotated[float, typer.Option(help="Kp [N/m].")] = 3.0,
     ki: Annotated[float, typer.Option(help="Ki [N/(m·s)].")] = 4.0,
     kv: Annotated[float, typer.Option(help="Kv [N·s/m] (on the measured velocity).")] = 6.0,
-    setpoint: Annotated[float, typer.Option(help="Set-point xd [m].")] = 1.0,
+    position_setpoint: Annotated[float, typer.Option(
+        "--position-setpoint", help="Set-point xd [m].")] = 1.0,
     t_end: Annotated[float, typer.Option(help="Duration [s].")] = 100.0,
     params: ParamsOption = "canudas1995",
     sample_time: SampleOption = None,
@@ -369,7 +370,7 @@ def hunting_command(
 
         out = check_out_dir("--out", out)
         loop, experiment = canudas_hunting(load_quietly(params), kp=kp, ki=ki, kv=kv,
-                                           setpoint=setpoint, t_end=t_end,
+                                           position_setpoint=position_setpoint, t_end=t_end,
                                            sample_time=sample_time)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        "Hunting (Canudas de Wit et al. 1995)")

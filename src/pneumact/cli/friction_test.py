@@ -36,10 +36,10 @@ friction_test_app = typer.Typer(help="Run a classic friction experiment (Canudas
                                 no_args_is_help=True)
 
 
-#: settings whose option has the name every other command uses for the same thing
-OPTION_NAMES = {"duration": "--t-end"}
-#: old option names still accepted (hidden from --help), with the name to use instead
-DEPRECATED = {"duration": "--duration"}
+#: settings whose option has another name than the setting (none: the names are the API's)
+OPTION_NAMES: dict[str, str] = {}
+#: old option names still accepted (hidden from --help), by the setting they set
+DEPRECATED = {"t_end": "--duration"}
 
 
 def option_name(field_name: str) -> str:

@@ -14,17 +14,24 @@ from rich.text import Text
 
 from pneumact.checks import check_int, check_out_dir, check_positive, check_range, check_seed
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     ModelOptions,
     ParamsOption,
-    Valve,
+    SchedulerOption,
     ValveOption,
     WorkersOption,
+    build_chamber,
     build_model,
     err_console,
+    executor_of,
     figure_writer,
     fit_with_progress,
     fmt,
@@ -38,6 +45,7 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import DataError, ParameterError
+from pneumact.options import LOSSES, Executor, Multistart, Optimizer, Profile
 
 if TYPE_CHECKING:
     from pneumact.identification.campaign import CampaignPlan
@@ -60,14 +68,9 @@ def _estimates_table(title: str, table) -> Table:
     return out
 
 
-class Loss(StrEnum):
-    """The losses of ``fit``: scipy least_squares' (robust ones damp outliers)."""
-
-    linear = "linear"
-    soft_l1 = "soft_l1"
-    huber = "huber"
-    cauchy = "cauchy"
-    arctan = "arctan"
+#: The losses of ``fit``: scipy least_squares' (robust ones damp outliers).
+Loss = StrEnum("Loss", {name: name for name in LOSSES})  # type: ignore[misc]
+DEFAULT_LOSS = Loss(Optimizer.loss)
 
 
 def _status(what: str):
@@ -193,7 +196,7 @@ def identify_paper_command(
         "--partial", help="Write identified.toml even when some parameters are not "
                           "identified (they keep the values of --params).")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the input-noise replicates.")] = 0,
-    workers: WorkersOption = None,
+    workers: WorkersOption = Executor.workers,
 ) -> None:
     """Identify the actuator from bench records named sweep*, ramp* and presliding*: the
     paper's staged procedure (section III.2), then a joint refinement of every spring and
@@ -202,14 +205,12 @@ def identify_paper_command(
     with user_errors():
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
-        from pneumact.models import Adiabatic, Isothermal
 
         if sliding_speed is not None:
             check_positive("--sliding-speed", sliding_speed)
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         check_seed("--seed", seed)
-        if workers is not None:
-            check_int("--workers", workers, minimum=1)
+        executor = executor_of(workers, None)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         recs = read_records(records, required=("pressure", "position"),
@@ -218,9 +219,8 @@ def identify_paper_command(
             result = identify_paper(
                 recs, parameter_set, fit_delta=fit_delta, prior_spread=spread / 100,
                 sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,
-                chamber=Adiabatic() if chamber is Chamber.adiabatic else Isothermal(),
-                refine=not staged_only, seed=seed, workers=workers,
-                progress=progress)
+                chamber=build_chamber(chamber), refine=not staged_only, seed=seed,
+                executor=executor, progress=progress)
         use_agg()
         written = write_outputs(out, result.writers(call=the_call(ctx), partial=partial))
         out_console.print(_verdict_table(result))
@@ -266,8 +266,8 @@ def _read_any(path: Path, data_format: DataFormat):
 def identify_friction_command(
     ctx: typer.Context,
     record: Annotated[Path, typer.Argument(help="Record with position and force.")],
-    model: Annotated[FrictionLaw, typer.Option(help="Friction law.")] = (
-        FrictionLaw.coulomb_viscous),
+    friction: Annotated[FrictionLaw, typer.Option(
+        help="Friction law of the inverse model.")] = FrictionLaw.coulomb_viscous,
     data_format: Annotated[DataFormat, typer.Option(
         "--format", help="auto (.mat: EMPS), record (CSV/Parquet), emps, tudelft.")] = (
         DataFormat.auto),
@@ -297,7 +297,7 @@ def identify_friction_command(
             force_name, mass = "friction", False
         if decimate < 1:
             raise ParameterError(f"--decimate = {decimate}; must be >= 1")
-        result = inverse_friction(rec, model.value, force=force_name, mass=mass,
+        result = inverse_friction(rec, friction.value, force=force_name, mass=mass,
                                   asymmetric=asymmetric, cutoff=cutoff, decimate=decimate)
         other = [_read_any(validate, data_format)] if validate else []
         checked = result.validate(other[0]) if other else None
@@ -308,7 +308,7 @@ def identify_friction_command(
         validation = validate_friction(result, other)
 
         def report(path: Path) -> None:
-            page = Report(f"{model.value} friction identified on {record.name}",
+            page = Report(f"{friction.value} friction identified on {record.name}",
                           call=the_call(ctx))
             page.table(table, "Estimates with standard errors and 95 % intervals (SI)")
             page.figure(result.plot(), "Inverse model on the identification record")
@@ -329,7 +329,8 @@ def identify_friction_command(
             "metrics.csv": lambda p: validation.metrics().to_csv(p, index=False),
             "report.html": report,
         })
-        out_console.print(_estimates_table(f"{model.value} friction from {record.name}", table))
+        out_console.print(_estimates_table(f"{friction.value} friction from {record.name}",
+                                           table))
         out_console.print(f"relative force error {100 * result.relative_force_error:.2f} %, "
                           f"condition number {result.condition_number:.3g}")
         if checked is not None and validate is not None:
@@ -350,9 +351,11 @@ def fit_command(
     records: RecordsArgument,
     free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
     params: ParamsOption = "vgt-paper",
-    valve: ValveOption = Valve.source,
-    friction: FrictionOption = Friction.lugre,
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     per_record: Annotated[str | None, typer.Option(
         "--per-record", help="Free parameters with one value per record.")] = None,
     signals: Annotated[str, typer.Option(help="Measured signals to match.")] = "position",
@@ -360,12 +363,20 @@ def fit_command(
         help="Signals with a free sensor offset per record.")] = None,
     window: Annotated[str | None, typer.Option(
         help="'t0,t1' [s]: match only this time span.")] = None,
-    multistart: Annotated[int, typer.Option(help="Extra space-filling starts (>= 0).")] = 0,
+    multistart: Annotated[int, typer.Option(
+        help="Extra space-filling starts (>= 0).")] = Multistart.starts,
+    seed: Annotated[int, typer.Option(
+        help="Seed of the multistart points (>= 0).")] = Multistart.seed,
     profile: Annotated[str | None, typer.Option(
         help="Parameters whose profile likelihood to compute.")] = None,
+    points: Annotated[int, typer.Option(
+        help="Profile: most steps on each side of the optimum (>= 3).")] = Profile.points,
     loss: Annotated[Loss, typer.Option(
-        help="linear, or a robust loss: soft_l1, huber, cauchy, arctan.")] = Loss.linear,
-    seed: Annotated[int, typer.Option(help="Seed of the multistart points (>= 0).")] = 0,
+        help="linear, or a robust loss: soft_l1, huber, cauchy, arctan.")] = DEFAULT_LOSS,
+    f_scale: Annotated[float, typer.Option(
+        "--f-scale", help="Residual scale of a robust loss.")] = Optimizer.f_scale,
+    workers: WorkersOption = Executor.workers,
+    scheduler: SchedulerOption = Executor.scheduler,
     rtol: Annotated[float, typer.Option(help="Relative tolerance of the solver.")] = 1e-6,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-fit"),
 ) -> None:
@@ -378,6 +389,9 @@ def fit_command(
         out = check_out_dir("--out", out)
         check_int("--multistart", multistart, minimum=0)
         check_seed("--seed", seed)
+        check_int("--points", points, minimum=3)
+        check_positive("--f-scale", f_scale)
+        executor = executor_of(workers, scheduler)
         free_names = names(free, "--free")
         span = None
         if window is not None:
@@ -390,14 +404,17 @@ def fit_command(
             from pneumact.identification.arguments import check_window
 
             check_window(span, where="--window")
-        parameter_set, actuator = build_model(ModelOptions(params, valve, friction, chamber,
-                                                           rtol=rtol))
+        parameter_set, actuator = build_model(ModelOptions(
+            params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
+            exponent=exponent, decaying_damping=decaying_damping))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
             actuator, recs, free_names, per_record=names(per_record, "--per-record") or (),
             signals=names(signals, "--signals") or ("position",),
-            offsets=names(offsets, "--offsets") or (), window=span, multistart=multistart,
-            profile=names(profile, "--profile") or (), loss=loss.value, seed=seed,
+            offsets=names(offsets, "--offsets") or (), window=span,
+            multistart=Multistart(multistart, seed),
+            profile=Profile(names(profile, "--profile") or (), points),
+            optimizer=Optimizer(loss=loss.value, f_scale=f_scale), executor=executor,
             solver=pa.Rodas4(rtol=rtol), progress=report))
         use_agg()
         writers = result.writers(the_call(ctx))

@@ -1,8 +1,9 @@
-"""``pneumact sensitivity oat|sobol|morris|src|fast``: sensitivity studies of the actuator,
+"""``pneumact sensitivity oat|sobol|morris|src|rbd_fast``: sensitivity studies of the actuator,
 at one operating condition or across several (``--conditions``)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -13,9 +14,15 @@ from rich.table import Table
 
 from pneumact.checks import check_int, check_out_dir, check_seed
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    ChunkSizeOption,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     ModelOptions,
     OverwriteOption,
@@ -29,9 +36,9 @@ from pneumact.cli.common import (
     batch_progress,
     build_experiment,
     build_model,
-    check_batch_flags,
-    check_workers,
+    checkpoint_of,
     err_console,
+    executor_of,
     figure_writer,
     fmt,
     names,
@@ -43,6 +50,7 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import ArgumentError, ParameterError
+from pneumact.options import Checkpoint, Executor
 
 if TYPE_CHECKING:
     from pneumact.experiments.actuator import Experiment
@@ -55,7 +63,7 @@ class Method(StrEnum):
     sobol = "sobol"
     morris = "morris"
     src = "src"
-    fast = "fast"
+    rbd_fast = "rbd_fast"
 
 
 def _variations(text: str | None) -> dict[str, str] | None:
@@ -66,7 +74,7 @@ def _variations(text: str | None) -> dict[str, str] | None:
     for item in names(text) or []:
         name, sep, amount = item.partition("=")
         if not sep or not amount.strip():
-            raise ParameterError(f"--vary item {item!r}; write name=N% (e.g. sigma0=50%)")
+            raise ParameterError(f"--variations item {item!r}; write name=N% (e.g. sigma0=50%)")
         out[name.strip()] = amount.strip()
     return out
 
@@ -83,13 +91,15 @@ ConditionsOption = Annotated[list[str] | None, typer.Option(
 def sensitivity(
     ctx: typer.Context,
     method: Annotated[Method, typer.Argument(help="oat (paper eq. 15), sobol, morris, src "
-                                                  "(eq. 14) or fast (RBD-FAST).")],
+                                                  "(eq. 14) or rbd_fast.")],
     params: ParamsOption = "vgt-paper",
-    valve: ValveOption = Valve.command,
-    friction: FrictionOption = Friction.lugre,
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
-    vary: Annotated[str | None, typer.Option(
+    variations: Annotated[str | None, typer.Option(
         help="name=N% list; default: the paper's amounts (oat), else ±20 % of sigma0, "
              "sigma1, sigma2, vs and ±10 % of Fc, Fs (so that Fs >= Fc in every run).")] = None,
     features: Annotated[str, typer.Option(help="Features to analyse.")] = (
@@ -99,8 +109,9 @@ def sensitivity(
              "the loop, and local normalised sensitivities.")] = None,
     times: Annotated[int, typer.Option(help="Points of the time grid of --signals.")] = 41,
     n: Annotated[int | None, typer.Option("--n", help=(
-        "Base sample size: sobol a power of two >= 8 (default 256), src >= 2·(k + 1) for k "
-        "parameters, fast >= 40, or trajectories (morris, >= 2); not for oat."),
+        "Base sample size: sobol a power of two >= 8, src >= 2·(k + 1) for k parameters, "
+        "rbd_fast >= 40, or trajectories (morris, >= 2); not for oat. Default: the API's "
+        "(sobol 1024, src 500, rbd_fast 1000, morris 20; 256 with --conditions)."),
         show_default=False)] = None,
     second_order: Annotated[bool, typer.Option("--second-order",
                                                help="Sobol second-order indices.")] = False,
@@ -109,10 +120,11 @@ def sensitivity(
                               "same sample.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sample (>= 0).")] = 0,
     conditions: ConditionsOption = None,
-    scheduler: SchedulerOption = None,
-    workers: WorkersOption = None,
-    resume: ResumeOption = False,
-    overwrite: OverwriteOption = False,
+    scheduler: SchedulerOption = Executor.scheduler,
+    workers: WorkersOption = Executor.workers,
+    chunk_size: ChunkSizeOption = Executor.chunk_size,
+    resume: ResumeOption = Checkpoint.resume,
+    overwrite: OverwriteOption = Checkpoint.overwrite,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-sensitivity"),
 ) -> None:
     """Sensitivity of the actuator's features (and signals) to its parameters, on the
@@ -120,15 +132,17 @@ def sensitivity(
     with user_errors():
         import numpy as np
 
-        check_batch_flags(resume, overwrite, scheduler)
-        check_workers(workers)
+        executor = executor_of(workers, scheduler, chunk_size)
         check_seed("--seed", seed)
         check_int("--times", times, minimum=2)
-        out = check_out_dir("--out", out)
+        out = checkpoint_of(check_out_dir("--out", out), resume, overwrite).path
         _check_method_options(method, n, second_order, convergence,
                               resume=resume, overwrite=overwrite,
-                              scheduler=scheduler is not None, workers=workers is not None)
-        options = ModelOptions(params, valve, friction, chamber, t_end)
+                              scheduler=scheduler is not None, workers=workers is not None,
+                              chunk_size=chunk_size is not None)
+        options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
+                               t_end=t_end, exponent=exponent,
+                               decaying_damping=decaying_damping)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         feature_names = names(features, "--features") or []
@@ -140,14 +154,14 @@ def sensitivity(
             raise ParameterError("--conditions runs the feature study at each condition; "
                                  "run --signals and --convergence without it")
         use_agg()
-        study = Study(method, actuator, experiment, parameter_set, vary,
-                      DEFAULT_N if n is None else n, second_order, seed,
-                      dict(scheduler=scheduler, workers=workers, resume=resume,
-                           overwrite=overwrite))
+        study = Study(method, actuator, experiment, parameter_set, variations,
+                      api_sample_size(method, bool(conditions)) if n is None else n,
+                      second_order, seed, executor,
+                      resume)
         try:
             factors = study.problem().names
         except ParameterError as exc:
-            raise ParameterError(f"--vary: {exc.message}") from None
+            raise ParameterError(f"--variations: {exc.message}") from None
         if method is not Method.oat:
             check_sample_size(method, study.n, len(factors))
         from pneumact.io.tables import staged_folder
@@ -168,8 +182,23 @@ def sensitivity(
             out_console.print(f"wrote {shown_path(path, stage, out)}")
 
 
-#: default --n of the sample-based methods
-DEFAULT_N = 256
+def api_sample_size(method: Method, across: bool) -> int:
+    """--n when not given: the API's default sample size of the method (of
+    ``across_conditions`` across conditions; morris: its trajectories)."""
+    import inspect
+
+    from pneumact import sensitivity as sa
+
+    function: Callable[..., object]
+    if across:
+        function, name = sa.across_conditions, "n"
+    elif method is Method.morris:
+        function, name = sa.morris, "trajectories"
+    elif method is Method.oat:
+        return 0
+    else:
+        function, name = getattr(sa, method.value), "n"
+    return int(inspect.signature(function).parameters[name].default)
 
 
 def _check_method_options(method: Method, n, second_order: bool, convergence: bool,
@@ -206,23 +235,31 @@ def check_sample_size(method: Method, n: int, k: int) -> None:
 
 @dataclass
 class Study:
-    """One sensitivity command: the method, the model and the batch options, and the
-    writers of what each analysis produced."""
+    """One sensitivity command: the method, the model, where the runs go (``executor``;
+    kept resumable beside the outputs, continued with ``resume``), and the writers of
+    what each analysis produced."""
 
     method: Method
     model: Actuator
     experiment: Experiment
     parameter_set: ParameterSet
-    vary: str | None
+    variations: str | None
     n: int
     second_order: bool
     seed: int
-    batch: dict
+    executor: Executor
+    resume: bool = False
+
+    def checkpoint(self, folder: Path) -> Checkpoint:
+        """Where a study's runs are kept (inside the staged output folder, which the
+        --overwrite of the command already emptied)."""
+        return Checkpoint(folder, resume=self.resume)
 
     def problem(self):
         from pneumact import sensitivity as sa
 
-        return sa.Problem.around(self.parameter_set, _variations(self.vary) or sa.DEFAULT_RANGES)
+        return sa.Problem.around(self.parameter_set,
+                                 _variations(self.variations) or sa.DEFAULT_RANGES)
 
     def _run(self, evaluate, convergence: bool = False):
         from pneumact import sensitivity as sa
@@ -234,7 +271,7 @@ class Study:
         run = {Method.sobol: lambda: sa.sobol(problem, evaluate, n, self.second_order, seed),
                Method.morris: lambda: sa.morris(problem, evaluate, n, seed=seed),
                Method.src: lambda: sa.src(problem, evaluate, n, seed),
-               Method.fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[self.method]
+               Method.rbd_fast: lambda: sa.rbd_fast(problem, evaluate, n, seed)}[self.method]
         return run(), None
 
     def features(self, feature_names: list[str], out: Path, convergence: bool) -> dict:
@@ -243,9 +280,9 @@ class Study:
 
         if self.method is Method.oat:
             with err_console.status("oat: simulating"):
-                study = sa.one_at_a_time(self.model, self.experiment, _variations(self.vary),
-                                         features=feature_names)
-            curves = sa.friction_velocity(self.parameter_set, _variations(self.vary))
+                study = sa.one_at_a_time(self.model, self.experiment, _variations(self.variations),
+                                         features=feature_names, executor=self.executor)
+            curves = sa.friction_velocity(self.parameter_set, _variations(self.variations))
             _print_oat(study, feature_names)
             return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
                     "loops.png": figure_writer(study.plot_loops),
@@ -253,7 +290,8 @@ class Study:
         problem = self.problem()
         with batch_progress(f"{self.method.value}: features") as progress:
             evaluate = sa.model_outputs(self.model, self.experiment, problem, feature_names,
-                                        out_dir=out / "runs", progress=progress, **self.batch)
+                                        checkpoint=self.checkpoint(out / "runs"),
+                                        progress=progress, executor=self.executor)
             study, table = self._run(evaluate, convergence)
         writers = {"indices.csv": lambda p: study.indices.to_csv(p, index=False),
                    "sample.csv": lambda p: study.sample.to_csv(p, index=False),
@@ -273,13 +311,14 @@ class Study:
         against them and one plot per feature (index against v/vs)."""
         from pneumact import sensitivity as sa
 
-        variations = _variations(self.vary)
+        variations = _variations(self.variations)
         with batch_progress(f"{self.method.value}: {len(chosen)} conditions") as progress:
             study = sa.across_conditions(
                 self.model, chosen, self.method.value, variations=variations,
                 features=feature_names, n=self.n, seed=self.seed,
-                second_order=self.second_order, out_dir=out / "runs",
-                progress=None if self.method is Method.oat else progress, **self.batch)
+                second_order=self.second_order, checkpoint=self.checkpoint(out / "runs"),
+                progress=None if self.method is Method.oat else progress,
+                executor=self.executor)
         for feature in feature_names:
             _print_across(study, feature)
         writers = {"conditions.csv": lambda p: study.conditions.to_csv(p, index=False),
@@ -307,8 +346,8 @@ class Study:
             return writers
         with batch_progress(f"{self.method.value}: {signal}") as progress:
             evaluate = sa.model_signal(self.model, self.experiment, problem, signal, grid,
-                                       out_dir=out / f"runs-{signal}", progress=progress,
-                                       **self.batch)
+                                       checkpoint=self.checkpoint(out / f"runs-{signal}"),
+                                       progress=progress, executor=self.executor)
             study, _ = self._run(evaluate)
         curves = sa.along_time(study)
         writers.update({

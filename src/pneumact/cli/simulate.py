@@ -10,9 +10,14 @@ from rich.table import Table
 
 from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     InputOption,
     LowOption,
@@ -20,7 +25,6 @@ from pneumact.cli.common import (
     ParamsOption,
     RtolOption,
     TEndOption,
-    Valve,
     ValveOption,
     build_experiment,
     build_model,
@@ -38,9 +42,11 @@ def simulate(
     out: Annotated[Path, typer.Option(help="Output directory (simulation.csv, "
                                            "hysteresis.png).")] = Path("pneumact-out"),
     input_csv: InputOption = None,
-    valve: ValveOption = Valve.source,
-    friction: FrictionOption = Friction.lugre,
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
     low: LowOption = None,
     rtol: RtolOption = 1e-6,
@@ -51,7 +57,9 @@ def simulate(
         from pneumact.simulation.simulate import check_drive
 
         out = check_out_dir("--out", out)
-        options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
+        options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
+                               t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
+                               exponent=exponent, decaying_damping=decaying_damping)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)

@@ -1,10 +1,11 @@
 """``pneumact validate RECORDS... --out DIR``: the model against measured records.
 
-Each record drives the model the way it was made (``--valve auto``, the default: its
-logged set-point through the regulator, else its pressure as a pressure source, else its
-command through the valve). With ``--train`` records and ``--free`` parameters, fits on
-the training records first and validates on both sets, with the metrics side by side.
-Every record gets a verdict that combines fit % with the loop measures and the residuals.
+Each record drives the model the way it was made (``--input auto``, the default: its
+logged set-point through the regulator, else its pressure as a pressure source, else
+its command through the valve); ``--input model`` keeps the model's ``--valve``. With
+``--train`` records and ``--free`` parameters, fits on the training records first and
+validates on both sets, with the metrics side by side. Every record gets a verdict that
+combines fit % with the loop measures and the residuals.
 """
 
 from __future__ import annotations
@@ -19,14 +20,19 @@ from rich.text import Text
 
 from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     ModelOptions,
     ParamsOption,
     RtolOption,
-    Valve,
+    ValveOption,
     build_model,
     err_console,
     fit_with_progress,
@@ -39,15 +45,12 @@ from pneumact.cli.common import (
 )
 from pneumact.cli.identify import RecordsArgument
 from pneumact.errors import ParameterError
+from pneumact.models.inputs import DEFAULT_INPUT as DEFAULT_INPUT_NAME
+from pneumact.models.inputs import INPUTS
 
-
-class DriveValve(StrEnum):
-    """``--valve`` of validate: the command's valves, or auto (each record picks its own)."""
-
-    auto = "auto"
-    source = Valve.source.value
-    command = Valve.command.value
-    regulator = Valve.regulator.value
+#: The ``--input`` choices: how a record's input is chosen (auto, model, or a signal).
+Input = StrEnum("Input", {name: name for name in INPUTS})  # type: ignore[misc]
+DEFAULT_INPUT = Input(DEFAULT_INPUT_NAME)
 
 VERDICT_STYLE = {"adequate": "green", "adequate, residuals not white": "yellow",
                  "inadequate": "red"}
@@ -57,12 +60,15 @@ def validate_command(
     ctx: typer.Context,
     records: RecordsArgument,
     params: ParamsOption = "vgt-paper",
-    valve: Annotated[DriveValve, typer.Option(
+    valve: ValveOption = DEFAULT_VALVE,
+    input: Annotated[Input, typer.Option(
         help="auto: each record drives the valve it was made with (set-point: regulator, "
-             "else pressure: source, else command: command); or one valve for all "
-             "records.")] = DriveValve.auto,
-    friction: FrictionOption = Friction.lugre,
+             "else pressure: source, else command: command); model: the --valve for all "
+             "records; or the record signal that drives them.")] = DEFAULT_INPUT,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     signals: Annotated[str, typer.Option(help="Measured signals to compare.")] = "position",
     train: Annotated[list[Path] | None, typer.Option(
         help="Training records (repeat the option): fit --free on them first.")] = None,
@@ -83,10 +89,10 @@ def validate_command(
         out = check_out_dir("--out", out)
         wanted = tuple(names(signals, "--signals") or ("position",))
         free_names = names(free, "--free")
-        chosen = Valve.regulator if valve is DriveValve.auto else Valve(valve.value)
-        drive = "auto" if valve is DriveValve.auto else "model"
-        parameter_set, model = build_model(ModelOptions(params, chosen, friction, chamber,
-                                                        rtol=rtol))
+        drive = str(input)
+        parameter_set, model = build_model(ModelOptions(
+            params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
+            exponent=exponent, decaying_damping=decaying_damping))
         test = read_records(records, p_atm=parameter_set["p_atm"])
         solver = pa.Rodas4(rtol=rtol)
         use_agg()

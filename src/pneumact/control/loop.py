@@ -3,7 +3,7 @@
 ``ClosedLoop(plant, controller)`` is simulated like any model:
 ``simulate(loop, step_setpoint(...))``. Its experiment is the position set-point; its
 states are the plant's then the controller's; its outputs are the plant's then
-``setpoint``, ``error``, ``command`` (the controller output), ``plant_input`` (what the
+``position_setpoint``, ``error``, ``command`` (the controller output), ``plant_input`` (what the
 plant receives: drive_gain·command + disturbance) and ``friction_compensation`` (F̂).
 """
 
@@ -112,9 +112,25 @@ class ClosedLoop:
             return -1.0 / (float(self.params["A_d"]) * self.drive_gain)
         return None
 
-    # -- the model protocol ----------------------------------------------------------------
+    # -- the model protocol (``simulation.Model``) ------------------------------------------
     drive_quantity: ClassVar[str] = "position"
     drive_unit: ClassVar[str] = "m"
+    #: the record signal that drives it: the position set-point (m)
+    input_signal: ClassVar[str] = "position_setpoint"
+    input_signals: ClassVar[tuple[str, ...]] = ("position_setpoint",)
+    drive_label: ClassVar[str] = "position set-point"
+
+    def driven_by(self, signal: str) -> ClosedLoop:
+        """This loop, when ``signal`` is its position set-point."""
+        if signal != self.input_signal:
+            raise ExperimentError(f"a ClosedLoop is driven by a record's {self.input_signal}, "
+                                  f"not its {signal}")
+        return self
+
+    @property
+    def stroke(self) -> float | None:
+        """Its plant's stroke: a set-point beyond it is impossible."""
+        return self.plant.stroke
 
     @property
     def required(self) -> tuple[str, ...]:
@@ -154,7 +170,9 @@ class ClosedLoop:
         return self.feedforward is not None or self.disturbance is not None
 
     def kernel_constants(self) -> dict[str, object]:
-        plant: dict[str, object] = getattr(self.plant, "kernel_constants", dict)()
+        plant: dict[str, object] = {}
+        if isinstance(self.plant, Actuator):  # a rig has no compile-time switches
+            plant.update(self.plant.kernel_constants())
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
@@ -210,8 +228,7 @@ class ClosedLoop:
         return points
 
     def describe(self) -> str:
-        plant = self.plant.describe() if hasattr(self.plant, "describe") else repr(self.plant)
-        return f"ClosedLoop({plant}, {type(self.controller).__name__})"
+        return f"ClosedLoop({self.plant.describe()}, {type(self.controller).__name__})"
 
     # -- operating points ------------------------------------------------------------------
     def holding_input(self, position: float, lo: float | None = None,

@@ -2,7 +2,7 @@
 effort, limit cycles (hunting) and stick phases.
 
 ``loop_metrics(result)`` reads a Result (or a DataFrame with the columns ``time``,
-``position``, ``setpoint`` and, optionally, ``velocity`` and ``command``) and returns a
+``position``, ``position_setpoint`` and, optionally, ``velocity`` and ``command``) and returns a
 frozen ``LoopMetrics`` in SI units. Pure numpy (peaks: ``scipy.signal.find_peaks``).
 
 Definitions (x: position, r: set-point, e = r − x, u: command, v: velocity; samples are
@@ -87,7 +87,7 @@ ROUND_OFF = 1e-9
 #: the rise-time levels, fractions of the step
 RISE_LEVELS = (0.1, 0.9)
 
-_REQUIRED = ("position", "setpoint")
+_REQUIRED = ("position", "position_setpoint")
 
 # name: (unit, description); "{x}" is the position's unit, "{u}" the command's
 _DESCRIPTIONS: dict[str, tuple[str, str]] = {
@@ -268,7 +268,8 @@ def _read(result: Any) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, str
         units = dict(getattr(result, "units", None) or {})
     else:
         raise DataError(f"loop_metrics: result = {type(result).__name__}; allowed: a pneumact "
-                        "Result or a pandas DataFrame with columns time, position, setpoint")
+                        "Result or a pandas DataFrame with columns time, position, "
+                        "position_setpoint")
     missing = [name for name in _REQUIRED if name not in signals]
     if missing:
         raise DataError(f"loop_metrics: the data has no {' and no '.join(map(repr, missing))} "
@@ -282,7 +283,7 @@ def _read(result: Any) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, str
         raise DataError(f"loop_metrics: time must increase strictly; time[{k + 1}] = "
                         f"{float(time[k + 1])!r} s after time[{k}] = {float(time[k])!r} s")
     out: dict[str, np.ndarray] = {}
-    for name in ("position", "setpoint", "velocity", "command"):
+    for name in ("position", "position_setpoint", "velocity", "command"):
         if name in signals:
             out[name] = _floats(name, signals[name])
             if out[name].shape != time.shape:
@@ -418,7 +419,7 @@ def loop_metrics(result: Any, *, start: float | None = None, target: float | Non
     """Step-response, error, effort, limit-cycle and stick metrics of a closed-loop run.
 
     ``result``: a pneumact Result, or a DataFrame with the columns (or index) ``time``
-    [s], ``position`` [m], ``setpoint`` [m] and optionally ``velocity`` [m/s] and
+    [s], ``position`` [m], ``position_setpoint`` [m] and optionally ``velocity`` [m/s] and
     ``command``. ``start``/``target`` [m]: the step (default: the position at
     ``t_step`` / the last set-point value); ``t_step`` [s]: default the first sample
     at which the set-point departs from its first value (else the first time); ``band``:
@@ -430,7 +431,7 @@ def loop_metrics(result: Any, *, start: float | None = None, target: float | Non
     settling times, not an error.
     """
     time, sig, units = _read(result)
-    x, r = sig["position"], sig["setpoint"]
+    x, r = sig["position"], sig["position_setpoint"]
     t0, t_end = float(time[0]), float(time[-1])
     duration = t_end - t0
 

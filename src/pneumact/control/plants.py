@@ -22,7 +22,7 @@ def input_kind(plant, who: str) -> str:
                                  "(a kinematic drive has no input to act on)")
         return "force"
     if isinstance(plant, Actuator):
-        return plant.valve.drive
+        return plant.plant_kind
     raise ParameterError(f"{who}: plant = {type(plant).__name__}; allowed: Actuator, "
                          "FrictionRig(drive='force')")
 

@@ -28,11 +28,11 @@ def plot_loop(result: Any, metrics: LoopMetrics | None = None) -> Figure:
     settling time (dotted line) when ``metrics`` (from ``loop_metrics``) are given;
     (2) the command, in its display unit; (3) friction and, where it is not zero
     throughout, the friction compensation [N]; (4) velocity [mm/s]. ``result``: a Result
-    or a DataFrame with the same signals (``time``, ``position``, ``setpoint`` required).
+    or a DataFrame with the same signals (``time``, ``position``, ``position_setpoint`` required).
     The key metrics go into the title. Returns the Figure."""
     time = signal_values(result, "time")
     position = signal_values(result, "position")
-    setpoint = signal_values(result, "setpoint")
+    setpoint = signal_values(result, "position_setpoint")
     fig, (ax_x, ax_u, ax_f, ax_v) = new_axes(4, height=9.0)
 
     ax_x.plot(time, setpoint * _MM, "k--", linewidth=1.0, label="set-point")

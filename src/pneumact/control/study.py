@@ -25,6 +25,7 @@ from .loop import ClosedLoop
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from ..parameters.files import ParameterSetLike
     from ..simulation.result import Result
     from .metrics import LoopMetrics
 
@@ -61,7 +62,8 @@ class LoopStudy:
             return frame
         import numpy as np
 
-        error = np.asarray(self.result["setpoint"]) - np.asarray(self.result["position"])
+        error = (np.asarray(self.result["position_setpoint"])
+                 - np.asarray(self.result["position"]))
         unit = self.metrics.position_unit
         extra = pd.DataFrame(
             [("rms_tracking_error", float(np.sqrt(np.mean(error ** 2))), unit,
@@ -141,20 +143,21 @@ def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
                      title or f"Closed-loop position control: {experiment.name}", tracking)
 
 
-def canudas_hunting(params=None, *, kp: float = 3.0, ki: float = 4.0, kv: float = 6.0,
-                    setpoint: float = 1.0, t_end: float = 100.0, n_points: int = 10001,
+def canudas_hunting(params: ParameterSetLike = "canudas1995", *, kp: float = 3.0,
+                    ki: float = 4.0, kv: float = 6.0, position_setpoint: float = 1.0,
+                    t_end: float = 100.0, n_points: int = 10001,
                     sample_time: float | None = None) -> tuple[ClosedLoop, Experiment]:
     """The hunting experiment of Canudas de Wit et al. (1995, §4): a unit mass with
     LuGre friction (``canudas1995``) under u = −Kv·v − Kp·(x − xd) − Ki·∫(x − xd) dt,
     Kp = 3, Ki = 4, Kv = 6, xd = 1 m, from rest, 100 s. With Fs > Fc it hunts."""
     from ..models.friction import LuGre
     from ..models.rig import FrictionRig
-    from ..parameters import load_params
+    from ..parameters.files import as_parameter_set
 
-    params = load_params("canudas1995") if params is None else params
+    params = as_parameter_set(params, "canudas_hunting")
     rig = FrictionRig(params, LuGre(), drive="force")
     pid = PID(kp=kp, ki=ki, kd=kv, derivative="velocity", anti_windup="none",
               sample_time=sample_time)
-    experiment = Experiment(Constant(setpoint), "position", t_end, n_points=n_points,
+    experiment = Experiment(Constant(position_setpoint), "position", t_end, n_points=n_points,
                             name="Canudas 1995 hunting")
     return ClosedLoop(rig, pid), experiment

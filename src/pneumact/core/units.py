@@ -15,8 +15,9 @@ SIGNAL_UNITS: dict[str, str] = {
     "time": "s",
     "pressure": "Pa",
     "pressure_gauge": "Pa",
-    "setpoint": "Pa",
+    "setpoint": "Pa",  # a pressure regulator's set-point
     "position": "m",
+    "position_setpoint": "m",  # a position controller's set-point
     "velocity": "m/s",
     "force": "N",
     "friction": "N",

@@ -142,11 +142,11 @@ class SteadyState(FrictionTest):
 @dataclass(frozen=True)
 class Presliding(FrictionTest):
     """Slow force triangle 0 → +A → −A → +A with A = ``amplitude``·Fs (below break-away);
-    all three legs have the same force rate, the test lasts ``duration`` s."""
+    all three legs have the same force rate, the test lasts ``t_end`` s."""
 
     amplitude: float = field(default=0.9, metadata={
         "help": "force amplitude as a fraction of Fs (below 1: no break-away)"})
-    duration: float = field(default=5.0, metadata={"help": "length of the test [s]"})
+    t_end: float = field(default=5.0, metadata={"help": "length of the test [s]"})
     n_points: int = field(default=5001, metadata={"help": "output points"})
     kind: ClassVar[str] = "presliding"
     help: ClassVar[str] = "force-displacement loop below break-away (stiffness sigma0)"
@@ -155,11 +155,11 @@ class Presliding(FrictionTest):
         if not 0 < self.amplitude < 1:
             raise ExperimentError(f"presliding: amplitude = {self.amplitude} (fraction of Fs) "
                                   "must be in (0, 1): the force has to stay below break-away")
-        _positive(self.kind, duration=self.duration)
+        _positive(self.kind, t_end=self.t_end)
         _check_points(self.kind, self.n_points)
 
     def setups(self, params, friction) -> list[RigSetup]:
-        a, d = self.amplitude * params["Fs"], self.duration
+        a, d = self.amplitude * params["Fs"], self.t_end
         drive = PiecewiseLinear([0.0, d / 5, 3 * d / 5, d], [0.0, a, -a, a])
         return [RigSetup("force", Experiment(drive, "force", d, n_points=self.n_points,
                                              name="presliding"))]
@@ -249,7 +249,7 @@ class StickSlip(FrictionTest):
     """The free end of a spring (stiffness k_drive) moves at ``v_drive`` (default: the
     parameter set's) from t = 0; the mass starts at rest with the spring relaxed."""
 
-    duration: float = field(default=20.0, metadata={"help": "length of the test [s]"})
+    t_end: float = field(default=20.0, metadata={"help": "length of the test [s]"})
     v_drive: float | None = field(default=None, metadata={
         "help": "speed of the spring's free end [m/s] (default: the set's v_drive)"})
     samples_per_second: int = field(default=1000, metadata={"help": "output points per s"})
@@ -257,7 +257,7 @@ class StickSlip(FrictionTest):
     help: ClassVar[str] = "a mass dragged through a spring at constant speed"
 
     def check(self) -> None:
-        _positive(self.kind, duration=self.duration)
+        _positive(self.kind, t_end=self.t_end)
         if self.v_drive is not None:
             _positive(self.kind, v_drive=self.v_drive)
             from ..parameters import catalogue
@@ -269,9 +269,9 @@ class StickSlip(FrictionTest):
 
     def setups(self, params, friction) -> list[RigSetup]:
         v_drive = params["v_drive"] if self.v_drive is None else float(self.v_drive)
-        exp = Experiment(Ramp(0.0, v_drive * self.duration, self.duration), "spring",
-                         self.duration,
-                         n_points=round(self.duration * self.samples_per_second) + 1,
+        exp = Experiment(Ramp(0.0, v_drive * self.t_end, self.t_end), "spring",
+                         self.t_end,
+                         n_points=round(self.t_end * self.samples_per_second) + 1,
                          name="stick-slip")
         return [RigSetup("spring", exp)]
 

@@ -25,9 +25,10 @@ def _check(name: str, t_end: float, n_points: int, **positions: float) -> None:
         raise ExperimentError(f"{name}: n_points = {n_points}; must be >= 2")
 
 
-def SetpointStep(start: float, stop: float, t_step: float = 0.0, t_end: float = 1.0,
+def SetpointStep(start: float, stop: float, t_step: float = 0.1, t_end: float = 1.0,
                  n_points: int = 4001) -> Experiment:
-    """The set-point jumps from ``start`` to ``stop`` [m] at ``t_step`` [s]."""
+    """The set-point jumps from ``start`` to ``stop`` [m] at ``t_step`` [s] (by default
+    after 0.1 s at ``start``, where a loop built to hold ``start`` rests)."""
     _check("SetpointStep", t_end, n_points, start=start, stop=stop)
     if not 0.0 <= t_step < t_end:
         raise ExperimentError(f"SetpointStep: t_step = {t_step} s; must be in [0, {t_end})")

@@ -21,7 +21,7 @@ from .campaign import (
     synthetic_campaign,
 )
 from .estimates import Estimates, linear_least_squares
-from .fit import FitResult, Profile, experiment_for, fit
+from .fit import FitResult, ProfileLikelihood, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
 from .paper import PaperIdentification, StageResult, identify_paper, record_kind
 
@@ -33,7 +33,7 @@ __all__ = [
     "InverseFriction",
     "Noise",
     "PaperIdentification",
-    "Profile",
+    "ProfileLikelihood",
     "StageResult",
     "design_campaign",
     "experiment_for",

@@ -35,6 +35,7 @@ from scipy.optimize import least_squares
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
 from ..progress import ProgressCallback, notify
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
@@ -45,7 +46,7 @@ if TYPE_CHECKING:
     from ..io.report import Report
     from ..simulation.simulate import Model
 
-__all__ = ["FitResult", "Profile", "fit"]
+__all__ = ["FitResult", "ProfileLikelihood", "fit"]
 
 CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood threshold
 
@@ -267,18 +268,14 @@ def _parameter_names(model) -> frozenset[str]:
     return frozenset(assemble(model).parameter_names)
 
 
-def _input_name(model) -> str:
-    """The record signal that drives ``model``: its valve's (``models.inputs``), or its
-    drive quantity (a rig's force)."""
-    from ..models.inputs import input_signal
-
-    valve = getattr(model, "valve", None)
-    return input_signal(valve) if valve is not None else model.drive_quantity
+def _input_name(model: Model) -> str:
+    """The record signal that drives ``model`` (its valve's, or a rig's drive)."""
+    return model.input_signal
 
 
 # --------------------------------------------------------------------------- results
 @dataclass(eq=False)
-class Profile:
+class ProfileLikelihood:
     """Profile likelihood of one parameter: Δ = N·ln(SSR/SSR_min) against its value."""
 
     name: str
@@ -344,7 +341,7 @@ class FitResult(ResultVocabulary):
     signals: tuple[str, ...]
     jacobian: np.ndarray
     starts: pd.DataFrame = field(default_factory=pd.DataFrame)
-    profiles: dict[str, Profile] = field(default_factory=dict)
+    profiles: dict[str, ProfileLikelihood] = field(default_factory=dict)
     base_values: dict[str, float] = field(default_factory=dict)
     model: Model | None = None
     window: tuple[float, float] | None = None
@@ -534,7 +531,7 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
     which = range(n_records) if offset_records is None else sorted(set(offset_records))
     bad = [i for i in which if not 0 <= i < n_records]
     if bad:
-        raise ParameterError(f"fit: offset_records {bad} are not record indices "
+        raise ParameterError(f"fit: offsets records {bad} are not record indices "
                              f"(0..{n_records - 1})")
     for signal in offsets:
         cols += [_Column(f"offset_{signal}[{i}]", signal, i, offset=True) for i in which]
@@ -588,10 +585,11 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
     return stats, aic
 
 
-def _solve(problem: _Problem, phi0, lo, hi, loss, f_scale, max_nfev):
+def _solve(problem: _Problem, phi0, lo, hi, optimizer: Optimizer):
     jac = problem.jac if problem.jacobian == "sensitivities" else problem.jacobian
-    return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi), loss=loss,
-                         f_scale=f_scale, x_scale="jac", max_nfev=max_nfev, method="trf")
+    return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi),
+                         loss=optimizer.loss, f_scale=optimizer.f_scale, x_scale="jac",
+                         max_nfev=optimizer.max_nfev, method="trf")
 
 
 def _starts(n, lo, hi, seed):
@@ -646,30 +644,33 @@ def _leave_one_blas_thread() -> None:
 @one_blas_thread
 def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         per_record: Sequence[str] = (), start: Mapping[str, float] | None = None,
-        bounds: Mapping[str, tuple[float, float]] | None = None,
-        log: bool | Sequence[str] = True, signals: Sequence[str] = ("position",),
-        weights: Mapping[str, float] | None = None, loss: str = "linear",
-        f_scale: float = 1.0, jacobian: str = "sensitivities", solver=None,
-        multistart: int = 0, seed: int = 0, workers: int | None = None, scheduler=None,
-        profile: Sequence[str] = (), profile_points: int = 8, max_nfev: int | None = None,
-        offsets: Sequence[str] = (), window: tuple[float, float] | None = None,
-        smooth_input: bool = True, covariance: str = "hac",
-        progress: ProgressCallback | None = None,
-        offset_records: Sequence[int] | None = None,
-        record_weights: Sequence[float] | None = None) -> FitResult:
+        bounds: Bounds | Mapping[str, tuple[float, float]] | None = None,
+        signals: Sequence[str] = ("position",),
+        weights: Weights | Mapping[str, float] | None = None,
+        optimizer: Optimizer | str | None = None, solver=None,
+        multistart: Multistart | int = 0,
+        executor: Executor | int | str | None = None,
+        profile: Profile | Sequence[str] = (),
+        offsets: Offsets | Sequence[str] = (),
+        window: tuple[float, float] | None = None, smooth_input: bool = True,
+        covariance: str = "hac",
+        progress: ProgressCallback | None = None) -> FitResult:
     """Fit ``free`` parameters of ``model`` to ``records`` (see the module docstring).
 
     ``model`` is one model for every record, or a sequence with one model per record
     (a joint fit of records made through different valves: the parameters are shared
     by name, and each record's model reads those it has).
 
-    ``start`` gives starting values (default: the model's parameter set); ``weights``
-    multiplies each signal's residual (default 1/std of the measured signal); ``loss``
-    and ``f_scale`` are those of ``least_squares`` (e.g. "soft_l1" for outliers);
-    ``multistart`` adds that many Latin-hypercube starts inside the bounds, run on
-    ``workers`` threads or a Dask ``scheduler``; ``profile`` names parameters whose
-    profile likelihood is computed. ``offsets`` names signals that get a free additive
-    sensor offset per record; ``window`` = (t0, t1) restricts the residuals to that time
+    ``start`` gives starting values (default: the model's parameter set); ``bounds``
+    the search space (``Bounds``: (low, high) per name, which are fitted in log scale;
+    a dict of ranges is enough); ``weights`` (``Weights``) multiplies each signal's
+    residuals (default 1/std of the measured signal) and each record's (default 1);
+    ``optimizer`` (``Optimizer``, or a loss name such as "soft_l1" for outliers) says
+    how least squares runs; ``multistart`` (``Multistart``, or a number of starts) adds
+    Latin-hypercube starts inside the bounds, run on the ``executor``'s threads or Dask
+    scheduler; ``profile`` (``Profile``, or parameter names) computes profile
+    likelihoods. ``offsets`` (``Offsets``, or signal names) gets a free additive sensor
+    offset per record; ``window`` = (t0, t1) restricts the residuals to that time
     span and ends each simulation at t1, or gives one such window (or None) per record;
     each simulation still starts at the record's start, because friction remembers the
     approach (started at rest at t0 instead, the presliding stage of the paper's
@@ -678,12 +679,9 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     a noisy measured input as piecewise linear before it drives the model (see
     ``identification.inputs``: noise on the input dithers LuGre bristles and biases the
     estimates). ``covariance`` is "hac" (residuals correlated in time, the default) or
-    "iid" (see ``estimates.covariance_from_jacobian``). ``offset_records`` limits the
-    ``offsets`` to those record indices (default: every record). ``record_weights``
-    multiply each record's residuals (default 1): records whose measurement carries
-    more noise than others (a noisy measured input) count for less. ``progress`` is
-    called with a ``pneumact.progress.Progress``: stage "fit" (started, done), then
-    "multistart" (starts done of all) and "profile <name>" (points done).
+    "iid" (see ``estimates.covariance_from_jacobian``). ``progress`` is called with a
+    ``pneumact.progress.Progress``: stage "fit" (started, done), then "multistart"
+    (starts done of all) and "profile <name>" (points done).
     """
     records = fit_records(records)
     models = _models_per_record(model, len(records))
@@ -691,12 +689,13 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     # nothing after t1 is simulated; before t0 is (friction remembers the approach)
     records = [r if w is None else r.crop(None, w[1]) for r, w in zip(records, windows,
                                                                        strict=True)]
+    bounds, weights = Bounds.of(bounds), Weights.of(weights)
+    optimizer, multistart = Optimizer.of(optimizer), Multistart.of(multistart)
+    executor, profile, offsets = Executor.of(executor, "fit"), Profile.of(profile), \
+        Offsets.of(offsets)
     checked = check_fit_arguments(
-        models[0], records, free, per_record=per_record, start=start, bounds=bounds,
-        log=log, signals=signals, weights=weights, loss=loss, f_scale=f_scale,
-        solver=solver, multistart=multistart, seed=seed, workers=workers, profile=profile,
-        profile_points=profile_points, max_nfev=max_nfev, offsets=offsets,
-        smooth_input=smooth_input, progress=progress)
+        models[0], records, free, per_record=per_record, start=start, signals=signals,
+        executor=executor, smooth_input=smooth_input, progress=progress, solver=solver)
     from ..simulation.simulate import check_model
 
     for other in dict.fromkeys(models[1:]):
@@ -704,9 +703,6 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     free, solver = checked["free"], checked["solver"]
     if covariance not in ("hac", "iid"):
         raise ParameterError(f"fit: covariance = {covariance!r}; allowed: hac, iid")
-    if jacobian not in ("sensitivities", "2-point", "3-point"):
-        raise ParameterError(f"fit: jacobian = {jacobian!r}; allowed: sensitivities, "
-                             "2-point, 3-point")
     signals = tuple(signals)
     for rec, own in zip(records, models, strict=True):
         rec.require([*signals, _input_name(own)], "this fit")
@@ -721,40 +717,41 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         unknown = [n for n in names_ if n not in base]
         if unknown:
             assemblies[0].check_parameters(unknown, what)
-    bad = [s for s in offsets if s not in signals]
+    bad = [s for s in offsets.signals if s not in signals]
     if bad:
         raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
                              f"({', '.join(signals)})")
-    columns = _columns(free, per_record, len(records), offsets, offset_records)
+    columns = _columns(free, per_record, len(records), offsets.signals, offsets.records)
     theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.name, base[c.name]))
                        for c in columns])
-    names_log = free if log is True else ([] if log is False else list(log))
+    names_log = bounds.log_names(free)
     log_mask = np.array([c.name in names_log and theta0[j] > 0
                          for j, c in enumerate(columns)])
-    lo, hi = _bounds(columns, theta0, bounds, log_mask)
-    if weights is None:
-        weights = {}
+    lo, hi = _bounds(columns, theta0, bounds.ranges, log_mask)
+    signal_weights = weights.signals
+    if signal_weights is None:
+        signal_weights = {}
         for s in signals:
             y = np.concatenate([r[s] for r in records])
-            weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
-    if record_weights is not None and (len(record_weights) != len(records) or not all(
-            np.isfinite(w) and w > 0 for w in record_weights)):
-        raise ParameterError(f"fit: record_weights = {list(record_weights)}; need one "
+            signal_weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
+    record_weights = weights.records
+    if record_weights is not None and len(record_weights) != len(records):
+        raise ParameterError(f"fit: weights.records = {list(record_weights)}; need one "
                              f"finite weight > 0 per record ({len(records)})")
-    problem = _Problem(models, records, columns, log_mask, signals, weights,
-                       solver or Rodas4(rtol=1e-6), jacobian, base, windows, smooth_input,
-                       record_weights)
-    problem.workers = 1 if multistart else max(1, int(workers or os.cpu_count() or 1))
+    problem = _Problem(models, records, columns, log_mask, signals, signal_weights,
+                       solver or Rodas4(rtol=1e-6), optimizer.jacobian, base, windows,
+                       smooth_input, record_weights)
+    problem.workers = 1 if multistart.starts else executor.threads
     plo, phi_ = problem.phi(lo), problem.phi(hi)
     tic = _time.perf_counter()
     notify(progress, "fit", 0, 1)
     starts = [problem.phi(theta0)]
-    if multistart:  # an offset has no bounds: each start begins it where the fit does
+    if multistart.starts:  # an offset has no bounds: each start begins it where the fit does
         offset = np.array([c.offset for c in columns])
         starts += [np.where(offset, starts[0], s) for s in _starts(
-            multistart, np.where(offset, 0.0, plo), np.where(offset, 1.0, phi_), seed)]
-    solutions = _run_starts(problem, starts, plo, phi_, loss, f_scale, max_nfev, workers,
-                            scheduler, progress)
+            multistart.starts, np.where(offset, 0.0, plo), np.where(offset, 1.0, phi_),
+            multistart.seed)]
+    solutions = _run_starts(problem, starts, plo, phi_, optimizer, executor, progress)
     best = min(solutions, key=lambda s: s.cost)
     notify(progress, "fit", 1, 1)
     theta = problem.theta(best.x)
@@ -778,25 +775,24 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
                        bool(best.success), str(best.message), int(best.nfev),
                        problem.simulations, 0.0, signals, jac, start_table, {}, base,
                        models[0], next((w for w in windows if w is not None), None),
-                       dict(weights), models, windows, (lo, hi),
+                       dict(signal_weights), models, windows, (lo, hi),
                        problem.record_weights.copy())
-    for name in profile:
-        result.profiles[name] = _profile(problem, result, name, plo, phi_, loss, f_scale,
-                                         profile_points, progress)
+    for name in profile.names:
+        result.profiles[name] = _profile(problem, result, name, plo, phi_, optimizer,
+                                         profile.points, progress)
     result.simulations = problem.simulations
     result.wall_time = _time.perf_counter() - tic
     return result
 
 
-def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, scheduler,
-                progress):
+def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executor, progress):
     if len(starts) == 1:
-        return [_solve(problem, starts[0], lo, hi, loss, f_scale, max_nfev)]
-    options = (lo, hi, loss, f_scale, max_nfev)
-    if scheduler is not None:
+        return [_solve(problem, starts[0], lo, hi, optimizer)]
+    options = (lo, hi, optimizer)
+    if executor.scheduler is not None:
         from ..simulation.batch.engine import dask_client
 
-        client, owned = dask_client(scheduler)
+        client, owned = dask_client(executor.scheduler)
         try:
             futures = client.map(_solve_copy, [problem] * len(starts), starts,
                                  [options] * len(starts), pure=False)
@@ -807,7 +803,7 @@ def _run_starts(problem, starts, lo, hi, loss, f_scale, max_nfev, workers, sched
         problem.simulations += sum(sol.simulations for sol in done)
         return done
     done = []
-    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+    with ThreadPoolExecutor(max_workers=executor.threads) as pool:
         futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
         for k, fut in enumerate(futures):
             done.append(fut.result())
@@ -844,7 +840,7 @@ def _solve_copy(problem, phi0, options):
     return sol
 
 
-def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -> Profile:
+def _profile(problem, result, name, lo, hi, optimizer, n_points, progress) -> ProfileLikelihood:
     """Step out from the optimum on each side (steps doubling from one standard error)
     until Δ exceeds twice the 95 % threshold or the bound is reached, refitting the other
     parameters at each point from the previous one."""
@@ -868,7 +864,7 @@ def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -
             target = phi_hat[j] + side * first * 2.0**k
             at_bound = side * (target - bound) >= 0
             target = bound if at_bound else target
-            ssr, x0 = _refit(problem, j, target, keep, x0, lo, hi, loss, f_scale)
+            ssr, x0 = _refit(problem, j, target, keep, x0, lo, hi, optimizer)
             delta = max(n * np.log(max(ssr, 1e-300) / ssr_min), 0.0)
             points[float(target)] = delta
             count += 1
@@ -878,17 +874,17 @@ def _profile(problem, result, name, lo, hi, loss, f_scale, n_points, progress) -
     grid_phi = np.array(sorted(points))
     delta = np.array([points[g] for g in grid_phi])
     grid = np.exp(grid_phi) if problem.log[j] else grid_phi
-    return Profile(name, grid, delta, float(result.estimates.values[j]))
+    return ProfileLikelihood(name, grid, delta, float(result.estimates.values[j]))
 
 
-def _refit(problem, j, phi_j, keep, x0, lo, hi, loss, f_scale):
+def _refit(problem, j, phi_j, keep, x0, lo, hi, optimizer: Optimizer):
     """(SSR, optimum of the others) with parameter ``j`` held at ``phi_j``."""
     sub = _Fixed(problem, j, phi_j)
     if keep:
         jac = sub.jac if problem.jacobian == "sensitivities" else problem.jacobian
         sol = least_squares(sub.residuals, np.clip(x0, lo[keep], hi[keep]), jac=jac,
-                            bounds=(lo[keep], hi[keep]), loss=loss, f_scale=f_scale,
-                            x_scale="jac", method="trf")
+                            bounds=(lo[keep], hi[keep]), loss=optimizer.loss,
+                            f_scale=optimizer.f_scale, x_scale="jac", method="trf")
         ssr, x = 2 * sol.cost, sol.x
     else:
         r = sub.residuals(np.empty(0))

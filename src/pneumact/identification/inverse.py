@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 __all__ = ["InverseFriction", "inverse_friction"]
 
+#: the laws of the inverse model (named as ``--friction`` names the simulated laws)
 MODELS = ("coulomb-viscous", "stribeck")
 
 
@@ -176,7 +177,7 @@ def _predict(model, p, v, a, asymmetric):
     return force
 
 
-def inverse_friction(record: Record, model: str = "coulomb-viscous", *, force: str = "force",
+def inverse_friction(record: Record, friction: str = "coulomb-viscous", *, force: str = "force",
                      mass: bool = True, offset: bool | None = None, asymmetric: bool = False,
                      cutoff: float | None = None, decimate: int = 1,
                      min_speed: float | None = None, delta: float = 2.0) -> InverseFriction:
@@ -187,7 +188,7 @@ def inverse_friction(record: Record, model: str = "coulomb-viscous", *, force: s
     low-pass (order 4) applied to position and force before differentiation (default:
     none); ``decimate`` keeps every n-th sample after filtering; samples slower than
     ``min_speed`` (default 1 % of the fastest) are left out, where the sign of v is noise.
-    ``model="stribeck"`` adds Fs and vs (exponent ``delta``) by nonlinear least squares.
+    ``friction="stribeck"`` adds Fs and vs (exponent ``delta``) by nonlinear least squares.
     ``offset`` (a constant force) is fitted by default, except with ``asymmetric``: then
     the Coulomb levels per direction already hold it (1(v>0) + 1(v<0) = 1 on every
     moving sample, so offset and the two levels are one regressor too many).
@@ -198,8 +199,9 @@ def inverse_friction(record: Record, model: str = "coulomb-viscous", *, force: s
         raise ParameterError("inverse_friction: offset=True with asymmetric=True: the "
                              "offset is the mean of the two Coulomb levels; fit one or "
                              "the other")
+    model = friction
     if model not in MODELS:
-        raise ParameterError(f"inverse_friction: model = {model!r}; allowed: "
+        raise ParameterError(f"inverse_friction: friction = {model!r}; allowed: "
                              f"{', '.join(MODELS)}")
     if model == "stribeck" and asymmetric:
         raise ParameterError("inverse_friction: the Stribeck model is symmetric; use "

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import DataError, SolverError
 from ..io.records import Record
+from ..options import Executor, Offsets, Optimizer, Weights
 from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import FitResult, fit
@@ -111,7 +112,8 @@ def _parameters_of(model) -> frozenset[str]:
 def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      friction=None, chamber=None, free: Sequence[str] = SPRING_AND_FRICTION,
                      solver=None, replicates: int | None = None, seed: int = 0,
-                     workers: int | None = None, max_evaluations: int = MAX_EVALUATIONS,
+                     executor: Executor | int | None = None,
+                     max_evaluations: int = MAX_EVALUATIONS,
                      prior=None, drop_chaotic: bool = True, excluded: list | None = None,
                      progress: ProgressCallback | None = None) -> FitResult:
     """Fit ``free`` to all ``records`` at once from the values of ``params`` (the staged
@@ -133,6 +135,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
       start of a round (``amplification`` above ``CHAOS_AMPLIFICATION``) is left out.
     """
     excluded = [] if excluded is None else excluded
+    workers = Executor.of(executor, "joint_refinement").workers
     options = dict(friction=friction, chamber=chamber, free=free, solver=solver,
                    replicates=replicates, seed=seed, workers=workers,
                    max_evaluations=max_evaluations, prior=params if prior is None else prior,
@@ -258,7 +261,7 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     record_weights = [weights[r.source] for r in records]
     bounds = prior_bounds(params if prior is None else prior, free)
     return fit(models, list(records), list(free), window=windows,
-               offsets=["position"] if offset_records else (),
-               offset_records=offset_records, solver=solver,
-               record_weights=record_weights, max_nfev=max_evaluations, bounds=bounds,
+               offsets=Offsets(["position"] if offset_records else (), offset_records),
+               solver=solver, weights=Weights(records=record_weights),
+               optimizer=Optimizer(max_nfev=max_evaluations), bounds=bounds,
                start=within({n: params[n] for n in free}, bounds))

@@ -35,6 +35,7 @@ import pandas as pd
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
     MODEL_FIDELITY,
@@ -527,7 +528,7 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     step("joint refinement", 0.3)
     chaotic: list[str] = []
     joint = joint_refinement(records, kinds, staged, friction=friction, chamber=chamber,
-                             free=free, replicates=replicates, seed=seed, workers=workers,
+                             free=free, replicates=replicates, seed=seed, executor=workers,
                              prior=prior, excluded=chaotic,
                              max_evaluations=max_evaluations)
     for name in chaotic:
@@ -622,7 +623,8 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
 def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
-                   replicates: int | None = None, seed: int = 0, workers: int | None = None,
+                   replicates: int | None = None, seed: int = 0,
+                   executor: Executor | int | None = None,
                    max_evaluations: int = MAX_EVALUATIONS, name: str | None = None,
                    progress: ProgressCallback | None = None
                    ) -> PaperIdentification:
@@ -636,7 +638,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     threshold of eq. 13 instead of deriving it from vs (it is then only checked).
     ``refine=False`` stops after the stages (fast; their intervals are conditional on
     the earlier stages). ``replicates`` of the input-noise bootstrap (default
-    ``uncertainty.INPUT_REPLICATES``) run on ``workers`` threads; each round of the joint
+    ``uncertainty.INPUT_REPLICATES``, drawn with ``seed``) run on the ``executor``'s
+    threads (an ``Executor`` or a number of threads); each round of the joint
     fit gives up after ``max_evaluations``. ``progress`` is called with a
     ``pneumact.progress.Progress`` (the stage's name, the fraction of the whole done) as
     the work goes on.
@@ -646,6 +649,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
 
     records = as_records(records, "identify_paper")
     params = as_parameter_set(params, "identify_paper")
+    workers = Executor.of(executor, "identify_paper").workers
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError, SolverError
+from ..options import Executor
 from .estimates import Estimates
 from .fit import FitResult, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
@@ -261,12 +262,13 @@ class PredictionBand:
 
 def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100,
                     level: float = 0.95, signals: Sequence[str] = ("position", "pressure"),
-                    t_eval=None, seed: int = 0, solver=None, workers: int | None = None
-                    ) -> PredictionBand:
+                    t_eval=None, seed: int = 0, solver=None,
+                    executor: Executor | int | str | None = None) -> PredictionBand:
     """The band of ``signals`` under ``experiment`` that the uncertainty of
     ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets with
     a non-positive value of a positive parameter are drawn again), simulated on the
-    batch engine; ``level`` is the central probability of the band."""
+    batch engine (``executor``: where, see ``simulate_batch``); ``level`` is the central
+    probability of the band."""
     from ..parameters import catalogue
     from ..simulation import simulate
     from ..simulation.batch import simulate_batch
@@ -293,7 +295,7 @@ def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100
     values = dict(zip(names, mean, strict=True))
     nominal = simulate(model, experiment, solver, t_eval=t_eval, values=values)
     result = simulate_batch(model, experiment, table, signals=list(signals),
-                            t_eval=nominal.time, solver=solver, workers=workers,
+                            t_eval=nominal.time, solver=solver, executor=executor,
                             features=())
     good = (result.table["status"] == "ok").to_numpy()
     tail = (1 - level) / 2

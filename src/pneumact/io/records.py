@@ -504,7 +504,7 @@ def _check_mappings(**given) -> None:
 def read_signal_csv(path: PathLike, *, columns: Mapping[str, str] | None = None,
                     units: Mapping[str, str] | None = None, p_atm: float | None = None
                     ) -> tuple[str, np.ndarray, np.ndarray]:
-    """Read one input signal against time (for ``pneumact simulate --input``).
+    """Read one input signal against time (for ``pneumact simulate --input-csv``).
 
     The file needs ``time`` and exactly one of pressure, command, setpoint, force,
     velocity, position (other columns are ignored). Returns ``(name, time [s], values

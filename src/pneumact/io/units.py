@@ -1,7 +1,8 @@
 """Units of measured records: pint converts each column to SI at the boundary.
 
 Known signal names (time, pressure, position, velocity, force, friction, command,
-setpoint) are converted to their SI unit; other columns to coherent SI. Pressures are
+setpoint: a regulator's, in Pa; position_setpoint: a position controller's, in m) are
+converted to their SI unit; other columns to coherent SI. Pressures are
 absolute unless the column is named ``pressure_gauge`` (then ``records`` adds p_atm);
 a gauge-style unit spelling such as ``barg`` or ``kPa (g)`` is refused with a message
 saying how to give it.
@@ -33,6 +34,7 @@ _TARGETS: dict[str, tuple[str, str]] = {
     "pressure_gauge": ("Pa", _GAUGE),
     "setpoint": ("Pa", _PRESSURE),
     "position": ("m", "a length unit such as m, mm or um"),
+    "position_setpoint": ("m", "a length unit such as m, mm or um"),
     "velocity": ("m/s", "a velocity unit such as m/s or mm/s"),
     "force": ("N", "a force unit such as N or kN"),
     "friction": ("N", "a force unit such as N or kN"),

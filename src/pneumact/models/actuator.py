@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, ClassVar
 
 from ..checks import as_instance, check_type
@@ -56,7 +56,7 @@ class Actuator:
             examples="pa.PressureSource(), pa.CommandValve() or pa.PressureRegulator()"))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Actuator",
-            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(n)"))
+            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
         for name in ("load", "load_map"):
             value = getattr(self, name)
             if value is not None:
@@ -70,9 +70,53 @@ class Actuator:
                 "PressureRegulator)")
         self.params.require(self.required, "Actuator")
 
+    has_sensitivities: ClassVar[bool] = True
+
+    # -- the model protocol (``simulation.Model``) -----------------------------------------
     @property
     def drive_quantity(self) -> str:
         return self.valve.drive
+
+    @property
+    def input_signal(self) -> str:
+        """The record signal that drives it: its valve's (a regulator's set-point, a
+        pressure, a command)."""
+        return self.valve.input_signal
+
+    @property
+    def input_signals(self) -> tuple[str, ...]:
+        """The record signals it can be driven by (behind the valve each one drives), in
+        the order a record's input is chosen: a logged set-point, a pressure, a command."""
+        from .inputs import INPUT_SIGNALS
+
+        return tuple(INPUT_SIGNALS.values())
+
+    def driven_by(self, signal: str) -> Actuator:
+        """This actuator behind the valve that a record's ``signal`` drives."""
+        from .inputs import valve_for_signal
+
+        if signal == self.input_signal:
+            return self
+        return replace(self, valve=valve_for_signal(signal))
+
+    @property
+    def plant_kind(self) -> str:
+        """What its input acts on: ``pressure`` (a source or a regulator) or ``command``."""
+        return self.valve.drive
+
+    @property
+    def drive_label(self) -> str:
+        """What takes its input, for messages: its valve."""
+        return self.valve.name
+
+    @property
+    def stroke(self) -> float | None:
+        """x_max [m]: set-points and measured positions beyond it are impossible."""
+        return float(self.params["x_max"])
+
+    def breakpoints(self, bp, channels, t_start: float, t_end: float):
+        """The experiment's breakpoints: an actuator adds none."""
+        return bp
 
     @property
     def required(self) -> tuple[str, ...]:

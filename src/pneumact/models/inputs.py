@@ -1,32 +1,41 @@
 """Which measured signal drives which valve: a record made through the pressure regulator
 logs its set-point, one made with an imposed pressure carries that pressure, one made
-through the valve carries its command. Validation and fitting use this to drive a model
-the way a record was made."""
+through the valve carries its command. Each valve declares its ``input_signal``;
+validation and fitting use them to drive a model the way a record was made."""
 
 from __future__ import annotations
 
 from ..errors import DataError
-from .valves import VALVES, Valve
+from .valves import VALVES, PressureRegulator, PressureSource, Valve
 
-__all__ = ["INPUT_SIGNALS", "input_signal", "valve_for_signal"]
+__all__ = ["DEFAULT_INPUT", "INPUTS", "INPUT_SIGNALS", "input_signal", "valve_for_signal"]
 
 #: The record signal that drives each valve (by its ``cli_name``), in the order a record's
 #: input is chosen when it carries several: a logged set-point first (the record was made
 #: through the regulator), then the measured pressure (applied as a pressure source),
 #: then the valve command.
-INPUT_SIGNALS: dict[str, str] = {"regulator": "setpoint", "source": "pressure",
-                                 "command": "command"}
+INPUT_SIGNALS: dict[str, str] = {
+    cls.cli_name: cls.input_signal for cls in sorted(
+        VALVES.values(), key=lambda c: (c is not PressureRegulator, c is not PressureSource))}
+
+
+#: How a record's input is chosen (``validate``'s ``input``): ``auto`` (the first of
+#: setpoint, pressure, command the record carries, the model's valve changed to the one
+#: it drives), ``model`` (the model's own valve, whose input the record must carry), or
+#: one signal name.
+INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
+DEFAULT_INPUT = "auto"
 
 
 def input_signal(valve: Valve) -> str:
     """The record signal that drives ``valve`` (setpoint, pressure or command)."""
-    return INPUT_SIGNALS[valve.cli_name]
+    return valve.input_signal
 
 
 def valve_for_signal(signal: str) -> Valve:
     """A default valve driven by a record's ``signal`` (setpoint, pressure or command)."""
-    for cli_name, name in INPUT_SIGNALS.items():
-        if name == signal:
-            return VALVES[cli_name]()
+    for cls in VALVES.values():
+        if cls.input_signal == signal:
+            return cls()
     raise DataError(f"no valve is driven by a record's {signal!r}; the input signals are "
                     f"{', '.join(INPUT_SIGNALS.values())}")

@@ -88,9 +88,9 @@ HAS_LOOP_INPUTS = False
 # ------------------------------------------------------------------------------------------
 
 #: the loop's own outputs, after the plant's
-LOOP_OUTPUTS = ("setpoint", "error", "command", "plant_input", "friction_compensation")
+LOOP_OUTPUTS = ("position_setpoint", "error", "command", "plant_input", "friction_compensation")
 #: generated from the loop's output names (after the plant's): OUT_<NAME>
-OUT_SETPOINT = OUT_ERROR = OUT_COMMAND = OUT_PLANT_INPUT = OUT_FRICTION_COMPENSATION = None
+OUT_POSITION_SETPOINT = OUT_ERROR = OUT_COMMAND = OUT_PLANT_INPUT = OUT_FRICTION_COMPENSATION = None
 #: relative step of the finite differences of the Jacobian's coupling terms
 COUPLING_FD = 1e-7
 #: clamping anti-windup: width of the output layer over which the integrator stops,
@@ -318,7 +318,7 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     command = y[S_HELD_COMMAND] if SAMPLED else law.output
     value = _write_input(t, ts, command, prm, sig, ptr)
     plant_outputs(t, ts, y, prm, sig, ptr, out)
-    out[OUT_SETPOINT] = law.setpoint
+    out[OUT_POSITION_SETPOINT] = law.setpoint
     out[OUT_ERROR] = law.error
     out[OUT_COMMAND] = command
     out[OUT_PLANT_INPUT] = value

@@ -266,15 +266,16 @@ class Adiabatic(ChamberLaw):
 
 @dataclass(frozen=True)
 class Polytropic(ChamberLaw):
-    """Any fixed n between 1 (isothermal) and γ (adiabatic)."""
+    """Any fixed polytropic ``exponent`` n between 1 (isothermal) and γ (adiabatic)."""
 
-    n: float = 1.2
+    exponent: float = 1.2
 
     def __post_init__(self):
         from ..checks import check_range
 
-        check_range("n", self.n, 1.0, 5.0 / 3.0, where="Polytropic", error=ParameterError,
+        check_range("exponent", self.exponent, 1.0, 5.0 / 3.0, where="Polytropic",
+                    error=ParameterError,
                     hint="1 isothermal, γ adiabatic; γ <= 5/3 for any ideal gas")
 
     def settings(self) -> dict[str, float]:
-        return {"chamber_n_offset": float(self.n), "chamber_n_gamma": 0.0}
+        return {"chamber_n_offset": float(self.exponent), "chamber_n_gamma": 0.0}

@@ -152,9 +152,48 @@ class FrictionRig:
                 f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}")
         self.params.require(self.required, "FrictionRig")
 
+    has_sensitivities: ClassVar[bool] = True
+
+    # -- the model protocol (``simulation.Model``) -----------------------------------------
     @property
     def drive_quantity(self) -> str:
         return self.drive
+
+    @property
+    def input_signal(self) -> str:
+        """The record signal that drives it: its drive quantity."""
+        return self.drive
+
+    @property
+    def input_signals(self) -> tuple[str, ...]:
+        return (self.drive,)
+
+    def driven_by(self, signal: str) -> FrictionRig:
+        """This rig, when ``signal`` is its drive (a rig has one drive)."""
+        from ..errors import DataError
+
+        if signal != self.drive:
+            raise DataError(f"a FrictionRig(drive={self.drive!r}) is driven by a record's "
+                            f"{self.drive}, not its {signal}")
+        return self
+
+    @property
+    def plant_kind(self) -> str:
+        """What its input acts on: the drive (force, spring, velocity, position)."""
+        return self.drive
+
+    @property
+    def drive_label(self) -> str:
+        return f"{self.drive} drive"
+
+    @property
+    def stroke(self) -> float | None:
+        """A rig's mass has no end stops."""
+        return None
+
+    def breakpoints(self, bp, channels, t_start: float, t_end: float):
+        """The experiment's breakpoints: a rig adds none."""
+        return bp
 
     @property
     def drive_unit(self) -> str:

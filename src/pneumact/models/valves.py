@@ -425,13 +425,16 @@ class Valve:
     """Strategy object: which compiled valve functions feed the chamber.
 
     ``drive`` is what the experiment's signal means for this valve (a pressure, or the
-    command u); ``cli_name`` its ``--valve`` choice on the command line.
+    command u); ``input_signal`` the record signal that drives it (a record made through
+    the regulator logs its set-point); ``cli_name`` its ``--valve`` choice on the command
+    line.
     """
 
     prefix: ClassVar[str]
     block: ClassVar[Block]
     states: ClassVar[tuple[StateSpec, ...]]
     drive: ClassVar[str]
+    input_signal: ClassVar[str]
     cli_name: ClassVar[str]
 
     def maps(self) -> tuple[Signal | None, Signal | None]:
@@ -469,6 +472,7 @@ class PressureSource(Valve):
     block: ClassVar[Block] = SOURCE_BLOCK
     states: ClassVar[tuple[StateSpec, ...]] = ()
     drive: ClassVar[str] = "pressure"
+    input_signal: ClassVar[str] = "pressure"
     cli_name: ClassVar[str] = "source"
 
 
@@ -496,6 +500,7 @@ class CommandValve(Valve):
     block: ClassVar[Block] = COMMAND_BLOCK
     states: ClassVar[tuple[StateSpec, ...]] = (StateSpec("pressure", "Pa"),)
     drive: ClassVar[str] = "command"
+    input_signal: ClassVar[str] = "command"
     cli_name: ClassVar[str] = "command"
 
     def maps(self) -> tuple[Signal, Signal]:
@@ -515,6 +520,7 @@ class PressureRegulator(CommandValve):
         StateSpec("pressure", "Pa"), StateSpec("opening", "1", monotone=True),
         StateSpec("integral", "1"))
     drive: ClassVar[str] = "pressure"
+    input_signal: ClassVar[str] = "setpoint"
     cli_name: ClassVar[str] = "regulator"
 
 

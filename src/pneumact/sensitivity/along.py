@@ -9,6 +9,7 @@ sample once and analyses its growing prefixes.
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Sequence
 
@@ -18,6 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..checks import check_int
 from ..errors import ArgumentError, ParameterError
+from ..options import Checkpoint, Executor
 from ..progress import ProgressCallback
 from .methods import (
     Evaluate,
@@ -35,14 +37,15 @@ __all__ = ["along_time", "local_along_time", "model_signal", "plot_along_loop",
 
 
 def model_signal(model, experiment, problem: Problem, signal: str, times: Sequence[float],
-                 *, workers=None, scheduler=None, out_dir=None, resume=False,
-                 overwrite=False, progress: ProgressCallback | None = None,
+                 *, executor: Executor | int | str | None = None,
+                 checkpoint: Checkpoint | str | os.PathLike | None = None,
+                 progress: ProgressCallback | None = None,
                  solver=None) -> Evaluate:
     """An ``evaluate`` giving ``signal`` at ``times`` (one output column per time, named
-    by the time) from the batch engine; resumable from ``out_dir`` like ``model_outputs``."""
+    by the time) from the batch engine; resumable from a ``checkpoint`` like
+    ``model_outputs``."""
     return batch_evaluate(model, experiment, problem, signal=signal, times=times,
-                          workers=workers, scheduler=scheduler, out_dir=out_dir,
-                          resume=resume, overwrite=overwrite, progress=progress,
+                          executor=executor, checkpoint=checkpoint, progress=progress,
                           solver=solver)
 
 

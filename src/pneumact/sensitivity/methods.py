@@ -9,6 +9,7 @@ with known indices and the actuator on the batch engine (``model_outputs``).
 from __future__ import annotations
 
 import functools
+import os
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -20,6 +21,7 @@ import pandas as pd
 from ..checks import check_int, check_range, check_seed, check_type
 from ..errors import ArgumentError, ArgumentTypeError, PneumactError
 from ..io.report import ResultVocabulary
+from ..options import Checkpoint, Executor
 from ..progress import ProgressCallback
 from .problem import Problem
 
@@ -327,14 +329,15 @@ def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False
 
 
 def model_outputs(model, experiment, problem: Problem, features: Sequence[str], *,
-                  workers=None, scheduler=None, out_dir=None, resume=False, overwrite=False,
+                  executor: Executor | int | str | None = None,
+                  checkpoint: Checkpoint | str | os.PathLike | None = None,
                   progress: ProgressCallback | None = None, solver=None) -> Evaluate:
-    """An ``evaluate`` that runs the sample on the batch engine (all local cores, or a
-    Dask ``scheduler``; resumable from ``out_dir``) and returns the features. Failed runs
-    are reported with their errors, never dropped."""
-    return batch_evaluate(model, experiment, problem, features=list(features), workers=workers,
-                          scheduler=scheduler, out_dir=out_dir, resume=resume,
-                          overwrite=overwrite, progress=progress, solver=solver)
+    """An ``evaluate`` that runs the sample on the batch engine (an ``Executor``: all
+    local cores by default, or a Dask scheduler; resumable from a ``Checkpoint``) and
+    returns the features. Failed runs are reported with their errors, never dropped."""
+    return batch_evaluate(model, experiment, problem, features=list(features),
+                          executor=executor, checkpoint=checkpoint, progress=progress,
+                          solver=solver)
 
 
 def batch_evaluate(model, experiment, problem: Problem, *, features=(), signal=None,

@@ -12,6 +12,7 @@ import pandas as pd
 
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
+from ..options import Executor
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -152,11 +153,12 @@ def _finish(fig, axes, n: int):
 
 
 def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = None, *,
-                  features: Sequence[str] = DEFAULT_FEATURES, workers=None,
+                  features: Sequence[str] = DEFAULT_FEATURES,
+                  executor: Executor | int | str | None = None,
                   solver=None) -> OneAtATime:
     """Vary each parameter of ``variations`` (fractions, "N%" strings, or lists of them;
     default ``PAPER_VARIATIONS``, both directions) with the others nominal, on the batch
-    engine; the nominal run comes first."""
+    engine (``executor``: where it runs); the nominal run comes first."""
     from ..simulation.batch import simulate_batch
     from .problem import parse_variation
 
@@ -181,7 +183,8 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
     if table.empty or not names:
         table = pd.DataFrame({"Fc": [params["Fc"]]})
     batch = simulate_batch(model, experiment, table, features=list(features),
-                           signals=["pressure", "position"], workers=workers, solver=solver)
+                           signals=["pressure", "position"], executor=executor,
+                           solver=solver)
     runs = pd.DataFrame(labels, columns=["parameter", "change_%", "value"])
     for feature in features:
         values = batch.table[feature].to_numpy(float)

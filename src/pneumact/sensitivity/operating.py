@@ -23,9 +23,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -37,6 +37,7 @@ from ..progress import Progress, ProgressCallback, notify
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+from ..options import Checkpoint, Executor
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -47,13 +48,13 @@ FULL_CYCLE_LOW_PRESSURE = 20e3
 #: Valves a condition can name (as on the command line).
 VALVE_NAMES = ("source", "command", "regulator")
 #: Study methods ``across_conditions`` runs.
-METHODS = ("oat", "sobol", "morris", "src", "fast")
+METHODS = ("oat", "sobol", "morris", "src", "rbd_fast")
 #: Columns of ``ConditionStudy.conditions`` that describe a condition.
 CONDITION_COLUMNS = ("condition", "valve", "period", "amplitude", "sliding_speed",
                      "speed_vs")
 #: Index plotted by default per method.
 DEFAULT_INDEX = {"oat": "relative_change", "sobol": "ST", "morris": "mu_star",
-                 "src": "SRC2", "fast": "S1"}
+                 "src": "SRC2", "rbd_fast": "S1"}
 #: ``at_speeds``: iterations of the period search and the accepted relative speed error.
 SPEED_ITERATIONS = 8
 SPEED_RTOL = 0.02
@@ -253,21 +254,26 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
                       variations: Mapping[str, object] | None = None,
                       features: Sequence[str] = ("loop_width_pressure", "breakaway_pressure"),
                       n: int = 256, seed: int = 0, second_order: bool = False,
-                      out_dir=None, progress: ProgressCallback | None = None,
-                      solver=None, **batch) -> ConditionStudy:
-    """Run the ``method`` study (oat, sobol, morris, src or fast) of ``model`` (an
+                      checkpoint: Checkpoint | str | os.PathLike | None = None,
+                      progress: ProgressCallback | None = None,
+                      solver=None, executor: Executor | int | str | None = None
+                      ) -> ConditionStudy:
+    """Run the ``method`` study (oat, sobol, morris, src or rbd_fast) of ``model`` (an
     ``Actuator``: its parameters, friction and chamber) at each condition.
 
     ``variations``: the paper's amounts for oat, ``DEFAULT_RANGES`` otherwise; ``n``: base
-    sample (sobol, src, fast) or trajectories (morris). ``out_dir``: each condition's runs
-    are kept in ``out_dir/<condition>`` (resumable, see ``model_outputs``). ``progress``:
-    called with a ``pneumact.progress.Progress`` (stage "across conditions", the sets
-    done of all conditions' sets). ``batch``: more ``simulate_batch``
-    options (workers, scheduler, ...).
+    sample (sobol, src, rbd_fast) or trajectories (morris). ``checkpoint``: a
+    ``Checkpoint`` (or a folder): each condition's runs are kept in
+    ``<folder>/<condition>`` (resumable, see ``model_outputs``). ``progress``: called
+    with a ``pneumact.progress.Progress`` (stage "across conditions", the sets done of
+    all conditions' sets). ``executor``: where the runs go (an ``Executor``, or a
+    number of threads).
     """
     if method not in METHODS:
         raise ParameterError(f"across_conditions: method = {method!r}; allowed: "
                              f"{', '.join(METHODS)}")
+    checkpoint = Checkpoint.of(checkpoint, "across_conditions")
+    executor = Executor.of(executor, "across_conditions")
     conditions = list(conditions)
     if not conditions:
         raise ParameterError("across_conditions: give at least one condition")
@@ -278,9 +284,9 @@ def across_conditions(model, conditions: Sequence[Condition], method: str = "sob
     for i, condition in enumerate(conditions):
         row = _describe(model, condition, solver)
         relay = _relay(progress, i, len(conditions))
-        where_runs = None if out_dir is None else Path(out_dir) / _folder(condition)
+        where_runs = None if checkpoint is None else checkpoint.within(_folder(condition))
         result, table = _study(model, condition, method, variations, list(features), n,
-                               seed, second_order, where_runs, relay, solver, batch)
+                               seed, second_order, where_runs, relay, solver, executor)
         rows.append(row)
         frames.append(table.assign(**{k: row[k] for k in CONDITION_COLUMNS}))
         results.append(result)
@@ -317,8 +323,8 @@ def _relay(progress: ProgressCallback | None, i: int, count: int
     return relay
 
 
-def _study(model, condition, method, variations, features, n, seed, second_order, out_dir,
-           progress, solver, batch) -> tuple[object, pd.DataFrame]:
+def _study(model, condition, method, variations, features, n, seed, second_order, checkpoint,
+           progress, solver, executor) -> tuple[object, pd.DataFrame]:
     """(study object, its long index table: output, parameter, indices) at one condition."""
     from . import methods
     from .oat import PAPER_VARIATIONS, one_at_a_time
@@ -328,16 +334,16 @@ def _study(model, condition, method, variations, features, n, seed, second_order
     experiment = condition.experiment(model.params)
     if method == "oat":
         oat = one_at_a_time(actuator, experiment, variations or PAPER_VARIATIONS,
-                            features=features, workers=batch.get("workers"), solver=solver)
+                            features=features, executor=executor, solver=solver)
         return oat, oat_indices(oat)
     problem = Problem.around(model.params, variations or DEFAULT_RANGES)
     evaluate = methods.model_outputs(actuator, experiment, problem, features,
-                                     out_dir=out_dir, progress=progress, solver=solver,
-                                     **batch)
+                                     checkpoint=checkpoint, progress=progress,
+                                     solver=solver, executor=executor)
     run = {"sobol": lambda: methods.sobol(problem, evaluate, n, second_order, seed),
            "morris": lambda: methods.morris(problem, evaluate, n, seed=seed),
            "src": lambda: methods.src(problem, evaluate, n, seed),
-           "fast": lambda: methods.rbd_fast(problem, evaluate, n, seed)}[method]
+           "rbd_fast": lambda: methods.rbd_fast(problem, evaluate, n, seed)}[method]
     study = run()
     return study, study.indices
 

@@ -154,7 +154,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     names = list(parameters)
     if not names:
         raise ParameterError("sensitivities: give at least one parameter name")
-    if not getattr(model, "has_sensitivities", True):
+    if not model.has_sensitivities:
         raise ParameterError(
             f"sensitivities: {model.describe()} does not carry forward sensitivities (a "
             f"closed loop's controller is not differentiated through); use finite "

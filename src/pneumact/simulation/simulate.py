@@ -6,7 +6,7 @@ import time as _time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import ModuleType
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -36,9 +36,20 @@ __all__ = ["Model", "Prepared", "check_drive", "check_experiment", "check_model"
            "model_stroke", "prepare", "run_kernel", "simulate"]
 
 
+@runtime_checkable
 class Model(Protocol):
     """What the simulation asks of a model: an ``Actuator``, a ``FrictionRig`` or a
-    ``control.ClosedLoop`` has it (``check_model`` checks it at run time)."""
+    ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
+
+    ``drive_quantity`` is what the experiment's signal is (pressure, command, force,
+    position...); ``input_signal`` the record signal that drives the model (a regulator's
+    logged ``setpoint``, a ``pressure``, a ``command``, a loop's ``position_setpoint``);
+    ``input_signals`` every record signal it can be driven by, and ``driven_by(signal)``
+    the same model driven by one of them (an actuator behind another valve);
+    ``plant_kind`` what its input acts on (pressure, command, force...); ``stroke`` the
+    end of its travel (None: unbounded)."""
+
+    has_sensitivities: bool
 
     @property
     def params(self) -> ParameterSet: ...
@@ -46,14 +57,36 @@ class Model(Protocol):
     @property
     def drive_quantity(self) -> str: ...
 
+    @property
+    def input_signal(self) -> str: ...
+
+    @property
+    def input_signals(self) -> tuple[str, ...]: ...
+
+    def driven_by(self, signal: str, /) -> Model: ...
+
+    @property
+    def plant_kind(self) -> str: ...
+
+    @property
+    def drive_label(self) -> str: ...
+
+    @property
+    def stroke(self) -> float | None: ...
+
     def parts(self) -> tuple[Part, ...]: ...
 
     def channels(self, drive: Signal, /) -> list[Signal | None]: ...
 
+    def breakpoints(self, bp: np.ndarray, channels: list[Signal | None], t_start: float,
+                    t_end: float, /) -> np.ndarray: ...
+
+    def describe(self) -> str: ...
+
 
 def check_model(model, where: str = "simulate") -> None:
     """``model`` must be a model (an Actuator, a FrictionRig, a ClosedLoop)."""
-    if not all(hasattr(model, a) for a in ("parts", "drive_quantity", "channels", "params")):
+    if not isinstance(model, Model):
         raise ArgumentTypeError(
             f"{where}: model = {shown(model)}: must be a model, e.g. pa.Actuator(params), "
             f"pa.FrictionRig(params) or pneumact.control.ClosedLoop(...), not "
@@ -74,11 +107,10 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
     check_experiment(experiment, where)
     expected = model.drive_quantity
     if experiment.quantity != expected:
-        valve = getattr(model, "valve", None)
-        who = valve.name if valve is not None else f"{expected} drive"
         raise ExperimentError(
             f"experiment '{experiment.name}' drives {experiment.quantity!r}, but the "
-            f"{who} of this {type(model).__name__} needs a {expected!r} signal")
+            f"{model.drive_label} of this {type(model).__name__} needs a {expected!r} "
+            "signal")
     low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
     what = f"experiment '{experiment.name}'"
     if expected == "pressure":
@@ -97,15 +129,9 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
                 "4 mm is 0.004)")
 
 
-def model_stroke(model) -> float | None:
+def model_stroke(model: Model) -> float | None:
     """x_max of a model whose plant is an actuator (set-points beyond it are impossible)."""
-    plant = getattr(model, "plant", model)
-    if not hasattr(plant, "valve"):
-        return None
-    try:
-        return float(plant.params["x_max"])
-    except (KeyError, TypeError):
-        return None
+    return model.stroke
 
 
 @dataclass(eq=False)
@@ -135,9 +161,8 @@ def _breakpoints(model, experiment: Experiment, channels) -> np.ndarray:
     if load is not None:
         bp = np.unique(np.concatenate([bp, load.breakpoints()]))
         bp = bp[(bp >= experiment.t_start) & (bp <= experiment.t_end)]
-    if hasattr(model, "breakpoints"):  # a closed loop: its own inputs and samples
-        bp = model.breakpoints(bp, channels, experiment.t_start, experiment.t_end)
-    return bp
+    # a closed loop adds its own inputs' corners and its samples
+    return model.breakpoints(bp, channels, experiment.t_start, experiment.t_end)
 
 
 def _output_times(experiment: Experiment, t_eval) -> np.ndarray:

@@ -12,7 +12,6 @@ on some records and validates on others, with both sets of metrics side by side.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import os
 from collections.abc import Callable, Mapping, Sequence
@@ -25,7 +24,7 @@ import pandas as pd
 
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
-from ..models.inputs import INPUT_SIGNALS, input_signal, valve_for_signal
+from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS, valve_for_signal
 from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
@@ -36,15 +35,12 @@ if TYPE_CHECKING:
 
     from ..identification.fit import FitResult
     from ..simulation.result import Result
+    from ..simulation.simulate import Model
 
 __all__ = ["INPUTS", "RecordValidation", "TrainTest", "Validation", "drive_for", "train_test",
            "validate"]
 
 ALL_RECORDS = "all records"
-#: How ``validate`` picks each record's input: ``auto`` (the first of setpoint, pressure,
-#: command the record carries, the model's valve changed to the one it drives), ``model``
-#: (the model's own valve, whose input the record must carry), or one signal name.
-INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
 
 
 def _can_drive(record: Record) -> str:
@@ -56,24 +52,23 @@ def _can_drive(record: Record) -> str:
     return f"it carries {', '.join(carried)}, so it can drive {' or '.join(valves)}"
 
 
-def drive_for(model, record: Record, input: str = "auto"):
-    """(the model behind the valve that ``record`` drives, the record signal that drives
-    it), as ``input`` says (see ``INPUTS``); a model without a valve is driven by its own
-    input quantity."""
+def drive_for(model: Model, record: Record, input: str = DEFAULT_INPUT) -> tuple[Model, str]:
+    """(the model driven the way ``record`` was made, the record signal that drives it),
+    as ``input`` says (see ``INPUTS``): an actuator goes behind the valve the chosen
+    signal drives; a model with one input (a rig, a closed loop) is driven by it."""
     if input not in INPUTS:
         raise DataError(f"input = {input!r}; allowed: {', '.join(INPUTS)}")
-    valve = getattr(model, "valve", None)
-    if valve is None or input == "model":
-        signal = model.drive_quantity if valve is None else input_signal(valve)
-        if signal not in record:
-            what = "the model" if valve is None else (
-                f"the model's {valve.name} (--valve {valve.cli_name})")
-            raise DataError(f"{record.source}: {what} is driven by a record's {signal}, "
+    own = model.input_signal
+    if input == "model" or len(model.input_signals) == 1:
+        if own not in record:
+            what = "the model" if len(model.input_signals) == 1 else (
+                f"the model's {model.drive_label}")
+            raise DataError(f"{record.source}: {what} is driven by a record's {own}, "
                             f"which this record lacks; {_can_drive(record)} (input='auto' "
                             "or --valve auto picks it)")
-        return model, signal
+        return model, own
     if input == "auto":
-        carried = [s for s in INPUT_SIGNALS.values() if s in record]
+        carried = [s for s in model.input_signals if s in record]
         if not carried:
             raise DataError(f"{record.source}: {_can_drive(record)}; the record has: time, "
                             f"{', '.join(record.signals) or '(nothing)'}")
@@ -83,9 +78,7 @@ def drive_for(model, record: Record, input: str = "auto"):
         if signal not in record:
             raise DataError(f"{record.source}: input = {signal!r}, which this record lacks; "
                             f"{_can_drive(record)}")
-    if input_signal(valve) == signal:
-        return model, signal
-    return dataclasses.replace(model, valve=valve_for_signal(signal)), signal
+    return model.driven_by(signal), signal
 
 
 def _write_bytes(data: bytes, path: Path) -> None:
@@ -323,7 +316,7 @@ class Validation:
 def validate(model, records: Record | Sequence[Record], *,
              signals: Sequence[str] = ("position",), values: Mapping[str, float] | None = None,
              solver=None, smooth_input: bool = False, label: str = "validation",
-             input: str = "auto", criteria: Criteria | None = None,
+             input: str = DEFAULT_INPUT, criteria: Criteria | None = None,
              progress: ProgressCallback | None = None) -> Validation:
     """Simulate ``model`` (with parameter ``values`` if given) under each record's
     measured input and compare ``signals`` with the measurement.
@@ -358,8 +351,8 @@ def validate(model, records: Record | Sequence[Record], *,
         experiment = experiment_for(driven, record, smooth_input)
         simulated = simulate(driven, experiment, solver, t_eval=record.time,
                              values=dict(values or {}))
-        valve = getattr(getattr(driven, "valve", None), "name", "")
-        out.append(RecordValidation(name, record, simulated, signals, signal, valve))
+        out.append(RecordValidation(name, record, simulated, signals, signal,
+                                    driven.drive_label))
         notify(progress, "validate", i + 1, len(records))
     return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
@@ -422,7 +415,7 @@ class TrainTest:
 
 
 def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Sequence[str],
-               *, signals: Sequence[str] = ("position",), input: str = "auto",
+               *, signals: Sequence[str] = ("position",), input: str = DEFAULT_INPUT,
                **fit_options) -> TrainTest:
     """Fit ``free`` parameters on ``train`` (``identification.fit`` options), then
     validate the fitted model on both sets. With ``input='auto'`` the fit drives the

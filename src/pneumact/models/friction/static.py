@@ -113,7 +113,7 @@ class CoulombViscous(StaticMap):
 
     block = COULOMB_BLOCK
     law = "coulomb_viscous"
-    cli_name = "coulomb"
+    cli_name = "coulomb-viscous"
 
 
 class StribeckMap(StaticMap):

@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from ...checks import check_bool, check_int, check_out_dir
 from ...core.assembly import assemble
 from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
@@ -41,6 +40,7 @@ from ...progress import ProgressCallback, check_progress, notify
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+from ...options import Checkpoint, Executor, check_scheduler_address
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
@@ -207,27 +207,6 @@ def dask_client(scheduler):
                             "('tcp://host:8786') or a distributed.Client")
 
 
-SCHEDULER_PROTOCOLS = ("tcp", "tls", "ucx", "ws", "wss", "inproc")
-
-
-def check_scheduler_address(address: str, name: str = "scheduler") -> str:
-    """A Dask scheduler address 'tcp://host:port' (or 'host:port'), checked before any
-    connection is tried: what is not an address is refused at once, not after a timeout."""
-    import re
-
-    text = address.strip()
-    protocol, sep, rest = text.partition("://")
-    if not sep:
-        protocol, rest = "tcp", text
-    match = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d{1,5})", rest)
-    if protocol not in SCHEDULER_PROTOCOLS or (protocol != "inproc" and (
-            match is None or not 0 < int(match[2]) < 65536)):
-        raise ArgumentError(
-            f"{name} = {address!r}: not a Dask scheduler address; write "
-            "'tcp://HOST:PORT' (e.g. 'tcp://127.0.0.1:8786', as printed by dask-scheduler)")
-    return f"{protocol}://{rest}"
-
-
 # --------------------------------------------------------------------------- execution
 def _run_threads(runner: ChunkRunner, starts, rows_of, todo, n_workers: int, finished) -> None:
     """Chunks on a thread pool; results handed to ``finished`` in completion order."""
@@ -275,10 +254,9 @@ def _assemble(table: pd.DataFrame, spec: BatchSpec, values: np.ndarray,
 # --------------------------------------------------------------------------- entry point
 def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
                    features: Sequence[str] | None = None, signals: Sequence[str] | None = None,
-                   t_eval=None, solver: Solver | None = None, scheduler=None,
-                   out_dir: str | os.PathLike | None = None, resume: bool = False,
-                   overwrite: bool = False, chunk_size: int | None = None,
-                   workers: int | None = None,
+                   t_eval=None, solver: Solver | None = None,
+                   executor: Executor | int | str | None = None,
+                   checkpoint: Checkpoint | str | os.PathLike | None = None,
                    progress: ProgressCallback | None = None,
                    reference=None, y0=None) -> BatchResult:
     """Simulate ``model`` under ``experiment`` once per row of ``table``.
@@ -287,30 +265,24 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     names from ``pneumact.analysis.FEATURES`` (default: all that apply, none if
     ``signals`` are asked; ``rms_error``/``max_error`` need ``reference=(time,
     position)``); ``signals``: signal names kept on the output grid ``t_eval`` (default
-    the experiment's grid, on which features are computed too). ``workers`` threads
-    locally (default all cores), or a Dask ``scheduler`` (address or
-    ``distributed.Client``). ``out_dir`` makes the batch resumable: ``resume=True``
-    continues it, ``overwrite=True`` starts it again. ``progress`` is called with a
-    ``pneumact.progress.Progress`` (stage "batch", sets done of all, failed sets) after
-    each chunk. ``y0`` fixes the initial state of every run.
+    the experiment's grid, on which features are computed too). ``executor``: an
+    ``Executor`` (threads, default all cores, or a Dask scheduler; chunk size), or
+    just a number of threads or a scheduler address. ``checkpoint``: a ``Checkpoint``
+    (or a folder) makes the batch resumable: ``Checkpoint(folder, resume=True)``
+    continues it, ``overwrite=True`` starts it again. ``progress`` is
+    called with a ``pneumact.progress.Progress`` (stage "batch", sets done of all, failed
+    sets) after each chunk. ``y0`` fixes the initial state of every run.
     """
     started = _time.perf_counter()
     solver = _checked_solver(solver)
-    resume = check_bool("resume", resume, where="simulate_batch")
-    overwrite = check_bool("overwrite", overwrite, where="simulate_batch")
-    if resume and overwrite:
-        raise ArgumentError("simulate_batch: resume=True and overwrite=True contradict each "
-                            "other: continue the kept runs, or start them again, not both")
-    if (resume or overwrite) and out_dir is None:
-        raise ArgumentError(f"simulate_batch: {'resume' if resume else 'overwrite'}=True "
-                            "needs out_dir (the directory of the batch)")
-    if workers is not None:
-        workers = check_int("workers", workers, minimum=1, where="simulate_batch")
-    if chunk_size is not None:
-        chunk_size = check_int("chunk_size", chunk_size, minimum=1, where="simulate_batch")
+    executor = Executor.of(executor, "simulate_batch")
+    checkpoint = Checkpoint.of(checkpoint, "simulate_batch")
     check_progress(progress, "simulate_batch")
-    out = None if out_dir is None else check_out_dir("out_dir", out_dir,
-                                                      where="simulate_batch")
+    out = None if checkpoint is None else checkpoint.path
+    resume = checkpoint is not None and checkpoint.resume
+    overwrite = checkpoint is not None and checkpoint.overwrite
+    chunk_size = executor.chunk_size
+    scheduler = executor.scheduler
     spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
                                  reference, y0)
     n, n_t = values.shape[0], runner.t_out.size
@@ -319,7 +291,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     client, own_client = (None, False) if scheduler is None else dask_client(scheduler)
     try:
         n_workers = (max(1, len(client.scheduler_info().get("workers", {}))) if client
-                     else workers or (os.cpu_count() or 1))
+                     else executor.threads)
         if chunk_size is None and out is not None and resume:
             chunk_size = (ChunkStore(partial_folder(out)).saved_chunk_size()
                           or ChunkStore(out).saved_chunk_size())

@@ -1,4 +1,5 @@
-"""``pneumact batch PARAMS.csv --out DIR``: the batch engine from the command line.
+"""``pneumact simulate-batch PARAMS.csv --out DIR``: ``simulate_batch`` from the command
+line.
 
 Reads the parameter table (CSV or Parquet; header cells ``name`` or ``name [unit]``,
 values converted to SI), builds the model and experiment from the same options as
@@ -15,9 +16,15 @@ import typer
 
 from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
     Chamber,
     ChamberOption,
-    Friction,
+    ChunkSizeOption,
+    DecayingDampingOption,
+    ExponentOption,
     FrictionOption,
     InputOption,
     LowOption,
@@ -28,19 +35,19 @@ from pneumact.cli.common import (
     RtolOption,
     SchedulerOption,
     TEndOption,
-    Valve,
     ValveOption,
     WorkersOption,
     batch_progress,
     build_experiment,
     build_model,
-    check_batch_flags,
-    check_workers,
+    checkpoint_of,
     err_console,
+    executor_of,
     names,
     user_errors,
 )
 from pneumact.errors import DataError
+from pneumact.options import Checkpoint, Executor
 
 
 def read_parameter_table(path: Path):
@@ -80,14 +87,16 @@ def read_parameter_table(path: Path):
     return table
 
 
-def batch(
+def simulate_batch(
     params_csv: Annotated[Path, typer.Argument(help="table of parameter sets: one column "
                                                      "per parameter, one row per set")],
     out: Annotated[Path, typer.Option("--out", help="output directory (resumable)")],
     params: ParamsOption = "vgt-paper",
-    valve: ValveOption = Valve.source,
-    friction: FrictionOption = Friction.lugre,
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
     chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
     low: LowOption = None,
     input_csv: InputOption = None,
@@ -95,30 +104,30 @@ def batch(
     features: Annotated[str | None, typer.Option(help="comma-separated feature names")]
     = None,
     signals: Annotated[str | None, typer.Option(help="comma-separated signal names")] = None,
-    scheduler: SchedulerOption = None,
-    resume: ResumeOption = False,
-    overwrite: OverwriteOption = False,
-    workers: WorkersOption = None,
+    scheduler: SchedulerOption = Executor.scheduler,
+    workers: WorkersOption = Executor.workers,
+    chunk_size: ChunkSizeOption = Executor.chunk_size,
+    resume: ResumeOption = Checkpoint.resume,
+    overwrite: OverwriteOption = Checkpoint.overwrite,
 ) -> None:
     """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
     with user_errors():
         import pneumact as pa
 
-        check_batch_flags(resume, overwrite, scheduler)
-        check_workers(workers)
-        out = check_out_dir("--out", out)
+        executor = executor_of(workers, scheduler, chunk_size)
+        checkpoint = checkpoint_of(check_out_dir("--out", out), resume, overwrite)
         table = read_parameter_table(params_csv)
-        options = ModelOptions(params, valve, friction, chamber, t_end, low, input_csv, rtol)
+        options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
+                               t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
+                               exponent=exponent, decaying_damping=decaying_damping)
         parameter_set, model = build_model(options)
         experiment = build_experiment(options, parameter_set)
         with batch_progress() as progress:
             result = pa.simulate_batch(model, experiment, table,
                                        features=names(features, "--features"),
                                        signals=names(signals, "--signals"),
-                                       solver=pa.Rodas4(rtol=rtol),
-                                       scheduler=scheduler, out_dir=out, resume=resume,
-                                       overwrite=overwrite, workers=workers,
-                                       progress=progress)
+                                       solver=pa.Rodas4(rtol=rtol), executor=executor,
+                                       checkpoint=checkpoint, progress=progress)
     stats = result.stats
     err_console.print(
         f"{stats['n_sets']} sets, {stats['failed']} failed, {stats['computed']} computed "

@@ -1,0 +1,114 @@
+"""Which part of the public API each command stands for, declared once.
+
+The command line is a thin layer over the API, and its words are the API's: an option is
+named as the parameter of the function the command calls, or the field of an object it
+builds (an option object such as ``Executor``, a model part such as ``LuGre``), and its
+default is that parameter's default. ``tests/unit/test_cli_meta.py`` walks every command
+and checks each option against the targets named here.
+
+Targets are "module:name" strings (a function, or a class whose fields count), so that
+reading this module imports nothing heavy. ``SPELLED`` lists the few options whose word
+differs from the API's, each with the parameter it stands for (a plain CSV path, a
+choice that builds an object); ``OWN`` those that are the command line's own (where to
+write, what to read); ``UNITS`` the options given in another unit than the API's SI.
+"""
+
+from __future__ import annotations
+
+__all__ = ["API", "NONE_MEANS", "OWN", "SPELLED", "UNITS"]
+
+#: the model every actuator command builds (``common.build_model``)
+_MODEL = ("pneumact.models:Actuator", "pneumact.models:LuGre", "pneumact.models:Polytropic",
+          "pneumact.simulation:Rodas4")
+#: the default experiment of ``common.build_experiment``
+_EXPERIMENT = ("pneumact.experiments:PressureCycle",)
+_FRICTION_TEST = ("pneumact.analysis.friction_tests:run_friction_test",)
+_CONTROL = ("pneumact.control:ClosedLoop", "pneumact.control:PID", "pneumact.control:Cascade",
+            "pneumact.control.study:run_loop", "pneumact.models:Actuator",
+            "pneumact.simulation:Rodas4")
+
+#: command (its words joined by spaces) -> the API it calls and the objects it builds
+API: dict[str, tuple[str, ...]] = {
+    "simulate": ("pneumact.simulation:simulate", *_MODEL, *_EXPERIMENT),
+    "simulate-batch": ("pneumact.simulation.batch:simulate_batch", *_MODEL, *_EXPERIMENT),
+    "campaign": ("pneumact.identification:design_campaign",
+                 "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),
+    "fit": ("pneumact.identification:fit", *_MODEL),
+    "sensitivity": ("pneumact.sensitivity:sobol", "pneumact.sensitivity:src",
+                    "pneumact.sensitivity:rbd_fast", "pneumact.sensitivity:model_outputs",
+                    "pneumact.sensitivity:across_conditions", "pneumact.sensitivity:model_signal",
+                    "pneumact.sensitivity:one_at_a_time", *_MODEL, *_EXPERIMENT),
+    "validate": ("pneumact.validation:validate", "pneumact.validation:train_test", *_MODEL),
+    "reproduce": ("pneumact.reproduction:reproduce",),
+    "friction-test steady-state": (*_FRICTION_TEST, "pneumact.experiments.friction:SteadyState",
+                                   "pneumact.simulation:Rodas4"),
+    "friction-test presliding": (*_FRICTION_TEST, "pneumact.experiments.friction:Presliding",
+                                 "pneumact.simulation:Rodas4"),
+    "friction-test frictional-lag": (*_FRICTION_TEST,
+                                     "pneumact.experiments.friction:FrictionalLag",
+                                     "pneumact.simulation:Rodas4"),
+    "friction-test break-away": (*_FRICTION_TEST, "pneumact.experiments.friction:BreakAway",
+                                 "pneumact.simulation:Rodas4"),
+    "friction-test stick-slip": (*_FRICTION_TEST, "pneumact.experiments.friction:StickSlip",
+                                 "pneumact.simulation:Rodas4"),
+    "params list": ("pneumact.parameters:available_params",),
+    "params show": ("pneumact.parameters:load_params",),
+    "params check": ("pneumact.parameters:load_params",),
+    "identify paper": ("pneumact.identification:identify_paper",),
+    "identify friction": ("pneumact.identification:inverse_friction",),
+    "control step": ("pneumact.experiments:SetpointStep", *_CONTROL),
+    "control profile": ("pneumact.experiments:SetpointProfile", *_CONTROL),
+    "control hunting": ("pneumact.control.study:canudas_hunting", "pneumact.simulation:Rodas4"),
+}
+
+#: options whose word is not the API's, and the parameter ("module:name.parameter") each
+#: stands for
+SPELLED: dict[str, str] = {
+    "low": "pneumact.experiments:PressureCycle.low",
+    "t_end": "pneumact.experiments:PressureCycle.period",
+    "signals": "pneumact.sensitivity:model_signal.signal",
+    "spread": "pneumact.identification:identify_paper.prior_spread",
+    "pressure_noise": "pneumact.identification:Noise.pressure",
+    "position_noise": "pneumact.identification:Noise.position",
+    "staged_only": "!pneumact.identification:identify_paper.refine",
+    "free": "pneumact.identification:fit.free",
+    "coulomb_ff": "pneumact.control:StaticCompensation.Fc",
+    "observer": "pneumact.control:LuGreObserver",
+    "observer_gain": "pneumact.control:LuGreObserver.gain",
+    "dither": "pneumact.control:Dither",
+    "plant": "pneumact.control:ClosedLoop.plant",
+    "column": "pneumact.experiments:SetpointProfile",
+    "atol_factor": "pneumact.simulation:Rodas4.atol",
+    "convergence": "pneumact.sensitivity:sobol_convergence",
+    "times": "pneumact.sensitivity:model_signal.times",
+}
+
+#: the command line's own options: what a command reads, where it writes, what it shows
+OWN: dict[str, str] = {
+    "out": "the folder a command writes its files into (atomically, all or none)",
+    "input_csv": "a CSV of time and an input signal, read by experiments.from_csv",
+    "plan": "campaign: write the plan of the tests instead of simulating them",
+    "partial": "identify paper: write identified.toml even with unidentified parameters",
+    "validate": "identify friction: a second record to validate the estimates on",
+    "version": "print the version",
+    "format": "identify friction: the reader of the record file (auto, record, emps, "
+              "tudelft)",
+}
+
+#: what an API default of None stands for, by parameter name (the API builds it)
+NONE_MEANS: dict[str, object] = {
+    "friction": "lugre",  # LuGre()
+    "chamber": "isothermal",  # Isothermal()
+}
+
+#: options given in another unit than the API's SI: API value = option value × factor
+UNITS: dict[str, float] = {
+    "low": 1e3,  # kPa
+    "spread": 1e-2,  # %
+    "sliding_speed": 1e-3,  # mm/s
+    "pressure_noise": 1e3,  # kPa
+    "position_noise": 1e-6,  # µm
+    "resolution": 1e-6,  # µm
+    "start": 1e-3,  # mm
+    "stop": 1e-3,  # mm
+}
