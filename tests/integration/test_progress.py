@@ -80,7 +80,7 @@ def _sensitivity_outputs(setup, progress):
     model, cycle, _ = setup
     problem = sa.Problem.around(model.params, {"Fc": 0.1})
     evaluate = sa.model_outputs(model, cycle, problem, ["loop_width_pressure"],
-                                progress=progress, workers=1)
+                                progress=progress, executor=1)
     evaluate(np.array([[model.params["Fc"]], [1.1 * model.params["Fc"]]]))
 
 
@@ -90,7 +90,7 @@ def _sensitivity_signal(setup, progress):
     model, cycle, _ = setup
     problem = sa.Problem.around(model.params, {"Fc": 0.1})
     evaluate = sa.model_signal(model, cycle, problem, "position", [0.5, 1.0],
-                               progress=progress, workers=1)
+                               progress=progress, executor=1)
     evaluate(np.array([[model.params["Fc"]]]))
 
 
@@ -113,10 +113,11 @@ CALLS = {
     "pneumact.simulation.simulate.simulate": (
         True, lambda s, p: pa.simulate(s[0], s[1], progress=p)),
     "pneumact.simulation.batch.engine.simulate_batch": (
-        True, lambda s, p: pa.simulate_batch(s[0], s[1], _table(s[0]), workers=1,
+        True, lambda s, p: pa.simulate_batch(s[0], s[1], _table(s[0]), executor=1,
                                              progress=p)),
     "pneumact.identification.fit.fit": (
-        True, lambda s, p: pa.fit(s[0], s[2][:1], ["Fc"], max_nfev=2, progress=p)),
+        True, lambda s, p: pa.fit(s[0], s[2][:1], ["Fc"], optimizer=pa.Optimizer(max_nfev=2),
+                                  progress=p)),
     "pneumact.validation.validate.validate": (
         True, lambda s, p: pa.validate(s[0], s[2][:2], progress=p)),
     "pneumact.sensitivity.methods.model_outputs": (True, _sensitivity_outputs),
@@ -136,7 +137,7 @@ def _across(setup, progress):
 
     sa.across_conditions(setup[0], [sa.Condition(period=2.0, valve="source")], "src",
                          variations={"Fc": 0.1}, features=["loop_width_pressure"], n=4,
-                         progress=progress, workers=1)
+                         progress=progress, executor=1)
 
 
 def test_every_public_progress_function_is_covered():

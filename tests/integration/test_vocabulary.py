@@ -67,7 +67,7 @@ def _run(extra: dict | None = None):
                "velocity": np.gradient(POSITION, T), "friction": 2.6 * np.sign(np.cos(T)),
                **(extra or {})}
     units = {"pressure": "Pa", "position": "m", "velocity": "m/s", "friction": "N",
-             "setpoint": "m", "command": "1"}
+             "position_setpoint": "m", "command": "1"}
     return Result(T.copy(), signals, {n: units.get(n, "") for n in signals},
                   {"model": "test", "experiment": "synthetic"}, {"Fc": 2.6, "k": 12850.0},
                   {"friction": "LuGre"})
@@ -183,7 +183,7 @@ def _loop_study():
     from pneumact.control import PID, ClosedLoop, LoopStudy
 
     loop = ClosedLoop(pa.FrictionRig(_params(), pa.LuGre(), drive="force"), PID(kp=1.0))
-    run = _run({"setpoint": np.full(T.size, 1e-3), "command": np.ones(T.size)})
+    run = _run({"position_setpoint": np.full(T.size, 1e-3), "command": np.ones(T.size)})
     return LoopStudy(loop, pa.SetpointStep(0.0, 1e-3, 0.0, 2.0, 41), run, _loop_metrics())
 
 
