@@ -10,9 +10,7 @@ at their first report, which must already be a ``Progress``.
 
 from __future__ import annotations
 
-import importlib
 import inspect
-import pkgutil
 
 import numpy as np
 import pandas as pd
@@ -20,6 +18,7 @@ import pytest
 
 import pneumact as pa
 from pneumact.progress import Progress
+from public_api import dotted_name, public_objects
 
 
 class StopReportsError(Exception):
@@ -28,17 +27,8 @@ class StopReportsError(Exception):
 
 def public_progress_functions() -> set[str]:
     """``module.qualname`` of every public function that takes ``progress``."""
-    modules = ["pneumact", "pneumact.reproduction"] + [
-        m.name for m in pkgutil.walk_packages(pa.__path__, "pneumact.")
-        if m.ispkg and ".cli" not in m.name]
-    found = set()
-    for name in modules:
-        module = importlib.import_module(name)
-        for public in getattr(module, "__all__", []):
-            obj = getattr(module, public)
-            if inspect.isfunction(obj) and "progress" in inspect.signature(obj).parameters:
-                found.add(f"{obj.__module__}.{obj.__qualname__}")
-    return found
+    return {dotted_name(obj) for obj in public_objects()
+            if inspect.isfunction(obj) and "progress" in inspect.signature(obj).parameters}
 
 
 @pytest.fixture(scope="module")

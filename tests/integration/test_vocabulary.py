@@ -11,9 +11,7 @@ a cheap instance below. The instances are synthetic (no kernel is compiled).
 
 from __future__ import annotations
 
-import importlib
 import inspect
-import pkgutil
 
 import matplotlib
 import numpy as np
@@ -22,6 +20,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import pneumact as pa
+from public_api import dotted_name, public_objects
 
 matplotlib.use("Agg")
 
@@ -33,19 +32,10 @@ ANY_WORD = (*VOCABULARY, "metrics", "save", "table", "to_frame", "html_report")
 
 def public_result_classes() -> set[str]:
     """``module.qualname`` of every public class that speaks a word of the vocabulary."""
-    modules = ["pneumact", "pneumact.reproduction"] + [
-        m.name for m in pkgutil.walk_packages(pa.__path__, "pneumact.")
-        if m.ispkg and ".cli" not in m.name]
-    found = set()
-    for name in modules:
-        module = importlib.import_module(name)
-        for public in getattr(module, "__all__", []):
-            obj = getattr(module, public)
+    return {dotted_name(obj) for obj in public_objects()
             if inspect.isclass(obj) and not issubclass(obj, BaseException) and (
-                    any(callable(getattr(obj, w, None)) for w in ANY_WORD)
-                    or obj.__name__.endswith("Result")):
-                found.add(f"{obj.__module__}.{obj.__qualname__}")
-    return found
+                any(callable(getattr(obj, w, None)) for w in ANY_WORD)
+                or obj.__name__.endswith("Result"))}
 
 
 # --------------------------------------------------------------------------- instances
