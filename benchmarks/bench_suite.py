@@ -8,13 +8,20 @@ plain pytest did before) and prints the ratio. Cold uses temporary ``PNEUMACT_CA
 and ``NUMBA_CACHE_DIR`` (fresh ones per run), so the user's caches are left alone.
 The suite's target (2 cores): under 6 minutes cold.
 
+``--census`` (with ``--cold``) also records every numba compilation with the test that
+caused it (``compile_census.py``) and prints the compile time per kernel module, largest
+first, with the tests that needed it: a kernel that one test alone needs is where a cold
+suite's minutes can be won.
+
 Run (after ``pip install -e ".[test]"``):
-    python benchmarks/bench_suite.py [--cold] [--serial] [-- extra pytest arguments]
+    python benchmarks/bench_suite.py [--cold] [--serial] [--census] [-- extra pytest arguments]
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
+import json
 import os
 import subprocess
 import sys
@@ -26,17 +33,41 @@ ROOT = Path(__file__).resolve().parents[1]
 TARGET_COLD_S = 360.0
 
 
-def run_suite(command: list[str], cold: bool) -> tuple[subprocess.CompletedProcess, float]:
-    """One run of ``command``: (the finished process, wall seconds)."""
+def run_suite(command: list[str], cold: bool,
+              census: Path | None = None) -> tuple[subprocess.CompletedProcess, float]:
+    """One run of ``command``: (the finished process, wall seconds); with ``census`` a
+    folder that receives the compile census."""
     with tempfile.TemporaryDirectory(prefix="pneumact-suite-") as tmp:
         env = dict(os.environ)
         if cold:
             env.update(PNEUMACT_CACHE_DIR=str(Path(tmp) / "kernels"),
                        NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
+        if census is not None:
+            here = str(Path(__file__).resolve().parent)
+            env.update(PNEUMACT_CENSUS_DIR=str(census), PYTHONPATH=os.pathsep.join(
+                filter(None, [here, env.get("PYTHONPATH")])))
+            command = [*command, "-p", "compile_census"]
         started = time.perf_counter()
         proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
                               check=False)
         return proc, time.perf_counter() - started
+
+
+def print_census(folder: Path, rows_shown: int = 30) -> None:
+    """Compile seconds per module (a generated kernel, or a package module), largest first,
+    with the number of tests that compiled it and the test when it is one alone."""
+    seconds: dict[str, float] = collections.defaultdict(float)
+    tests: dict[str, set[str]] = collections.defaultdict(set)
+    for path in folder.glob("*.jsonl"):
+        for line in path.read_text(encoding="utf-8").splitlines():
+            row = json.loads(line)
+            seconds[row["module"]] += row["seconds"]
+            tests[row["module"]].add(row["test"])
+    total = sum(seconds.values())
+    print(f"  compile census: {total:.0f} s of numba compilation over {len(seconds)} modules")
+    for module in sorted(seconds, key=seconds.get, reverse=True)[:rows_shown]:
+        alone = next(iter(tests[module])) if len(tests[module]) == 1 else ""
+        print(f"  {seconds[module]:6.1f} s  {len(tests[module]):3d} tests  {module[:60]}  {alone}")
 
 
 def report(command: list[str], proc: subprocess.CompletedProcess, wall: float) -> None:
@@ -53,14 +84,19 @@ def main(argv=None) -> None:
     parser.add_argument("--cold", action="store_true", help="empty kernel and numba caches")
     parser.add_argument("--serial", action="store_true",
                         help="also run in one process (-n 0) and print the ratio")
+    parser.add_argument("--census", action="store_true",
+                        help="record numba compilations per test and print them per kernel")
     parser.add_argument("pytest_args", nargs="*", help="more pytest arguments (after --)")
     args = parser.parse_args(argv)
     command = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
                *args.pytest_args]
     print(f"pneumact test suite benchmark ({'cold' if args.cold else 'warm'}); "
           f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}")
-    proc, wall = run_suite(command, args.cold)
-    report(command, proc, wall)
+    with tempfile.TemporaryDirectory(prefix="pneumact-census-") as census:
+        proc, wall = run_suite(command, args.cold, Path(census) if args.census else None)
+        report(command, proc, wall)
+        if args.census:
+            print_census(Path(census))
     if args.cold:
         print(f"  target (cold, 2 cores): under {TARGET_COLD_S / 60:g} min: "
               f"{'met' if wall <= TARGET_COLD_S else 'NOT met'}")
