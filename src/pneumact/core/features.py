@@ -415,6 +415,18 @@ def _position_errors(t, x, ref_t, ref_x):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _pressure_features(t, p, x, out):
+    """The features of PRESSURE_FEATURES into ``out`` (a run's summary needs these and the
+    stroke only: it compiles them without the rest of ``all_features``)."""
+    out[F_LOOP_WIDTH_PRESSURE] = _loop_width_pressure(p, x)
+    out[F_LOOP_WIDTH_POSITION] = _loop_width_position(p, x)
+    out[F_LOOP_AREA] = _loop_area(p, x)
+    out[F_BREAKAWAY_PRESSURE] = _breakaway(p, x)
+    out[F_SLIDING_SPEED] = _sliding_speed(t, p, x)
+    out[F_PRESLIDING_TRAVEL] = _presliding_travel(p, x)
+
+
+@njit(cache=True)
 def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
     """Every feature of FEATURES into ``out`` (NaN where one does not apply)."""
     for k in range(N_FEATURES):
@@ -424,12 +436,7 @@ def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
     out[F_MAX_VELOCITY] = max(-v_lo, v_hi)
     out[F_STROKE] = _stroke(x)
     if has_pressure:
-        out[F_LOOP_WIDTH_PRESSURE] = _loop_width_pressure(p, x)
-        out[F_LOOP_WIDTH_POSITION] = _loop_width_position(p, x)
-        out[F_LOOP_AREA] = _loop_area(p, x)
-        out[F_BREAKAWAY_PRESSURE] = _breakaway(p, x)
-        out[F_SLIDING_SPEED] = _sliding_speed(t, p, x)
-        out[F_PRESLIDING_TRAVEL] = _presliding_travel(p, x)
+        _pressure_features(t, p, x, out)
     if has_reference:
         out[F_RMS_ERROR], out[F_MAX_ERROR] = _position_errors(t, x, ref_t, ref_x)
 
@@ -597,8 +604,8 @@ def turning_points(time, pressure, position) -> np.ndarray:
 def hysteresis_summary(time, pressure, position) -> dict[str, float]:
     """The hysteresis features of one record, SI (units in ``FEATURE_UNITS``)."""
     t, p, x = _signals(time=time, pressure=pressure, position=position)
-    out = np.empty(N_FEATURES)
-    empty = np.zeros(1)
-    all_features(t, x, np.zeros_like(x), p, True, empty, empty, False, out)
+    out = np.full(N_FEATURES, np.nan)
+    out[F_STROKE] = _stroke(x)
+    _pressure_features(t, p, x, out)
     names = ("stroke", *PRESSURE_FEATURES)
     return {name: float(out[FEATURES.index(name)]) for name in names}
