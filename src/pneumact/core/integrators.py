@@ -348,7 +348,9 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
     rejected = 0
     n_rhs = 0
     n_jac = 0
-    j = 0
+    # an int64 from the start, not the literal 0: a call that first sees j = 0 would
+    # compile a second copy of the function it calls, for that constant
+    j = np.int64(0)
     t = tb[0]
     while not HAS_JUMPS and j < n_out and t_out[j] <= t:
         _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out[j], out[j])
