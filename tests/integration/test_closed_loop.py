@@ -50,6 +50,25 @@ def test_no_hunting_when_static_equals_coulomb_friction(canudas):
     assert abs(result.signals["position"][-1] - 1.0) < ref.FS_EQUALS_FC_FINAL_ERROR
 
 
+def test_every_controller_calls_the_plant_kernel_of_an_open_loop_run(canudas):
+    """The loop kernel calls its plant's own compiled kernel (no copy of the plant's code
+    per controller configuration), and names it in its source, so that a change to the
+    plant recompiles the loop."""
+    from pneumact.core import codegen
+    from pneumact.simulation import assemble
+
+    rig = pa.FrictionRig(canudas, pa.LuGre(), drive="force")
+    plant = assemble(rig).kernel
+    for controller in (PID(kp=1.0), PID(kp=1.0, kd=1.0, derivative="error"),
+                       PID(kp=1.0, sample_time=0.01)):
+        loop = ClosedLoop(rig, controller)
+        spec = assemble(loop).kernel_spec()
+        assert codegen.module_name(assemble(rig).kernel_spec()) in spec.source()
+        kernel = assemble(loop).kernel
+        for name in ("rhs", "jac", "param_jac", "outputs", "initial_state", "project"):
+            assert getattr(kernel, f"plant_{name}") is getattr(plant, name)
+
+
 def _saturated_step(canudas, anti_windup):
     pid = PID(kp=3.0, ki=4.0, kd=6.0, derivative="velocity", u_min=-ref.WINDUP_LIMIT,
               u_max=ref.WINDUP_LIMIT, anti_windup=anti_windup)

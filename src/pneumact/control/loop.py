@@ -180,13 +180,10 @@ class ClosedLoop:
                 "HAS_LOOP_INPUTS": self.has_loop_inputs}
 
     def kernel_children(self) -> tuple[Child, ...]:
-        n_plant_out = len(self._plant_module().OUTPUT_NAMES)
-        from ..core.assembly import output_constant
+        """The plant's own kernel, called under ``plant_``."""
+        from ..core.assembly import assemble
 
-        outputs = tuple((output_constant(name), i)
-                        for i, name in enumerate(self._plant_module().OUTPUT_NAMES))
-        return (Child("plant_", self.plant.template,
-                      (("NSTATE", self._plant_states()), ("NOUT", n_plant_out), *outputs)),)
+        return (Child("plant_", assemble(self.plant).kernel_spec()),)
 
     @property
     def kernel_templates(self) -> tuple[str, ...]:

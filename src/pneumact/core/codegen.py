@@ -76,7 +76,7 @@ class KernelSpec:
         """Text of the generated module: a docstring, imports and constants."""
         lines = [f'"""pneumact kernel {self.label}: generated, do not edit.',
                  "", f"Templates bound to it: {', '.join((*self.components, *self.templates))}."]
-        lines += [f"Bound under '{c.prefix}': {c.template} with {dict(c.constants)}."
+        lines += [f"Bound under '{c.prefix}': the kernel {module_name(c.spec)}."
                   for c in self.children]
         lines.append('"""')
         for alias, target in self.imports:
@@ -89,25 +89,25 @@ class KernelSpec:
     def modules(self) -> tuple[str, ...]:
         """The modules the kernel's code comes from (templates and component modules)."""
         imported = (target.split(":")[0] for _, target in self.imports)
-        children = (c.template for c in self.children)
+        children = (m for c in self.children for m in c.spec.modules())
         return tuple(dict.fromkeys((*self.components, *self.templates, *children,
                                     *imported)))
 
 
 @dataclass(frozen=True)
 class Child:
-    """A template bound in a namespace of its own and exposed under ``prefix``.
+    """Another model's own kernel, its functions exposed under ``prefix``.
 
-    A closed loop binds its plant's template this way: the plant's ``rhs`` becomes
-    ``plant_rhs`` beside the loop's own ``rhs``. The child sees the kernel's imports and
-    constants, with ``constants`` overriding some (its own NSTATE and NOUT: the plant's
-    states come first in the loop's state vector, so the plant's code reads them where
-    it always does).
+    A closed loop calls its plant's kernel this way: the plant's ``rhs`` becomes
+    ``plant_rhs`` beside the loop's own ``rhs``. The plant's states come first in the
+    loop's state vector and its parameter blocks first in the loop's vector, so the
+    plant's code reads both where it always does. The functions are the plant kernel's
+    own (the same compiled code as an open-loop run of the plant): every controller
+    configuration over one plant shares them, compiled once per machine.
     """
 
     prefix: str
-    template: str
-    constants: tuple[tuple[str, object], ...] = ()
+    spec: KernelSpec
 
 
 def cache_dir() -> Path:
@@ -349,29 +349,26 @@ def _verify_needs(namespace: dict, needs: dict[str, str]) -> None:
                 "of this model defines" for name in missing))
 
 
-def _bind_child(namespace: dict, child: Child, filename: str,
-                provided: frozenset[str]) -> None:
-    """Bind ``child.template`` in a copy of ``namespace`` and export its compiled
-    functions to ``namespace`` under ``child.prefix``."""
-    own = {k: v for k, v in namespace.items() if not k.startswith("__")}
-    own["__name__"] = namespace["__name__"]
-    own.update(child.constants)
-    template = importlib.import_module(child.template)
-    needs: dict[str, str] = {}
-    _bind(own, template, filename, provided | {name for name, _ in child.constants}, {},
-          needs, child.prefix)
-    _verify_needs(own, needs)
-    for name, obj in vars(template).items():
-        if getattr(obj, "__kernel_options__", None) is not None and \
-                getattr(obj, "__module__", None) == template.__name__:
-            namespace[child.prefix + name] = own[name]
+def _bind_child(namespace: dict, child: Child) -> None:
+    """Export the compiled functions of ``child.spec``'s kernel to ``namespace`` under
+    ``child.prefix``."""
+    module = load(child.spec)
+    for template in (*child.spec.components, *child.spec.templates):
+        for name, obj in vars(importlib.import_module(template)).items():
+            if getattr(obj, "__kernel_options__", None) is not None and \
+                    getattr(obj, "__module__", None) == template:
+                namespace[child.prefix + name] = getattr(module, name)
+
+
+def module_name(spec: KernelSpec) -> str:
+    """The name of ``spec``'s generated module: its label and key."""
+    return f"pneumact_kernel_{spec.label}_{kernel_key(spec)[:16]}"
 
 
 def load(spec: KernelSpec) -> types.ModuleType:
     """The kernel module of ``spec``: generated on first use, then cached on disk and in
     this process."""
-    key = kernel_key(spec)
-    name = f"pneumact_kernel_{spec.label}_{key[:16]}"
+    name = module_name(spec)
     with _LOCK:
         module = _LOADED.get(name)
         if module is not None:
@@ -393,7 +390,7 @@ def load(spec: KernelSpec) -> types.ModuleType:
             _bind(module.__dict__, importlib.import_module(template), str(path), provided,
                   origins, needs)
         for child in spec.children:
-            _bind_child(module.__dict__, child, str(path), provided)
+            _bind_child(module.__dict__, child)
         for template in spec.templates:
             _bind(module.__dict__, importlib.import_module(template), str(path), provided,
                   origins, needs)

@@ -34,7 +34,6 @@ valve_derive = valve_equilibrium = valve_scales = valve_project = None
 VALVE_PRESSURE_STATE = -1
 HAS_LOAD = True
 NSTATE = 3
-NPARAM = 0
 MECHANICS_LO = MECHANICS_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
@@ -106,9 +105,9 @@ def jac(t, ts, y, prm, sig, ptr, out):
 
 @kernel()
 def param_jac(t, ts, y, prm, sig, ptr, g, needed):
-    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × NPARAM); blocks with no ``needed`` slot skipped."""
+    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × vector size); blocks with no ``needed`` slot skipped."""
     for a in range(NSTATE):
-        for k in range(NPARAM):
+        for k in range(g.shape[1]):
             g[a, k] = 0.0
     x = y[S_POSITION]
     v = y[S_VELOCITY]

@@ -14,7 +14,6 @@ friction_rates = friction_force = friction_partials = friction_param_partials = 
 friction_project = friction_scales = friction_store = friction_store_partials = None
 drive_eval = drive_params = drive_start = None
 NSTATE = 3
-NPARAM = 0
 RIG_LO = RIG_HI = FRICTION_LO = FRICTION_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
@@ -65,15 +64,15 @@ def jac(t, ts, y, prm, sig, ptr, out):
 
 @kernel()
 def param_jac(t, ts, y, prm, sig, ptr, g, needed):
-    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × NPARAM)."""
+    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × vector size)."""
     for a in range(NSTATE):
-        for k in range(NPARAM):
+        for k in range(g.shape[1]):
             g[a, k] = 0.0
     kin, v_kin, _, f_drive, _, _, _ = _drive(t, ts, y, prm, sig, ptr)
     v = v_kin if kin else y[S_VELOCITY]
     friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
     if kin:  # the velocity is prescribed: nothing acts on its row
-        for k in range(NPARAM):
+        for k in range(g.shape[1]):
             g[S_VELOCITY, k] = 0.0
         return
     m = prm[RIG_LO + RG_M]
