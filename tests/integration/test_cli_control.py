@@ -62,7 +62,9 @@ def test_profile_command_follows_a_csv_profile(tmp_path):
     profile.write_text("time [s],reference [mm]\n0,4\n0.2,4\n0.5,7\n0.9,7\n1.2,5\n1.8,5\n",
                        encoding="utf-8")
     out = tmp_path / "profile"
-    result = invoke("control", "profile", str(profile), "--out", str(out))
+    # the plant and controller of the step test above: one closed-loop kernel for both
+    result = invoke("control", "profile", str(profile), "--plant", "command",
+                    "--sample-time", "1e-3", "--out", str(out))
     assert result.exit_code == 0, result.output
     signals = pd.read_csv(out / "signals.csv")
     assert np.allclose(signals["position_setpoint [m]"].iloc[0], 0.004)

@@ -44,6 +44,10 @@ from reference import (
     STIFFNESS_RTOL,
 )
 
+#: over a minute and a half with an empty kernel cache (three kernels per law): started
+#: first in a parallel run, beside the identification family, so no process waits on it
+pytestmark = pytest.mark.long
+
 LAWS = [cls() for cls in friction_models().values()]
 VARIANTS = [*LAWS, LuGre(decaying_damping=True)]
 CYCLE = pa.PressureCycle(high=90e3, low=30e3, period=2.0, n_points=401)
