@@ -81,8 +81,7 @@ def test_key_covers_every_source_the_kernel_imports(valve_actuator):
                    "models/friction/base.py", "core/marks.py", "models/valves.py",
                    "models/pneumatics.py", "models/mechanics.py", "core/signals.py",
                    "core/linalg.py",
-                   "core/integrators.py", "core/batch_loop.py",
-                   "core/features.py"):
+                   "core/integrators.py"):
         assert needed in names, needed
     # nothing the kernel does not use: an import inside a function binds no global that
     # compiled code reads, so it is not followed (models/friction/base.py imports the assembly

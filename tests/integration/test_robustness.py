@@ -77,20 +77,20 @@ def test_frictionless_row_of_a_batch_runs(vgt):
 
 
 def test_a_row_that_raises_is_that_row_s_error(vgt, monkeypatch):
-    """Whatever a row raises inside the compiled loop (here a ZeroDivisionError on the
-    row with Fc = 2.5) becomes its error; the rows beside it finish."""
+    """Whatever a row's run raises (here a ZeroDivisionError on the row with Fc = 2.5)
+    becomes its error; the rows beside it finish."""
     model = pa.Actuator(vgt.replace(delta=2.0))
     experiment = pa.PressureCycle(period=2.0, n_points=101)
     table = pd.DataFrame({"Fc": [2.4, 2.5, 2.6]})
     plain = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
-    real = batch_runner.ChunkRunner._rows
+    real = batch_runner.ChunkRunner._row
 
-    def flaky(self, values, valid, *arrays):
-        if np.any(values[valid, 0] == 2.5):
+    def flaky(self, row, work):
+        if row[0] == 2.5:
             raise ZeroDivisionError("division by zero")
-        return real(self, values, valid, *arrays)
+        return real(self, row, work)
 
-    monkeypatch.setattr(batch_runner.ChunkRunner, "_rows", flaky)
+    monkeypatch.setattr(batch_runner.ChunkRunner, "_row", flaky)
     batch = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
     assert batch.table["status"].tolist() == ["ok", "error", "ok"]
     assert "ZeroDivisionError" in batch.table["error"].iloc[1]

@@ -187,9 +187,9 @@ class ClosedLoop:
 
     @property
     def kernel_templates(self) -> tuple[str, ...]:
-        from ..core.assembly import BATCH, INTEGRATORS
+        from ..core.assembly import INTEGRATORS
 
-        return (LOOP_TEMPLATE, INTEGRATORS, BATCH)
+        return (LOOP_TEMPLATE, INTEGRATORS)
 
     def channels(self, setpoint: Signal) -> list[Signal | None]:
         held = Constant(self.drive_gain * self.bias)

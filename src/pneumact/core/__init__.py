@@ -8,10 +8,11 @@ of any model.
 - ``assembly``: a model's components joined (layout of parameters, states, outputs);
 - ``codegen``: the generated kernel module per component combination;
 - ``signals``: the input signals and their compiled evaluation;
-- ``features``: the hysteresis features, compiled so that the batch engine computes
-  them in its loop (``pneumact.analysis`` is their public face);
+- ``features``: the hysteresis features, compiled once per machine (not per kernel):
+  the batch engine computes them for every row (``pneumact.analysis`` is their public
+  face);
 - ``integrators`` (with ``linalg``): RODAS4 and Dormand-Prince 5(4), one driver, with
-  forward sensitivities; ``batch_loop``: a chunk of rows simulated in one compiled call;
+  forward sensitivities;
 - ``units``: the SI unit of each signal name.
 
 A model's own template (its right-hand side and Jacobian) lies beside the model in

@@ -37,7 +37,6 @@ from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 __all__ = ["Assembly", "assemble"]
 
 INTEGRATORS = "pneumact.core.integrators"
-BATCH = "pneumact.core.batch_loop"
 
 
 @dataclass(frozen=True)
@@ -216,12 +215,15 @@ class Assembly:
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
         constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))
-        switches: dict[str, object] = getattr(self.model, "kernel_constants", dict)()
+        # PRIVATE_INPUTS: the model writes its own input into the channels (a closed
+        # loop's controller output), so a batch gives each row its own copy of them
+        switches: dict[str, object] = {"PRIVATE_INPUTS": False,
+                                       **getattr(self.model, "kernel_constants", dict)()}
         constants += sorted(switches.items())
         keys = [part.key for part in self.parts if part.key]
         model = self.template.rpartition(".")[2].removesuffix("_template")
         label = "_".join([model, *keys])
-        templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS, BATCH))
+        templates = getattr(self.model, "kernel_templates", (self.template, INTEGRATORS))
         children = tuple(getattr(self.model, "kernel_children", tuple)())
         components = tuple(dict.fromkeys(t for part in self.parts for t in part.templates))
         return codegen.KernelSpec(label, tuple(templates), tuple(imports),

@@ -6,7 +6,7 @@ recompiling in every process. Instead, for each combination a small module is ge
 that holds only imports (the chosen component functions under the names a template
 calls: ``friction_law``, ``valve_rates``, …) and constants (the layout of the state and
 parameter vectors). The functions of the templates (a model's ``*_template.py`` beside
-it, ``core/integrators.py``, ``core/batch_loop.py``; marked with ``@kernel``) are then
+it, ``core/integrators.py``; marked with ``@kernel``) are then
 bound to that module's namespace and compiled with ``cache=True``: numba keys their
 disk cache on the generated file, so each combination compiles once per machine and
 loads from disk afterwards. Parameter values are a runtime array: changing them never

@@ -3,9 +3,9 @@
 These numbers summarise one simulated or measured run: the stroke, the width of the
 hysteresis loop in pressure and in position, the loop area, the break-away pressure, the
 sliding speed and the presliding travel at a reversal, and the position error against a
-reference. They are compiled (numba), so the batch engine computes them inside its
-compiled loop, with no Python lock per run, and ``Result.summary()`` runs the very same
-code.
+reference. They are compiled (numba) once per machine, not per model: the batch
+engine computes them for every row without the Python interpreter's cost, and
+``Result.summary()`` runs the very same code.
 
 Each feature measures the actuator, not a threshold: the break-away pressure is where the
 sliding line of a branch meets the position the branch started from (no motion threshold,
