@@ -3,6 +3,7 @@ numbers that were computed."""
 
 from __future__ import annotations
 
+import dataclasses
 from html import unescape
 from html.parser import HTMLParser
 
@@ -73,9 +74,35 @@ def _find(tables, frame: pd.DataFrame):
 
 
 @pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("paper")
-    return reproduce(out, quick=True)
+def quick_cli(tmp_path_factory):
+    """One quick reproduction, run from the command line as a user runs it: (the CLI's
+    result, the ``Reproduction`` the API returned to it, the folder). One run serves the
+    command line's tests and the API's (it takes ~10 s)."""
+    import pneumact.reproduction as reproduction
+
+    folder = tmp_path_factory.mktemp("cli")
+    returned = []
+
+    def keep(*args, **kwargs):
+        returned.append(reproduce(*args, **kwargs))
+        return returned[-1]
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(reproduction, "reproduce", keep)
+        patch.chdir(folder)
+        result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", "paper"])
+    assert result.exit_code == 0, result.output
+    assert len(returned) == 1
+    # the command line passed the relative folder it was given: anchor its paths here
+    made = returned[0]
+    made = dataclasses.replace(made, out_dir=folder / made.out_dir,
+                               files=[folder / p for p in made.files])
+    return result, made, folder / "paper"
+
+
+@pytest.fixture(scope="module")
+def quick(quick_cli):
+    return quick_cli[1]
 
 
 def test_quick_reproduction_writes_every_figure_and_table(quick):
@@ -139,10 +166,9 @@ def test_identified_parameters_are_close_to_table_one(quick):
     assert (metrics["fit_percent"] > 99.0).all()
 
 
-def test_cli_reproduce_quick(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", "paper"])
-    assert result.exit_code == 0, result.output
-    assert (tmp_path / "paper" / "index.html").exists()
+def test_cli_reproduce_quick(quick_cli):
+    _, returned, folder = quick_cli
+    assert (folder / "index.html").exists()
+    assert returned.report == folder / "index.html"
     assert "pneumact reproduce --quick --out paper" in (
-        tmp_path / "paper" / "index.html").read_text(encoding="utf-8")
+        folder / "index.html").read_text(encoding="utf-8")
