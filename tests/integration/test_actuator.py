@@ -146,24 +146,26 @@ def test_equilibrium_start_stays_still(valve, quantity, value, vgt):
     assert np.abs(r["velocity"]).max() <= EQUILIBRIUM_DRIFT_VELOCITY
 
 
-def test_constant_external_load_shifts_equilibrium_by_load_over_stiffness(vgt):
+def test_constant_external_load_shifts_the_rest_position_by_load_over_stiffness(vgt):
+    """A load present from the start: the actuator starts at rest −F_ext/k from where it
+    rests without it, and stays there (the net force, friction's included, is zero)."""
     load = 10.0  # N, opposing motion towards larger x
-    params = vgt.replace(Fc=0.0, sigma2=60.0)  # viscous only: settles exactly
-    free = Actuator(params, friction=CoulombViscous(), valve=PressureSource())
-    loaded = Actuator(params, friction=CoulombViscous(), valve=PressureSource(),
-                      load=Constant(load))
     experiment = Experiment(Constant(60e3), "pressure", t_end=2.0, n_points=201)
-    x_free = simulate(free, experiment, SOLVER)["position"][-1]
-    x_loaded = simulate(loaded, experiment, SOLVER)["position"][-1]
-    assert x_loaded - x_free == pytest.approx(-load / params["k"], rel=LOAD_SHIFT_RTOL)
-
-
-def test_external_load_with_lugre_friction_within_friction_band(vgt):
-    """With LuGre friction the shifted rest position lies within ±Fs/k of −F_ext/k."""
-    load = 20.0
-    experiment = Experiment(Constant(60e3), "pressure", t_end=2.0, n_points=201)
-    x_free = simulate(Actuator(vgt), experiment, SOLVER)["position"][-1]
+    x_free = simulate(Actuator(vgt), experiment, SOLVER)["position"]
     x_loaded = simulate(Actuator(vgt, load=Constant(load)), experiment, SOLVER)["position"]
-    shift = x_loaded[-1] - x_free
+    assert x_loaded[0] - x_free[0] == pytest.approx(-load / vgt["k"], rel=LOAD_SHIFT_RTOL)
+    assert np.ptp(x_loaded) <= EQUILIBRIUM_DRIFT_POSITION
+
+
+def test_a_load_step_moves_the_actuator_until_friction_holds_it(vgt):
+    """A load applied at 0.5 s (60 N, about 20 Fs): the actuator moves and comes to rest
+    within ±Fs/k of −F_ext/k from where it was (LuGre's band of rest positions; a tenth
+    of the load lost is twice that band)."""
+    load = 60.0
+    experiment = Experiment(Constant(60e3), "pressure", t_end=2.0, n_points=201)
+    x_loaded = simulate(Actuator(vgt, load=Step(0.5, 0.0, load)), experiment,
+                        SOLVER)["position"]
+    shift = x_loaded[-1] - x_loaded[0]
+    assert abs(shift) > 0.5 * load / vgt["k"]  # it moved
     assert abs(shift + load / vgt["k"]) <= vgt["Fs"] / vgt["k"]
     assert abs(x_loaded[-1] - x_loaded[-20]) <= EQUILIBRIUM_DRIFT_POSITION  # at rest

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -61,17 +61,20 @@ def _file_lock(path: Path) -> Iterator[None]:
             os.close(fd)
 
 
-def compile_one_process_at_a_time(dispatcher: Any, lock_path: Path) -> Any:
+def compile_one_process_at_a_time(dispatcher: Any, lock_path: Path | Callable[[], Path]
+                                  ) -> Any:
     """``dispatcher`` (a numba ``@njit`` function with ``cache=True``) compiling under
-    the lock ``lock_path``: its ``compile`` (which numba calls on a call with new types,
-    and when a function calling it compiles) first looks in the disk cache, so a
-    process that waited finds what the first one wrote."""
+    the lock ``lock_path`` (or the path a callable gives when it first compiles): its
+    ``compile`` (which numba calls on a call with new types, and when a function
+    calling it compiles) first looks in the disk cache, so a process that waited finds
+    what the first one wrote."""
     from numba.core.compiler_lock import global_compiler_lock
 
     compile_unlocked = dispatcher.compile
 
     def compile(sig):
-        with global_compiler_lock, _file_lock(lock_path):
+        path = lock_path() if callable(lock_path) else lock_path
+        with global_compiler_lock, _file_lock(path):
             return compile_unlocked(sig)
 
     dispatcher.compile = compile

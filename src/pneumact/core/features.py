@@ -23,10 +23,12 @@ A record without such a pair (a step response, say) gives NaN loop features.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
+from pneumact.core.compile_lock import compile_one_process_at_a_time
 from pneumact.errors import DataError
 
 __all__ = [
@@ -609,3 +611,17 @@ def hysteresis_summary(time, pressure, position) -> dict[str, float]:
     _pressure_features(t, p, x, out)
     names = ("stroke", *PRESSURE_FEATURES)
     return {name: float(out[FEATURES.index(name)]) for name in names}
+
+
+def _features_lock() -> Path:
+    """The lock the features compile under: beside the kernels (``core.codegen``)."""
+    from pneumact.core.codegen import cache_dir
+
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder / ".pneumact_core_features.all_features.lock"
+
+
+#: a batch's features compile once per machine: processes that start batches together
+#: (a Dask cluster, a parallel test run) wait for the first instead of each compiling
+all_features = compile_one_process_at_a_time(all_features, _features_lock)
