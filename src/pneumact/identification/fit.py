@@ -88,6 +88,10 @@ class _Problem:
             self.masks.append(mask)
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
+        #: the optimizer's last trial point not yet followed by its Jacobian, and whether
+        #: it accepted the one before (``residuals``)
+        self._last_trial: bytes | None = None
+        self._accepting = True
 
     def __getstate__(self) -> dict:
         """Pickled (for Dask) without the cache of simulated results."""
@@ -193,12 +197,22 @@ class _Problem:
         return block
 
     def residuals(self, phi: np.ndarray) -> np.ndarray:
-        """Plain simulations: a trial point the optimizer rejects (measured: 4 in 10 of
-        the joint fit's) never needs its Jacobian, and forward sensitivities of 8
-        parameters cost 3-5 plain runs; an accepted point runs again with them (``jac``)."""
-        return self.evaluate(self.theta(phi), False)[0]
+        """The residuals at ``phi``, with the forward sensitivities in the same runs while
+        the optimizer accepts its trial points, plain after it rejected one: the
+        Jacobian of an accepted point comes free, a rejected point (4 in 10 of the
+        joint fit's on drawn actuators, mostly near convergence) never needs it, and
+        sensitivities of 8 parameters cost 3-5 plain runs."""
+        key = phi.tobytes()
+        if self._last_trial is not None and self._last_trial != key:
+            self._accepting = False  # the last trial point was left without a Jacobian
+        self._last_trial = key
+        return self.evaluate(self.theta(phi), self.jacobian == "sensitivities"
+                             and self._accepting)[0]
 
     def jac(self, phi: np.ndarray) -> np.ndarray:
+        if phi.tobytes() == self._last_trial:
+            self._accepting = True
+        self._last_trial = None
         theta = self.theta(phi)
         jac = self.evaluate(theta, True)[1]
         return jac * np.where(self.log, theta, 1.0)[None, :]
@@ -589,6 +603,7 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
 
 
 def _solve(problem: _Problem, phi0, lo, hi, optimizer: Optimizer):
+    problem._last_trial, problem._accepting = None, True  # a new optimizer run
     jac = problem.jac if problem.jacobian == "sensitivities" else problem.jacobian
     return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi),
                          loss=optimizer.loss, f_scale=optimizer.f_scale, x_scale="jac",
@@ -820,6 +835,7 @@ def _own_copy(problem: _Problem) -> _Problem:
     records run one after the other."""
     own = copy.copy(problem)
     own._cache = {}
+    own._last_trial, own._accepting = None, True
     own.simulations = 0
     own.workers = 1
     return own
