@@ -88,9 +88,7 @@ class _Problem:
             self.masks.append(mask)
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
-        #: the optimizer's last trial point not yet followed by its Jacobian, and whether
-        #: it accepted the one before (``residuals``)
-        self._last_trial: bytes | None = None
+        self._last_trial: bytes | None = None  # see ``new_optimizer_run``
         self._accepting = True
 
     def __getstate__(self) -> dict:
@@ -195,6 +193,12 @@ class _Problem:
                                           for s in self.signals])
             k += 1
         return block
+
+    def new_optimizer_run(self) -> None:
+        """Forget the last optimizer's trial points: ``residuals`` keeps the last one not
+        yet followed by its Jacobian, and whether the optimizer accepted the one before."""
+        self._last_trial = None
+        self._accepting = True
 
     def residuals(self, phi: np.ndarray) -> np.ndarray:
         """The residuals at ``phi``, with the forward sensitivities in the same runs while
@@ -603,7 +607,7 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
 
 
 def _solve(problem: _Problem, phi0, lo, hi, optimizer: Optimizer):
-    problem._last_trial, problem._accepting = None, True  # a new optimizer run
+    problem.new_optimizer_run()
     jac = problem.jac if problem.jacobian == "sensitivities" else problem.jacobian
     return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi),
                          loss=optimizer.loss, f_scale=optimizer.f_scale, x_scale="jac",
@@ -835,7 +839,7 @@ def _own_copy(problem: _Problem) -> _Problem:
     records run one after the other."""
     own = copy.copy(problem)
     own._cache = {}
-    own._last_trial, own._accepting = None, True
+    own.new_optimizer_run()
     own.simulations = 0
     own.workers = 1
     return own
