@@ -614,12 +614,13 @@ def hysteresis_summary(time, pressure, position) -> dict[str, float]:
 
 
 def _features_lock() -> Path:
-    """The lock the features compile under: beside the kernels (``core.codegen``)."""
-    from pneumact.core.codegen import cache_dir
+    """The lock the features compile under: named and placed as a kernel function's
+    (``core.codegen.compile_lock_path``), beside the kernels."""
+    from pneumact.core.codegen import cache_dir, compile_lock_path
 
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
-    return folder / ".pneumact_core_features.all_features.lock"
+    return compile_lock_path(str(folder / "pneumact_core_features.py"), "all_features")
 
 
 #: a batch's features compile once per machine: processes that start batches together
