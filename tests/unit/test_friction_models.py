@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.models import BoucWen, CoulombViscous, Dahl, LuGre, StribeckMap
+from pneumact.models import BoucWen, CoulombViscous, Dahl, ElastoPlastic, LuGre, StribeckMap
 from reference import (
     FRICTION_RTOL,
     ROUND_OFF_ATOL,
@@ -110,3 +110,60 @@ def test_static_maps_are_odd_and_zero_at_rest(vgt):
         f = model.steady_force(v, vgt)
         np.testing.assert_allclose(f, -f[::-1], rtol=FRICTION_RTOL, err_msg=model.name)
         assert model.steady_force(0.0, vgt)[0] == 0.0
+
+
+# ----------------------------------------------------- elasto-plastic (Dupont et al. 2002)
+@pytest.fixture
+def ep_params(lugre_params):
+    return lugre_params.replace(z_ba_ratio=0.4)
+
+
+def _ep_rates(v, z, params) -> np.ndarray:
+    return ElastoPlastic().evaluate(np.asarray(v, float), np.asarray(z, float)[:, None],
+                                    params)["rates"][:, 0]
+
+
+def test_elasto_plastic_unloads_elastically(ep_params):
+    """Moving against the bristle's deflection, dz/dt = v exactly (α = 0), however deep
+    the bristle is in its transition or saturated: unloading is a pure spring."""
+    v = _speeds()
+    steady = np.abs(ElastoPlastic().steady_states(v, ep_params)[:, 0])
+    for fraction in (0.2, 0.6, 0.9, 1.0):
+        z = -np.sign(v) * fraction * steady
+        np.testing.assert_array_equal(_ep_rates(v, z, ep_params), v)
+
+
+def test_elasto_plastic_is_elastic_below_break_away_and_lugre_past_steady(ep_params):
+    v = _speeds()
+    z_ss = ElastoPlastic().steady_states(v, ep_params)[:, 0]
+    z_ba = ep_params["z_ba_ratio"] * ep_params["Fc"] / ep_params["sigma0"]
+    np.testing.assert_array_equal(_ep_rates(v, 0.99 * np.sign(v) * z_ba, ep_params), v)
+    past = 1.2 * z_ss
+    np.testing.assert_allclose(_ep_rates(v, past, ep_params),
+                               LuGre().evaluate(v, past[:, None], ep_params)["rates"][:, 0],
+                               rtol=FRICTION_RTOL)
+
+
+def test_elasto_plastic_transition_uses_the_deflection_magnitude(ep_params):
+    """The law is odd in (v, z), and across the transition α rises from 0 at z_ba to 1 at
+    z_ss(v) in |z| for either direction of sliding: (1 − ż/v)·z_ss/z = α climbs 0 → 1."""
+    v = _speeds()
+    z_ss = ElastoPlastic().steady_states(v, ep_params)[:, 0]
+    z_ba = ep_params["z_ba_ratio"] * ep_params["Fc"] / ep_params["sigma0"]
+    for w in np.linspace(0.05, 0.95, 7):
+        z = np.sign(v) * (z_ba + w * (np.abs(z_ss) - z_ba))
+        rates = _ep_rates(v, z, ep_params)
+        np.testing.assert_allclose(_ep_rates(-v, -z, ep_params), -rates, rtol=FRICTION_RTOL)
+        alpha = (1.0 - rates / v) * z_ss / z
+        np.testing.assert_allclose(alpha, 0.5 - 0.5 * np.cos(np.pi * w), rtol=1e-9)
+
+
+def test_elasto_plastic_steady_state_is_stribeck_curve_plus_viscous(ep_params):
+    """Steady sliding at z_ss(v) = sgn(v)·g(v)/σ0, the speed's own steady deflection (not
+    one fixed for all speeds): dz/dt = 0 there and F = g(v)·sgn(v) + σ2·v."""
+    v = _speeds()
+    z_ss = ElastoPlastic().steady_states(v, ep_params)
+    values = ElastoPlastic().evaluate(v, z_ss, ep_params)
+    assert np.all(np.abs(values["rates"][:, 0]) <= STEADY_ZDOT_RTOL * np.abs(v))
+    np.testing.assert_allclose(values["force"], np.sign(v) * _stribeck(v, ep_params)
+                               + ep_params["sigma2"] * v, rtol=FRICTION_RTOL)

@@ -5,6 +5,7 @@ from .friction import (
     BoucWen,
     CoulombViscous,
     Dahl,
+    ElastoPlastic,
     FrictionModel,
     LuGre,
     StribeckMap,
@@ -24,8 +25,8 @@ from .valves import VALVES, CommandValve, PressureRegulator, PressureSource, Val
 
 __all__ = [
     "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve",
-    "CoulombViscous", "Dahl", "FrictionModel", "FrictionRig", "Isothermal", "LuGre",
-    "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
+    "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig", "Isothermal",
+    "LuGre", "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
     "flow_function_values", "friction_models", "input_signal", "orifice_mass_flow",
     "valve_for_signal",
 ]

@@ -1,5 +1,5 @@
-"""Friction laws behind one interface (``base``): LuGre, Dahl, Bouc-Wen and two static
-maps, one module each.
+"""Friction laws behind one interface (``base``): LuGre, Dahl, Bouc-Wen, elasto-plastic,
+generalized Maxwell-slip and two static maps, one module each.
 
 ``friction_models()`` finds every module of this package, so a new law is one new
 module with a ``FrictionModel`` subclass that names its ``cli_name``.
@@ -13,11 +13,12 @@ import pkgutil
 from .base import FrictionModel, registered
 from .bouc_wen import BoucWen
 from .dahl import Dahl
+from .elasto_plastic import ElastoPlastic
 from .lugre import LuGre
 from .static import CoulombViscous, StaticMap, StribeckMap
 
-__all__ = ["BoucWen", "CoulombViscous", "Dahl", "FrictionModel", "LuGre", "StaticMap",
-           "StribeckMap", "friction_models"]
+__all__ = ["BoucWen", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "LuGre",
+           "StaticMap", "StribeckMap", "friction_models"]
 
 
 #: the paper's law, listed first

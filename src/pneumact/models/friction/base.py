@@ -46,7 +46,7 @@ from ...core.component import Block, Part, StateSpec
 from ...parameters.catalogue import ParameterSpec, declare, declare_relation
 
 __all__ = ["RELAXED_LEVEL", "SCALAR_LAW", "STATELESS_LAW", "CoulombBristleLaw", "FrictionModel",
-           "clear_block",
+           "StribeckBristleLaw", "clear_block",
            "power", "presliding_scale", "sign", "stribeck_curve", "stribeck_curve_params"]
 
 P = ParameterSpec
@@ -263,6 +263,23 @@ class CoulombBristleLaw(FrictionModel):
 
     def presliding_range(self, params) -> float:
         level = float(params["Fc"])
+        return (level if level > 0.0 else 1.0) / float(params["sigma0"])
+
+
+class StribeckBristleLaw(FrictionModel):
+    """A law of one bristle state that settles at z = sgn(v)·g(v)/σ0 in steady sliding, g
+    the Stribeck curve (LuGre, elasto-plastic): stiffness σ0, range max(Fs, Fc)/σ0."""
+
+    def steady_states(self, v, params) -> np.ndarray:
+        """z = sgn(v)·g(v)/σ0: the bristle deflection where dz/dt = 0."""
+        v = np.atleast_1d(np.asarray(v, dtype=float))
+        return (np.sign(v) * stribeck_level(v, params) / params["sigma0"])[:, None]
+
+    def presliding_stiffness(self, params) -> float:
+        return float(params["sigma0"])
+
+    def presliding_range(self, params) -> float:
+        level = max(float(params["Fs"]), float(params["Fc"]))
         return (level if level > 0.0 else 1.0) / float(params["sigma0"])
 
 

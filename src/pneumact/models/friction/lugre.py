@@ -14,18 +14,16 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-import numpy as np
 from numba import njit
 
 from ...core.component import Block
 from .base import (
     RELAXED_LEVEL,
-    FrictionModel,
+    StribeckBristleLaw,
     presliding_scale,
     sign,
     stribeck_curve,
     stribeck_curve_params,
-    stribeck_level,
 )
 
 LUGRE_BLOCK = Block.of("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs", "delta")
@@ -143,7 +141,7 @@ lugre_decaying_bound = lugre_bound
 
 
 @dataclass(frozen=True, eq=False)
-class LuGre(FrictionModel):
+class LuGre(StribeckBristleLaw):
     """LuGre friction (Canudas de Wit et al. 1995; paper eqs. 6-8).
 
     ``decaying_damping=True`` uses σ1(v) = σ1·exp(−(v/vs)²) instead of a constant σ1.
@@ -161,18 +159,6 @@ class LuGre(FrictionModel):
     @property
     def law(self) -> str:  # type: ignore[override]
         return "lugre_decaying" if self.decaying_damping else "lugre"
-
-    def steady_states(self, v, params) -> np.ndarray:
-        """z = sgn(v)·g(v)/σ0: the bristle deflection where dz/dt = 0."""
-        v = np.atleast_1d(np.asarray(v, dtype=float))
-        return (np.sign(v) * stribeck_level(v, params) / params["sigma0"])[:, None]
-
-    def presliding_stiffness(self, params) -> float:
-        return float(params["sigma0"])
-
-    def presliding_range(self, params) -> float:
-        level = max(float(params["Fs"]), float(params["Fc"]))
-        return (level if level > 0.0 else 1.0) / float(params["sigma0"])
 
     def __repr__(self) -> str:
         return f"LuGre(decaying_damping={self.decaying_damping})"
