@@ -54,7 +54,8 @@ class ClosedLoop:
     disturbance: Signal | None = None
     compensation_gain: float | None = None
     template: ClassVar[str] = LOOP_TEMPLATE
-    has_sensitivities: ClassVar[bool] = False
+    sensitivity_refusal: ClassVar[str | None] = (
+        "a closed loop's controller is not differentiated through")
 
     def __post_init__(self):
         kind = input_kind(self.plant, "ClosedLoop")

@@ -34,10 +34,15 @@ from pneumact.core.linalg import lu_det_sign, lu_factor, lu_solve
 
 # --- bound by the generator and the model template ---------------------------------------
 rhs = jac = outputs = param_jac = derive = project = jump = None
-#: only a model with jumps defines ``jump`` (it is called under ``HAS_JUMPS``)
-OPTIONAL_FUNCTIONS = ("jump",)
+event_guards = event_switch = None
+#: only a model with jumps defines ``jump`` (it is called under ``HAS_JUMPS``), only one
+#: with events ``event_guards`` and ``event_switch`` (under ``HAS_EVENTS``)
+OPTIONAL_FUNCTIONS = ("jump", "event_guards", "event_switch")
 #: a model with a sampled part (a digital controller) updates it at breakpoints
 HAS_JUMPS = False
+#: a model with state events (a hybrid friction law's stick/slip switches) switches
+#: where its guards cross zero, located on each step's interpolant
+HAS_EVENTS = False
 NSTATE = 3
 NOUT = None  # generated from the model's outputs
 NPARAM = 0
@@ -72,6 +77,11 @@ TIME_FD = 1.4901161193847656e-08
 OUTPUT_FD = 1e-7
 #: relative distance below a breakpoint from which an output point waits for its jump
 JUMP_EDGE = 1e-12
+#: an event located within this fraction of a step's end ends that step; an earlier one
+#: cuts the step there (the step is taken again, ending at the event)
+EVENT_EDGE = 1e-9
+#: bisections of the step fraction that locate an event (2^-42 of the step)
+EVENT_BISECTIONS = 42
 
 # RODAS (Hairer & Wanner 1996, rodas.f METH=1)
 GAM = 0.25
@@ -298,6 +308,43 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
                   y_out, out, info, None, DopriWork(np.empty(n), np.empty(n)))
 
 
+@kernel()
+def _first_event(h, y, f0, ynew, f1, prm, g_start, g_end, g_mid, ybuf, at):
+    """The fraction of the step at which the first guard crosses zero (2.0 if none does),
+    by bisection on the step's cubic Hermite interpolant; ``at[i]``: guard i's crossing
+    (2.0 if it does not cross)."""
+    count = event_guards(prm, ynew, g_end)
+    first = 2.0
+    for i in range(count):
+        at[i] = 2.0
+        if not (g_start[i] > 0.0 and g_end[i] <= 0.0):
+            continue
+        lo = 0.0
+        hi = 1.0
+        for _ in range(EVENT_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            h00, h10, h01, h11 = _hermite(mid)
+            for a in range(NSTATE):
+                ybuf[a] = h00 * y[a] + h01 * ynew[a] + h * (h10 * f0[a] + h11 * f1[a])
+            event_guards(prm, ybuf, g_mid)
+            if g_mid[i] > 0.0:
+                lo = mid
+            else:
+                hi = mid
+        at[i] = hi
+        first = min(first, hi)
+    return first
+
+
+@kernel()
+def _mark_events(at, first, forced, count, cut):
+    """Flag the guards that cross at ``first``: they replace the flags when the step is
+    cut there, and join those of the cut step that now ends at its event."""
+    for i in range(count):
+        here = at[i] <= min(first + EVENT_EDGE, 1.0)
+        forced[i] = here if cut else (forced[i] or here)
+
+
 #: Dormand-Prince's work arrays: a stage's state (cont) and the error estimate (err).
 #: ``None`` in their place selects RODAS4.
 DopriWork = namedtuple("DopriWork", ["cont", "err"])
@@ -361,6 +408,17 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
     just_rejected = False
     h_acc = 0.0
     err_acc = 1.0
+    # events: the guards at the step's start and end, a bisection's guards, the blocks
+    # located at the end of a cut step (switched there whatever their guard's round-off)
+    g_start = np.empty(n)
+    g_end = np.empty(n)
+    g_mid = np.empty(n)
+    at = np.full(n, 2.0)
+    forced = np.zeros(n, dtype=np.bool_)
+    event_cut = False
+    if HAS_EVENTS:
+        event_switch(prm, y, forced)
+        event_guards(prm, y, g_start)
     for seg in range(tb.shape[0] - 1):
         t = tb[seg]
         t_end = tb[seg + 1]
@@ -409,7 +467,7 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
             else:
                 h = min(h, h_max)
             last = False
-            if t + h >= t_end - 1e-3 * h:
+            if t + h >= t_end - 1e-3 * h and not (HAS_EVENTS and event_cut):
                 h = t_end - t
                 last = True
             t_new = t_end if last else t + h
@@ -450,6 +508,14 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                         dopri.err[a] = h * acc
                     err = _error_norm(dopri.err, y, ynew, rtol, atol, n)
                 n_rhs += 6
+            if HAS_EVENTS and err <= 1.0:
+                theta = _first_event(h, y, f0, ynew, f1, prm, g_start, g_end, g_mid, ybuf, at)
+                cut = theta < 1.0 - EVENT_EDGE
+                _mark_events(at, theta, forced, n, cut)
+                if cut:  # the step again, ending at the event
+                    h *= theta
+                    event_cut = True
+                    continue
             if err <= 1.0:
                 if sens is not None:
                     n_jac += _sens_step(t, t_new, ts, y, ynew, jm, e, piv,
@@ -482,6 +548,16 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                 ft_valid = False
                 t = t_new
                 steps += 1
+                if HAS_EVENTS:
+                    if event_switch(prm, y, forced):
+                        rhs(t, ts, y, prm, sig, ptr, f0)
+                        n_rhs += 1
+                        jm_valid = False
+                        o0_valid = False
+                    event_guards(prm, y, g_start)
+                    for a in range(n):
+                        forced[a] = False
+                    event_cut = False
                 if dopri is None:
                     # predictive (Gustafsson) controller, as in Hairer & Wanner's RODAS
                     quot = min(5.0, max(1.0 / 6.0, err ** 0.25 / 0.9))
@@ -500,6 +576,10 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                     h *= min(5.0, max(0.2, scale))
             else:
                 rejected += 1
+                if HAS_EVENTS:
+                    event_cut = False
+                    for a in range(n):
+                        forced[a] = False
                 if dopri is None:
                     just_rejected = True
                     h *= 0.25 if not finite else max(0.2, 0.9 * err ** -0.25)

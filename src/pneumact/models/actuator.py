@@ -70,7 +70,10 @@ class Actuator:
                 "PressureRegulator)")
         self.params.require(self.required, "Actuator")
 
-    has_sensitivities: ClassVar[bool] = True
+    @property
+    def sensitivity_refusal(self) -> str | None:
+        """Why forward sensitivities are refused: the friction law's reason, if any."""
+        return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
     @property

@@ -142,7 +142,10 @@ class FrictionRig:
                 f"FrictionRig: drive = {self.drive!r}; allowed: {', '.join(DRIVES)}")
         self.params.require(self.required, "FrictionRig")
 
-    has_sensitivities: ClassVar[bool] = True
+    @property
+    def sensitivity_refusal(self) -> str | None:
+        """Why forward sensitivities are refused: the friction law's reason, if any."""
+        return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
     @property

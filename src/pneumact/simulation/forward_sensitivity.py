@@ -154,11 +154,10 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     names = list(parameters)
     if not names:
         raise ParameterError("sensitivities: give at least one parameter name")
-    if not model.has_sensitivities:
+    if model.sensitivity_refusal is not None:
         raise ParameterError(
-            f"sensitivities: {model.describe()} does not carry forward sensitivities (a "
-            f"closed loop's controller is not differentiated through); use finite "
-            f"differences or the batch engine")
+            f"sensitivities: {model.describe()} does not carry forward sensitivities "
+            f"({model.sensitivity_refusal}); use finite differences or the batch engine")
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     assembly, kernel = prep.assembly, prep.kernel
     names = assembly.check_parameters(names, "sensitivities")

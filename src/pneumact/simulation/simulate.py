@@ -49,7 +49,10 @@ class Model(Protocol):
     ``plant_kind`` what its input acts on (pressure, command, force...); ``stroke`` the
     end of its travel (None: unbounded)."""
 
-    has_sensitivities: bool
+    @property
+    def sensitivity_refusal(self) -> str | None:
+        """Why the model does not carry forward sensitivities (None: it does)."""
+        ...
 
     @property
     def params(self) -> ParameterSet: ...

@@ -14,10 +14,11 @@ from .base import FrictionModel, registered
 from .bouc_wen import BoucWen
 from .dahl import Dahl
 from .elasto_plastic import ElastoPlastic
+from .gms import GMS
 from .lugre import LuGre
 from .static import CoulombViscous, StaticMap, StribeckMap
 
-__all__ = ["BoucWen", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "LuGre",
+__all__ = ["GMS", "BoucWen", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "LuGre",
            "StaticMap", "StribeckMap", "friction_models"]
 
 

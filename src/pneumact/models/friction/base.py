@@ -165,6 +165,8 @@ class FrictionModel:
     template: ClassVar[str] = SCALAR_LAW
     #: the compiled functions the template binds: ``law`` + each suffix
     compiled: ClassVar[tuple[str, ...]] = ("", "_params", "_scales", "_bound")
+    #: why a run of the law cannot carry forward sensitivities (None: it can)
+    sensitivity_refusal: ClassVar[str | None] = None
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -209,6 +211,12 @@ class FrictionModel:
         """How far the body moves at rest before gross sliding (m); 0 for a static map.
         With no friction level (frictionless) the deflection under 1 N."""
         raise NotImplementedError
+
+    def matched_values(self, params) -> dict[str, float]:
+        """Values of the law's own parameters that match a LuGre set (its σ0, Fc, Fs, vs),
+        for a set that lacks them: a starting point to fit from, not a measurement. Laws
+        whose own parameters have catalogue defaults return none."""
+        return {}
 
     def relaxation_length(self, v, params) -> np.ndarray:
         """Sliding distance over which the states settle at speed |v| (m); its ratio to
