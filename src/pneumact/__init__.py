@@ -30,6 +30,7 @@ _EXPORTS: dict[str, str] = {
     "CoulombViscous": "pneumact.models",
     "Dahl": "pneumact.models",
     "ElastoPlastic": "pneumact.models",
+    "GMS": "pneumact.models",
     "FrictionRig": "pneumact.models",
     "Isothermal": "pneumact.models",
     "LuGre": "pneumact.models",
@@ -88,6 +89,7 @@ _EXPORTS: dict[str, str] = {
 }
 
 __all__ = [
+    "GMS",
     "PID",
     "Actuator",
     "Adiabatic",
@@ -203,6 +205,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     )
     from pneumact.io import Record, read_record, read_records
     from pneumact.models import (
+        GMS,
         Actuator,
         Adiabatic,
         BoucWen,

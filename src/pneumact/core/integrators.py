@@ -78,8 +78,12 @@ OUTPUT_FD = 1e-7
 #: relative distance below a breakpoint from which an output point waits for its jump
 JUMP_EDGE = 1e-12
 #: an event located within this fraction of a step's end ends that step; an earlier one
-#: cuts the step there (the step is taken again, ending at the event)
+#: cuts the step there (the step is taken again, ending at the event). A step already cut
+#: at an event ends at it if it is found again within EVENT_CUT_EDGE of the end: the
+#: shorter step's interpolant puts the crossing a little elsewhere, and cutting again
+#: for each such shift would shorten it without end.
 EVENT_EDGE = 1e-9
+EVENT_CUT_EDGE = 1e-3
 #: bisections of the step fraction that locate an event (2^-42 of the step)
 EVENT_BISECTIONS = 42
 
@@ -309,11 +313,12 @@ def integrate_dopri5(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
 
 
 @kernel()
-def _first_event(h, y, f0, ynew, f1, prm, g_start, g_end, g_mid, ybuf, at):
+def _first_event(t, h, ts, y, f0, ynew, f1, prm, sig, ptr, g_start, g_end, g_mid, ybuf,
+                 at):
     """The fraction of the step at which the first guard crosses zero (2.0 if none does),
     by bisection on the step's cubic Hermite interpolant; ``at[i]``: guard i's crossing
     (2.0 if it does not cross)."""
-    count = event_guards(prm, ynew, g_end)
+    count = event_guards(t + h, ts, ynew, prm, sig, ptr, g_end)
     first = 2.0
     for i in range(count):
         at[i] = 2.0
@@ -326,7 +331,7 @@ def _first_event(h, y, f0, ynew, f1, prm, g_start, g_end, g_mid, ybuf, at):
             h00, h10, h01, h11 = _hermite(mid)
             for a in range(NSTATE):
                 ybuf[a] = h00 * y[a] + h01 * ynew[a] + h * (h10 * f0[a] + h11 * f1[a])
-            event_guards(prm, ybuf, g_mid)
+            event_guards(t + mid * h, ts, ybuf, prm, sig, ptr, g_mid)
             if g_mid[i] > 0.0:
                 lo = mid
             else:
@@ -416,9 +421,6 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
     at = np.full(n, 2.0)
     forced = np.zeros(n, dtype=np.bool_)
     event_cut = False
-    if HAS_EVENTS:
-        event_switch(prm, y, forced)
-        event_guards(prm, y, g_start)
     for seg in range(tb.shape[0] - 1):
         t = tb[seg]
         t_end = tb[seg + 1]
@@ -431,6 +433,9 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
             j = _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out)
             if seg < tb.shape[0] - 2:  # a point on the next breakpoint: after its jump
                 t_stop = t_end - JUMP_EDGE * max(1.0, abs(t_end))
+        if HAS_EVENTS:  # the interval's inputs (a reversal of a prescribed motion) decide
+            event_switch(t, ts, y, prm, sig, ptr, forced)
+            event_guards(t, ts, y, prm, sig, ptr, g_start)
         rhs(t, ts, y, prm, sig, ptr, f0)
         n_rhs += 1
         jm_valid = False
@@ -509,9 +514,22 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                     err = _error_norm(dopri.err, y, ynew, rtol, atol, n)
                 n_rhs += 6
             if HAS_EVENTS and err <= 1.0:
-                theta = _first_event(h, y, f0, ynew, f1, prm, g_start, g_end, g_mid, ybuf, at)
-                cut = theta < 1.0 - EVENT_EDGE
+                theta = _first_event(t, h, ts, y, f0, ynew, f1, prm, sig, ptr, g_start, g_end,
+                                     g_mid, ybuf, at)
+                cut = theta < 1.0 - (EVENT_CUT_EDGE if event_cut else EVENT_EDGE)
                 _mark_events(at, theta, forced, n, cut)
+                if cut and theta * h <= 1e-14 * max(1.0, abs(t)):  # at the step's start
+                    event_switch(t, ts, y, prm, sig, ptr, forced)
+                    event_guards(t, ts, y, prm, sig, ptr, g_start)
+                    for a in range(n):
+                        forced[a] = False
+                    rhs(t, ts, y, prm, sig, ptr, f0)
+                    n_rhs += 1
+                    jm_valid = False
+                    ft_valid = False
+                    o0_valid = False
+                    event_cut = False
+                    continue
                 if cut:  # the step again, ending at the event
                     h *= theta
                     event_cut = True
@@ -549,12 +567,12 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                 t = t_new
                 steps += 1
                 if HAS_EVENTS:
-                    if event_switch(prm, y, forced):
+                    if event_switch(t, ts, y, prm, sig, ptr, forced):
                         rhs(t, ts, y, prm, sig, ptr, f0)
                         n_rhs += 1
                         jm_valid = False
                         o0_valid = False
-                    event_guards(prm, y, g_start)
+                    event_guards(t, ts, y, prm, sig, ptr, g_start)
                     for a in range(n):
                         forced[a] = False
                     event_cut = False

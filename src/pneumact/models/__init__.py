@@ -2,6 +2,7 @@
 
 from .actuator import Actuator
 from .friction import (
+    GMS,
     BoucWen,
     CoulombViscous,
     Dahl,
@@ -24,9 +25,9 @@ from .rig import FrictionRig
 from .valves import VALVES, CommandValve, PressureRegulator, PressureSource, Valve
 
 __all__ = [
-    "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw", "CommandValve",
-    "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig", "Isothermal",
-    "LuGre", "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
-    "flow_function_values", "friction_models", "input_signal", "orifice_mass_flow",
-    "valve_for_signal",
+    "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
+    "CommandValve", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig",
+    "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap",
+    "Valve", "flow_function_values", "friction_models", "input_signal", "orifice_mass_flow",
+    "valve_for_signal"
 ]

@@ -64,6 +64,12 @@ def external_load(t, ts, x, sig, ptr):
 
 
 @kernel()
+def model_velocity(t, ts, y, prm, sig, ptr):
+    """The diaphragm's velocity (what a friction law's events read)."""
+    return y[S_VELOCITY]
+
+
+@kernel()
 def derive(prm):
     """Recompute the derived entries of every block (after any change of a value)."""
     valve_derive(prm, VALVE_LO)

@@ -37,6 +37,14 @@ def _drive(t, ts, y, prm, sig, ptr):
 
 
 @kernel()
+def model_velocity(t, ts, y, prm, sig, ptr):
+    """The mass's velocity: a kinematic drive's, else the state (what a friction law's
+    events read)."""
+    kin, v_kin, _, _, _, _, _ = _drive(t, ts, y, prm, sig, ptr)
+    return v_kin if kin else y[S_VELOCITY]
+
+
+@kernel()
 def rhs(t, ts, y, prm, sig, ptr, dydt):
     kin, v_kin, a_kin, f_drive, _, _, _ = _drive(t, ts, y, prm, sig, ptr)
     v = v_kin if kin else y[S_VELOCITY]

@@ -35,7 +35,10 @@ from pneumact.models.friction.gms import (
 # --- bound by the generator --------------------------------------------------------------
 FRICTION_LO = FRICTION_HI = 0
 S_FRICTION = 0
-S_VELOCITY = 1
+#: the model's velocity at (t, y): its state, or a kinematic drive's (the model template's)
+model_velocity = None
+#: the law on its own (``law_alone``) has no velocity and calls no event function
+OPTIONAL_FUNCTIONS = ("model_velocity",)
 # ------------------------------------------------------------------------------------------
 
 
@@ -191,11 +194,15 @@ def friction_param_partials(v, y, s, p, o, g, row_f):
 
 @kernel()
 def friction_project(p, o, y, s):
-    """|kᵢ·zᵢ| <= νᵢ·max(Fs, Fc)/Σν: a block slips before its force passes its share."""
+    """A slipping block's |kᵢ·zᵢ| <= νᵢ·max(Fs, Fc)/Σν (its force approaches its share of
+    g(v) <= max(Fs, Fc)). A stuck block is left alone: a step that carries it past its
+    slip force is cut at the crossing by the event location, which must see it."""
     n = _blocks()
     shares = share_sum(p, o, n)
     level = max(p[o + GMS_FS], p[o + GMS_FC])
     for i in range(n):
+        if y[s + n + i] == 0.0:
+            continue
         bound = p[o + GMS_COMMON + n + i] * level / (shares * p[o + GMS_COMMON + i])
         y[s + i] = min(max(y[s + i], -bound), bound)
 
@@ -226,10 +233,10 @@ def _guard_of(v, y, prm, i, n, level):
 
 
 @kernel()
-def event_guards(prm, y, out):
+def event_guards(t, ts, y, prm, sig, ptr, out):
     """One guard per block into ``out``; returns how many."""
     n = _blocks()
-    v = y[S_VELOCITY]
+    v = model_velocity(t, ts, y, prm, sig, ptr)
     level = _level(v, prm, FRICTION_LO)[0]
     for i in range(n):
         out[i] = _guard_of(v, y, prm, i, n, level)[0]
@@ -237,12 +244,12 @@ def event_guards(prm, y, out):
 
 
 @kernel()
-def event_switch(prm, y, forced):
+def event_switch(t, ts, y, prm, sig, ptr, forced):
     """Switch each block whose guard is <= 0 or that ``forced`` names (located at this
     instant): a stuck block starts to slip in the direction of motion, on its slip force;
     a slipping block sticks. Returns whether any block switched."""
     n = _blocks()
-    v = y[S_VELOCITY]
+    v = model_velocity(t, ts, y, prm, sig, ptr)
     level = _level(v, prm, FRICTION_LO)[0]
     changed = False
     for i in range(n):
@@ -253,7 +260,9 @@ def event_switch(prm, y, forced):
             y[S_FRICTION + n + i] = 0.0
             changed = True
             continue
-        direction = sign(v) if v != 0.0 else sign(y[S_FRICTION + i])
+        # the direction the block is loaded in (that of the motion that loaded it; near a
+        # reversal the velocity at the located instant may already point back)
+        direction = sign(y[S_FRICTION + i]) if y[S_FRICTION + i] != 0.0 else sign(v)
         if direction != 0.0:
             y[S_FRICTION + n + i] = direction
             y[S_FRICTION + i] = direction * limit / k
