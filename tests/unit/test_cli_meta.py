@@ -231,3 +231,23 @@ def test_chamber_laws_and_friction_options_are_reachable():
     with pytest.raises(ArgumentError, match="--decaying-damping is an option of --friction "
                                             "lugre"):
         build_model(ModelOptions(friction="dahl", decaying_damping=True))
+
+
+def test_elements_builds_a_gms_law_and_a_set_without_its_blocks_names_one_with_them():
+    """--friction gms --elements N is GMS(n_elements=N); a set without the blocks is
+    refused naming the shipped set that has them; --elements goes with gms only."""
+    import pneumact as pa
+    from conftest import load_quietly
+    from pneumact.cli.common import ModelOptions, build_model
+    from pneumact.errors import ArgumentError
+
+    _, actuator = build_model(ModelOptions(friction="gms", elements=3),
+                              load_quietly("vgt-paper-gms4"))
+    assert actuator.friction == pa.GMS(n_elements=3)
+    with pytest.raises(ArgumentError, match=r"lacks gms_C.*shipped sets that have them: "
+                                            r"vgt-paper-gms4"):
+        build_model(ModelOptions(friction="gms", elements=4), load_quietly("vgt-paper"))
+    with pytest.raises(ArgumentError, match="--elements is an option of --friction gms"):
+        build_model(ModelOptions(friction="dahl", elements=4), load_quietly("vgt-paper"))
+    assert build_model(ModelOptions(friction="elasto-plastic"),
+                       load_quietly("vgt-paper"))[1].friction == pa.ElastoPlastic()

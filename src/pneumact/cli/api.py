@@ -18,8 +18,8 @@ from __future__ import annotations
 __all__ = ["API", "NONE_MEANS", "OWN", "SPELLED", "UNITS"]
 
 #: the model every actuator command builds (``common.build_model``)
-_MODEL = ("pneumact.models:Actuator", "pneumact.models:LuGre", "pneumact.models:Polytropic",
-          "pneumact.simulation:Rodas4")
+_MODEL = ("pneumact.models:Actuator", "pneumact.models:LuGre", "pneumact.models:GMS",
+          "pneumact.models:Polytropic", "pneumact.simulation:Rodas4")
 #: the default experiment of ``common.build_experiment``
 _EXPERIMENT = ("pneumact.experiments:PressureCycle",)
 _FRICTION_TEST = ("pneumact.analysis.friction_tests:run_friction_test",)
@@ -64,6 +64,7 @@ API: dict[str, tuple[str, ...]] = {
 #: options whose word is not the API's, and the parameter ("module:name.parameter") each
 #: stands for
 SPELLED: dict[str, str] = {
+    "elements": "pneumact.models:GMS.n_elements",
     "low": "pneumact.experiments:PressureCycle.low",
     "t_end": "pneumact.experiments:PressureCycle.period",
     "signals": "pneumact.sensitivity:model_signal.signal",

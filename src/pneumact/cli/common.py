@@ -2,7 +2,7 @@
 progress display, and the options that build a model and its experiment.
 
 ``simulate``, ``simulate-batch`` (and the commands that come after them) take the same
-``--params --valve --friction --decaying-damping --chamber --exponent --t-end --low
+``--params --valve --friction --decaying-damping --elements --chamber --exponent --t-end --low
 --input-csv --rtol`` options,
 defined once here (``ModelOptions``) and turned into library objects by one function
 (``build_model``, ``build_experiment``). Nothing here imports numpy, pandas or numba at
@@ -27,7 +27,7 @@ from rich.text import Text
 
 from pneumact.checks import check_int, check_names, check_range
 from pneumact.errors import ArgumentError, ExperimentError, PassivityWarning, PneumactError
-from pneumact.models.friction import LuGre
+from pneumact.models.friction import GMS, LuGre
 from pneumact.models.pneumatics import Polytropic
 from pneumact.models.valves import PressureSource
 
@@ -99,6 +99,9 @@ ExponentOption = Annotated[float, typer.Option(
 DecayingDampingOption = Annotated[bool, typer.Option(
     "--decaying-damping", help="LuGre: σ1(v) = σ1·exp(−(v/vs)²) instead of a constant "
                                "σ1.")]
+ElementsOption = Annotated[int | None, typer.Option(
+    "--elements", help="GMS: the number of blocks (default 4; the set carries gms_k1.., "
+                       "gms_nu1.. and gms_C).")]
 TEndOption = Annotated[float | None, typer.Option(
     "--t-end", help="Duration [s]: the period of the default cycle (default 20), or where "
                     "to stop the input.")]
@@ -141,6 +144,7 @@ class ModelOptions:
     rtol: float = 1e-6
     exponent: float = DEFAULT_EXPONENT
     decaying_damping: bool = DEFAULT_DECAYING_DAMPING
+    elements: int | None = None
 
 
 def executor_of(workers: int | None, scheduler: str | None, chunk_size: int | None = None):
@@ -204,15 +208,50 @@ def check_model_options(options: ModelOptions) -> None:
 
 def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
-    from pneumact.models import VALVES, Actuator, friction_models
+    from pneumact.models import VALVES, Actuator
 
     check_model_options(options)
     params = load_quietly(options.params) if params is None else params
-    law = friction_models()[str(options.friction)]
-    friction = (law(decaying_damping=True) if options.decaying_damping  # type: ignore[call-arg]
-                else law())
+    friction = friction_of(options)
+    _check_friction_parameters(friction, params, options)
     return params, Actuator(params, friction=friction, valve=VALVES[options.valve.value](),
                             chamber=build_chamber(options.chamber, options.exponent))
+
+
+def _check_friction_parameters(friction, params, options: ModelOptions) -> None:
+    """A set without the law's own parameters (GMS's blocks) is refused naming the shipped
+    sets that have them and everything the given set has."""
+    import pneumact as pa
+    from pneumact.parameters import catalogue
+
+    missing = [name for name in friction.required
+               if name not in params and catalogue()[name].default is None]
+    if not missing:
+        return
+    needed = {*friction.required, *params}
+    with warnings.catch_warnings():  # the shipped sets' own warnings are not the user's
+        warnings.simplefilter("ignore")
+        having = [name for name, _ in pa.available_params()
+                  if needed <= set(load_quietly(name))]
+    hint = f"; shipped sets that have them: {', '.join(having)} (--params)" if having else ""
+    raise ArgumentError(f"--friction {options.friction}: parameter set {params.name!r} lacks "
+                        f"{', '.join(missing)}{hint}; or add them to a copy of its .toml "
+                        f"file (pneumact params show {params.name} lists its values)")
+
+
+def friction_of(options: ModelOptions):
+    """The friction law --friction, --decaying-damping and --elements name."""
+    from pneumact.models import friction_models
+
+    law = friction_models()[str(options.friction)]
+    if options.elements is not None and law is not GMS:
+        raise ArgumentError(f"--elements is an option of --friction gms, not of "
+                            f"--friction {options.friction}")
+    if options.decaying_damping:
+        return law(decaying_damping=True)  # type: ignore[call-arg]
+    if options.elements is not None:
+        return law(n_elements=options.elements)  # type: ignore[call-arg]
+    return law()
 
 
 def build_chamber(chamber: Chamber, exponent: float = DEFAULT_EXPONENT):

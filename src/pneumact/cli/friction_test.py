@@ -19,10 +19,13 @@ from rich.table import Table
 
 from pneumact.checks import check_out_dir
 from pneumact.cli.common import (
+    ElementsOption,
     Friction,
     FrictionOption,
+    ModelOptions,
     ParamsOption,
     fmt,
+    friction_of,
     out_console,
     use_agg,
     user_errors,
@@ -93,6 +96,8 @@ def _command(cls: type[FrictionTest]):
                           annotation=ParamsOption),
         inspect.Parameter("friction", inspect.Parameter.KEYWORD_ONLY, default=Friction.lugre,
                           annotation=FrictionOption),
+        inspect.Parameter("elements", inspect.Parameter.KEYWORD_ONLY, default=None,
+                          annotation=ElementsOption),
         inspect.Parameter("out", inspect.Parameter.KEYWORD_ONLY, default=Path("pneumact-out"),
                           annotation=Annotated[Path, typer.Option(
                               help="Output directory (friction_test.csv, "
@@ -107,11 +112,13 @@ def _command(cls: type[FrictionTest]):
 
     def command(**given) -> None:
         params, friction, out = given.pop("params"), given.pop("friction"), given.pop("out")
+        elements = given.pop("elements")
         with user_errors():
             _take_deprecated(cls, given)
             out = check_out_dir("--out", out)
             test = cls(**_settings(cls, given))
-            _run(test, params, friction, out)
+            law = friction_of(ModelOptions(friction=friction, elements=elements))
+            _run(test, params, law, out)
 
     # typer reads the parameters from the signature built here (mypy knows no such attribute)
     command.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
@@ -140,18 +147,15 @@ def _take_deprecated(cls: type[FrictionTest], given: dict[str, Any]) -> None:
         given[name] = value
 
 
-def _run(test: FrictionTest, params_name: str, friction_name: str, out: Path) -> None:
+def _run(test: FrictionTest, params_name: str, model, out: Path) -> None:
     from pneumact.analysis.friction_tests import run_friction_test
     from pneumact.cli.common import COMPILING, err_console, load_quietly
-    from pneumact.models import friction_models
-
     use_agg()
     import matplotlib.pyplot as plt
 
     from pneumact.plotting import plot_friction_test, save_figure
 
     params = load_quietly(params_name)
-    model = friction_models()[str(friction_name)]()
     with err_console.status(f"running the {test.kind} test ({COMPILING})"):
         result = run_friction_test(test, params, friction=model)
     fig = plot_friction_test(result, test.kind)

@@ -21,6 +21,7 @@ from pneumact.cli.common import (
     Chamber,
     ChamberOption,
     DecayingDampingOption,
+    ElementsOption,
     ExponentOption,
     FrictionOption,
     ModelOptions,
@@ -354,6 +355,7 @@ def fit_command(
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     per_record: Annotated[str | None, typer.Option(
@@ -406,7 +408,8 @@ def fit_command(
             check_window(span, where="--window")
         parameter_set, actuator = build_model(ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
-            exponent=exponent, decaying_damping=decaying_damping))
+            exponent=exponent, decaying_damping=decaying_damping,
+                               elements=elements))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
             actuator, recs, free_names, per_record=names(per_record, "--per-record") or (),

@@ -22,6 +22,7 @@ from pneumact.cli.common import (
     ChamberOption,
     ChunkSizeOption,
     DecayingDampingOption,
+    ElementsOption,
     ExponentOption,
     FrictionOption,
     ModelOptions,
@@ -96,6 +97,7 @@ def sensitivity(
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
@@ -142,7 +144,8 @@ def sensitivity(
                               chunk_size=chunk_size is not None)
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, exponent=exponent,
-                               decaying_damping=decaying_damping)
+                               decaying_damping=decaying_damping,
+                               elements=elements)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         feature_names = names(features, "--features") or []

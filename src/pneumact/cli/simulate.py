@@ -17,6 +17,7 @@ from pneumact.cli.common import (
     Chamber,
     ChamberOption,
     DecayingDampingOption,
+    ElementsOption,
     ExponentOption,
     FrictionOption,
     InputOption,
@@ -45,6 +46,7 @@ def simulate(
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
@@ -59,7 +61,8 @@ def simulate(
         out = check_out_dir("--out", out)
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
-                               exponent=exponent, decaying_damping=decaying_damping)
+                               exponent=exponent, decaying_damping=decaying_damping,
+                               elements=elements)
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)

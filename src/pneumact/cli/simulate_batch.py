@@ -24,6 +24,7 @@ from pneumact.cli.common import (
     ChamberOption,
     ChunkSizeOption,
     DecayingDampingOption,
+    ElementsOption,
     ExponentOption,
     FrictionOption,
     InputOption,
@@ -95,6 +96,7 @@ def simulate_batch(
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     t_end: TEndOption = None,
@@ -119,7 +121,8 @@ def simulate_batch(
         table = read_parameter_table(params_csv)
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
-                               exponent=exponent, decaying_damping=decaying_damping)
+                               exponent=exponent, decaying_damping=decaying_damping,
+                               elements=elements)
         parameter_set, model = build_model(options)
         experiment = build_experiment(options, parameter_set)
         with batch_progress() as progress:

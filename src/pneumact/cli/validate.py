@@ -27,6 +27,7 @@ from pneumact.cli.common import (
     Chamber,
     ChamberOption,
     DecayingDampingOption,
+    ElementsOption,
     ExponentOption,
     FrictionOption,
     ModelOptions,
@@ -67,6 +68,7 @@ def validate_command(
              "records; or the record signal that drives them.")] = DEFAULT_INPUT,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
     chamber: ChamberOption = Chamber.isothermal,
     exponent: ExponentOption = DEFAULT_EXPONENT,
     signals: Annotated[str, typer.Option(help="Measured signals to compare.")] = "position",
@@ -92,7 +94,8 @@ def validate_command(
         drive = str(input)
         parameter_set, model = build_model(ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
-            exponent=exponent, decaying_damping=decaying_damping))
+            exponent=exponent, decaying_damping=decaying_damping,
+                               elements=elements))
         test = read_records(records, p_atm=parameter_set["p_atm"])
         solver = pa.Rodas4(rtol=rtol)
         use_agg()
