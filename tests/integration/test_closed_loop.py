@@ -183,3 +183,17 @@ def test_coulomb_feedforward_cuts_the_ramp_tracking_error(canudas):
         inside = (result.time > 2.0) & (result.time < 10.0)
         worst.append(np.abs(result.signals["error"][inside]).max())
     assert worst[1] < worst[0] / 5
+
+
+def test_a_plant_with_state_events_is_refused_with_the_reason():
+    """A GMS plant's stick/slip switches are located by the open-loop kernel only: a
+    closed loop around it is refused, not run with its blocks' memory lost."""
+    import pneumact as pa
+    from conftest import load_quietly
+    from pneumact.errors import ParameterError
+
+    plant = pa.Actuator(load_quietly("vgt-paper-gms4"), friction=pa.GMS(4),
+                        valve=pa.PressureSource())
+    with pytest.raises(ParameterError, match=r"GMS\(n_elements=4\) switches modes at state "
+                                             "events"):
+        pa.ClosedLoop(plant, pa.PID(kp=1.0))

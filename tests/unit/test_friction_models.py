@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.models import BoucWen, CoulombViscous, Dahl, ElastoPlastic, LuGre, StribeckMap
+from pneumact.errors import ArgumentError
+from pneumact.models import GMS, BoucWen, CoulombViscous, Dahl, ElastoPlastic, LuGre, StribeckMap
 from reference import (
     FRICTION_RTOL,
     ROUND_OFF_ATOL,
@@ -167,3 +168,23 @@ def test_elasto_plastic_steady_state_is_stribeck_curve_plus_viscous(ep_params):
     assert np.all(np.abs(values["rates"][:, 0]) <= STEADY_ZDOT_RTOL * np.abs(v))
     np.testing.assert_allclose(values["force"], np.sign(v) * _stribeck(v, ep_params)
                                + ep_params["sigma2"] * v, rtol=FRICTION_RTOL)
+
+
+# ------------------------------------------------ generalized Maxwell-slip (Al-Bender 2005)
+def test_gms_steady_state_is_stribeck_curve_plus_viscous(lugre_params):
+    """Every block slipping at its share νᵢ·g(v)/Σν: the rates rest and the blocks
+    together give F = g(v)·sgn(v) + σ2·v, whatever their number and shares."""
+    for law in (GMS(1), GMS(4), GMS(7)):
+        params = lugre_params.replace(law.matched_values(lugre_params))
+        v = _speeds()
+        steady = law.steady_states(v, params)
+        values = law.evaluate(v, steady, params)
+        assert np.all(np.abs(values["rates"]) <= STEADY_ZDOT_RTOL * np.abs(v)[:, None])
+        np.testing.assert_allclose(values["force"], np.sign(v) * _stribeck(v, params)
+                                   + params["sigma2"] * v, rtol=FRICTION_RTOL)
+
+
+def test_gms_refuses_a_block_count_out_of_range():
+    with pytest.raises(ArgumentError, match=r"n_elements = 9: must be a whole number in "
+                                            r"\[1, 8\]"):
+        GMS(9)

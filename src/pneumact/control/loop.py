@@ -68,6 +68,12 @@ class ClosedLoop:
                 raise ParameterError(f"ClosedLoop: {name} = {value!r}; must be a finite number")
         if self.drive_gain == 0.0:
             raise ParameterError("ClosedLoop: drive_gain = 0; the controller would not act")
+        hybrid = [part.label for part in self.plant.parts() if "HAS_EVENTS" in part.constants]
+        if hybrid:
+            raise ParameterError(
+                f"ClosedLoop: the plant's {', '.join(hybrid)} switches modes at state events, "
+                "which a closed loop's kernel does not locate yet (its stick/slip memory "
+                "would be lost); close the loop around a plant with another friction law")
         if self.disturbance is not None and kind != "force":
             raise ParameterError("ClosedLoop: disturbance is a force on a rig's mass; an "
                                  "actuator takes its loads as Actuator(load=...)")
