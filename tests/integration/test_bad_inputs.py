@@ -72,6 +72,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--chamber": ["adiabatic"],  # with the default pressure source: it would do nothing
     "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
     "--decaying-damping": [],
+    "--elements": ["0", "4"],  # with the default --friction lugre: not a GMS
     "--chunk-size": ["0"],
     "--t-end": ["0", "-1"],
     "--low": ["0", "-50", "200", "20000"],
