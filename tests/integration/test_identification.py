@@ -318,3 +318,25 @@ def test_fit_of_the_friction_rig_to_a_measured_friction(canudas):
                  start={"Fc": 1.3 * canudas["Fc"], "sigma2": 0.7 * canudas["sigma2"]})
     for name in ("Fc", "sigma2"):
         assert result.values[name] == pytest.approx(canudas[name], rel=ref.FIT_RTOL)
+
+
+def test_a_law_without_sensitivities_is_fitted_by_finite_differences_on_request():
+    """GMS refuses forward sensitivities (its switches are state events): fit says so and
+    how to go on; with a finite-difference Jacobian it finds the truth."""
+    from conftest import load_quietly
+    from pneumact.experiments import Experiment, Sine
+    from pneumact.options import Optimizer
+
+    params = load_quietly("canudas1995-gms4")
+    rig = pa.FrictionRig(params, pa.GMS(4), drive="velocity")
+    experiment = Experiment(Sine(0.01, 0.5), "velocity", 4.0, n_points=2001)
+    truth = pa.simulate(rig, experiment)
+    record = Record.from_arrays(truth.time, {"velocity": truth["drive_velocity"],
+                                             "friction": truth["friction"]}, source="rig")
+    start = {"Fc": 1.3 * params["Fc"], "sigma2": 0.7 * params["sigma2"]}
+    with pytest.raises(ParameterError, match=r"Optimizer\(jacobian=\"2-point\"\)"):
+        fit(rig, record, ["Fc", "sigma2"], signals=["friction"], start=start)
+    result = fit(rig, record, ["Fc", "sigma2"], signals=["friction"], start=start,
+                 optimizer=Optimizer(jacobian="2-point"))
+    for name in ("Fc", "sigma2"):
+        assert result.values[name] == pytest.approx(params[name], rel=ref.FIT_RTOL)

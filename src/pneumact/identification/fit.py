@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import math
 import os
 import threading
 import time as _time
@@ -73,6 +74,10 @@ class _Problem:
         #: whose starts run on threads of their own)
         self.workers = 1
         self.jacobian = jacobian
+        #: the relative step of a difference Jacobian: √rtol balances the solver's noise
+        #: (rtol/step) against the truncation error (step); None with sensitivities
+        self.diff_step = (None if jacobian == "sensitivities"
+                          else math.sqrt(max(getattr(solver, "rtol", 1e-6), 1e-14)))
         self.base = dict(base_values)
         #: the parameters each record's model reads (a joint fit mixes valves)
         self.model_parameters = [_parameter_names(m) for m in self.models]
@@ -606,12 +611,27 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
     return stats, aic
 
 
+def _difference_jacobian(problem: _Problem, theta: np.ndarray) -> np.ndarray:
+    """dr/dθ at the solution by central differences of relative step ``diff_step``, for
+    the covariance of a fit whose model carries no forward sensitivities."""
+    columns = []
+    for j in range(theta.size):
+        step = problem.diff_step * (abs(theta[j]) if theta[j] != 0.0 else 1.0)
+        up, down = theta.copy(), theta.copy()
+        up[j] += step
+        down[j] -= step
+        columns.append((problem.evaluate(up, False)[0] - problem.evaluate(down, False)[0])
+                       / (2.0 * step))
+    return np.column_stack(columns)
+
+
 def _solve(problem: _Problem, phi0, lo, hi, optimizer: Optimizer):
     problem.new_optimizer_run()
     jac = problem.jac if problem.jacobian == "sensitivities" else problem.jacobian
     return least_squares(problem.residuals, phi0, jac=jac, bounds=(lo, hi),
                          loss=optimizer.loss, f_scale=optimizer.f_scale, x_scale="jac",
-                         max_nfev=optimizer.max_nfev, method="trf")
+                         max_nfev=optimizer.max_nfev, method="trf",
+                         diff_step=problem.diff_step)
 
 
 def _starts(n, lo, hi, seed):
@@ -760,6 +780,11 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     if record_weights is not None and len(record_weights) != len(records):
         raise ParameterError(f"fit: weights.records = {list(record_weights)}; need one "
                              f"finite weight > 0 per record ({len(records)})")
+    refusals = {m.sensitivity_refusal for m in models} - {None}
+    if refusals and optimizer.jacobian == "sensitivities":
+        raise ParameterError(
+            f"fit: the model does not carry forward sensitivities ({'; '.join(refusals)}); "
+            "give optimizer=Optimizer(jacobian=\"2-point\") to fit with finite differences")
     problem = _Problem(models, records, columns, log_mask, signals, signal_weights,
                        solver or Rodas4(rtol=1e-6), optimizer.jacobian, base, windows,
                        smooth_input, record_weights)
@@ -777,7 +802,11 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     best = min(solutions, key=lambda s: s.cost)
     notify(progress, "fit", 1, 1)
     theta = problem.theta(best.x)
-    r, jac, simulated = problem.evaluate(theta, True)
+    if problem.jacobian == "sensitivities":
+        r, jac, simulated = problem.evaluate(theta, True)
+    else:
+        r, _, simulated = problem.evaluate(theta, False)
+        jac = _difference_jacobian(problem, theta)
     groups = [int(m.sum()) for m in problem.masks for _ in signals]
     cov, dof = covariance_from_jacobian(jac, r, len(columns), groups=groups,
                                         correlated=covariance == "hac")
@@ -907,7 +936,8 @@ def _refit(problem, j, phi_j, keep, x0, lo, hi, optimizer: Optimizer):
         jac = sub.jac if problem.jacobian == "sensitivities" else problem.jacobian
         sol = least_squares(sub.residuals, np.clip(x0, lo[keep], hi[keep]), jac=jac,
                             bounds=(lo[keep], hi[keep]), loss=optimizer.loss,
-                            f_scale=optimizer.f_scale, x_scale="jac", method="trf")
+                            f_scale=optimizer.f_scale, x_scale="jac", method="trf",
+                            diff_step=problem.diff_step)
         ssr, x = 2 * sol.cost, sol.x
     else:
         r = sub.residuals(np.empty(0))
