@@ -34,15 +34,24 @@ declare(
       group="rig", plausible=(-10.0, 10.0)),
 )
 
-#: the drive, a setting of the rig block: every drive shares one kernel per friction law
-#: (changing the drive never recompiles); the spring's stiffness k_drive is in the block
-#: whatever the drive (read by the spring drive only; it has a default)
+#: the drive, a setting of the rig block: the force and kinematic drives share one kernel
+#: (changing the drive never recompiles); the spring drive has a parameter of its own
 DRIVE_KIND = {"force": 0.0, "velocity": 1.0, "position": 2.0, "spring": 3.0}
-RIG_BLOCK = Block.of("m", "k_drive", settings=("drive_kind",))
+RIG_BLOCK = Block.of("m", settings=("drive_kind",))
+SPRING_RIG_BLOCK = RIG_BLOCK + Block.of("k_drive")
 RG_M = RIG_BLOCK.index("m")
-RG_KDRIVE = RIG_BLOCK.index("k_drive")
 RG_KIND = RIG_BLOCK.index("drive_kind")
+RG_KDRIVE = SPRING_RIG_BLOCK.index("k_drive")
 RIG_SIZE = len(RIG_BLOCK)
+SPRING_RIG_SIZE = len(SPRING_RIG_BLOCK)
+
+
+@njit(cache=True, inline="always")
+def spring_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compiled
+    """A spring k_drive whose free end follows x_d(t) [m] pulls the mass (stick-slip)."""
+    xd = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    kd = p[o + RG_KDRIVE]
+    return False, 0.0, 0.0, kd * (xd - x), -kd, 0.0, xd
 
 
 @njit(cache=True)
@@ -57,13 +66,9 @@ def prescribed_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compile
     F(t) [N] on the mass, or its prescribed velocity v(t) [m/s] (the slope: its
     acceleration), or its prescribed position x(t) [m] (the slope: its velocity; the
     acceleration by a forward difference of the slope). The channel is read once, as
-    each read inlined here made every rig kernel compile 0.4 s longer. The spring drive:
-    a spring k_drive whose free end follows the channel x_d(t) [m] pulls the mass."""
+    each read inlined here made every rig kernel compile 0.4 s longer."""
     kind = p[o + RG_KIND]
     value, slope = channel_eval(sig, ptr, CH_DRIVE, t, ts)
-    if kind == 3.0:
-        kd = p[o + RG_KDRIVE]
-        return False, 0.0, 0.0, kd * (value - x), -kd, 0.0, value
     if kind == 1.0:
         return True, value, slope, 0.0, 0.0, 0.0, value
     if kind == 2.0:
@@ -74,12 +79,17 @@ def prescribed_drive(t, ts, x, v, p, o, sig, ptr):  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover - compiled
-    """g[row, o + k] = ∂F_drive/∂p_k: x_d − x for the spring's k_drive, else zero."""
+def no_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover - compiled
+    """g[row, o + k] = ∂F_drive/∂p_k: zero for drives without parameters of their own."""
     for k in range(RIG_SIZE):
         g[row, o + k] = 0.0
-    if p[o + RG_KIND] == 3.0:
-        g[row, o + RG_KDRIVE] = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0] - x
+
+
+@njit(cache=True)
+def spring_drive_params(t, ts, x, v, p, o, sig, ptr, g, row):  # pragma: no cover
+    for k in range(SPRING_RIG_SIZE):
+        g[row, o + k] = 0.0
+    g[row, o + RG_KDRIVE] = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0] - x
 
 
 @njit(cache=True)
@@ -188,13 +198,16 @@ class FrictionRig:
 
     def parts(self) -> tuple[Part, ...]:
         module = __name__
-        rig = Part(role="rig", block=RIG_BLOCK,
+        spring = self.drive == "spring"
+        params = "spring_drive_params" if spring else "no_drive_params"
+        rig = Part(role="rig", block=SPRING_RIG_BLOCK if spring else RIG_BLOCK,
                    states=(StateSpec("position", "m"), StateSpec("velocity", "m/s")),
-                   functions={"drive_eval": f"{module}:prescribed_drive",
-                              "drive_params": f"{module}:drive_params",
+                   functions={"drive_eval": f"{module}:"
+                                            f"{'spring' if spring else 'prescribed'}_drive",
+                              "drive_params": f"{module}:{params}",
                               "drive_start": f"{module}:drive_start"},
                    settings={"drive_kind": DRIVE_KIND[self.drive]},
-                   label=f"{self.drive} drive", key="driven")
+                   label=f"{self.drive} drive", key="spring" if spring else "driven")
         return rig, self.friction.part()
 
     def channels(self, drive_signal):
