@@ -75,9 +75,8 @@ class _Problem:
         self.workers = 1
         self.jacobian = jacobian
         #: the relative step of a difference Jacobian: √rtol balances the solver's noise
-        #: (rtol/step) against the truncation error (step); None with sensitivities
-        self.diff_step = (None if jacobian == "sensitivities"
-                          else math.sqrt(max(getattr(solver, "rtol", 1e-6), 1e-14)))
+        #: (rtol/step) against the truncation error (step); unused with sensitivities
+        self.diff_step = math.sqrt(max(getattr(solver, "rtol", 1e-6), 1e-14))
         self.base = dict(base_values)
         #: the parameters each record's model reads (a joint fit mixes valves)
         self.model_parameters = [_parameter_names(m) for m in self.models]
