@@ -1,8 +1,11 @@
 """Template: one friction law on its own, evaluated over arrays (tests and plots).
 
-Bound to a friction law by the generator; the state vector is the law's states
-(NSTATE of them, from 0), the parameter vector the law's block. The velocity takes the
-column NSTATE of a local Jacobian, the force its row NSTATE.
+Bound to a friction law by the generator. The law does not sit at the start of the
+vectors: a one-state, one-parameter component comes first (``models.friction.evaluation``),
+so a law that reads or writes its slice at a fixed index instead of at its offsets
+(``s``, ``o``) gives wrong values here, as it would in a model. That first state's slot is
+the velocity's column of a local Jacobian and the force's row; the law's states are
+NSTATE − S_FRICTION of them, from S_FRICTION.
 """
 
 import numpy as np
@@ -12,13 +15,15 @@ from pneumact.core import kernel
 # --- bound by the generator --------------------------------------------------------------
 friction_rates = friction_partials = friction_param_partials = None
 friction_store = friction_store_partials = None
-NSTATE = 1
-FRICTION_LO = FRICTION_HI = 0
-S_FRICTION = 0
+NSTATE = 2
+FRICTION_LO = FRICTION_HI = 1
+S_FRICTION = 1
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ()
 OUTPUT_UNITS = ()
+#: the slot of the velocity (a Jacobian's column) and of the force (its row)
+MOTION = 0
 
 
 @kernel()
@@ -28,8 +33,9 @@ def derive(prm):
 
 @kernel()
 def law_values(v, y, prm, force, dforce_dv, rates, jac):
-    """At (v[i], y[i]): force, ∂F/∂v, the rates; jac[i] is the law's Jacobian with the
-    velocity as column NSTATE and the force (×−1: the row of a unit mass) as row NSTATE."""
+    """At (v[i], y[i]) (y[i] the whole vector, the law's states from S_FRICTION): force,
+    ∂F/∂v, the rates of the whole vector; jac[i] the Jacobian with the velocity as column
+    MOTION and the force (×−1: the row of a unit mass) as row MOTION."""
     dydt = np.zeros(NSTATE)
     for i in range(v.shape[0]):
         force[i], z_rates = friction_rates(v[i], y[i], S_FRICTION, prm, FRICTION_LO)
@@ -38,11 +44,11 @@ def law_values(v, y, prm, force, dforce_dv, rates, jac):
             rates[i, j] = dydt[j]
         _, dforce_dv[i], z_partials = friction_partials(v[i], y[i], S_FRICTION, prm,
                                                         FRICTION_LO)
-        friction_store_partials(z_partials, jac[i], S_FRICTION, NSTATE, NSTATE, 1.0)
+        friction_store_partials(z_partials, jac[i], S_FRICTION, MOTION, MOTION, 1.0)
 
 
 @kernel()
 def law_parameter_derivatives(v, y, prm, g):
-    """g[i, j, k]: ∂ż_j/∂p_k (j < NSTATE) and ∂F/∂p_k (j = NSTATE) of the law's block."""
+    """g[i, j, k]: ∂ż_j/∂p_k (rows from S_FRICTION) and ∂F/∂p_k (row MOTION)."""
     for i in range(v.shape[0]):
-        friction_param_partials(v[i], y[i], S_FRICTION, prm, FRICTION_LO, g[i], NSTATE)
+        friction_param_partials(v[i], y[i], S_FRICTION, prm, FRICTION_LO, g[i], MOTION)
