@@ -444,3 +444,19 @@ FAMILY_MIN_IDENTIFIED = 0.4
 THIN_ACTUATOR = 7
 THIN_RAMPS = 4
 SENSOR_LAG = 5e-3  # s: a first-order position sensor of 5 ms (issue 18's mismatch case)
+
+# --- comparison of friction laws (validation/compare.py, issue 21) ---------------------------
+#: the campaign of the honesty tests: the Canudas rig driven by a measured position, two
+#: records (one trains, one is held out) of COMPARE_SAMPLES samples over four periods of a
+#: sine of COMPARE_AMPLITUDE [m] at COMPARE_FREQUENCIES [Hz] with a reversal-making
+#: harmonic of COMPARE_HARMONIC of it at 7×, friction noise COMPARE_NOISE × Fc
+COMPARE_SAMPLES = 601
+COMPARE_AMPLITUDES = (2e-3, 1e-3)
+COMPARE_FREQUENCIES = (0.5, 0.3)
+COMPARE_HARMONIC = 0.02
+COMPARE_NOISE = 0.01
+#: the laws every generating law is compared with (GMS only where it generated the records:
+#: its difference Jacobian and starts make it the costliest to fit)
+COMPARE_LAWS = ("lugre", "elasto-plastic", "dahl", "bouc-wen", "stribeck", "coulomb-viscous")
+#: the generating law's held-out fit (measured 98.9-99.1 % with 1 % noise on Fc)
+COMPARE_TRUTH_FIT_PERCENT = 97.0

@@ -54,6 +54,8 @@ _EXPORTS: dict[str, str] = {
     "BatchResult": "pneumact.simulation.batch",
     "simulate_batch": "pneumact.simulation.batch",
     "fit": "pneumact.identification",
+    "compare_friction_models": "pneumact.validation",
+    "FrictionComparison": "pneumact.validation",
     "Bounds": "pneumact.options",
     "Multistart": "pneumact.options",
     "Offsets": "pneumact.options",
@@ -112,6 +114,7 @@ __all__ = [
     "Executor",
     "Experiment",
     "ExperimentError",
+    "FrictionComparison",
     "FrictionRig",
     "Isothermal",
     "LuGre",
@@ -140,6 +143,7 @@ __all__ = [
     "StribeckMap",
     "Weights",
     "available_params",
+    "compare_friction_models",
     "control",
     "experiments",
     "fit",
@@ -243,4 +247,9 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         simulate_sensitivities,
     )
     from pneumact.simulation.batch import BatchResult, simulate_batch
-    from pneumact.validation import train_test, validate
+    from pneumact.validation import (
+        FrictionComparison,
+        compare_friction_models,
+        train_test,
+        validate,
+    )

@@ -137,7 +137,7 @@ def test_elasto_plastic_unloads_elastically(ep_params):
 def test_elasto_plastic_is_elastic_below_break_away_and_lugre_past_steady(ep_params):
     v = _speeds()
     z_ss = ElastoPlastic().steady_states(v, ep_params)[:, 0]
-    z_ba = ep_params["z_ba_ratio"] * ep_params["Fc"] / ep_params["sigma0"]
+    z_ba = ep_params["z_ba_ratio"] * min(ep_params["Fc"], ep_params["Fs"]) / ep_params["sigma0"]
     np.testing.assert_array_equal(_ep_rates(v, 0.99 * np.sign(v) * z_ba, ep_params), v)
     past = 1.2 * z_ss
     np.testing.assert_allclose(_ep_rates(v, past, ep_params),
@@ -150,7 +150,7 @@ def test_elasto_plastic_transition_uses_the_deflection_magnitude(ep_params):
     z_ss(v) in |z| for either direction of sliding: (1 − ż/v)·z_ss/z = α climbs 0 → 1."""
     v = _speeds()
     z_ss = ElastoPlastic().steady_states(v, ep_params)[:, 0]
-    z_ba = ep_params["z_ba_ratio"] * ep_params["Fc"] / ep_params["sigma0"]
+    z_ba = ep_params["z_ba_ratio"] * min(ep_params["Fc"], ep_params["Fs"]) / ep_params["sigma0"]
     for w in np.linspace(0.05, 0.95, 7):
         z = np.sign(v) * (z_ba + w * (np.abs(z_ss) - z_ba))
         rates = _ep_rates(v, z, ep_params)
@@ -188,3 +188,34 @@ def test_gms_refuses_a_block_count_out_of_range():
     with pytest.raises(ArgumentError, match=r"n_elements = 9: must be a whole number in "
                                             r"\[1, 8\]"):
         GMS(9)
+
+
+def test_elasto_plastic_break_away_follows_the_smaller_of_fc_and_fs(ep_params):
+    """With Fs < Fc (a curve that rises with speed: no parameter set has it, but a fit
+    tries it) the smallest steady deflection is Fs/σ0: z_ba is the ratio of it, and its
+    partials in Fc, Fs and the ratio follow (by central differences, in the transition,
+    where α depends on z_ba)."""
+    from reference import FD_REL_STEP, PARAM_JAC_RTOL
+
+    params = _Values({**ep_params, "Fs": 0.5 * ep_params["Fc"]})
+    law = ElastoPlastic()
+    z_ba = params["z_ba_ratio"] * params["Fs"] / params["sigma0"]
+    v = np.array([-3e-3, -1e-4, 2e-4, 5e-3])
+    z_ss = law.steady_states(v, params)[:, 0]
+    np.testing.assert_array_equal(_ep_rates(v, 0.99 * np.sign(v) * z_ba, params), v)
+    z = (0.5 * (z_ba + np.abs(z_ss)) * np.sign(v))[:, None]
+    partials = law.parameter_derivatives(v, z, params)
+    for name in ("Fc", "Fs", "z_ba_ratio"):
+        h = FD_REL_STEP * params[name]
+        numeric = (law.evaluate(v, z, params.replace({name: params[name] + h}))["rates"]
+                   - law.evaluate(v, z, params.replace({name: params[name] - h}))["rates"]
+                   ) / (2 * h)
+        np.testing.assert_allclose(partials[name][:, 0], numeric[:, 0], rtol=PARAM_JAC_RTOL,
+                                   atol=1e-12 * np.max(np.abs(numeric)))
+
+
+class _Values(dict):
+    """Values a fit may try that no parameter set holds (unvalidated)."""
+
+    def replace(self, changes):
+        return _Values({**self, **changes})

@@ -10,6 +10,7 @@
     pneumact identify friction DATA_EMPS.mat --validate DATA_EMPS_PULSES.mat
     pneumact fit bench/presliding.csv --free sigma0,sigma1 --offsets position
     pneumact validate bench/sweep.csv --out val   # model against records, HTML report
+    pneumact compare bench/*.csv --laws lugre,gms:4,dahl   # which friction law fits?
     pneumact reproduce                           # the whole paper, one folder
     pneumact control step --start 4 --stop 8     # closed-loop position step, metrics
     pneumact control hunting                     # Canudas et al. (1995) hunting
@@ -27,6 +28,7 @@ from typing import Annotated
 import typer
 
 from pneumact.cli.common import out_console
+from pneumact.cli.compare import compare_command
 from pneumact.cli.control import control_app
 from pneumact.cli.friction_test import friction_test_app
 from pneumact.cli.identify import campaign, fit_command, identify_app
@@ -68,6 +70,7 @@ app.add_typer(params_app, name="params")
 app.command("campaign")(campaign)
 app.add_typer(identify_app, name="identify")
 app.command("fit")(fit_command)
+app.command("compare")(compare_command)
 app.command("sensitivity")(sensitivity)
 app.command("validate")(validate_command)
 app.command("reproduce")(reproduce_command)

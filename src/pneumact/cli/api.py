@@ -34,6 +34,8 @@ API: dict[str, tuple[str, ...]] = {
     "campaign": ("pneumact.identification:design_campaign",
                  "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),
     "fit": ("pneumact.identification:fit", *_MODEL),
+    "compare": ("pneumact.validation:compare_friction_models", "pneumact.options:Executor",
+                *_MODEL),
     "sensitivity": ("pneumact.sensitivity:sobol", "pneumact.sensitivity:src",
                     "pneumact.sensitivity:rbd_fast", "pneumact.sensitivity:model_outputs",
                     "pneumact.sensitivity:across_conditions", "pneumact.sensitivity:model_signal",
@@ -92,8 +94,8 @@ OWN: dict[str, str] = {
     "partial": "identify paper: write identified.toml even with unidentified parameters",
     "validate": "identify friction: a second record to validate the estimates on",
     "version": "print the version",
-    "format": "identify friction: the reader of the record file (auto, record, emps, "
-              "tudelft)",
+    "format": "identify friction, compare: the reader of the record files (auto, record, "
+              "emps, tudelft)",
 }
 
 #: what an API default of None stands for, by parameter name (the API builds it)

@@ -137,7 +137,12 @@ def covariance_from_jacobian(jac: np.ndarray, residuals: np.ndarray, n_par: int,
         r = residuals[start:start + length]
         start += length
         meat += _long_run_covariance(g, _bandwidth(r))
-    return scale * bread @ meat @ bread, dof
+    with np.errstate(invalid="ignore"):  # inf·0 of a dead parameter: its row stays inf
+        covariance = scale * bread @ meat @ bread
+    # a negative variance is round-off of a sandwich that cancelled: no interval, rather
+    # than one of width zero
+    negative = np.diag(covariance) < 0
+    return (_with_infinite(covariance, negative) if np.any(negative) else covariance), dof
 
 
 #: Up to this bandwidth the lag sums are direct products (O(L·n·P²)), beyond it FFTs
@@ -191,6 +196,15 @@ def _long_run_covariance(g: np.ndarray, bandwidth: int) -> np.ndarray:
             value = cross[0] + weights @ (cross[1:bandwidth + 1] + cross[-bandwidth:][::-1])
             out[a, b] = out[b, a] = value
     return out
+
+
+def long_run_variance(series: np.ndarray) -> float:
+    """The HAC (Bartlett, ``_bandwidth``) variance of the sum of a series correlated in
+    time, about its mean: what the variance of Σx would be were the samples independent
+    times what their correlation adds (a held-out loss differential's, for instance)."""
+    x = np.asarray(series, dtype=float).ravel()
+    centred = (x - x.mean())[:, None]
+    return float(_long_run_covariance(centred, _bandwidth(x))[0, 0])
 
 
 def _bandwidth(r: np.ndarray) -> int:

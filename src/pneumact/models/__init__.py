@@ -10,6 +10,7 @@ from .friction import (
     FrictionModel,
     LuGre,
     StribeckMap,
+    friction_law,
     friction_models,
 )
 from .inputs import INPUT_SIGNALS, input_signal, valve_for_signal
@@ -28,6 +29,6 @@ __all__ = [
     "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
     "CommandValve", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig",
     "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap",
-    "Valve", "flow_function_values", "friction_models", "input_signal", "orifice_mass_flow",
-    "valve_for_signal"
+    "Valve", "flow_function_values", "friction_law", "friction_models", "input_signal",
+    "orifice_mass_flow", "valve_for_signal"
 ]

@@ -19,7 +19,7 @@ from .lugre import LuGre
 from .static import CoulombViscous, StaticMap, StribeckMap
 
 __all__ = ["GMS", "BoucWen", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "LuGre",
-           "StaticMap", "StribeckMap", "friction_models"]
+           "StaticMap", "StribeckMap", "friction_law", "friction_models"]
 
 
 #: the paper's law, listed first
@@ -33,6 +33,26 @@ def friction_models() -> dict[str, type[FrictionModel]]:
         importlib.import_module(f"{__name__}.{module}")
     laws = registered()
     return {DEFAULT: laws.pop(DEFAULT), **laws}
+
+
+def friction_law(spec: str | FrictionModel) -> FrictionModel:
+    """A law from its command-line name, with GMS's number of blocks after a colon
+    ("lugre", "elasto-plastic", "gms:4"); a law instance is returned as it is."""
+    from ...errors import ParameterError
+
+    if isinstance(spec, FrictionModel):
+        return spec
+    laws = friction_models()
+    name, _, count = str(spec).strip().partition(":")
+    if name not in laws:
+        raise ParameterError(f"friction law {spec!r}: unknown; allowed: {', '.join(laws)} "
+                             "(gms:N for N blocks)")
+    if not count:
+        return laws[name]()
+    if laws[name] is not GMS or not count.isdigit():
+        raise ParameterError(f"friction law {spec!r}: only gms takes a number of blocks "
+                             "(gms:4)")
+    return GMS(n_elements=int(count))
 
 
 friction_models()  # every law module declares its parameters on import (the catalogue)

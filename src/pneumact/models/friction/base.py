@@ -212,6 +212,14 @@ class FrictionModel:
         With no friction level (frictionless) the deflection under 1 N."""
         raise NotImplementedError
 
+    #: block parameters a comparison of laws leaves at the set's values: shape exponents
+    #: and regularisations that trade off with the others and say little of the law
+    held_in_comparison: ClassVar[tuple[str, ...]] = ("delta", "v_reg")
+
+    def comparison_parameters(self) -> tuple[str, ...]:
+        """The parameters ``compare_friction_models`` fits for this law."""
+        return tuple(n for n in self.block.parameters if n not in self.held_in_comparison)
+
     def matched_values(self, params) -> dict[str, float]:
         """Values of the law's own parameters that match a LuGre set (its σ0, Fc, Fs, vs),
         for a set that lacks them: a starting point to fit from, not a measurement. Laws

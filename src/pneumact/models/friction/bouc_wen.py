@@ -101,3 +101,4 @@ class BoucWen(CoulombBristleLaw):
     block = BOUC_WEN_BLOCK
     law = "bouc_wen"
     cli_name = "bouc-wen"
+    held_in_comparison = ("bw_n",)  # the shape exponent

@@ -12,8 +12,10 @@ F = σ0·z + σ1·dz/dt + σ2·v,  g(v) = Fc + (Fs − Fc)·e^(−(|v|/vs)^δ),
 
 Dupont et al. write the transition as ½·sin(π·(|z| − (z_max + z_ba)/2)/(z_max − z_ba)) + ½
 with z_max = |z_ss(v)|: the same function. The break-away deflection is a fraction of the
-smallest steady deflection, z_ba = z_ba_ratio·Fc/σ0 (0 <= ratio < 1), so that
-0 <= z_ba < |z_ss(v)| at every speed, as the model needs, whatever σ0 and Fc a fit tries.
+smallest steady deflection, z_ba = z_ba_ratio·min(Fc, Fs)/σ0 (0 <= ratio < 1), so that
+0 <= z_ba < |z_ss(v)| at every speed, as the model needs, whatever σ0, Fc and Fs a fit
+tries (g(v) lies between Fs and Fc; a fit that tries Fs < Fc with z_ba a fraction of Fc
+alone crossed z_ss at low speeds, and α stepping there took millions of steps a run).
 α is continuous with a continuous slope in |z|, so the rates are C1 in z.
 """
 
@@ -37,7 +39,7 @@ from .base import (
 
 declare(ParameterSpec(
     "z_ba_ratio", "", "elasto-plastic break-away deflection z_ba as a fraction of the "
-    "Coulomb deflection Fc/sigma0 (0 <= ratio < 1)", 0.5, 0.0, False, 0.999,
+    "smallest steady deflection min(Fc, Fs)/sigma0 (0 <= ratio < 1)", 0.5, 0.0, False, 0.999,
     group="friction", plausible=(0.05, 0.95)))
 
 ELASTO_PLASTIC_BLOCK = Block.of("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs", "delta",
@@ -86,7 +88,7 @@ def elasto_plastic_law(v, z, s0, s1, s2, fc, fs, vs, delta, ratio):  # pragma: n
     g, dg = stribeck_curve(v, fc, fs, vs, delta)
     if g <= RELAXED_LEVEL * fs:
         return 0.0, s2 * v, 0.0, 0.0, s2, 0.0
-    q, dq_da, _, dq_dg = _creep(v, z, s0, ratio * fc, g)
+    q, dq_da, _, dq_dg = _creep(v, z, s0, ratio * min(fc, fs), g)
     zdot = v * (1.0 - q)
     dzdot_dv = 1.0 - q - v * dq_dg * dg
     dzdot_dz = -v * dq_da * s0 * sign(z)
@@ -105,18 +107,21 @@ def elasto_plastic(v, z, p, o):  # pragma: no cover - compiled
 def elasto_plastic_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
     """∂ż/∂θ into row rz and ∂F/∂θ into row rf for every θ of the block."""
     s0, s1, fc, ratio = p[o + EP_SIGMA0], p[o + EP_SIGMA1], p[o + EP_FC], p[o + EP_RATIO]
+    fs = p[o + EP_FS]
     level, dg_dfc, dg_dfs, dg_dvs, dg_ddelta = stribeck_curve_params(
-        v, fc, p[o + EP_FS], p[o + EP_VS], p[o + EP_DELTA])
+        v, fc, fs, p[o + EP_VS], p[o + EP_DELTA])
+    # a_ba = ratio·min(Fc, Fs): its slope in Fc or in Fs, whichever is the smaller
+    dba_dfc, dba_dfs = (ratio, 0.0) if fc <= fs else (0.0, ratio)
     for k in range(ELASTO_PLASTIC_SIZE):
         g[rz, o + k] = 0.0
     if level > RELAXED_LEVEL * p[o + EP_FS]:
-        q, dq_da, dq_dba, dq_dg = _creep(v, z, s0, ratio * fc, level)
+        q, dq_da, dq_dba, dq_dg = _creep(v, z, s0, ratio * min(fc, fs), level)
         g[rz, o + EP_SIGMA0] = -v * dq_da * abs(z)
-        g[rz, o + EP_FC] = -v * (dq_dba * ratio + dq_dg * dg_dfc)
-        g[rz, o + EP_FS] = -v * dq_dg * dg_dfs
+        g[rz, o + EP_FC] = -v * (dq_dba * dba_dfc + dq_dg * dg_dfc)
+        g[rz, o + EP_FS] = -v * (dq_dba * dba_dfs + dq_dg * dg_dfs)
         g[rz, o + EP_VS] = -v * dq_dg * dg_dvs
         g[rz, o + EP_DELTA] = -v * dq_dg * dg_ddelta
-        g[rz, o + EP_RATIO] = -v * dq_dba * fc
+        g[rz, o + EP_RATIO] = -v * dq_dba * min(fc, fs)
         zdot = v * (1.0 - q)
     else:
         zdot = 0.0
@@ -143,8 +148,8 @@ def elasto_plastic_bound(p, o):  # pragma: no cover - compiled
 
 class ElastoPlastic(StribeckBristleLaw):
     """Elasto-plastic friction (Dupont et al. 2002): LuGre without presliding drift. The
-    bristle is a pure spring below the break-away deflection z_ba = z_ba_ratio·Fc/σ0 and
-    whenever it unloads; it creeps as LuGre's only near its steady deflection."""
+    bristle is a pure spring below the break-away deflection z_ba = z_ba_ratio·min(Fc,
+    Fs)/σ0 and whenever it unloads; it creeps as LuGre's only near its steady deflection."""
 
     block: ClassVar[Block] = ELASTO_PLASTIC_BLOCK
     law: ClassVar[str] = "elasto_plastic"

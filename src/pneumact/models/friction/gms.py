@@ -117,6 +117,12 @@ class GMS(FrictionModel):
         "the saltation term (f⁻ − f⁺)·dτ/dθ, which the integrator does not apply yet")
     template: ClassVar[str] = "pneumact.models.friction.gms_law"
 
+    def comparison_parameters(self) -> tuple[str, ...]:
+        """The blocks' stiffnesses, C and the Stribeck curve; the shares νᵢ stay as set
+        (normalised to Σν = 1, one of them is redundant; N shares beside N stiffnesses are
+        more than any record of one law's loops tells apart)."""
+        return tuple(n for n in super().comparison_parameters() if not n.startswith("gms_nu"))
+
     def __post_init__(self):
         from ...checks import check_int
 

@@ -1,0 +1,166 @@
+"""``pneumact compare``: which friction law do the records support?"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from pneumact.cli.common import (
+    DEFAULT_EXPONENT,
+    DEFAULT_VALVE,
+    Chamber,
+    ChamberOption,
+    ExponentOption,
+    ModelOptions,
+    ParamsOption,
+    SchedulerOption,
+    ValveOption,
+    WorkersOption,
+    build_model,
+    executor_of,
+    names,
+    out_console,
+    progress_display,
+    the_call,
+    use_agg,
+    user_errors,
+)
+from pneumact.errors import ArgumentError
+
+RecordsArgument = Annotated[list[Path], typer.Argument(
+    help="Record files (CSV with 'name [unit]' headers, Parquet, or --format emps/tudelft "
+         "files) or folders of them.")]
+
+
+class CompareFormat(StrEnum):
+    auto = "auto"
+    record = "record"
+    emps = "emps"
+    tudelft = "tudelft"
+
+
+#: what a data set's records are fitted on, by format: (signal, also free); the signal gets
+#: a sensor offset per record (a load cell's, a drive's current offset) and the measured
+#: position, noisy, is rebuilt piecewise linear before it drives the rig
+RIG_FORMATS = {"emps": ("drive_force", ("m",)), "tudelft": ("friction", ())}
+
+
+def _read(paths: list[Path], data_format: CompareFormat, p_atm: float):
+    from pneumact.io import read_records
+    from pneumact.io.datasets import read_emps, read_tudelft_cylinder
+    from pneumact.io.records import Record
+
+    if data_format is CompareFormat.auto and all(p.suffix.lower() == ".mat" for p in paths):
+        data_format = CompareFormat.emps
+    if data_format is CompareFormat.emps:
+        out = []
+        for path in paths:  # the drive's force is the rig's (m·a + friction)
+            rec = read_emps(path)
+            signals = {n: rec[n] for n in ("position", "force")}
+            signals["drive_force"] = rec["force"]
+            out.append(Record.from_arrays(rec.time, signals, {n: "N" if n != "position"
+                                                               else "m" for n in signals},
+                                          rec.source, rec.meta))
+        return out, data_format
+    if data_format is CompareFormat.tudelft:
+        return [read_tudelft_cylinder(p) for p in paths], data_format
+    return read_records(paths, p_atm=p_atm), CompareFormat.record
+
+
+def compare_command(
+    ctx: typer.Context,
+    records: RecordsArgument,
+    laws: Annotated[str, typer.Option(
+        help="Comma-separated laws as --friction names them, gms:N for N blocks.")] = (
+        "lugre,gms:4,elasto-plastic,dahl,stribeck"),
+    holdout: Annotated[str | None, typer.Option(
+        help="Comma-separated indices of the held-out records (default: the last; one "
+             "record: its last third).")] = None,
+    data_format: Annotated[CompareFormat, typer.Option(
+        "--format", help="auto (.mat: EMPS), record (an actuator's CSV/Parquet), emps or "
+                         "tudelft (a rig driven by the measured position).")] = (
+        CompareFormat.auto),
+    signals: Annotated[str | None, typer.Option(
+        help="Measured signals to fit and score (default: position; a data set's force).")
+    ] = None,
+    params: ParamsOption = "vgt-paper",
+    valve: ValveOption = DEFAULT_VALVE,
+    chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
+    multistart: Annotated[str, typer.Option(
+        help="Extra starts per law, or 'auto' (4 for a law of more than 6 parameters).")
+    ] = "auto",
+    workers: WorkersOption = None,
+    scheduler: SchedulerOption = None,
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-compare"),
+) -> None:
+    """Fit each friction law on training records, score it on held-out ones, recommend."""
+    with user_errors():
+        from pneumact.checks import check_int, check_out_dir
+        from pneumact.validation.compare import (
+            compare_friction_models,
+            friction_rig_for,
+        )
+
+        out = check_out_dir("--out", out)
+        law_names = names(laws, "--laws") or []
+        if multistart != "auto":
+            try:
+                starts: int | str = check_int("--multistart", int(multistart), minimum=0)
+            except ValueError:
+                raise ArgumentError(f"--multistart = {multistart!r}; give a number of "
+                                    "starts (>= 0) or 'auto'") from None
+        else:
+            starts = "auto"
+        held = None
+        if holdout is not None:
+            try:
+                held = [int(i) for i in names(holdout, "--holdout") or []]
+            except ValueError:
+                raise ArgumentError(f"--holdout = {holdout!r}; give record indices, "
+                                    "e.g. 1 or 0,2") from None
+        parameter_set, actuator = build_model(ModelOptions(
+            params=params, valve=valve, chamber=chamber, exponent=exponent))
+        recs, data_format = _read(list(records), data_format, parameter_set["p_atm"])
+        also: tuple[str, ...] = ()
+        offsets: list[str] = []
+        smooth = None
+        if data_format.value in RIG_FORMATS:
+            signal, also = RIG_FORMATS[data_format.value]
+            model = friction_rig_for(recs, signal)
+            chosen = names(signals, "--signals") or [signal]
+            offsets, smooth = [signal], True
+        else:
+            model = actuator
+            chosen = names(signals, "--signals") or ["position"]
+        with progress_display("comparing laws", counts=True) as report:
+            result = compare_friction_models(
+                model, recs, law_names, holdout=held, signals=chosen, also=also,
+                offsets=offsets, smooth_input=smooth, multistart=starts,
+                executor=executor_of(workers, scheduler), progress=report)
+        use_agg()
+        written = result.write(out, call=the_call(ctx))
+        out_console.print(_table(result.to_pandas()))
+        out_console.print(result.recommendation)
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+def _table(frame):
+    """The comparison as a rich table: each law's held-out fit, z against the best, ΔBIC
+    and verdict (a failed law with its reason)."""
+    from rich.table import Table
+
+    table = Table(title="friction laws, best held-out prediction first")
+    for column in ("law", "parameters", "held-out fit %", "z vs best", "ΔBIC", "verdict"):
+        table.add_column(column, justify="left" if column in ("law", "verdict") else "right")
+    for _, row in frame.iterrows():
+        if row["verdict"] == "failed":
+            table.add_row(row["law"], "", "", "", "", f"failed: {str(row['error'])[:80]}")
+            continue
+        table.add_row(row["law"], f"{int(row['parameters'])}", f"{row['held_out_fit_%']:.1f}",
+                      f"{row['z_vs_best']:+.2f}", f"{row['delta_bic']:.4g}", row["verdict"])
+    return table
