@@ -35,7 +35,7 @@ API: dict[str, tuple[str, ...]] = {
                  "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),
     "fit": ("pneumact.identification:fit", *_MODEL),
     "compare": ("pneumact.validation:compare_friction_models", "pneumact.options:Executor",
-                *_MODEL),
+                "pneumact.options:Optimizer", *_MODEL),
     "sensitivity": ("pneumact.sensitivity:sobol", "pneumact.sensitivity:src",
                     "pneumact.sensitivity:rbd_fast", "pneumact.sensitivity:model_outputs",
                     "pneumact.sensitivity:across_conditions", "pneumact.sensitivity:model_signal",

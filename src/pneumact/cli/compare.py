@@ -29,6 +29,7 @@ from pneumact.cli.common import (
     user_errors,
 )
 from pneumact.errors import ArgumentError
+from pneumact.options import Optimizer
 
 RecordsArgument = Annotated[list[Path], typer.Argument(
     help="Record files (CSV with 'name [unit]' headers, Parquet, or --format emps/tudelft "
@@ -93,6 +94,9 @@ def compare_command(
     multistart: Annotated[str, typer.Option(
         help="Extra starts per law, or 'auto' (4 for a law of more than 6 parameters).")
     ] = "auto",
+    jacobian: Annotated[str, typer.Option(
+        help="The fits' Jacobian: sensitivities (a kernel of its own per law, compiled once), "
+             "2-point or 3-point (differences).")] = "sensitivities",
     workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-compare"),
@@ -140,6 +144,7 @@ def compare_command(
             result = compare_friction_models(
                 model, recs, law_names, holdout=held, signals=chosen, also=also,
                 offsets=offsets, smooth_input=smooth, multistart=starts,
+                optimizer=Optimizer(jacobian=jacobian),
                 executor=executor_of(workers, scheduler), progress=report)
         use_agg()
         written = result.write(out, call=the_call(ctx))

@@ -64,6 +64,10 @@ AUTO_STARTS = 4
 #: end (the elasto-plastic law on a static map's records: σ0 → 1e8 and 500 000 steps a
 #: run, 190 s for one fit); an estimate that ends at the box's edge is flagged as such
 SEARCH_BOX = 10.0
+#: the steps a run of the comparison may take (default solver): a trial point where a law
+#: chatters fails in a second instead of the default limit's minutes (a law that cannot
+#: be fitted is reported with the reason; ordinary runs take a few thousand steps)
+MAX_STEPS = 200_000
 
 
 @dataclass(eq=False)
@@ -148,24 +152,26 @@ def _free_parameters(law, model) -> tuple[str, ...]:
     return tuple(n for n in law.comparison_parameters() if model.params[n] != 0.0)
 
 
-def _box(name: str, start: float) -> tuple[float, float]:
+def _box(name: str, start: float, law) -> tuple[float, float]:
     """×/÷ ``SEARCH_BOX`` about ``start``, inside the catalogue's plausible range (the
     elasto-plastic z_ba_ratio at 0.999 makes α step from 0 to 1 within 0.1 % of z_ss: a
-    run of millions of steps), the start always inside."""
+    run of millions of steps) and the law's ``comparison_ranges``, the start always
+    inside."""
     from ..parameters import catalogue
 
     start = abs(start)
     low, high = start / SEARCH_BOX, start * SEARCH_BOX
     spec = catalogue().get(name)
-    if spec is not None and spec.plausible is not None:
-        low, high = max(low, min(spec.plausible[0], start)), min(high, max(spec.plausible[1],
-                                                                            start))
+    for limits in (spec.plausible if spec is not None else None,
+                   law.comparison_ranges.get(name)):
+        if limits is not None:
+            low, high = max(low, min(limits[0], start)), min(high, max(limits[1], start))
     return low, high
 
 
 def _search(multistart, model, free) -> tuple[Multistart, dict]:
     """The starts of one law's fit and the box it searches (``_box``)."""
-    box = {n: _box(n, model.params[n]) for n in free}
+    box = {n: _box(n, model.params[n], model.friction) for n in free}
     if multistart != "auto":
         return Multistart.of(multistart, "compare_friction_models"), box
     return Multistart(AUTO_STARTS if len(free) > MANY_PARAMETERS else 0), box
@@ -174,7 +180,7 @@ def _search(multistart, model, free) -> tuple[Multistart, dict]:
 def _score_one(model, law, train, test, signals, multistart, solver, window, also, offsets,
                optimizer, smooth_input) -> LawScore:
     """Fit ``law`` on ``train``, predict ``test``; failures are the score's ``error``."""
-    label = repr(law)
+    label = law.spec
     began = _time.perf_counter()
     try:
         own = _with_law(model, law)
@@ -301,7 +307,7 @@ def compare_friction_models(model, records: Record | Sequence[Record],
     if not laws:
         raise ParameterError("compare_friction_models: laws = []; name at least two laws")
     chosen = [friction_law(spec) for spec in laws]
-    labels = [repr(law) for law in chosen]
+    labels = [law.spec for law in chosen]
     if len(set(labels)) != len(labels):
         raise ParameterError(f"compare_friction_models: a law is named twice in {labels}")
     train, test, held = _split(records, holdout)
@@ -512,10 +518,11 @@ class FrictionComparison(ResultVocabulary):
             return "No law could be fitted: see each law's error in the table."
         ranked = self.ranking()
         if self.cannot_tell:
-            others = ", ".join(s.label for s in self.tied() if s is not best)
-            return (f"Cannot tell: the held-out records fit {best.label} and {others} "
-                    f"within their noise; the simplest, {best.label} ({len(best.free)} "
-                    "parameters), is recommended.")
+            tied = [s.label for s in self.tied()]
+            listed = ", ".join(tied[:-1]) + f" and {tied[-1]}"
+            return (f"Cannot tell: the held-out records fit {listed} within their noise; "
+                    f"the simplest, {best.label} ({len(best.free)} parameters), is "
+                    "recommended.")
         runner = ranked[1].label if len(ranked) > 1 else "none"
         return (f"{best.label} predicts the held-out records best, beyond the noise of the "
                 f"next, {runner}.")

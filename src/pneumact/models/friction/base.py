@@ -216,6 +216,10 @@ class FrictionModel:
     #: and regularisations that trade off with the others and say little of the law
     held_in_comparison: ClassVar[tuple[str, ...]] = ("delta", "v_reg")
 
+    #: narrower search ranges a comparison keeps a parameter in than its plausible range
+    #: (a shape exponent whose low end makes runs of millions of steps)
+    comparison_ranges: ClassVar[dict[str, tuple[float, float]]] = {}
+
     def comparison_parameters(self) -> tuple[str, ...]:
         """The parameters ``compare_friction_models`` fits for this law."""
         return tuple(n for n in self.block.parameters if n not in self.held_in_comparison)
@@ -255,6 +259,11 @@ class FrictionModel:
     @property
     def name(self) -> str:
         return type(self).__name__
+
+    @property
+    def spec(self) -> str:
+        """The law as ``friction_law`` reads it ("lugre", "gms:4"): a short label."""
+        return self.cli_name
 
     def __repr__(self) -> str:
         return f"{self.name}()"

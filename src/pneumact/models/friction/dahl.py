@@ -6,6 +6,7 @@ dz/dt = v·φ(1 − σ0·z·sgn(v)/Fc), φ(s) = |s|^α·sgn(s); F = σ0·z + σ2
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 from numba import njit
 
@@ -78,3 +79,6 @@ class Dahl(CoulombBristleLaw):
     block = DAHL_BLOCK
     law = "dahl"
     cli_name = "dahl"
+    #: α < ½ makes dz/dt's slope near |z| = Fc/σ0 so steep that a run takes millions of
+    #: steps (a comparison's fit tried α = 0.1 on Coulomb-viscous records)
+    comparison_ranges: ClassVar[dict[str, tuple[float, float]]] = {"dahl_alpha": (0.5, 4.0)}

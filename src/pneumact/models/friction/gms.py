@@ -207,5 +207,9 @@ class GMS(FrictionModel):
     def __repr__(self) -> str:
         return f"GMS(n_elements={self.n_elements})"
 
+    @property
+    def spec(self) -> str:
+        return f"gms:{self.n_elements}"
+
 
 __all__ = ["GMS", "MAX_ELEMENTS", "RELAXED_LEVEL", "element_names"]

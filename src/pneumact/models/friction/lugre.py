@@ -151,6 +151,10 @@ class LuGre(StribeckBristleLaw):
     block: ClassVar[Block] = LUGRE_BLOCK
     cli_name: ClassVar[str] = "lugre"
 
+    @property
+    def spec(self) -> str:
+        return "lugre (decaying damping)" if self.decaying_damping else "lugre"
+
     def __post_init__(self):
         from ...checks import check_bool
 
