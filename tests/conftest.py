@@ -82,3 +82,24 @@ def dask_client(monkeypatch):
                                   dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         yield client
+
+
+def small_rig_comparison(progress=None):
+    """Two laws compared on two short records of the Canudas rig (Coulomb-viscous)
+    driven by a position: a cheap ``FrictionComparison`` (difference Jacobians)."""
+    import numpy as np
+
+    import pneumact as pa
+    from pneumact.experiments import from_samples
+
+    rig = pa.FrictionRig(load_quietly("canudas1995"), pa.CoulombViscous(), drive="position")
+    records = []
+    for k in range(2):
+        t = np.linspace(0.0, 2.0, 201)
+        x = 1e-3 * (k + 1) * np.sin(np.pi * t)
+        run = pa.simulate(rig, from_samples(t, x, "position", name=f"r{k}"), t_eval=t)
+        records.append(pa.Record.from_arrays(t, {"position": x, "friction": run["friction"]},
+                                             {"position": "m", "friction": "N"}, f"r{k}"))
+    return pa.compare_friction_models(rig, records, ["coulomb-viscous", "stribeck"],
+                                      signals=["friction"], executor=1, progress=progress,
+                                      optimizer=pa.Optimizer(jacobian="2-point"))

@@ -56,6 +56,7 @@ _EXPORTS: dict[str, str] = {
     "fit": "pneumact.identification",
     "compare_friction_models": "pneumact.validation",
     "FrictionComparison": "pneumact.validation",
+    "friction_rig_for": "pneumact.validation",
     "Bounds": "pneumact.options",
     "Multistart": "pneumact.options",
     "Offsets": "pneumact.options",
@@ -147,6 +148,7 @@ __all__ = [
     "control",
     "experiments",
     "fit",
+    "friction_rig_for",
     "identify_paper",
     "inverse_friction",
     "load_params",
@@ -250,6 +252,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from pneumact.validation import (
         FrictionComparison,
         compare_friction_models,
+        friction_rig_for,
         train_test,
         validate,
     )

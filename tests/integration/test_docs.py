@@ -77,3 +77,16 @@ def test_the_model_page_runs_and_names_every_assumed_value(tmp_path, monkeypatch
 def test_the_architecture_page_runs(tmp_path, monkeypatch):
     namespace = _run_page("architecture.md", tmp_path, monkeypatch)
     assert "plotting.py" not in namespace["reached"]
+
+
+def test_the_friction_laws_page_runs(tmp_path, monkeypatch):
+    """docs/friction-laws.md: on Dahl's records Dahl is recommended, LuGre and the
+    Stribeck map are worse beyond the noise, as the page says; the files are written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    result = _run_page("friction-laws.md", tmp_path, monkeypatch)["result"]
+    assert result.recommended.label == "dahl" and not result.cannot_tell
+    table = result.to_pandas().set_index("law")
+    assert (table.loc[["lugre", "stribeck"], "verdict"] == "worse").all()
+    assert (tmp_path / "compare-dahl" / "report.html").exists()

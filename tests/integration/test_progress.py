@@ -98,8 +98,15 @@ def _canudas():
     return load_quietly("canudas1995")
 
 
+def _comparison(setup, progress):
+    from conftest import small_rig_comparison
+
+    return small_rig_comparison(progress)
+
+
 #: function -> (runs to the end?, call(setup, progress))
 CALLS = {
+    "pneumact.validation.compare.compare_friction_models": (True, _comparison),
     "pneumact.simulation.simulate.simulate": (
         True, lambda s, p: pa.simulate(s[0], s[1], progress=p)),
     "pneumact.simulation.batch.engine.simulate_batch": (

@@ -255,8 +255,15 @@ def _friction_test():
     return FrictionTestResult("steady-state", _run(), table, "force")
 
 
+def _comparison():
+    from conftest import small_rig_comparison
+
+    return small_rig_comparison()
+
+
 #: class -> cheap instance (``tmp_path_factory`` for those that need files)
 FACTORIES = {
+    "pneumact.validation.compare.FrictionComparison": lambda f: _comparison(),
     "pneumact.simulation.result.Result": lambda f: _run(),
     "pneumact.simulation.forward_sensitivity.SensitivityResult": lambda f: _sensitivities(),
     "pneumact.simulation.batch.engine.BatchResult": lambda f: _batch(),

@@ -250,6 +250,22 @@ class _Shifted:
         return getattr(self.run, name)
 
 
+def _checked_signals(model, records, signals, also) -> tuple[str, ...]:
+    """``signals`` as a tuple, once each, in every record with the model's input; ``also``
+    parameters of the model: refused before any law is fitted (a law's own failure is its
+    row in the table, a mistake of the call is not)."""
+    from ..core.assembly import assemble
+
+    signals = (signals,) if isinstance(signals, str) else tuple(signals)
+    if not signals or len(set(signals)) != len(signals):
+        raise ParameterError(f"compare_friction_models: signals = {list(signals)}; name each "
+                             "measured signal once")
+    for record in records:
+        record.require([*signals, model.input_signal], "compare_friction_models")
+    assemble(model).check_parameters(list(also), "compare_friction_models: also")
+    return signals
+
+
 def _split(records: list[Record], holdout) -> tuple[list[Record], list[Record], list[int]]:
     """(training, held-out, held-out indices): ``holdout`` indices, default the last
     record; one record is split in time (its first 2/3 train, all of it is predicted and
@@ -310,6 +326,7 @@ def compare_friction_models(model, records: Record | Sequence[Record],
     labels = [law.spec for law in chosen]
     if len(set(labels)) != len(labels):
         raise ParameterError(f"compare_friction_models: a law is named twice in {labels}")
+    signals = _checked_signals(model, records, signals, also)
     train, test, held = _split(records, holdout)
     window = None
     scored_from = None
@@ -317,7 +334,6 @@ def compare_friction_models(model, records: Record | Sequence[Record],
         rec = records[0]
         split = float(rec.time[0] + 2.0 / 3.0 * (rec.time[-1] - rec.time[0]))
         window, scored_from = (float(rec.time[0]), split), split
-    signals = tuple(signals)
     executor = Executor.of(executor, "compare_friction_models")
     optimizer = Optimizer.of(optimizer)
     smooth = _smooth(model, smooth_input)
@@ -436,7 +452,7 @@ class FrictionComparison(ResultVocabulary):
                     for j, v in enumerate(est.values)]
         return verdicts(est.names, est.values, half, at_bound)
 
-    def table(self) -> pd.DataFrame:
+    def _table(self) -> pd.DataFrame:
         """One row per law, best held-out prediction first, failed laws last."""
         rows = []
         z = self.z_against_best()
@@ -507,7 +523,7 @@ class FrictionComparison(ResultVocabulary):
         return pd.DataFrame(rows)
 
     def tables(self) -> dict[str, pd.DataFrame]:
-        return {"comparison": self.table(), "estimates": self.estimates(),
+        return {"comparison": self._table(), "estimates": self.estimates(),
                 "held_out": self.held_out_scores()}
 
     # -- the words -----------------------------------------------------------------------
@@ -530,7 +546,7 @@ class FrictionComparison(ResultVocabulary):
     def reasons(self) -> list[str]:
         """Why: the held-out errors, the tie, the parameters the records do not fix, the
         laws that failed."""
-        table = self.table()
+        table = self._table()
         lines = []
         fitted = table[table["verdict"] != "failed"]
         for _, row in fitted.iterrows():
