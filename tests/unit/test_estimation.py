@@ -157,6 +157,19 @@ def test_inverse_model_recovers_coulomb_viscous_mass_offset():
     assert result.relative_force_error < ref.INVERSE_RTOL
 
 
+def test_the_friction_of_a_record_is_its_force_less_inertia_and_offset():
+    """force − M·a − offset with the identified M and offset: the friction that made it
+    (away from the reversals, where sgn(v) jumps)."""
+    friction = inverse_friction(_motion_record()).friction_of(_motion_record())
+    v = np.gradient(friction["position"], friction.time)
+    moving = np.abs(v) > 0.05 * np.max(np.abs(v))
+    moving[:2] = moving[-2:] = False  # one-sided differences at the ends
+    truth = 20.0 * np.sign(v) + 200.0 * v
+    np.testing.assert_allclose(friction["friction"][moving], truth[moving],
+                               atol=ref.INVERSE_RTOL * 20.0)
+    assert friction.units["friction"] == "N"
+
+
 def test_inverse_model_stribeck_and_asymmetric():
     stribeck = inverse_friction(_motion_record(stribeck=(30.0, 0.02)), "stribeck")
     assert stribeck.estimates["Fs"] == pytest.approx(30.0, rel=10 * ref.INVERSE_RTOL)

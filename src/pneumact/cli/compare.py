@@ -46,26 +46,24 @@ class CompareFormat(StrEnum):
 #: what a data set's records are fitted on, by format: (signal, also free); the signal gets
 #: a sensor offset per record (a load cell's, a drive's current offset) and the measured
 #: position, noisy, is rebuilt piecewise linear before it drives the rig
-RIG_FORMATS = {"emps": ("drive_force", ("m",)), "tudelft": ("friction", ())}
+RIG_FORMATS = {"emps": ("friction", ()), "tudelft": ("friction", ())}
+#: Hz: the low-pass before the EMPS position is differentiated for M·a (1 kHz samples)
+EMPS_CUTOFF = 50.0
 
 
 def _read(paths: list[Path], data_format: CompareFormat, p_atm: float):
     from pneumact.io import read_records
     from pneumact.io.datasets import read_emps, read_tudelft_cylinder
-    from pneumact.io.records import Record
-
     if data_format is CompareFormat.auto and all(p.suffix.lower() == ".mat" for p in paths):
         data_format = CompareFormat.emps
     if data_format is CompareFormat.emps:
-        out = []
-        for path in paths:  # the drive's force is the rig's (m·a + friction)
-            rec = read_emps(path)
-            signals = {n: rec[n] for n in ("position", "force")}
-            signals["drive_force"] = rec["force"]
-            out.append(Record.from_arrays(rec.time, signals, {n: "N" if n != "position"
-                                                               else "m" for n in signals},
-                                          rec.source, rec.meta))
-        return out, data_format
+        # the drive's force carries M·a: the friction is force − M·a − offset, with M and
+        # the offset of the inverse model identified on the first record
+        from pneumact.identification import inverse_friction
+
+        raw = [read_emps(path) for path in paths]
+        inverse = inverse_friction(raw[0], cutoff=EMPS_CUTOFF)
+        return [inverse.friction_of(rec) for rec in raw], data_format
     if data_format is CompareFormat.tudelft:
         return [read_tudelft_cylinder(p) for p in paths], data_format
     return read_records(paths, p_atm=p_atm), CompareFormat.record

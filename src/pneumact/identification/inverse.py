@@ -100,6 +100,22 @@ class InverseFriction(ResultVocabulary):
         return pd.DataFrame({"time": m.time[used], "velocity": m.velocity[used],
                              "measured": m.force[used], "predicted": predicted})
 
+    def friction_of(self, record: Record) -> Record:
+        """``record`` with its ``friction`` = force − M·a − offset [N] (the identified mass
+        and offset; a from the position filtered as the identification's, not decimated):
+        the friction a simulated law is compared with where the force carries inertia."""
+        force_name = self.options["force"]
+        record.require(["position", force_name], "the friction of a record")
+        m = _motion(record.time, record["position"], record[force_name],
+                    self.options["cutoff"], 1)
+        values = self.estimates.as_dict()
+        friction = m.force - values.get("mass", 0.0) * m.acceleration - values.get("offset",
+                                                                                   0.0)
+        position = np.interp(m.time, record.time, record["position"])
+        return Record.from_arrays(m.time, {"position": position, "friction": friction},
+                                  {"position": "m", "friction": "N"}, record.source,
+                                  dict(record.meta))
+
     def validate(self, record: Record) -> float:
         """Relative force error ‖F − F̂‖/‖F‖ on another record (same processing)."""
         frame = self.prediction(record)
