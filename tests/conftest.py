@@ -84,7 +84,7 @@ def dask_client(monkeypatch):
         yield client
 
 
-def small_rig_comparison(progress=None):
+def small_rig_comparison(progress=None, executor=1):
     """Two laws compared on two short records of the Canudas rig (Coulomb-viscous)
     driven by a position: a cheap ``FrictionComparison`` (difference Jacobians)."""
     import numpy as np
@@ -101,5 +101,6 @@ def small_rig_comparison(progress=None):
         records.append(pa.Record.from_arrays(t, {"position": x, "friction": run["friction"]},
                                              {"position": "m", "friction": "N"}, f"r{k}"))
     return pa.compare_friction_models(rig, records, ["coulomb-viscous", "stribeck"],
-                                      signals=["friction"], executor=1, progress=progress,
+                                      signals=["friction"], executor=executor,
+                                      progress=progress,
                                       optimizer=pa.Optimizer(jacobian="2-point"))

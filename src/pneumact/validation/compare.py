@@ -539,7 +539,9 @@ class FrictionComparison(ResultVocabulary):
             return (f"Cannot tell: the held-out records fit {listed} within their noise; "
                     f"the simplest, {best.label} ({len(best.free)} parameters), is "
                     "recommended.")
-        runner = ranked[1].label if len(ranked) > 1 else "none"
+        if len(ranked) == 1:
+            return f"{best.label} is the only law fitted: there is nothing to rank it against."
+        runner = ranked[1].label
         return (f"{best.label} predicts the held-out records best, beyond the noise of the "
                 f"next, {runner}.")
 
