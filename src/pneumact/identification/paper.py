@@ -270,7 +270,9 @@ class PaperIdentification(ResultVocabulary):
         ax_loop.set_ylabel("position [mm]")
         ax_loop.set_title(f"{Path(chosen.source).name}: loop, {len(band.samples['position'])}"
                           " draws from the estimates' uncertainty", fontsize=9)
-        ax_loop.legend(fontsize=8)
+        # a fixed corner: "best" scans every point, and on a long record under load
+        # matplotlib warns that it is slow (a failed test, once)
+        ax_loop.legend(fontsize=8, loc="lower left")
         ax_time.fill_between(band.time, band.lower["position"] * 1e3,
                              band.upper["position"] * 1e3, color="C0", alpha=0.3,
                              label=f"{100 * band.level:.0f} % band")
@@ -279,7 +281,7 @@ class PaperIdentification(ResultVocabulary):
                      label="identified model")
         ax_time.set_xlabel("time [s]")
         ax_time.set_ylabel("position [mm]")
-        ax_time.legend(fontsize=8)
+        ax_time.legend(fontsize=8, loc="upper right")
         for a in (ax_loop, ax_time):
             a.grid(True, alpha=0.3)
         fig.tight_layout()

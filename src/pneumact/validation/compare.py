@@ -597,7 +597,7 @@ class FrictionComparison(ResultVocabulary):
             ax.set_ylabel(y_label)
             ax.set_title(os.path.basename(rec.source), fontsize=9)
             ax.grid(True, alpha=0.3)
-        axes[0][0].legend(fontsize=7)
+        axes[0][0].legend(fontsize=7, loc="upper left")  # "best" scans every sample: slow
         fig.tight_layout()
         return fig
 
