@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -28,19 +27,13 @@ from pneumact.cli.common import (
     use_agg,
     user_errors,
 )
+from pneumact.cli.identify import DataFormat
 from pneumact.errors import ArgumentError
 from pneumact.options import Optimizer
 
 RecordsArgument = Annotated[list[Path], typer.Argument(
     help="Record files (CSV with 'name [unit]' headers, Parquet, or --format emps/tudelft "
          "files) or folders of them.")]
-
-
-class CompareFormat(StrEnum):
-    auto = "auto"
-    record = "record"
-    emps = "emps"
-    tudelft = "tudelft"
 
 
 #: what a data set's records are fitted on, by format: (signal, also free); the signal gets
@@ -51,12 +44,12 @@ RIG_FORMATS = {"emps": ("friction", ()), "tudelft": ("friction", ())}
 EMPS_CUTOFF = 50.0
 
 
-def _read(paths: list[Path], data_format: CompareFormat, p_atm: float):
+def _read(paths: list[Path], data_format: DataFormat, p_atm: float):
     from pneumact.io import read_records
     from pneumact.io.datasets import read_emps, read_tudelft_cylinder
-    if data_format is CompareFormat.auto and all(p.suffix.lower() == ".mat" for p in paths):
-        data_format = CompareFormat.emps
-    if data_format is CompareFormat.emps:
+    if data_format is DataFormat.auto and all(p.suffix.lower() == ".mat" for p in paths):
+        data_format = DataFormat.emps
+    if data_format is DataFormat.emps:
         # the drive's force carries M·a: the friction is force − M·a − offset, with M and
         # the offset of the inverse model identified on the first record
         from pneumact.identification import inverse_friction
@@ -64,9 +57,9 @@ def _read(paths: list[Path], data_format: CompareFormat, p_atm: float):
         raw = [read_emps(path) for path in paths]
         inverse = inverse_friction(raw[0], cutoff=EMPS_CUTOFF)
         return [inverse.friction_of(rec) for rec in raw], data_format
-    if data_format is CompareFormat.tudelft:
+    if data_format is DataFormat.tudelft:
         return [read_tudelft_cylinder(p) for p in paths], data_format
-    return read_records(paths, p_atm=p_atm), CompareFormat.record
+    return read_records(paths, p_atm=p_atm), DataFormat.record
 
 
 def compare_command(
@@ -78,10 +71,10 @@ def compare_command(
     holdout: Annotated[str | None, typer.Option(
         help="Comma-separated indices of the held-out records (default: the last; one "
              "record: its last third).")] = None,
-    data_format: Annotated[CompareFormat, typer.Option(
+    data_format: Annotated[DataFormat, typer.Option(
         "--format", help="auto (.mat: EMPS), record (an actuator's CSV/Parquet), emps or "
                          "tudelft (a rig driven by the measured position).")] = (
-        CompareFormat.auto),
+        DataFormat.auto),
     signals: Annotated[str | None, typer.Option(
         help="Measured signals to fit and score (default: position; a data set's force).")
     ] = None,

@@ -31,19 +31,18 @@ from ...parameters.catalogue import ParameterSpec, declare
 from .base import (
     RELAXED_LEVEL,
     StribeckBristleLaw,
-    presliding_scale,
     sign,
     stribeck_curve,
     stribeck_curve_params,
 )
+from .lugre import LUGRE_BLOCK, lugre_bound, lugre_scales
 
 declare(ParameterSpec(
     "z_ba_ratio", "", "elasto-plastic break-away deflection z_ba as a fraction of the "
     "smallest steady deflection min(Fc, Fs)/sigma0 (0 <= ratio < 1)", 0.5, 0.0, False, 0.999,
     group="friction", plausible=(0.05, 0.95)))
 
-ELASTO_PLASTIC_BLOCK = Block.of("sigma0", "sigma1", "sigma2", "Fc", "Fs", "vs", "delta",
-                                "z_ba_ratio")
+ELASTO_PLASTIC_BLOCK = LUGRE_BLOCK + Block.of("z_ba_ratio")
 EP_SIGMA0 = ELASTO_PLASTIC_BLOCK.index("sigma0")
 EP_SIGMA1 = ELASTO_PLASTIC_BLOCK.index("sigma1")
 EP_SIGMA2 = ELASTO_PLASTIC_BLOCK.index("sigma2")
@@ -133,17 +132,10 @@ def elasto_plastic_params(v, z, p, o, g, rz, rf):  # pragma: no cover - compiled
     g[rf, o + EP_SIGMA2] = v
 
 
-@njit(cache=True)
-def elasto_plastic_scales(p, o):  # pragma: no cover - compiled
-    """(typical deflection Fs/σ0, stiffness σ0, regularisation speed 0), as LuGre's."""
-    s0 = p[o + EP_SIGMA0]
-    return presliding_scale(max(p[o + EP_FS], p[o + EP_FC]), s0), s0, 0.0
-
-
-@njit(cache=True)
-def elasto_plastic_bound(p, o):  # pragma: no cover - compiled
-    """|σ0·z| <= max(Fs, Fc) is invariant: past |z_ss(v)| the law is LuGre's (α = 1)."""
-    return max(p[o + EP_FS], p[o + EP_FC]) / p[o + EP_SIGMA0]
+#: the typical deflection, stiffness and bound of LuGre's bristle: the block starts with
+#: LuGre's, and past |z_ss(v)| the law is LuGre's (α = 1), so |σ0·z| <= max(Fs, Fc) holds
+elasto_plastic_scales = lugre_scales
+elasto_plastic_bound = lugre_bound
 
 
 class ElastoPlastic(StribeckBristleLaw):
