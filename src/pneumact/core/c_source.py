@@ -1,0 +1,490 @@
+"""The kernel generator's second back end: C99 source from the compiled kernel functions.
+
+A kernel's functions (the model template's ``rhs``, ``outputs``, ``jac``, … and every
+component function they call) are written once, in the numba subset of Python. The first
+back end is numba itself. This one reads what numba made of them — its typed
+intermediate representation, after inlining, with every variable's type resolved — and
+writes each function as a C function: one ``goto`` label per basic block, one C variable
+per IR variable, tuples as structs, arrays as a (data, shape, strides) struct. So the
+C code and the compiled kernels come from the same component equations, and a change
+to a component changes both.
+
+What it covers is what the kernels use: float and integer scalars and their arithmetic
+with Python's semantics (floor division and modulo, negative indices), ``math`` functions,
+``abs``/``min``/``max``/``int``/``float``, tuples, ``range`` loops, 1-D and 2-D arrays,
+calls between compiled functions. Anything else is refused with the construct and the
+function named (``CSourceError``), never translated approximately.
+"""
+
+from __future__ import annotations
+
+import builtins
+import itertools
+import math
+import operator
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+from numba.core import ir, types
+
+__all__ = ["CSourceError", "CUnit", "translate"]
+
+
+class CSourceError(RuntimeError):
+    """A construct of a kernel function the C back end does not translate."""
+
+
+BINARY = {operator.add: "+", operator.sub: "-", operator.mul: "*", operator.lt: "<",
+          operator.le: "<=", operator.gt: ">", operator.ge: ">=", operator.eq: "==",
+          operator.ne: "!=", operator.and_: "&", operator.or_: "|", operator.xor: "^",
+          operator.iadd: "+", operator.isub: "-", operator.imul: "*",
+          operator.lshift: "<<", operator.rshift: ">>"}
+UNARY = {operator.neg: "-", operator.pos: "+", operator.not_: "!", operator.invert: "~"}
+#: math and numpy scalar functions with a C99 <math.h> function of the same meaning
+MATH = {"exp": "exp", "log": "log", "log10": "log10", "log1p": "log1p", "expm1": "expm1",
+        "sqrt": "sqrt", "sin": "sin", "cos": "cos", "tan": "tan", "asin": "asin",
+        "acos": "acos", "atan": "atan", "atan2": "atan2", "sinh": "sinh", "cosh": "cosh",
+        "tanh": "tanh", "fabs": "fabs", "floor": "floor", "ceil": "ceil", "pow": "pow",
+        "hypot": "hypot", "copysign": "copysign", "isfinite": "isfinite", "isnan": "isnan",
+        "isinf": "isinf", "erf": "erf", "erfc": "erfc", "cbrt": "cbrt",
+        "absolute": "fabs", "power": "pow", "arctan": "atan", "arctan2": "atan2",
+        "arcsin": "asin", "arccos": "acos", "trunc": "trunc"}
+
+PRELUDE = r"""
+#include <math.h>
+#include <stdint.h>
+
+typedef struct { int64_t start, stop, step; } pa_range;
+typedef struct { int64_t first; int second; } pa_pair;
+
+static inline pa_pair pa_range_next(pa_range *it) {
+    pa_pair out;
+    out.second = it->step > 0 ? it->start < it->stop : it->start > it->stop;
+    out.first = it->start;
+    if (out.second) it->start += it->step;
+    return out;
+}
+static inline int64_t pa_floordiv(int64_t a, int64_t b) {
+    int64_t q = a / b;
+    return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
+}
+static inline int64_t pa_mod(int64_t a, int64_t b) {
+    int64_t r = a % b;
+    return (r != 0 && ((r < 0) != (b < 0))) ? r + b : r;
+}
+static inline double pa_fmod(double a, double b) {
+    double r = fmod(a, b);
+    return (r != 0.0 && ((r < 0.0) != (b < 0.0))) ? r + b : r;
+}
+static inline int64_t pa_ipow(int64_t a, int64_t n) {
+    int64_t r = 1;
+    while (n-- > 0) r *= a;
+    return r;
+}
+static inline double pa_sign(double x) { return (x > 0.0) - (x < 0.0); }
+static inline int64_t pa_index(int64_t i, int64_t n) { return i < 0 ? i + n : i; }
+"""
+
+
+@dataclass
+class CUnit:
+    """The C translation of a set of kernel functions: ``source`` (one C file: types,
+    then the functions, ``static`` but for the entry points) and the ``header`` that
+    declares the entry points and the types they take."""
+
+    source: str
+    header: str
+    entry_points: tuple[str, ...]
+
+
+@dataclass
+class _Function:
+    name: str
+    prototype: str
+    body: list[str] = field(default_factory=list)
+
+
+class _Translator:
+    def __init__(self):
+        self.structs: dict[object, tuple[str, str]] = {}
+        self.functions: dict[tuple, _Function] = {}
+        self.order: list[tuple] = []
+        self.entries: dict[str, str] = {}
+        self.counter = itertools.count()
+
+    # -- types -------------------------------------------------------------------------
+    def ctype(self, t) -> str | None:
+        """The C type of a numba type; None for values that have no run-time form
+        (functions, modules, classes, None)."""
+        if isinstance(t, types.Literal):
+            t = t.literal_type if hasattr(t, "literal_type") else types.unliteral(t)
+        if isinstance(t, types.Boolean):
+            return "int"
+        if isinstance(t, types.Integer):
+            return f"{'' if t.signed else 'u'}int{t.bitwidth}_t"
+        if isinstance(t, types.Float):
+            return "double" if t.bitwidth == 64 else "float"
+        if isinstance(t, types.Array):
+            return self._array(t)
+        if isinstance(t, types.BaseTuple):
+            return self._tuple(t) if len(t) else None
+        if isinstance(t, types.RangeType | types.RangeIteratorType):
+            return "pa_range"
+        if isinstance(t, types.Pair):
+            return "pa_pair"
+        if isinstance(t, types.NoneType | types.Omitted | types.Function | types.Dispatcher
+                      | types.Module | types.NumberClass | types.Dummy):
+            return None
+        raise CSourceError(f"the C back end has no type for {t}")
+
+    def _array(self, t: types.Array) -> str:
+        key = ("array", t.dtype, t.ndim)
+        if key not in self.structs:
+            element = self.ctype(t.dtype)
+            name = f"pa_arr_{re.sub(r'[^a-z0-9]', '', str(t.dtype))}_{t.ndim}d"
+            self.structs[key] = (name, f"typedef struct {{ {element} *data; int64_t "
+                                       f"shape[{t.ndim}]; int64_t strides[{t.ndim}]; }} "
+                                       f"{name};")
+        return self.structs[key][0]
+
+    def _tuple(self, t: types.BaseTuple) -> str:
+        key = ("tuple", t)
+        if key not in self.structs:
+            members = [self.ctype(e) for e in t.types]
+            name = f"pa_tuple_{len(self.structs)}"
+            body = " ".join(f"{m} f{i};" for i, m in enumerate(members) if m is not None)
+            self.structs[key] = (name, f"typedef struct {{ {body or 'int empty;'} }} {name};")
+        return self.structs[key][0]
+
+    # -- functions ---------------------------------------------------------------------
+    def function(self, py_func: Callable, argtypes: Sequence) -> _Function:
+        """The C function of ``py_func`` typed for ``argtypes`` (translated on first need)."""
+        key = (py_func, tuple(argtypes))
+        if key not in self.functions:
+            name = f"pa_{py_func.__name__.strip('_')}_{next(self.counter)}"
+            self.functions[key] = _Function(name, "")
+            _FunctionWriter(self, py_func, tuple(argtypes), self.functions[key]).write()
+            self.order.append(key)
+        return self.functions[key]
+
+    def entry(self, name: str, inner: _Function) -> str:
+        """An exported function ``name`` that calls the (static) ``inner``."""
+        prototype = inner.prototype.replace("static ", "", 1).replace(
+            f" {inner.name}(", f" {name}(", 1)
+        arguments = ", ".join(re.findall(r" (a\d+)(?=[,)])", inner.prototype))
+        call = f"{inner.name}({arguments})"
+        body = call if prototype.startswith("void ") else f"return {call}"
+        self.entries[name] = f"{prototype} {{ {body}; }}"
+        return prototype
+
+    def unit(self) -> CUnit:
+        structs = "\n".join(definition for _, definition in self.structs.values())
+        prototypes = "\n".join(self.functions[k].prototype + ";" for k in self.order)
+        bodies = "\n\n".join("\n".join(self.functions[k].body) for k in self.order)
+        source = "\n".join([PRELUDE, structs, "", prototypes, "", bodies, "",
+                            *self.entries.values(), ""])
+        header = "\n".join(["#include <stdint.h>", structs, "",
+                            *(e.split(" {", 1)[0] + ";" for e in self.entries.values()), ""])
+        return CUnit(source, header, tuple(self.entries))
+
+
+def _typed_ir(py_func: Callable, argtypes: tuple):
+    """numba's typed IR of ``py_func`` for ``argtypes`` (a fresh, uncached compile:
+    a kernel's cached dispatchers keep no IR)."""
+    dispatcher = numba.njit(py_func)
+    try:
+        dispatcher.compile(argtypes)
+    except numba.core.errors.TypingError as error:
+        raise CSourceError(f"{py_func.__qualname__}{argtypes}: {error}") from error
+    (result,) = dispatcher.overloads.values()
+    annotation = result.type_annotation
+    return annotation.blocks, annotation.typemap, annotation.calltypes, result.signature
+
+
+class _FunctionWriter:
+    """Writes one typed function as C (see the module docstring)."""
+
+    def __init__(self, unit: _Translator, py_func, argtypes: tuple, out: _Function):
+        self.unit = unit
+        self.py_func = py_func
+        self.where = f"{py_func.__module__}.{py_func.__qualname__}"
+        self.blocks, self.typemap, self.calltypes, self.signature = _typed_ir(py_func, argtypes)
+        self.out = out
+        self.names: dict[str, str] = {}
+        self.objects: dict[str, object] = {}  # variables bound to a function or module
+
+    def fail(self, what: str) -> CSourceError:
+        return CSourceError(f"{self.where}: the C back end does not translate {what}")
+
+    def var(self, v: ir.Var | str) -> str:
+        name = v if isinstance(v, str) else v.name
+        if name not in self.names:
+            self.names[name] = f"v{len(self.names)}_{re.sub(r'[^A-Za-z0-9]', '_', name)[-24:]}"
+        return self.names[name]
+
+    def type_of(self, v: ir.Var):
+        return self.typemap[v.name]
+
+    def write(self) -> None:
+        rtype = self.unit.ctype(self.signature.return_type) or "void"
+        params = [f"{self.unit.ctype(t)} a{i}" for i, t in enumerate(self.signature.args)
+                  if self.unit.ctype(t) is not None]
+        self.out.prototype = f"static {rtype} {self.out.name}({', '.join(params) or 'void'})"
+        lines: list[str] = []
+        for label in sorted(self.blocks):
+            lines.append(f"  L{label}:;")
+            for stmt in self.blocks[label].body:
+                lines.extend("    " + s for s in self.statement(stmt, rtype))
+        declarations = []
+        for name, cname in self.names.items():
+            ctype = self.unit.ctype(self.typemap[name]) if name in self.typemap else None
+            if ctype is not None:
+                declarations.append(f"    {ctype} {cname};")
+        first = min(self.blocks)
+        self.out.body = [self.out.prototype + " {", *declarations, f"    goto L{first};",
+                         *lines, "}"]
+
+    # -- statements --------------------------------------------------------------------
+    def statement(self, stmt, rtype: str) -> list[str]:
+        if isinstance(stmt, ir.Assign):
+            return self.assign(stmt.target, stmt.value)
+        if isinstance(stmt, ir.Del):
+            return []
+        if isinstance(stmt, ir.Jump):
+            return [f"goto L{stmt.target};"]
+        if isinstance(stmt, ir.Branch):
+            return [f"if ({self.var(stmt.cond)}) goto L{stmt.truebr}; else goto L{stmt.falsebr};"]
+        if isinstance(stmt, ir.Return):
+            if rtype == "void":
+                return ["return;"]
+            return [f"return {self.var(stmt.value)};"]
+        if isinstance(stmt, ir.SetItem):
+            return [f"{self.element(stmt.target, stmt.index)} = {self.var(stmt.value)};"]
+        if isinstance(stmt, ir.StaticSetItem):
+            return [f"{self.element(stmt.target, stmt.index_var)} = {self.var(stmt.value)};"]
+        if isinstance(stmt, ir.StaticRaise | ir.Raise | ir.DynamicRaise):
+            raise self.fail(f"a raise statement ({stmt}); a kernel function must not raise")
+        raise self.fail(f"the statement {stmt!r}")
+
+    def assign(self, target: ir.Var, value) -> list[str]:
+        t = self.type_of(target)
+        if isinstance(value, ir.Global | ir.FreeVar):
+            return self.constant(target, value.value)
+        if isinstance(value, ir.Const):
+            return self.constant(target, value.value)
+        if self.unit.ctype(t) is None:  # a function, module or None: remember what it is
+            if isinstance(value, ir.Var) and value.name in self.objects:
+                self.objects[target.name] = self.objects[value.name]
+            elif isinstance(value, ir.Expr) and value.op == "getattr":
+                base = self.objects.get(value.value.name)
+                if base is not None:
+                    self.objects[target.name] = getattr(base, value.attr)
+            elif isinstance(value, ir.Expr) and value.op == "call":
+                return [self.call(target, value) + ";"]
+            return []
+        lhs = self.var(target)
+        if isinstance(value, ir.Arg):
+            return [f"{lhs} = a{value.index};"]
+        if isinstance(value, ir.Var):
+            return [f"{lhs} = {self.coerce(value, t)};"]
+        if isinstance(value, ir.Expr):
+            return [f"{lhs} = {self.expression(target, value)};"]
+        raise self.fail(f"the assignment {target} = {value!r}")
+
+    def constant(self, target: ir.Var, value) -> list[str]:
+        t = self.type_of(target)
+        ctype = self.unit.ctype(t)
+        if ctype is None:
+            self.objects[target.name] = value
+            return []
+        return [f"{self.var(target)} = {self.literal(value, t)};"]
+
+    def literal(self, value, t) -> str:
+        if isinstance(t, types.Literal):
+            t = types.unliteral(t)
+        if isinstance(value, bool | np.bool_):
+            return "1" if value else "0"
+        if isinstance(value, int | np.integer):
+            return f"INT64_C({int(value)})" if isinstance(t, types.Integer) else repr(float(value))
+        if isinstance(value, float | np.floating):
+            value = float(value)
+            if math.isnan(value):
+                return "NAN"
+            if math.isinf(value):
+                return "INFINITY" if value > 0 else "(-INFINITY)"
+            return repr(value)
+        if isinstance(value, tuple) and isinstance(t, types.BaseTuple):
+            items = ", ".join(self.literal(v, e) for v, e in zip(value, t.types, strict=True)
+                              if self.unit.ctype(e) is not None)
+            return f"(({self.unit.ctype(t)}){{{items}}})"
+        raise self.fail(f"the constant {value!r} of type {t}")
+
+    def coerce(self, v: ir.Var, to) -> str:
+        """``v`` as a value of type ``to``: tuples of other member types (a literal
+        member, an int where a float goes) are rebuilt member by member."""
+        have = self.type_of(v)
+        if not (isinstance(to, types.BaseTuple) and isinstance(have, types.BaseTuple)):
+            return self.var(v)
+        if self.unit.ctype(to) == self.unit.ctype(have):
+            return self.var(v)
+        items = [self._member(f"{self.var(v)}.f{i}", h, t)
+                 for i, (h, t) in enumerate(zip(have.types, to.types, strict=True))
+                 if self.unit.ctype(t) is not None]
+        return f"(({self.unit.ctype(to)}){{{', '.join(items)}}})"
+
+    def _member(self, expr: str, have, to) -> str:
+        if isinstance(to, types.BaseTuple) and isinstance(have, types.BaseTuple):
+            if self.unit.ctype(to) == self.unit.ctype(have):
+                return expr
+            items = [self._member(f"{expr}.f{i}", h, t)
+                     for i, (h, t) in enumerate(zip(have.types, to.types, strict=True))
+                     if self.unit.ctype(t) is not None]
+            return f"(({self.unit.ctype(to)}){{{', '.join(items)}}})"
+        return f"(({self.unit.ctype(to)}){expr})"
+
+    # -- expressions -------------------------------------------------------------------
+    def expression(self, target: ir.Var, expr: ir.Expr) -> str:
+        op = expr.op
+        if op in ("binop", "inplace_binop"):
+            fn = expr.fn if op == "binop" else expr.immutable_fn
+            return self.binary(fn, expr.lhs, expr.rhs, self.type_of(target))
+        if op == "unary":
+            fn = expr.fn if callable(expr.fn) else {"-": operator.neg, "+": operator.pos,
+                                                     "not": operator.not_}[expr.fn]
+            return f"({UNARY[fn]}{self.var(expr.value)})"
+        if op == "call":
+            return self.call(target, expr)
+        if op in ("getitem", "typed_getitem"):
+            return self.item(expr.value, expr.index)
+        if op == "static_getitem":
+            return self.item(expr.value, expr.index_var, static=expr.index)
+        if op == "build_tuple":
+            t = self.type_of(target)
+            items = [self.var(v) for v, e in zip(expr.items, t.types, strict=True)
+                     if self.unit.ctype(e) is not None]
+            return f"(({self.unit.ctype(t)}){{{', '.join(items)}}})"
+        if op in ("exhaust_iter", "cast"):
+            return self.coerce(expr.value, self.type_of(target))
+        if op == "getiter":
+            return self.var(expr.value)
+        if op == "iternext":
+            return f"pa_range_next(&{self.var(expr.value)})"
+        if op == "pair_first":
+            return f"{self.var(expr.value)}.first"
+        if op == "pair_second":
+            return f"{self.var(expr.value)}.second"
+        if op == "getattr":
+            return self.attribute(target, expr)
+        raise self.fail(f"the expression {expr!r}")
+
+    def binary(self, fn, lhs: ir.Var, rhs: ir.Var, result) -> str:
+        a, b = self.var(lhs), self.var(rhs)
+        ta, tb = types.unliteral(self.type_of(lhs)), types.unliteral(self.type_of(rhs))
+        ints = isinstance(ta, types.Integer) and isinstance(tb, types.Integer)
+        if fn in (operator.truediv, operator.itruediv):
+            return f"((double){a} / (double){b})"
+        if fn in (operator.floordiv, operator.ifloordiv):
+            return f"pa_floordiv({a}, {b})" if ints else f"floor({a} / {b})"
+        if fn in (operator.mod, operator.imod):
+            return f"pa_mod({a}, {b})" if ints else f"pa_fmod({a}, {b})"
+        if fn in (operator.pow, operator.ipow):
+            return f"pa_ipow({a}, {b})" if ints else f"pow({a}, {b})"
+        if fn in (operator.is_, operator.is_not):
+            raise self.fail("'is' comparisons")
+        if fn in BINARY:
+            return f"({a} {BINARY[fn]} {b})"
+        raise self.fail(f"the operator {fn}")
+
+    def attribute(self, target: ir.Var, expr: ir.Expr) -> str:
+        base_type = self.type_of(expr.value)
+        if isinstance(base_type, types.Array):
+            arr = self.var(expr.value)
+            if expr.attr == "shape":
+                items = ", ".join(f"{arr}.shape[{k}]" for k in range(base_type.ndim))
+                return f"(({self.unit.ctype(self.type_of(target))}){{{items}}})"
+            if expr.attr == "size":
+                return " * ".join(f"{arr}.shape[{k}]" for k in range(base_type.ndim))
+            if expr.attr == "ndim":
+                return str(base_type.ndim)
+        base = self.objects.get(expr.value.name)
+        if base is not None and isinstance(getattr(base, expr.attr, None), int | float):
+            return self.literal(getattr(base, expr.attr), self.type_of(target))
+        raise self.fail(f"the attribute .{expr.attr} of {base_type}")
+
+    def item(self, value: ir.Var, index: ir.Var, static=None) -> str:
+        t = self.type_of(value)
+        if isinstance(t, types.BaseTuple):
+            if static is None:
+                raise self.fail("a tuple indexed by a run-time value")
+            k = static if static >= 0 else len(t) + static
+            kept = [i for i, e in enumerate(t.types) if self.unit.ctype(e) is not None]
+            return f"{self.var(value)}.f{k}" if k in kept else "0"
+        if isinstance(t, types.Array):
+            return self.element(value, index)
+        raise self.fail(f"indexing a {t}")
+
+    def element(self, array: ir.Var, index: ir.Var) -> str:
+        t = self.type_of(array)
+        if not isinstance(t, types.Array):
+            raise self.fail(f"item assignment into a {t}")
+        arr = self.var(array)
+        it = self.type_of(index)
+        if isinstance(it, types.BaseTuple):
+            if any(not isinstance(types.unliteral(e), types.Integer) for e in it.types):
+                raise self.fail(f"the array index {it} (slices)")
+            parts = [f"pa_index({self.var(index)}.f{k}, {arr}.shape[{k}]) * {arr}.strides[{k}]"
+                     for k in range(len(it))]
+        elif isinstance(types.unliteral(it), types.Integer):
+            parts = [f"pa_index({self.var(index)}, {arr}.shape[0]) * {arr}.strides[0]"]
+        else:
+            raise self.fail(f"the array index {it} (slices)")
+        return f"{arr}.data[{' + '.join(parts)}]"
+
+    def call(self, target: ir.Var, expr: ir.Expr) -> str:
+        fn = self.objects.get(expr.func.name)
+        if expr.kws or expr.vararg:
+            raise self.fail(f"keyword or star arguments in a call of {fn}")
+        signature = self.calltypes[expr]
+        if isinstance(fn, numba.core.registry.CPUDispatcher):
+            args = [self.coerce(a, t) for a, t in zip(expr.args, signature.args, strict=True)
+                    if self.unit.ctype(t) is not None]
+            name = self.unit.function(fn.py_func, signature.args).name
+            return f"{name}({', '.join(args)})"
+        args = [self.var(a) for a in expr.args if self.unit.ctype(self.type_of(a)) is not None]
+        if fn in (builtins.abs, np.abs, np.absolute):
+            t = types.unliteral(self.type_of(expr.args[0]))
+            return f"{'llabs' if isinstance(t, types.Integer) else 'fabs'}({args[0]})"
+        if fn in (builtins.min, builtins.max) and len(args) == 2:
+            compare = "<" if fn is builtins.min else ">"
+            a, b = args
+            return f"({b} {compare} {a} ? {b} : {a})"
+        if fn is builtins.int:
+            return f"((int64_t)({args[0]}))"
+        if fn is builtins.float:
+            return f"((double)({args[0]}))"
+        if fn is builtins.bool:
+            return f"(({args[0]}) != 0)"
+        if fn is builtins.range:
+            start, stop, step = ({1: ["0", args[0], "1"], 2: [*args, "1"], 3: args}[len(args)])
+            return f"((pa_range){{{start}, {stop}, {step}}})"
+        if fn is builtins.len:
+            return f"{self.var(expr.args[0])}.shape[0]"
+        if fn is np.sign:
+            return f"pa_sign({args[0]})"
+        name = getattr(fn, "__name__", None)
+        if name in MATH and getattr(fn, "__module__", None) in ("math", "numpy", None):
+            return f"{MATH[name]}({', '.join(args)})"
+        raise self.fail(f"a call of {fn!r}")
+
+
+def translate(roots: dict[str, tuple[Callable, Sequence]]) -> CUnit:
+    """C source of the functions ``roots`` (entry name -> (a compiled kernel function
+    or its Python function, numba argument types)) and of everything they call."""
+    unit = _Translator()
+    for entry, (function, argtypes) in roots.items():
+        py_func = getattr(function, "py_func", function)
+        unit.entry(entry, unit.function(py_func, argtypes))
+    return unit.unit()
