@@ -57,6 +57,11 @@ class SolverError(PneumactError, RuntimeError):
     """The integrator failed (step size underflow, non-finite state)."""
 
 
+class ExportError(PneumactError, RuntimeError):
+    """A model could not be exported (no C compiler, a failed build, a model the export
+    does not cover); the message says what to install or change."""
+
+
 class ResourceError(PneumactError, MemoryError):
     """A run would need more memory (or disk) than the machine has; nothing was started."""
 

@@ -28,7 +28,11 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
-from numba.core import ir, types
+from numba.core import ir, registry, types
+from numba.core.compiler import CompilerBase, DefaultPassBuilder, Flags, compile_extra
+from numba.core.compiler_machinery import FunctionPass, PassManager, register_pass
+from numba.core.typed_passes import AnnotateTypes
+from numba.core.typing import signature
 
 __all__ = ["CSourceError", "CUnit", "translate"]
 
@@ -56,6 +60,7 @@ MATH = {"exp": "exp", "log": "log", "log10": "log10", "log1p": "log1p", "expm1":
 PRELUDE = r"""
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 
 typedef struct { int64_t start, stop, step; } pa_range;
 typedef struct { int64_t first; int second; } pa_pair;
@@ -142,8 +147,8 @@ class _Translator:
 
     def _array(self, t: types.Array) -> str:
         key = ("array", t.dtype, t.ndim)
-        if key not in self.structs:
-            element = self.ctype(t.dtype)
+        if key not in self.structs:  # numpy's bool is one byte
+            element = "uint8_t" if isinstance(t.dtype, types.Boolean) else self.ctype(t.dtype)
             name = f"pa_arr_{re.sub(r'[^a-z0-9]', '', str(t.dtype))}_{t.ndim}d"
             self.structs[key] = (name, f"typedef struct {{ {element} *data; int64_t "
                                        f"shape[{t.ndim}]; int64_t strides[{t.ndim}]; }} "
@@ -191,17 +196,47 @@ class _Translator:
         return CUnit(source, header, tuple(self.entries))
 
 
+@register_pass(mutates_CFG=False, analysis_only=True)
+class _KeepTypedIR(FunctionPass):
+    """The last pass of ``_TypedIR``: its result is the typed IR (nothing is lowered)."""
+
+    _name = "pneumact_keep_typed_ir"
+
+    def __init__(self):
+        FunctionPass.__init__(self)
+
+    def run_pass(self, state) -> bool:
+        state.cr = (state.type_annotation, signature(state.return_type, *state.args))
+        return False
+
+
+class _TypedIR(CompilerBase):
+    """numba's pipeline up to the typed, inlined and rewritten IR, without lowering: the
+    C back end needs the types, not machine code."""
+
+    def define_pipelines(self):
+        manager = PassManager("pneumact typed IR")
+        manager.passes.extend(DefaultPassBuilder.define_untyped_pipeline(self.state).passes)
+        manager.passes.extend(DefaultPassBuilder.define_typed_pipeline(self.state).passes)
+        manager.add_pass(AnnotateTypes, "annotate types")
+        manager.add_pass(_KeepTypedIR, "keep the typed IR")
+        manager.finalize()
+        return [manager]
+
+
 def _typed_ir(py_func: Callable, argtypes: tuple):
-    """numba's typed IR of ``py_func`` for ``argtypes`` (a fresh, uncached compile:
-    a kernel's cached dispatchers keep no IR)."""
-    dispatcher = numba.njit(py_func)
+    """numba's typed IR of ``py_func`` for ``argtypes`` (blocks, variable types, call
+    signatures, the function's signature). A kernel's cached dispatchers keep no IR, so
+    the function is typed afresh; what it calls is typed through those dispatchers."""
+    target = registry.cpu_target
+    flags = Flags()
+    flags.nrt = True
     try:
-        dispatcher.compile(argtypes)
+        annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
+                                   argtypes, None, flags, {}, pipeline_class=_TypedIR)
     except numba.core.errors.TypingError as error:
         raise CSourceError(f"{py_func.__qualname__}{argtypes}: {error}") from error
-    (result,) = dispatcher.overloads.values()
-    annotation = result.type_annotation
-    return annotation.blocks, annotation.typemap, annotation.calltypes, result.signature
+    return annotation.blocks, annotation.typemap, annotation.calltypes, typed
 
 
 class _FunctionWriter:

@@ -1,0 +1,92 @@
+"""The C compiler an FMU's binary is built with, and where the FMI headers come from.
+
+The binary is built for the platform pneumact runs on, with the C compiler found on the
+machine (``$CC``, else ``cc``, ``gcc``, ``clang``); the FMI 2.0 headers are FMPy's
+(``pip install "pneumact[fmu]"``), never a copy kept in this repository.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from ..errors import ExportError
+
+__all__ = ["binary_folder", "build_binary", "find_compiler", "fmi_headers",
+           "shared_library_suffix"]
+
+CANDIDATES = ("cc", "gcc", "clang")
+#: what to install, per platform, when no C compiler is found
+INSTALL_HINT = {
+    "linux": "install gcc (Debian/Ubuntu: sudo apt install gcc; Fedora: sudo dnf install gcc)",
+    "darwin": "install the Xcode command line tools (xcode-select --install)",
+    "win32": "install a gcc or clang for Windows (e.g. MinGW-w64 or LLVM) and put it on PATH, "
+             "or set CC to it",
+}
+FLAGS = ("-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
+
+
+def find_compiler(compiler: str | None = None) -> str:
+    """Path of the C compiler: ``compiler`` if given, else ``$CC``, else the first of
+    cc, gcc, clang on PATH; ExportError naming what to install when there is none."""
+    wanted = compiler or os.environ.get("CC")
+    if wanted:
+        found = shutil.which(wanted)
+        if found is None:
+            raise ExportError(f"C compiler {wanted!r} (from {'compiler=' if compiler else '$CC'})"
+                              " was not found on PATH")
+        return found
+    for name in CANDIDATES:
+        found = shutil.which(name)
+        if found is not None:
+            return found
+    hint = INSTALL_HINT.get(sys.platform, INSTALL_HINT["linux"])
+    raise ExportError(f"no C compiler found (looked for $CC, {', '.join(CANDIDATES)}) to build "
+                      f"the FMU's binary: {hint}; or export the sources only (binary=False, "
+                      "pneumact export fmu --no-binary): an importer can build them")
+
+
+def fmi_headers() -> Path:
+    """The folder of FMPy's FMI 2.0 headers (fmi2Functions.h, …)."""
+    try:
+        import fmpy
+    except ImportError as error:
+        raise ExportError('building an FMU needs FMPy (its FMI headers): pip install '
+                          '"pneumact[fmu]"') from error
+    folder = Path(fmpy.__file__).parent / "c-code"
+    if not (folder / "fmi2Functions.h").is_file():
+        raise ExportError(f"FMPy {fmpy.__version__} has no fmi2Functions.h in {folder}")
+    return folder
+
+
+def binary_folder() -> str:
+    """The FMI 2.0 name of this platform's binaries folder (linux64, darwin64, win64)."""
+    bits = "64" if sys.maxsize > 2**32 else "32"
+    system = {"linux": "linux", "darwin": "darwin", "win32": "win"}.get(sys.platform)
+    if system is None or platform.machine().lower() not in ("x86_64", "amd64", "arm64",
+                                                             "aarch64", "i686", "x86"):
+        raise ExportError(f"no FMI 2.0 binaries folder for {sys.platform} "
+                          f"{platform.machine()}: export the sources only (binary=False)")
+    return system + bits
+
+
+def shared_library_suffix() -> str:
+    return {"darwin": ".dylib", "win32": ".dll"}.get(sys.platform, ".so")
+
+
+def build_binary(sources: list[Path], output: Path, compiler: str | None = None) -> str:
+    """Compile ``sources`` into the shared library ``output``; returns the compiler used.
+    A failed build raises ExportError with the compiler's own message."""
+    cc = find_compiler(compiler)
+    flags = [f for f in FLAGS if not (sys.platform == "win32" and f == "-fPIC")]
+    command = [cc, *flags, "-I", str(fmi_headers()), "-I", str(sources[0].parent),
+               *map(str, sources), "-o", str(output), "-lm"]
+    result = subprocess.run(command, capture_output=True, text=True, check=False)
+    if result.returncode != 0:
+        raise ExportError(f"building the FMU's binary failed ({' '.join(command)}):\n"
+                          f"{result.stderr[-4000:]}")
+    return cc

@@ -1,0 +1,380 @@
+"""Export an actuator as an FMI 2.0 Model Exchange FMU.
+
+The FMU's physics is the model's kernel written in C by the kernel generator's second
+back end (``core.c_source``), from the same component functions the compiled kernels
+run: ``rhs``, ``outputs``, ``jac``, ``initial_state``, ``derive`` and, for a law with mode
+switches (GMS), ``event_guards`` and ``event_switch``. A fixed C file (``templates/
+fmu.c.j2``) holds the FMI side: an instance's arrays and the value references onto them.
+
+What drives the model becomes an FMU input (a one-point input channel of the packed
+signals: the pressure, the set-point or the command, and an external force); every
+parameter of the set is a tunable parameter with its unit, description and provenance;
+every state and every output of the kernel is an output; the derivatives are declared.
+The archive holds the C sources (an importer on another platform builds them) and, unless
+``binary=False``, the binary built here with the machine's C compiler.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import hashlib
+import os
+import re
+import tempfile
+import uuid
+import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+from numba.core import types
+
+from ..core.assembly import Assembly, assemble
+from ..core.c_source import CUnit, translate
+from ..core.channels import CH_DRIVE, CH_LOAD_T, INPUT_OFFSET
+from ..core.signals import Constant, pack_channels
+from ..errors import ArgumentError, ExportError
+from ..files import atomic_write
+from ..models import Actuator
+from ..parameters.catalogue import catalogue
+from ..version import __version__
+from .compiler import binary_folder, build_binary, shared_library_suffix
+
+__all__ = ["ExportedFmu", "FmuVariable", "export_fmu"]
+
+#: the FMU input that takes what drives each valve (the record signal it replaces)
+DRIVE_INPUTS = {"pressure": ("pressure_input", "Pa", "chamber pressure imposed by the source"),
+                "setpoint": ("pressure_setpoint", "Pa", "set-point of the pressure regulator"),
+                "command": ("valve_command", "1", "valve command (0 closed to atmosphere, 1 "
+                                                  "open to the vacuum reservoir)")}
+FORCE_INPUT = ("external_force", "N", "external force on the rod (opposes motion towards "
+                                      "larger x)")
+#: the FMI BaseUnit exponents pint's dimensions map onto
+BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[temperature]": "K",
+              "[current]": "A", "[substance]": "mol", "[luminosity]": "cd"}
+TEMPLATES = "pneumact.export"
+STOP_TIME = 10.0
+
+F64 = types.float64
+VECTOR = types.float64[::1]
+MATRIX = types.float64[:, ::1]
+INDICES = types.int64[::1]
+FLAGS = types.boolean[::1]
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    """One FMU variable: its name, causality, unit, start value and where it lives."""
+
+    name: str
+    causality: str  # parameter, input, output, local
+    kind: str  # parameter, input, state, derivative, output
+    index: int  # parameter number, signal entry, state or output column
+    unit: str
+    description: str
+    start: float | None = None
+    variability: str = "continuous"
+    initial: str | None = None
+    derivative: int | None = None  # the 1-based index of its state (a derivative)
+    minimum: float | None = None
+    maximum: float | None = None
+    nominal: float | None = None
+
+
+@dataclass(frozen=True)
+class ExportedFmu:
+    """What ``export_fmu`` wrote: the archive, its variables, its binary (if built)."""
+
+    path: Path
+    identifier: str
+    variables: tuple[FmuVariable, ...]
+    platform: str | None
+    compiler: str | None
+    events: int
+
+    def to_pandas(self):
+        """One row per variable (value reference = row number)."""
+        import pandas as pd
+
+        rows = [{"value_reference": i, **dataclasses.asdict(v)}
+                for i, v in enumerate(self.variables)]
+        return pd.DataFrame(rows).set_index("name")
+
+    def names(self, causality: str) -> tuple[str, ...]:
+        return tuple(v.name for v in self.variables if v.causality == causality)
+
+    def __repr__(self) -> str:
+        built = f"binary {self.platform}" if self.platform else "sources only"
+        return (f"ExportedFmu({str(self.path)!r}, inputs={list(self.names('input'))}, "
+                f"{len(self.names('parameter'))} parameters, "
+                f"{len(self.names('output'))} outputs, {self.events} event indicators, "
+                f"{built})")
+
+
+# ------------------------------------------------------------------------------ the model
+def exportable(model) -> Actuator:
+    """The actuator the FMU runs: ``model`` with an external-force input channel."""
+    if not isinstance(model, Actuator):
+        raise ArgumentError(f"export_fmu: model = {type(model).__name__}; an FMU is exported "
+                            "from a pa.Actuator (a friction rig or closed loop is not yet)")
+    if model.load is not None:
+        raise ArgumentError("export_fmu: the actuator has a load against time; in the FMU the "
+                            "external force is an input: export it without load= and drive "
+                            "the input 'external_force'")
+    return dataclasses.replace(model, load=Constant(0.0))
+
+
+def kernel_roots(kernel: ModuleType, events: bool) -> dict:
+    """The kernel functions the FMU calls, with their argument types."""
+    run = (F64, F64, VECTOR, VECTOR, VECTOR, INDICES)
+    roots = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
+             "pa_outputs": (kernel.outputs, (*run, VECTOR)),
+             "pa_jac": (kernel.jac, (*run, MATRIX)),
+             "pa_initial_state": (kernel.initial_state, (F64, F64, VECTOR, VECTOR, INDICES,
+                                                         VECTOR)),
+             "pa_derive": (kernel.derive, (VECTOR,))}
+    if events:
+        roots["pa_event_guards"] = (kernel.event_guards, (*run, VECTOR))
+        roots["pa_event_switch"] = (kernel.event_switch, (*run, FLAGS))
+    return roots
+
+
+def has_events(kernel: ModuleType) -> bool:
+    return bool(getattr(kernel, "HAS_EVENTS", False))
+
+
+def event_count(model: Actuator, kernel: ModuleType, asm: Assembly) -> int:
+    if not has_events(kernel):
+        return 0
+    vec = asm.pack()
+    sig, ptr = pack_channels(model.channels(Constant(0.0)))
+    y = np.zeros(len(asm.states))
+    out = np.zeros(len(asm.states))
+    return int(kernel.event_guards(0.0, 0.0, y, vec, sig, ptr, out))
+
+
+# ------------------------------------------------------------------------------ variables
+def parameter_variables(model: Actuator, asm: Assembly) -> list[FmuVariable]:
+    specs = catalogue()
+    info = model.params.info
+    values = asm.values(asm.pack())
+    out = []
+    for k, name in enumerate(asm.parameter_names):
+        spec = specs[name]
+        note = info.get(name)
+        source = f" [{note.source}: {note.given}]" if note is not None else " [catalogue default]"
+        low = spec.minimum if spec.minimum is not None and not spec.strict_minimum else None
+        out.append(FmuVariable(name, "parameter", "parameter", k, spec.unit,
+                               spec.description + source, start=values[name],
+                               variability="tunable", initial="exact", minimum=low,
+                               maximum=spec.maximum))
+    return out
+
+
+def input_variables(model: Actuator, ptr: np.ndarray, inputs: Mapping[str, float]
+                    ) -> list[FmuVariable]:
+    name, unit, description = DRIVE_INPUTS[model.input_signal]
+    rest = float(model.params["p_atm"]) if unit == "Pa" else 0.0
+    starts = {name: rest, FORCE_INPUT[0]: 0.0}
+    unknown = sorted(set(inputs) - set(starts))
+    if unknown:
+        raise ArgumentError(f"export_fmu: inputs = {unknown}: not inputs of this FMU; its "
+                            f"inputs are {sorted(starts)}")
+    starts.update({k: float(v) for k, v in inputs.items()})
+    drive = int(ptr[CH_DRIVE]) + INPUT_OFFSET
+    force = int(ptr[CH_LOAD_T]) + INPUT_OFFSET
+    return [FmuVariable(name, "input", "input", drive, unit, description, start=starts[name]),
+            FmuVariable(FORCE_INPUT[0], "input", "input", force, FORCE_INPUT[1], FORCE_INPUT[2],
+                        start=starts[FORCE_INPUT[0]])]
+
+
+def state_variables(asm: Assembly, nominals: np.ndarray, first: int
+                    ) -> tuple[list[FmuVariable], list[FmuVariable]]:
+    """The states (outputs) and their derivatives (locals); ``first``: the 1-based index
+    of the first state."""
+    states, derivatives = [], []
+    for i, spec in enumerate(asm.states):
+        states.append(FmuVariable(spec.name, "output", "state", i, spec.unit,
+                                  f"state: {spec.name.replace('_', ' ')}", initial="calculated",
+                                  nominal=float(nominals[i])))
+        derivatives.append(FmuVariable(f"der({spec.name})", "local", "derivative", i,
+                                       rate_unit(spec.unit), f"d{spec.name}/dt",
+                                       initial="calculated", derivative=first + i))
+    return states, derivatives
+
+
+def output_variables(asm: Assembly) -> list[FmuVariable]:
+    """The kernel's outputs that are not states already."""
+    states = set(asm.state_names)
+    return [FmuVariable(name, "output", "output", k, unit, f"output: {name.replace('_', ' ')}",
+                        initial="calculated")
+            for k, (name, unit) in enumerate(zip(asm.output_names, asm.output_units,
+                                                 strict=True))
+            if name not in states]
+
+
+def rate_unit(unit: str) -> str:
+    if unit in ("", "1"):
+        return "1/s"
+    return f"{unit}/s"
+
+
+def all_variables(model: Actuator, asm: Assembly, kernel: ModuleType, ptr: np.ndarray,
+                  inputs: Mapping[str, float]) -> list[FmuVariable]:
+    nominals = np.zeros(len(asm.states))
+    kernel.state_scales(asm.pack(), nominals)
+    nominals = np.where(np.isfinite(nominals) & (nominals > 0.0), nominals, 1.0)
+    head = parameter_variables(model, asm) + input_variables(model, ptr, inputs)
+    states, derivatives = state_variables(asm, nominals, first=len(head) + 1)
+    return head + states + derivatives + output_variables(asm)
+
+
+# ------------------------------------------------------------------------------ units
+def unit_definitions(variables: list[FmuVariable]) -> list[dict]:
+    """FMI UnitDefinitions of the variables' units (exponents of SI base units, by pint)."""
+    from ..io.quantities import unit_registry
+
+    ureg = unit_registry()
+    out = []
+    for unit in sorted({v.unit for v in variables if v.unit}):
+        quantity = ureg.Quantity(1.0, "" if unit == "1" else unit).to_base_units()
+        base = [(BASE_UNITS[d], _exponent(e)) for d, e in quantity.dimensionality.items()]
+        if quantity.magnitude != 1.0:
+            base.append(("factor", repr(float(quantity.magnitude))))
+        out.append({"name": unit, "base": base})
+    return out
+
+
+def _exponent(value: float) -> str:
+    if float(value) != int(value):
+        raise ExportError(f"a unit with the fractional exponent {value} has no FMI BaseUnit")
+    return str(int(value))
+
+
+# ------------------------------------------------------------------------------ files
+def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
+                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, events: int) -> str:
+    kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4}
+    slot_ptr, slots = [0], []
+    for name in asm.parameter_names:
+        slots.extend(asm.slots[name])
+        slot_ptr.append(len(slots))
+    nominals = [v.nominal for v in variables if v.kind == "state"]
+    return render("fmu.c.j2", identifier=identifier, guid=guid, n_states=len(asm.states),
+                  n_vector=len(vec), n_outputs=len(asm.output_names), n_events=events,
+                  n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),
+                  prm_start=_c_list(vec), sig_start=_c_list(sig),
+                  ptr=", ".join(str(int(p)) for p in ptr), nominals=_c_list(nominals),
+                  var_kind=", ".join(str(kinds[v.kind]) for v in variables),
+                  var_index=", ".join(str(v.index) for v in variables),
+                  slot_ptr=", ".join(map(str, slot_ptr)), slots=", ".join(map(str, slots)))
+
+
+def _c_list(values) -> str:
+    return ", ".join(repr(float(v)) if np.isfinite(v) else
+                     ("INFINITY" if v > 0 else "(-INFINITY)" if v < 0 else "NAN")
+                     for v in values)
+
+
+def model_description(model: Actuator, identifier: str, guid: str,
+                      variables: list[FmuVariable], events: int) -> str:
+    index = {id(v): i + 1 for i, v in enumerate(variables)}
+    outputs = [index[id(v)] for v in variables if v.causality == "output"]
+    derivatives = [index[id(v)] for v in variables if v.kind == "derivative"]
+    provenance = model.params.provenance.get("source", "") if isinstance(
+        model.params.provenance, Mapping) else ""
+    description = (f"pneumact {model.describe()}, parameter set '{model.params.name}'"
+                   + (f" ({provenance})" if provenance else ""))
+    return render("modelDescription.xml.j2", model_name=identifier, guid=guid,
+                  description=description, version=__version__,
+                  date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+                  n_events=events, identifier=identifier, units=unit_definitions(variables),
+                  stop_time=STOP_TIME, variables=[_xml_fields(v) for v in variables],
+                  outputs=outputs, derivatives=derivatives,
+                  initial_unknowns=sorted(set(outputs) | set(derivatives)))
+
+
+def _xml_fields(v: FmuVariable) -> dict:
+    fields = dataclasses.asdict(v)
+    for key in ("start", "minimum", "maximum", "nominal"):
+        if fields[key] is not None:
+            fields[key] = repr(float(fields[key]))
+    fields["unit"] = v.unit if v.unit not in ("",) else None
+    return fields
+
+
+def render(template: str, **context) -> str:
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.PackageLoader(TEMPLATES, "templates"),
+                             autoescape=template.endswith(".xml.j2"),
+                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+    return env.get_template(template).render(**context)
+
+
+def identifier_for(path: Path) -> str:
+    """The model identifier: the file's stem as a C identifier."""
+    stem = re.sub(r"\W", "_", path.stem)
+    return stem if stem and not stem[0].isdigit() else f"fmu_{stem}"
+
+
+# ------------------------------------------------------------------------------ the export
+def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
+               inputs: Mapping[str, float] | None = None, binary: bool = True,
+               compiler: str | None = None) -> ExportedFmu:
+    """Write ``model`` as an FMI 2.0 Model Exchange FMU at ``path`` (``.fmu``).
+
+    ``inputs``: start values of the FMU's inputs by name (default: at rest, atmospheric
+    pressure, no force). ``binary``: build this platform's binary with the C compiler
+    (``compiler``, ``$CC`` or cc/gcc/clang); the C sources are always inside. The file is
+    written atomically: a failed export leaves an existing file as it was.
+    """
+    path = Path(path)
+    if path.suffix != ".fmu":
+        raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
+    fmu_model = exportable(model)
+    asm = assemble(fmu_model)
+    kernel = asm.kernel
+    vec = asm.pack()
+    sig, ptr = pack_channels(fmu_model.channels(Constant(0.0)))
+    variables = all_variables(fmu_model, asm, kernel, ptr, inputs or {})
+    for v in variables:
+        if v.kind == "input":
+            sig[v.index] = v.start
+    events = event_count(fmu_model, kernel, asm)
+    unit = translate(kernel_roots(kernel, events > 0))
+    identifier = identifier_for(path)
+    guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
+        [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
+    files = {"modelDescription.xml": model_description(fmu_model, identifier, guid,
+                                                       variables, events),
+             "sources/model.c": unit.source, "sources/model.h": unit.header,
+             "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
+                                          events)}
+    platform, used = None, None
+    if binary:
+        platform = binary_folder()
+        library, used = build(unit, files, identifier)
+        files[f"binaries/{platform}/{identifier}{shared_library_suffix()}"] = library
+    write_archive(path, files)
+    return ExportedFmu(path, identifier, tuple(variables), platform, used, events)
+
+
+def build(unit: CUnit, files: dict, identifier: str) -> tuple[bytes, str]:
+    """The binary built from the FMU's sources, and the compiler that built it."""
+    with tempfile.TemporaryDirectory(prefix="pneumact-fmu-") as folder:
+        root = Path(folder)
+        for name in ("sources/model.c", "sources/model.h", "sources/fmu.c"):
+            (root / Path(name).name).write_text(files[name])
+        output = root / f"{identifier}{shared_library_suffix()}"
+        used = build_binary([root / "model.c", root / "fmu.c"], output)
+        return output.read_bytes(), used
+
+
+def write_archive(path: Path, files: Mapping[str, str | bytes]) -> None:
+    with atomic_write(path) as tmp, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, content in files.items():
+            archive.writestr(name, content)
