@@ -57,6 +57,8 @@ _EXPORTS: dict[str, str] = {
     "compare_friction_models": "pneumact.validation",
     "FrictionComparison": "pneumact.validation",
     "friction_rig_for": "pneumact.validation",
+    "export_fmu": "pneumact.export",
+    "ExportError": "pneumact.errors",
     "Bounds": "pneumact.options",
     "Multistart": "pneumact.options",
     "Offsets": "pneumact.options",
@@ -115,6 +117,7 @@ __all__ = [
     "Executor",
     "Experiment",
     "ExperimentError",
+    "ExportError",
     "FrictionComparison",
     "FrictionRig",
     "Isothermal",
@@ -147,6 +150,7 @@ __all__ = [
     "compare_friction_models",
     "control",
     "experiments",
+    "export_fmu",
     "fit",
     "friction_rig_for",
     "identify_paper",
@@ -188,6 +192,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         ArgumentTypeError,
         DataError,
         ExperimentError,
+        ExportError,
         ParameterError,
         PassivityWarning,
         PlausibilityWarning,
@@ -203,6 +208,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         SetpointRamp,
         SetpointStep,
     )
+    from pneumact.export import export_fmu
     from pneumact.identification import (
         fit,
         identify_paper,

@@ -55,6 +55,7 @@ BASE = {
     "control step": ["--out", "OUT"],
     "control profile": [str(GOOD / "profile.csv"), "--out", "OUT"],
     "control hunting": ["--out", "OUT"],
+    "export fmu": ["--out", "OUT"],
 }
 
 #: option -> values it must refuse, beyond NaN, infinities and text (refused by the
@@ -175,6 +176,8 @@ BAD_VALUES: dict[str, list[str]] = {
     "hunting --ki": ["-4"],
     "--position-setpoint": [],
     "hunting --t-end": ["0"],
+    "--binary": [],
+    "--compiler": ["no-such-cc"],
 }
 #: arguments (not options) and the bad values each command must refuse
 BAD_ARGUMENTS: dict[str, list[str]] = {

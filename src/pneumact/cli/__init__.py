@@ -14,6 +14,7 @@
     pneumact reproduce                           # the whole paper, one folder
     pneumact control step --start 4 --stop 8     # closed-loop position step, metrics
     pneumact control hunting                     # Canudas et al. (1995) hunting
+    pneumact export fmu --out actuator.fmu       # FMI 2.0 Model Exchange FMU
 
 Options map onto exactly the objects of the library (parameter set, friction model,
 valve, experiment, solver); no physics lives here. Output files are written only after
@@ -30,6 +31,7 @@ import typer
 from pneumact.cli.common import out_console
 from pneumact.cli.compare import compare_command
 from pneumact.cli.control import control_app
+from pneumact.cli.export import export_app
 from pneumact.cli.friction_test import friction_test_app
 from pneumact.cli.identify import campaign, fit_command, identify_app
 from pneumact.cli.params import params_app
@@ -75,6 +77,7 @@ app.command("sensitivity")(sensitivity)
 app.command("validate")(validate_command)
 app.command("reproduce")(reproduce_command)
 app.add_typer(control_app, name="control")
+app.add_typer(export_app, name="export")
 
 
 def finite_float(text: str) -> float:

@@ -61,6 +61,7 @@ API: dict[str, tuple[str, ...]] = {
     "control step": ("pneumact.experiments:SetpointStep", *_CONTROL),
     "control profile": ("pneumact.experiments:SetpointProfile", *_CONTROL),
     "control hunting": ("pneumact.control.study:canudas_hunting", "pneumact.simulation:Rodas4"),
+    "export fmu": ("pneumact.export:export_fmu", *_MODEL),
 }
 
 #: options whose word is not the API's, and the parameter ("module:name.parameter") each

@@ -25,6 +25,7 @@ import operator
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numba
 import numpy as np
@@ -32,7 +33,7 @@ from numba.core import ir, registry, types
 from numba.core.compiler import CompilerBase, DefaultPassBuilder, Flags, compile_extra
 from numba.core.compiler_machinery import FunctionPass, PassManager, register_pass
 from numba.core.typed_passes import AnnotateTypes
-from numba.core.typing import signature
+from numba.core.typing.templates import signature
 
 __all__ = ["CSourceError", "CUnit", "translate"]
 
@@ -129,7 +130,7 @@ class _Translator:
         if isinstance(t, types.Boolean):
             return "int"
         if isinstance(t, types.Integer):
-            return f"{'' if t.signed else 'u'}int{t.bitwidth}_t"
+            return f"{t}_t"  # int64_t, uint8_t, …
         if isinstance(t, types.Float):
             return "double" if t.bitwidth == 64 else "float"
         if isinstance(t, types.Array):
@@ -158,7 +159,7 @@ class _Translator:
     def _tuple(self, t: types.BaseTuple) -> str:
         key = ("tuple", t)
         if key not in self.structs:
-            members = [self.ctype(e) for e in t.types]
+            members = [self.ctype(e) for e in _members(t)]
             name = f"pa_tuple_{len(self.structs)}"
             body = " ".join(f"{m} f{i};" for i, m in enumerate(members) if m is not None)
             self.structs[key] = (name, f"typedef struct {{ {body or 'int empty;'} }} {name};")
@@ -196,6 +197,11 @@ class _Translator:
         return CUnit(source, header, tuple(self.entries))
 
 
+def _members(t: Any) -> tuple:
+    """The member types of a numba tuple type."""
+    return tuple(t.types)
+
+
 @register_pass(mutates_CFG=False, analysis_only=True)
 class _KeepTypedIR(FunctionPass):
     """The last pass of ``_TypedIR``: its result is the typed IR (nothing is lowered)."""
@@ -230,7 +236,6 @@ def _typed_ir(py_func: Callable, argtypes: tuple):
     the function is typed afresh; what it calls is typed through those dispatchers."""
     target = registry.cpu_target
     flags = Flags()
-    flags.nrt = True
     try:
         annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
                                    argtypes, None, flags, {}, pipeline_class=_TypedIR)
@@ -352,7 +357,7 @@ class _FunctionWriter:
                 return "INFINITY" if value > 0 else "(-INFINITY)"
             return repr(value)
         if isinstance(value, tuple) and isinstance(t, types.BaseTuple):
-            items = ", ".join(self.literal(v, e) for v, e in zip(value, t.types, strict=True)
+            items = ", ".join(self.literal(v, e) for v, e in zip(value, _members(t), strict=True)
                               if self.unit.ctype(e) is not None)
             return f"(({self.unit.ctype(t)}){{{items}}})"
         raise self.fail(f"the constant {value!r} of type {t}")
@@ -366,7 +371,7 @@ class _FunctionWriter:
         if self.unit.ctype(to) == self.unit.ctype(have):
             return self.var(v)
         items = [self._member(f"{self.var(v)}.f{i}", h, t)
-                 for i, (h, t) in enumerate(zip(have.types, to.types, strict=True))
+                 for i, (h, t) in enumerate(zip(_members(have), _members(to), strict=True))
                  if self.unit.ctype(t) is not None]
         return f"(({self.unit.ctype(to)}){{{', '.join(items)}}})"
 
@@ -375,7 +380,7 @@ class _FunctionWriter:
             if self.unit.ctype(to) == self.unit.ctype(have):
                 return expr
             items = [self._member(f"{expr}.f{i}", h, t)
-                     for i, (h, t) in enumerate(zip(have.types, to.types, strict=True))
+                     for i, (h, t) in enumerate(zip(_members(have), _members(to), strict=True))
                      if self.unit.ctype(t) is not None]
             return f"(({self.unit.ctype(to)}){{{', '.join(items)}}})"
         return f"(({self.unit.ctype(to)}){expr})"
@@ -398,7 +403,7 @@ class _FunctionWriter:
             return self.item(expr.value, expr.index_var, static=expr.index)
         if op == "build_tuple":
             t = self.type_of(target)
-            items = [self.var(v) for v, e in zip(expr.items, t.types, strict=True)
+            items = [self.var(v) for v, e in zip(expr.items, _members(t), strict=True)
                      if self.unit.ctype(e) is not None]
             return f"(({self.unit.ctype(t)}){{{', '.join(items)}}})"
         if op in ("exhaust_iter", "cast"):
@@ -455,7 +460,7 @@ class _FunctionWriter:
             if static is None:
                 raise self.fail("a tuple indexed by a run-time value")
             k = static if static >= 0 else len(t) + static
-            kept = [i for i, e in enumerate(t.types) if self.unit.ctype(e) is not None]
+            kept = [i for i, e in enumerate(_members(t)) if self.unit.ctype(e) is not None]
             return f"{self.var(value)}.f{k}" if k in kept else "0"
         if isinstance(t, types.Array):
             return self.element(value, index)
@@ -468,7 +473,7 @@ class _FunctionWriter:
         arr = self.var(array)
         it = self.type_of(index)
         if isinstance(it, types.BaseTuple):
-            if any(not isinstance(types.unliteral(e), types.Integer) for e in it.types):
+            if any(not isinstance(types.unliteral(e), types.Integer) for e in _members(it)):
                 raise self.fail(f"the array index {it} (slices)")
             parts = [f"pa_index({self.var(index)}.f{k}, {arr}.shape[{k}]) * {arr}.strides[{k}]"
                      for k in range(len(it))]
@@ -509,7 +514,7 @@ class _FunctionWriter:
             return f"{self.var(expr.args[0])}.shape[0]"
         if fn is np.sign:
             return f"pa_sign({args[0]})"
-        name = getattr(fn, "__name__", None)
+        name = str(getattr(fn, "__name__", ""))
         if name in MATH and getattr(fn, "__module__", None) in ("math", "numpy", None):
             return f"{MATH[name]}({', '.join(args)})"
         raise self.fail(f"a call of {fn!r}")

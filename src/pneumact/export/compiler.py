@@ -53,7 +53,7 @@ def find_compiler(compiler: str | None = None) -> str:
 def fmi_headers() -> Path:
     """The folder of FMPy's FMI 2.0 headers (fmi2Functions.h, …)."""
     try:
-        import fmpy
+        import fmpy  # type: ignore[import-untyped]
     except ImportError as error:
         raise ExportError('building an FMU needs FMPy (its FMI headers): pip install '
                           '"pneumact[fmu]"') from error

@@ -248,7 +248,7 @@ def unit_definitions(variables: list[FmuVariable]) -> list[dict]:
     return out
 
 
-def _exponent(value: float) -> str:
+def _exponent(value) -> str:
     if float(value) != int(value):
         raise ExportError(f"a unit with the fractional exponent {value} has no FMI BaseUnit")
     return str(int(value))
@@ -258,7 +258,8 @@ def _exponent(value: float) -> str:
 def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
                 vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, events: int) -> str:
     kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4}
-    slot_ptr, slots = [0], []
+    slot_ptr: list[int] = [0]
+    slots: list[int] = []
     for name in asm.parameter_names:
         slots.extend(asm.slots[name])
         slot_ptr.append(len(slots))
@@ -349,8 +350,8 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
         [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
-    files = {"modelDescription.xml": model_description(fmu_model, identifier, guid,
-                                                       variables, events),
+    description = model_description(fmu_model, identifier, guid, variables, events)
+    files: dict[str, str | bytes] = {"modelDescription.xml": description,
              "sources/model.c": unit.source, "sources/model.h": unit.header,
              "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
                                           events)}

@@ -1,0 +1,83 @@
+"""``pneumact export fmu``: the actuator as an FMI 2.0 Model Exchange FMU."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from pneumact.checks import check_path
+from pneumact.cli.common import (
+    DEFAULT_DECAYING_DAMPING,
+    DEFAULT_EXPONENT,
+    DEFAULT_FRICTION,
+    DEFAULT_VALVE,
+    Chamber,
+    ChamberOption,
+    DecayingDampingOption,
+    ElementsOption,
+    ExponentOption,
+    FrictionOption,
+    ModelOptions,
+    ParamsOption,
+    ValveOption,
+    build_model,
+    out_console,
+    user_errors,
+)
+
+export_app = typer.Typer(help="Export the actuator to the tools it goes into (FMI).",
+                         no_args_is_help=True)
+
+DEFAULT_NAME = "actuator.fmu"
+
+
+@export_app.command("fmu")
+def export_fmu_command(
+    params: ParamsOption = "vgt-paper",
+    valve: ValveOption = DEFAULT_VALVE,
+    friction: FrictionOption = DEFAULT_FRICTION,
+    decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
+    elements: ElementsOption = None,
+    chamber: ChamberOption = Chamber.isothermal,
+    exponent: ExponentOption = DEFAULT_EXPONENT,
+    out: Annotated[Path, typer.Option(
+        help="The FMU file (…/name.fmu; its stem is the model identifier), or a folder to "
+             f"write {DEFAULT_NAME} into.")] = Path(DEFAULT_NAME),
+    binary: Annotated[bool, typer.Option(
+        "--binary/--no-binary",
+        help="Build this platform's binary with the C compiler (the C sources are always "
+             "inside).")] = True,
+    compiler: Annotated[str | None, typer.Option(
+        help="The C compiler to build the binary with (default: $CC, else cc, gcc, "
+             "clang).")] = None,
+) -> None:
+    """Export the actuator as an FMI 2.0 Model Exchange FMU (Simulink, Dymola,
+    OpenModelica, GT-SUITE, FMPy): inputs, every parameter, states and outputs."""
+    with user_errors():
+        from pneumact.export import export_fmu
+
+        target = check_path("--out", out)
+        if target.suffix != ".fmu":
+            target = target / DEFAULT_NAME
+        options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
+                               exponent=exponent, decaying_damping=decaying_damping,
+                               elements=elements)
+        _, actuator = build_model(options)
+        fmu = export_fmu(actuator, target, binary=binary, compiler=compiler)
+        _print_summary(fmu)
+
+
+def _print_summary(fmu) -> None:
+    table = Table(title=f"pneumact export fmu: {fmu.identifier}", show_header=True)
+    table.add_column("causality")
+    table.add_column("variables")
+    for causality in ("input", "parameter", "output"):
+        table.add_row(causality, ", ".join(fmu.names(causality)))
+    table.add_row("event indicators", str(fmu.events))
+    table.add_row("binary", f"{fmu.platform} ({fmu.compiler})" if fmu.platform
+                  else "none (sources only)")
+    out_console.print(table)
+    out_console.print(f"wrote {fmu.path}")
