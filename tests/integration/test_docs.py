@@ -90,3 +90,23 @@ def test_the_friction_laws_page_runs(tmp_path, monkeypatch):
     table = result.to_pandas().set_index("law")
     assert (table.loc[["lugre", "stribeck"], "verdict"] == "worse").all()
     assert (tmp_path / "compare-dahl" / "report.html").exists()
+
+
+def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
+    """docs/fmu-export.md: the paper's actuator exported, run by FMPy like pa.simulate."""
+    import pytest
+
+    import reference as ref
+
+    pytest.importorskip("fmpy", reason="FMPy (the test extra) runs the page's FMU")
+    from pneumact.errors import ExportError
+    from pneumact.export import find_compiler
+
+    try:
+        find_compiler()
+    except ExportError as error:
+        pytest.skip(str(error))
+    namespace = _run_page("fmu-export.md", tmp_path, monkeypatch)
+    assert (tmp_path / "vgt_actuator.fmu").exists()
+    stroke = namespace["actuator"].params["x_max"]
+    assert namespace["rms"] <= ref.FMU_POSITION_RMS_OF_STROKE * stroke

@@ -76,7 +76,8 @@ def _print_summary(fmu) -> None:
     table.add_column("variables")
     for causality in ("input", "parameter", "output"):
         table.add_row(causality, ", ".join(fmu.names(causality)))
-    table.add_row("event indicators", str(fmu.events))
+    table.add_row("event indicators", f"{fmu.event_indicators} (end stops"
+                  + (f", {fmu.mode_switches} friction modes)" if fmu.mode_switches else ")"))
     table.add_row("binary", f"{fmu.platform} ({fmu.compiler})" if fmu.platform
                   else "none (sources only)")
     out_console.print(table)

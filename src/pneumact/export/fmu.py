@@ -41,7 +41,7 @@ from ..files import atomic_write
 from ..models import Actuator
 from ..parameters.catalogue import catalogue
 from ..version import __version__
-from .compiler import binary_folder, build_binary, shared_library_suffix
+from .compiler import binary_folder, build_binary, find_compiler, shared_library_suffix
 
 __all__ = ["ExportedFmu", "FmuVariable", "export_fmu"]
 
@@ -93,10 +93,12 @@ class ExportedFmu:
     variables: tuple[FmuVariable, ...]
     platform: str | None
     compiler: str | None
-    events: int
+    event_indicators: int  # the end stops' guards, then the friction law's mode guards
+    mode_switches: int  # of which the friction law's (GMS: one per block)
 
-    def to_pandas(self):
-        """One row per variable (value reference = row number)."""
+    def variable_table(self):
+        """The FMU's variables, one row each (value reference, causality, unit, start,
+        description), as a DataFrame: a receipt of the export, not a result."""
         import pandas as pd
 
         rows = [{"value_reference": i, **dataclasses.asdict(v)}
@@ -110,7 +112,8 @@ class ExportedFmu:
         built = f"binary {self.platform}" if self.platform else "sources only"
         return (f"ExportedFmu({str(self.path)!r}, inputs={list(self.names('input'))}, "
                 f"{len(self.names('parameter'))} parameters, "
-                f"{len(self.names('output'))} outputs, {self.events} event indicators, "
+                f"{len(self.names('output'))} outputs, {self.event_indicators} event "
+                f"indicators, "
                 f"{built})")
 
 
@@ -135,7 +138,8 @@ def kernel_roots(kernel: ModuleType, events: bool) -> dict:
              "pa_jac": (kernel.jac, (*run, MATRIX)),
              "pa_initial_state": (kernel.initial_state, (F64, F64, VECTOR, VECTOR, INDICES,
                                                          VECTOR)),
-             "pa_derive": (kernel.derive, (VECTOR,))}
+             "pa_derive": (kernel.derive, (VECTOR,)),
+             "pa_switch_guards": (kernel.switch_guards, (*run, VECTOR))}
     if events:
         roots["pa_event_guards"] = (kernel.event_guards, (*run, VECTOR))
         roots["pa_event_switch"] = (kernel.event_switch, (*run, FLAGS))
@@ -146,14 +150,16 @@ def has_events(kernel: ModuleType) -> bool:
     return bool(getattr(kernel, "HAS_EVENTS", False))
 
 
-def event_count(model: Actuator, kernel: ModuleType, asm: Assembly) -> int:
-    if not has_events(kernel):
-        return 0
+def guard_counts(model: Actuator, kernel: ModuleType, asm: Assembly) -> tuple[int, int]:
+    """How many guards the model's kinks (end stops) and its friction law's modes have."""
     vec = asm.pack()
     sig, ptr = pack_channels(model.channels(Constant(0.0)))
     y = np.zeros(len(asm.states))
-    out = np.zeros(len(asm.states))
-    return int(kernel.event_guards(0.0, 0.0, y, vec, sig, ptr, out))
+    out = np.zeros(len(asm.states) + 2)
+    switches = int(kernel.switch_guards(0.0, 0.0, y, vec, sig, ptr, out))
+    if not has_events(kernel):
+        return switches, 0
+    return switches, int(kernel.event_guards(0.0, 0.0, y, vec, sig, ptr, out))
 
 
 # ------------------------------------------------------------------------------ variables
@@ -256,7 +262,8 @@ def _exponent(value) -> str:
 
 # ------------------------------------------------------------------------------ files
 def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
-                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, events: int) -> str:
+                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int]
+                ) -> str:
     kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4}
     slot_ptr: list[int] = [0]
     slots: list[int] = []
@@ -265,7 +272,8 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
     return render("fmu.c.j2", identifier=identifier, guid=guid, n_states=len(asm.states),
-                  n_vector=len(vec), n_outputs=len(asm.output_names), n_events=events,
+                  n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
+                  n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),
                   prm_start=_c_list(vec), sig_start=_c_list(sig),
                   ptr=", ".join(str(int(p)) for p in ptr), nominals=_c_list(nominals),
@@ -281,7 +289,7 @@ def _c_list(values) -> str:
 
 
 def model_description(model: Actuator, identifier: str, guid: str,
-                      variables: list[FmuVariable], events: int) -> str:
+                      variables: list[FmuVariable], indicators: int) -> str:
     index = {id(v): i + 1 for i, v in enumerate(variables)}
     outputs = [index[id(v)] for v in variables if v.causality == "output"]
     derivatives = [index[id(v)] for v in variables if v.kind == "derivative"]
@@ -292,7 +300,7 @@ def model_description(model: Actuator, identifier: str, guid: str,
     return render("modelDescription.xml.j2", model_name=identifier, guid=guid,
                   description=description, version=__version__,
                   date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-                  n_events=events, identifier=identifier, units=unit_definitions(variables),
+                  n_indicators=indicators, identifier=identifier, units=unit_definitions(variables),
                   stop_time=STOP_TIME, variables=[_xml_fields(v) for v in variables],
                   outputs=outputs, derivatives=derivatives,
                   initial_unknowns=sorted(set(outputs) | set(derivatives)))
@@ -337,6 +345,8 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     if path.suffix != ".fmu":
         raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
     fmu_model = exportable(model)
+    if binary:
+        compiler = find_compiler(compiler)  # before any work: a missing compiler fails fast
     asm = assemble(fmu_model)
     kernel = asm.kernel
     vec = asm.pack()
@@ -345,33 +355,35 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     for v in variables:
         if v.kind == "input":
             sig[v.index] = v.start
-    events = event_count(fmu_model, kernel, asm)
-    unit = translate(kernel_roots(kernel, events > 0))
+    guards = guard_counts(fmu_model, kernel, asm)
+    unit = translate(kernel_roots(kernel, guards[1] > 0))
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
         [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
-    description = model_description(fmu_model, identifier, guid, variables, events)
+    description = model_description(fmu_model, identifier, guid, variables, sum(guards))
     files: dict[str, str | bytes] = {"modelDescription.xml": description,
              "sources/model.c": unit.source, "sources/model.h": unit.header,
              "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
-                                          events)}
+                                          guards)}
     platform, used = None, None
     if binary:
         platform = binary_folder()
-        library, used = build(unit, files, identifier)
+        library, used = build(unit, files, identifier, compiler)
         files[f"binaries/{platform}/{identifier}{shared_library_suffix()}"] = library
     write_archive(path, files)
-    return ExportedFmu(path, identifier, tuple(variables), platform, used, events)
+    return ExportedFmu(path, identifier, tuple(variables), platform, used, sum(guards),
+                       guards[1])
 
 
-def build(unit: CUnit, files: dict, identifier: str) -> tuple[bytes, str]:
+def build(unit: CUnit, files: dict, identifier: str, compiler: str | None
+          ) -> tuple[bytes, str]:
     """The binary built from the FMU's sources, and the compiler that built it."""
     with tempfile.TemporaryDirectory(prefix="pneumact-fmu-") as folder:
         root = Path(folder)
         for name in ("sources/model.c", "sources/model.h", "sources/fmu.c"):
             (root / Path(name).name).write_text(files[name])
         output = root / f"{identifier}{shared_library_suffix()}"
-        used = build_binary([root / "model.c", root / "fmu.c"], output)
+        used = build_binary([root / "model.c", root / "fmu.c"], output, compiler)
         return output.read_bytes(), used
 
 

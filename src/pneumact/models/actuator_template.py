@@ -24,6 +24,7 @@ from pneumact.models.mechanics import (
     net_force,
     rest_position,
     stop_force_of,
+    stop_guards,
 )
 
 # --- bound by the generator --------------------------------------------------------------
@@ -158,6 +159,16 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_OPENING] = u
     out[OUT_MASS_FLOW_IN] = q_in
     out[OUT_MASS_FLOW_OUT] = q_out
+
+
+@kernel()
+def switch_guards(t, ts, y, prm, sig, ptr, out):
+    """Guards of the right-hand side's kinks, > 0 away from them: the end stops. Where an
+    importer's solver must stop and restart (an FMU's event indicators, with a friction
+    law's own events); the pneumact integrator's error control handles them itself.
+    Returns how many."""
+    out[0], out[1] = stop_guards(y[S_POSITION], prm, MECHANICS_LO)
+    return 2
 
 
 @kernel()

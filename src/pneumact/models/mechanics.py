@@ -76,6 +76,14 @@ def stop_force(x, v, ks, cs, x_max):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def stop_guards(x, p, o):  # pragma: no cover - compiled
+    """Where the end-stop force switches on: x = 0 (the rest stop) and x = x_max, each
+    guard > 0 off its stop. The right-hand side has a kink there: an FMU importer's solver
+    locates these as state events (``export``)."""
+    return x, p[o + MC_XMAX] - x
+
+
+@njit(cache=True)
 def stop_force_params(x, v, ks, cs, x_max):  # pragma: no cover - compiled
     """(∂F_stop/∂k_stop, ∂F_stop/∂c_stop, ∂F_stop/∂x_max)."""
     if x < 0.0:
