@@ -269,6 +269,19 @@ class _FunctionWriter:
         return self.typemap[v.name]
 
     def write(self) -> None:
+        for block in self.blocks.values():
+            for stmt in block.body:
+                if isinstance(stmt, ir.StaticRaise | ir.Raise | ir.DynamicRaise):
+                    raise self.fail(f"a raise statement (line {stmt.loc.line}); a kernel "
+                                    "function must not raise")
+        try:
+            self._write()
+        except CSourceError as error:
+            if str(error).startswith(self.where):
+                raise
+            raise CSourceError(f"{self.where}: {error}") from error
+
+    def _write(self) -> None:
         rtype = self.unit.ctype(self.signature.return_type) or "void"
         params = [f"{self.unit.ctype(t)} a{i}" for i, t in enumerate(self.signature.args)
                   if self.unit.ctype(t) is not None]
@@ -305,8 +318,6 @@ class _FunctionWriter:
             return [f"{self.element(stmt.target, stmt.index)} = {self.var(stmt.value)};"]
         if isinstance(stmt, ir.StaticSetItem):
             return [f"{self.element(stmt.target, stmt.index_var)} = {self.var(stmt.value)};"]
-        if isinstance(stmt, ir.StaticRaise | ir.Raise | ir.DynamicRaise):
-            raise self.fail(f"a raise statement ({stmt}); a kernel function must not raise")
         raise self.fail(f"the statement {stmt!r}")
 
     def assign(self, target: ir.Var, value) -> list[str]:

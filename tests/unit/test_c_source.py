@@ -1,0 +1,124 @@
+"""The kernel generator's C back end (``core.c_source``): Python's semantics in C.
+
+Functions in the numba subset the kernels use (integer floor division and modulo of
+negative numbers, negative indices, tuples, loops, ``min``/``max``, ``math``) are
+translated, compiled with the machine's C compiler and called through ctypes: each
+returns what the compiled Python returns. A construct the back end does not translate is
+refused naming it and the function.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core import types
+
+from pneumact.core.c_source import CSourceError, translate
+
+CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler (install gcc or clang)")
+
+
+@njit
+def _pair(a, b):
+    return a // b, a % b
+
+
+@njit
+def integer_semantics(a, b):
+    q, r = _pair(a, b)
+    return q * 1000 + r
+
+
+@njit
+def float_semantics(x, y):
+    return (x // y) + (x % y) * 10.0 + 2.0 ** y + abs(-x) + min(x, y) - max(x, y)
+
+
+@njit
+def last_and_sum(values):
+    total = 0.0
+    for i in range(values.shape[0]):
+        total += values[i] * i
+    return values[-1] + total + math.exp(-values[0])
+
+
+@njit
+def write_rows(out):
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            out[i, j] = i * 10 + j if i != j else -1.0
+
+
+@njit
+def raising(x):
+    if x < 0:
+        raise ValueError("negative")
+    return x
+
+
+F64 = types.float64
+I64 = types.int64
+
+
+def array(values: np.ndarray) -> ctypes.Structure:
+    """The back end's array struct: data, shape[ndim], strides[ndim] (in elements)."""
+    ndim = values.ndim
+
+    class Array(ctypes.Structure):
+        _fields_ = [("data", ctypes.POINTER(ctypes.c_double)),
+                    ("shape", ctypes.c_int64 * ndim), ("strides", ctypes.c_int64 * ndim)]
+
+    strides = [s // values.itemsize for s in values.strides]
+    return Array(values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                 (ctypes.c_int64 * ndim)(*values.shape), (ctypes.c_int64 * ndim)(*strides))
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    unit = translate({"c_integer": (integer_semantics, (I64, I64)),
+                      "c_float": (float_semantics, (F64, F64)),
+                      "c_last": (last_and_sum, (types.float64[::1],)),
+                      "c_rows": (write_rows, (types.float64[:, ::1],))})
+    folder = tmp_path_factory.mktemp("c")
+    (folder / "unit.c").write_text(unit.source)
+    subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(folder / "unit.so"),
+                    str(folder / "unit.c"), "-lm"], check=True)
+    lib = ctypes.CDLL(str(folder / "unit.so"))
+    lib.c_integer.restype = ctypes.c_int64
+    lib.c_float.restype = ctypes.c_double
+    lib.c_last.restype = ctypes.c_double
+    return lib
+
+
+@pytest.mark.parametrize(("a", "b"), [(7, 2), (-7, 2), (7, -2), (-7, -2), (6, 3), (0, 5)])
+def test_integer_floor_division_and_modulo_are_python_s(library, a, b):
+    assert library.c_integer(a, b) == integer_semantics(a, b)
+
+
+@pytest.mark.parametrize(("x", "y"), [(7.5, 2.0), (-7.5, 2.0), (7.5, -2.0), (0.25, 3.0)])
+def test_float_arithmetic_is_python_s(library, x, y):
+    assert library.c_float(ctypes.c_double(x), ctypes.c_double(y)) == float_semantics(x, y)
+
+
+def test_negative_indices_loops_and_math(library):
+    values = np.array([0.5, -1.25, 3.0, 2.5])
+    assert library.c_last(array(values)) == last_and_sum(values)
+
+
+def test_two_dimensional_arrays_are_row_major(library):
+    c_out, py_out = np.zeros((3, 4)), np.zeros((3, 4))
+    library.c_rows(array(c_out))
+    write_rows(py_out)
+    np.testing.assert_array_equal(c_out, py_out)
+
+
+def test_an_untranslated_construct_is_refused_by_name():
+    with pytest.raises(CSourceError, match=r"raising.*raise statement"):
+        translate({"c_raising": (raising, (F64,))})
