@@ -252,7 +252,10 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
     monkeypatch.chdir(tmp_path)
     for record in no_stribeck.records:
         record.save(f"fast/{record.source}.csv")
-    result = runner.invoke(app, ["identify", "paper", "fast", "--out", "ident"])
+    # staged only: the joint refinement of these records is the API's (no_stribeck), and
+    # the command's default path is test_cli_campaign_plan_simulate_identify_and_fit's
+    result = runner.invoke(app, ["identify", "paper", "fast", "--staged-only", "--out",
+                                 "ident"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
     assert not (tmp_path / "ident" / "identified.toml").exists()
     assert (tmp_path / "ident" / "report.html").exists()
