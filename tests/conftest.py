@@ -67,21 +67,31 @@ def canudas():
     return load_quietly("canudas1995")
 
 
-@pytest.fixture
-def dask_client(monkeypatch):
-    """A two-process Dask cluster whose workers import the ``pneumact`` this process runs;
-    its dashboard on a free port, so that clusters of concurrent test processes
-    (``pytest -n``) do not collide on the default one."""
+@pytest.fixture(scope="session")
+def _dask_cluster_client():
+    """A two-process Dask cluster whose workers import the ``pneumact`` this process runs
+    (started with that PYTHONPATH, which the rest of the session does not see); its
+    dashboard on a free port, so that clusters of concurrent test processes (``pytest
+    -n``) do not collide on the default one. One per test process: starting and stopping
+    a cluster, and the workers' first imports, cost seconds per test that uses one."""
     distributed = pytest.importorskip("distributed")
     import pneumact
 
     src = str(Path(pneumact.__file__).resolve().parents[1])
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
-        src, os.environ.get("PYTHONPATH")])))
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=":0") as cluster, \
-            distributed.Client(cluster) as client:
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [
+            src, os.environ.get("PYTHONPATH")])))
+        cluster = distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                           dashboard_address=":0")
+    with cluster, distributed.Client(cluster) as client:
         yield client
+
+
+@pytest.fixture
+def dask_client(_dask_cluster_client):
+    """The test process's Dask cluster (a client of it), with both workers up."""
+    _dask_cluster_client.wait_for_workers(2)
+    return _dask_cluster_client
 
 
 def small_rig_comparison(progress=None, executor=1):

@@ -109,6 +109,21 @@ def test_signals_on_requested_grid_match_simulate():
     np.testing.assert_array_equal(batch.signals["pressure"][1], r["pressure"])
 
 
+def test_a_read_only_time_grid_runs_the_integrator_already_compiled():
+    """numba types a read-only array apart from a writeable one: a Record's time (read
+    only) as t_eval must run the kernel's integrator compiled for writeable times, not
+    compile it a second time (~3-6 s per kernel)."""
+    from pneumact.simulation import assemble
+
+    t_eval = np.linspace(0.0, 2.0, 201)
+    frozen = t_eval.copy()
+    frozen.setflags(write=False)
+    runs = [pa.simulate(MODEL, EXPERIMENT, t_eval=t) for t in (t_eval, frozen)]
+    np.testing.assert_array_equal(runs[0]["position"], runs[1]["position"])
+    integrate = getattr(assemble(MODEL).kernel, pa.Rodas4().kernel_function)
+    assert len(integrate.signatures) == 1, integrate.signatures
+
+
 def test_invalid_and_failing_sets_fail_alone():
     table = random_table(6, seed=3)
     table.loc[1, "F0"] = np.nan

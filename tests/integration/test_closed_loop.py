@@ -105,14 +105,23 @@ def test_clamping_stops_the_integrator_while_pushing_into_the_limit(canudas):
 
 
 def test_sampled_controller_holds_its_output_between_samples(canudas):
+    """The hunting loop's gains, sampled: the command is held within each period and
+    changes at the samples. The hold is the controller's, whatever the plant: the rig
+    has Coulomb-viscous friction and the PID a filtered derivative, the sampled loop of
+    test_loop_linear.py (one kernel for both)."""
     period = 0.05
-    loop, experiment = canudas_hunting(canudas, t_end=5.0, sample_time=period)
+    rig = pa.FrictionRig(canudas, pa.CoulombViscous(), drive="force")
+    pid = PID(kp=3.0, ki=4.0, kd=6.0, derivative="measurement", filter_time=period,
+              anti_windup="none", sample_time=period)
+    experiment = pa.Experiment(pa.experiments.Constant(1.0), "position", 5.0, n_points=101)
     times = np.sort(np.concatenate([np.arange(0, 100) * period + 0.3 * period,
                                     np.arange(0, 100) * period + 0.9 * period]))
-    result = pa.simulate(loop, experiment, t_eval=times)
+    result = pa.simulate(ClosedLoop(rig, pid), experiment, t_eval=times)
     command = result.signals["command"].reshape(-1, 2)
     np.testing.assert_allclose(command[:, 0], command[:, 1], rtol=1e-12)  # held in a period
     assert np.count_nonzero(np.diff(command[:, 0])) > 50  # and changes at the samples
+    loop, _ = canudas_hunting(canudas, sample_time=period)  # the experiment samples too
+    assert loop.controller.sample_time == period
 
 
 def test_batch_engine_equals_single_runs_for_a_closed_loop(canudas):

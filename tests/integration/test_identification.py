@@ -51,10 +51,11 @@ def identified(campaign, start):
     return identify_paper(campaign, start)
 
 
-def test_the_procedure_recovers_table_one_and_says_so(identified, vgt, tmp_path):
+def test_the_procedure_recovers_table_one_and_says_so(identified, vgt, tmp_path,
+                                                     monkeypatch):
     """Staged estimates near Table I, then joint ones nearer, every one identified with
     the truth inside its 95 % interval, and the identified set written with its
-    provenance."""
+    provenance (each figure drawn once, for its file and the report)."""
     table = identified.to_pandas(truth=vgt)
     for name, rtol in ref.IDENT_RTOL.items():
         assert table.loc[name, "staged"] == pytest.approx(vgt[name], rel=rtol), name
@@ -66,11 +67,16 @@ def test_the_procedure_recovers_table_one_and_says_so(identified, vgt, tmp_path)
         assert abs(z) <= 3, (name, table.loc[name].to_dict())
     assert identified.ok, identified.summary()
     assert set(table["verdict"]) == {"identified"}
+    bands = []
+    band = type(identified).plot_band
+    monkeypatch.setattr(type(identified), "plot_band",
+                        lambda self, *a, **k: bands.append(1) or band(self, *a, **k))
     written = identified.write(tmp_path / "ident", truth=vgt)
     assert {p.name for p in written} >= {"identified.toml", "estimates.csv", "verdicts.csv",
                                           "diagnostics.csv", "residuals.csv", "report.md",
                                           "report.html", "band.png", "joint_fit.png",
                                           "stage_spring.png", "stage_presliding.png"}
+    assert len(bands) == 1  # the band simulates its draws: once for file and report
     with pytest.warns(PassivityWarning):  # identified values break it as Table I does
         back = pa.load_params(tmp_path / "ident" / "identified.toml")
     assert back["sigma0"] == pytest.approx(identified.parameters["sigma0"], rel=1e-15)
@@ -252,7 +258,10 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
     monkeypatch.chdir(tmp_path)
     for record in no_stribeck.records:
         record.save(f"fast/{record.source}.csv")
-    result = runner.invoke(app, ["identify", "paper", "fast", "--out", "ident"])
+    # staged only: the joint refinement of these records is the API's (no_stribeck), and
+    # the command's default path is test_cli_campaign_plan_simulate_identify_and_fit's
+    result = runner.invoke(app, ["identify", "paper", "fast", "--staged-only", "--out",
+                                 "ident"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
     assert not (tmp_path / "ident" / "identified.toml").exists()
     assert (tmp_path / "ident" / "report.html").exists()

@@ -45,7 +45,9 @@ def test_validation_report_fits_the_page(vgt, records, tmp_path):
 @pytest.mark.parametrize("args", [
     ["sensitivity", "oat", "--conditions", "period=20,80", "--conditions",
      "valve=command,regulator"],
-    ["control", "step", "--t-end", "1"]], ids=["sensitivity", "control"])
+    # the loop of test_cli_control.py's step test: its closed-loop kernel serves both
+    ["control", "step", "--plant", "command", "--start", "4", "--stop", "8", "--t-end",
+     "0.6", "--sample-time", "1e-3"]], ids=["sensitivity", "control"])
 def test_command_reports_fit_the_page(args, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     result = runner.invoke(app, [*args, "--out", "out"])

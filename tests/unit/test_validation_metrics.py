@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import reference as ref
@@ -70,3 +71,28 @@ def test_loop_measures_of_an_analytic_parallelogram():
     assert turns["turn"].tolist() == ["minimum"]
     assert turns["pressure"].iloc[0] == pytest.approx(20e3)
     assert turns["position"].iloc[0] == pytest.approx(stroke)
+
+
+def test_read_only_signals_reach_the_compiled_features_writeable(monkeypatch):
+    """A Record's signals are read-only; numba compiles the features once more for each
+    mix of read-only and writeable arguments (~3 s each): the loop measures and the
+    reversals hand them writeable arrays, and measure the same loop."""
+    from pneumact.validation import loops
+
+    t, p, x = _parallelogram()
+    frozen = [a.copy() for a in (t, p, x)]
+    for a in frozen:
+        a.setflags(write=False)
+    seen = []
+
+    def spy(wrapped):
+        def call(*signals):
+            seen.extend(a.flags.writeable for a in signals)
+            return wrapped(*signals)
+        return call
+
+    monkeypatch.setattr(loops, "hysteresis_summary", spy(loops.hysteresis_summary))
+    monkeypatch.setattr(loops, "turning_points", spy(loops.turning_points))
+    assert loop_measures(*frozen) == loop_measures(t, p, x)
+    pd.testing.assert_frame_equal(reversals(*frozen), reversals(t, p, x))
+    assert len(seen) == 12 and all(seen)

@@ -23,7 +23,7 @@ parameter is identified, unless a partial result is asked for.
 from __future__ import annotations
 
 import datetime as _dt
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -312,7 +312,13 @@ class PaperIdentification(ResultVocabulary):
         identified.toml when every parameter is identified (or ``partial``: then only
         the identified ones replace the prior's values)."""
         from ..parameters import write_params
-        from ..plotting import figure_writer
+
+        rendered: dict[str, bytes] = {}
+
+        def pngs() -> dict[str, bytes]:  # drawn once, when the first one is written
+            if not rendered:
+                rendered.update(self._pngs())
+            return rendered
 
         writers: dict = {}
         if self.ok or partial:
@@ -321,15 +327,30 @@ class PaperIdentification(ResultVocabulary):
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
         writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
-        for name, stage in self.stages.items():
-            writers[f"stage_{name}.png"] = figure_writer(stage.plot)
-        if self.joint is not None:
-            writers["joint_fit.png"] = figure_writer(self.joint.plot_fit)
-            writers["band.png"] = figure_writer(self.plot_band)
+        for name in self.figures():
+            writers[f"{name}.png"] = lambda p, name=name: Path(p).write_bytes(pngs()[name])
         writers["report.md"] = lambda p: Path(p).write_text(self.markdown(truth),
                                                             encoding="utf-8")
-        writers["report.html"] = lambda p: self.report(call, truth=truth).write(p)
+        writers["report.html"] = lambda p: self.report(call, truth=truth,
+                                                       pngs=pngs()).write(p)
         return writers
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        """The figures ``write`` draws, by file name: each stage's, then (after a joint
+        refinement) the joint fit and the prediction band."""
+        makers = {f"stage_{name}": stage.plot for name, stage in self.stages.items()}
+        if self.joint is not None:
+            makers["joint_fit"] = self.joint.plot_fit
+            makers["band"] = self.plot_band
+        return makers
+
+    def _pngs(self) -> dict[str, bytes]:
+        """Every figure as PNG, drawn once for both its file and the report (the
+        prediction band simulates its draws)."""
+        from ..io.report import figure_png
+        from ..plotting import PNG_DPI
+
+        return {name: figure_png(make(), dpi=PNG_DPI) for name, make in self.figures().items()}
 
     def parameter_set(self, partial: bool = False):
         """The identified set; with ``partial`` the parameters that are not identified
@@ -354,11 +375,23 @@ class PaperIdentification(ResultVocabulary):
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
 
-    def report(self, call: str = "", png: bytes | None = None, truth=None) -> Report:
+    def report(self, call: str = "", png: bytes | None = None, truth=None,
+               pngs: dict[str, bytes] | None = None) -> Report:
         """Verdicts, estimates (staged and joint), diagnostics, residual checks and the
         figures as a self-contained HTML ``Report`` (not yet written; ``png``: the joint
-        fit's figure if already drawn)."""
+        fit's figure if already drawn; ``pngs``: any figures already drawn, by name)."""
         from ..io.report import Report
+
+        drawn = dict(pngs or {})
+        if png is not None:
+            drawn.setdefault("joint_fit", png)
+        makers = self.figures()
+
+        def figure(name: str, caption: str) -> None:
+            if name in drawn:
+                report.image(drawn[name], caption)
+            else:
+                report.figure(makers[name](), caption)
 
         report = Report(self.report_title, call=call, parameters=self.parameters)
         report.text(("Result: " if self.ok else "Result NOT usable as it is: ")
@@ -374,18 +407,13 @@ class PaperIdentification(ResultVocabulary):
                          "against the sensor noise)", index=False)
         if self.joint is not None:
             report.heading("Prediction band")
-            report.figure(self.plot_band(), "The loop and the time series with the band "
-                          "the parameter uncertainty leaves")
-        if self.joint is not None:
+            figure("band", "The loop and the time series with the band the parameter "
+                   "uncertainty leaves")
             report.heading("Joint refinement")
-            if png is None:
-                report.figure(self.joint.plot_fit(), "Measured and fitted position, all "
-                              "records")
-            else:
-                report.image(png, "Measured and fitted position, all records")
-        for stage in self.stages.values():
+            figure("joint_fit", "Measured and fitted position, all records")
+        for name, stage in self.stages.items():
             report.heading(stage.title)
-            report.figure(stage.plot(), stage.title)
+            figure(f"stage_{name}", stage.title)
         return report
 
     def write(self, out_dir: str | PathLike[str], truth=None, *, call: str = "",

@@ -169,8 +169,11 @@ def _breakpoints(model, experiment: Experiment, channels) -> np.ndarray:
 
 
 def _output_times(experiment: Experiment, t_eval) -> np.ndarray:
+    """The output times, always a writeable C-contiguous copy: numba types a read-only
+    array (a Record's time) apart from a writeable one, so passing both would compile
+    every integrator of a kernel twice."""
     if t_eval is None:
-        return np.ascontiguousarray(experiment.output_times())
+        return _writeable(experiment.output_times())
     try:
         t_out = np.asarray(t_eval, dtype=float)
     except (TypeError, ValueError):
@@ -186,7 +189,11 @@ def _output_times(experiment: Experiment, t_eval) -> np.ndarray:
     if np.any(np.diff(t_out) < 0) or t_out[0] < experiment.t_start or \
             t_out[-1] > experiment.t_end:
         raise ExperimentError(f"t_eval spans {t_out[0]:g}..{t_out[-1]:g} s: {allowed}")
-    return np.ascontiguousarray(t_out)
+    return _writeable(t_out)
+
+
+def _writeable(times) -> np.ndarray:
+    return np.array(times, dtype=float, order="C", copy=True)
 
 
 def _output_count(experiment: Experiment, t_eval) -> int:

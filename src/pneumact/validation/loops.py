@@ -19,11 +19,18 @@ LOOP_MEASURES = ("stroke", "loop_width_pressure", "loop_width_position", "loop_a
                  "breakaway_pressure")
 
 
+def _writeable(*signals) -> list[np.ndarray]:
+    """Writeable float copies of ``signals``: a Record's signals are read-only, and numba
+    compiles the features once more for each mix of read-only and writeable arguments
+    (measured, predicted, both: three times each)."""
+    return [np.array(a, dtype=float, order="C") for a in signals]
+
+
 def reversals(time, pressure, position) -> pd.DataFrame:
     """The pressure's reversal points (turning points beyond 10 % of its range): time,
     pressure, position, and whether the pressure turned at a minimum or a maximum."""
-    cuts = turning_points(time, pressure, position)
-    t, p, x = (np.asarray(a, dtype=float) for a in (time, pressure, position))
+    t, p, x = _writeable(time, pressure, position)
+    cuts = turning_points(t, p, x)
     turns = cuts[1:-1]
     kind = ["minimum" if p[cuts[j]] < p[cuts[j - 1]] else "maximum"
             for j in range(1, cuts.size - 1)]
@@ -33,7 +40,7 @@ def reversals(time, pressure, position) -> pd.DataFrame:
 
 def loop_measures(time, pressure, position) -> dict[str, float]:
     """The loop measures of one record (SI; units in ``FEATURE_UNITS``)."""
-    summary = hysteresis_summary(time, pressure, position)
+    summary = hysteresis_summary(*_writeable(time, pressure, position))
     return {name: summary[name] for name in LOOP_MEASURES}
 
 
