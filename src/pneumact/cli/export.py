@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from pneumact.checks import check_path
+from pneumact.checks import check_out_dir, check_path
 from pneumact.cli.common import (
     DEFAULT_DECAYING_DAMPING,
     DEFAULT_EXPONENT,
@@ -60,8 +60,8 @@ def export_fmu_command(
         from pneumact.export import export_fmu
 
         target = check_path("--out", out)
-        if target.suffix != ".fmu":
-            target = target / DEFAULT_NAME
+        if target.suffix != ".fmu":  # a folder (refused at once if it is a file)
+            target = check_out_dir("--out", target) / DEFAULT_NAME
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                exponent=exponent, decaying_damping=decaying_damping,
                                elements=elements)
