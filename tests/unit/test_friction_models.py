@@ -173,8 +173,9 @@ def test_elasto_plastic_steady_state_is_stribeck_curve_plus_viscous(ep_params):
 # ------------------------------------------------ generalized Maxwell-slip (Al-Bender 2005)
 def test_gms_steady_state_is_stribeck_curve_plus_viscous(lugre_params):
     """Every block slipping at its share νᵢ·g(v)/Σν: the rates rest and the blocks
-    together give F = g(v)·sgn(v) + σ2·v, whatever their number and shares."""
-    for law in (GMS(1), GMS(4), GMS(7)):
+    together give F = g(v)·sgn(v) + σ2·v, whatever their number and shares (one block,
+    and the four of the shipped sets; each count is a kernel of its own)."""
+    for law in (GMS(1), GMS(4)):
         params = lugre_params.replace(law.matched_values(lugre_params))
         v = _speeds()
         steady = law.steady_states(v, params)
