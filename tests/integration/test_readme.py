@@ -46,3 +46,24 @@ def test_the_readme_api_and_validation_snippets_run(vgt, tmp_path, monkeypatch):
     assert verdicts.loc["sweep.csv", "valve"] == "PressureRegulator"
     assert (tmp_path / "val" / "report.html").exists()
     assert set(namespace["split"].metrics()["set"]) == {"training", "test"}
+
+
+def test_the_readme_batch_and_closed_loop_snippets_run(tmp_path, monkeypatch):
+    """README.md's batch/sensitivities and closed-loop snippets, after its first one (they
+    use its actuators): a batch row per parameter set, ∂x/∂θ per parameter, the regulator
+    loop's step metrics and files, the linearised plant as a python-control system."""
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pa.PassivityWarning)  # Table I's σ1, as published
+        for i, block in enumerate(_blocks("import pneumact as pa",
+                                          "batch = pa.simulate_batch(",
+                                          "from pneumact.control import PID, ClosedLoop")):
+            exec(compile(block, f"README.md, snippet {i + 1}", "exec"), namespace)
+    assert (namespace["batch"].to_pandas()["status"] == "ok").all()
+    assert namespace["sens"]["position"].shape[1] == 4
+    metrics = namespace["study"].metrics.to_pandas()
+    assert "settling_time" in set(metrics["metric"])
+    assert (tmp_path / "step" / "report.html").exists()
+    assert namespace["linear"].to_control().nstates >= 2
