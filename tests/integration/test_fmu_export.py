@@ -217,6 +217,11 @@ def test_no_compiler_is_one_clear_error_and_keeps_the_old_file(tmp_path, monkeyp
     assert path.read_bytes() == b"previous export"
     with pytest.raises(ExportError, match="'no-such-cc'"):
         pa.export_fmu(actuator("source"), path, compiler="no-such-cc")
+    for inputs, words in (({"pressure": 60e3}, "not inputs of this FMU"),
+                          ({"pressure_input": -1.0}, "pressure_input"),
+                          ({"external_force": float("nan")}, "external_force")):
+        with pytest.raises(pa.ArgumentError, match=words):
+            pa.export_fmu(actuator("source"), path, inputs=inputs)
     assert path.read_bytes() == b"previous export"
 
 

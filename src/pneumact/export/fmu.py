@@ -180,16 +180,33 @@ def parameter_variables(model: Actuator, asm: Assembly) -> list[FmuVariable]:
     return out
 
 
-def input_variables(model: Actuator, ptr: np.ndarray, inputs: Mapping[str, float]
-                    ) -> list[FmuVariable]:
-    name, unit, description = DRIVE_INPUTS[model.input_signal]
-    rest = float(model.params["p_atm"]) if unit == "Pa" else 0.0
-    starts = {name: rest, FORCE_INPUT[0]: 0.0}
-    unknown = sorted(set(inputs) - set(starts))
+def input_starts(model: Actuator, inputs: Mapping[str, float] | None) -> dict[str, float]:
+    """The start value of each FMU input: ``inputs`` (checked: a name the FMU has, an
+    absolute pressure, a command in [0, 1], a finite force), else at rest (atmospheric
+    pressure, command 0, no force)."""
+    from ..checks import check_absolute_pressure, check_finite, check_range
+
+    name, unit, _ = DRIVE_INPUTS[model.input_signal]
+    starts = {name: float(model.params["p_atm"]) if unit == "Pa" else 0.0,
+              FORCE_INPUT[0]: 0.0}
+    unknown = sorted(set(inputs or {}) - set(starts))
     if unknown:
         raise ArgumentError(f"export_fmu: inputs = {unknown}: not inputs of this FMU; its "
                             f"inputs are {sorted(starts)}")
-    starts.update({k: float(v) for k, v in inputs.items()})
+    for key, value in (inputs or {}).items():
+        where = "export_fmu inputs"
+        if key == FORCE_INPUT[0]:
+            starts[key] = check_finite(key, value, where=where)
+        elif unit == "Pa":
+            starts[key] = check_absolute_pressure(key, value, where=where)
+        else:
+            starts[key] = check_range(key, value, 0.0, 1.0, where=where)
+    return starts
+
+
+def input_variables(model: Actuator, ptr: np.ndarray, starts: Mapping[str, float]
+                    ) -> list[FmuVariable]:
+    name, unit, description = DRIVE_INPUTS[model.input_signal]
     drive = int(ptr[CH_DRIVE]) + INPUT_OFFSET
     force = int(ptr[CH_LOAD_T]) + INPUT_OFFSET
     return [FmuVariable(name, "input", "input", drive, unit, description, start=starts[name]),
@@ -229,11 +246,11 @@ def rate_unit(unit: str) -> str:
 
 
 def all_variables(model: Actuator, asm: Assembly, kernel: ModuleType, ptr: np.ndarray,
-                  inputs: Mapping[str, float]) -> list[FmuVariable]:
+                  starts: Mapping[str, float]) -> list[FmuVariable]:
     nominals = np.zeros(len(asm.states))
     kernel.state_scales(asm.pack(), nominals)
     nominals = np.where(np.isfinite(nominals) & (nominals > 0.0), nominals, 1.0)
-    head = parameter_variables(model, asm) + input_variables(model, ptr, inputs)
+    head = parameter_variables(model, asm) + input_variables(model, ptr, starts)
     states, derivatives = state_variables(asm, nominals, first=len(head) + 1)
     return head + states + derivatives + output_variables(asm)
 
@@ -345,13 +362,14 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     if path.suffix != ".fmu":
         raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
     fmu_model = exportable(model)
+    starts = input_starts(fmu_model, inputs)
     if binary:
         compiler = find_compiler(compiler)  # before any work: a missing compiler fails fast
     asm = assemble(fmu_model)
     kernel = asm.kernel
     vec = asm.pack()
     sig, ptr = pack_channels(fmu_model.channels(Constant(0.0)))
-    variables = all_variables(fmu_model, asm, kernel, ptr, inputs or {})
+    variables = all_variables(fmu_model, asm, kernel, ptr, starts)
     for v in variables:
         if v.kind == "input":
             sig[v.index] = v.start
