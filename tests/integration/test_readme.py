@@ -48,22 +48,30 @@ def test_the_readme_api_and_validation_snippets_run(vgt, tmp_path, monkeypatch):
     assert set(namespace["split"].metrics()["set"]) == {"training", "test"}
 
 
-def test_the_readme_batch_and_closed_loop_snippets_run(tmp_path, monkeypatch):
-    """README.md's batch/sensitivities and closed-loop snippets, after its first one (they
-    use its actuators): a batch row per parameter set, ∂x/∂θ per parameter, the regulator
-    loop's step metrics and files, the linearised plant as a python-control system."""
+def test_the_readme_batch_sensitivity_and_closed_loop_snippets_run(tmp_path, monkeypatch):
+    """README.md's batch/sensitivities, sensitivity-analysis and closed-loop snippets,
+    after its first one (they use its actuators): a batch row per parameter set, ∂x/∂θ per
+    parameter, Sobol indices of the three parameters and a study per operating condition,
+    the regulator loop's step metrics and files, the linearised plant as a python-control
+    system."""
     matplotlib.use("Agg")
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
+    found: dict = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pa.PassivityWarning)  # Table I's σ1, as published
         for i, block in enumerate(_blocks("import pneumact as pa",
                                           "batch = pa.simulate_batch(",
+                                          "from pneumact import sensitivity as sa",
                                           "from pneumact.control import PID, ClosedLoop")):
             exec(compile(block, f"README.md, snippet {i + 1}", "exec"), namespace)
-    assert (namespace["batch"].to_pandas()["status"] == "ok").all()
-    assert namespace["sens"]["position"].shape[1] == 4
-    metrics = namespace["study"].metrics.to_pandas()
+            found[i] = dict(namespace)
+    assert (found[1]["batch"].to_pandas()["status"] == "ok").all()
+    assert found[1]["sens"]["position"].shape[1] == 4
+    indices = found[2]["study"].to_pandas(output="loop_width_pressure")
+    assert {"sigma0", "Fc", "Fs"} <= set(indices.to_string().split())
+    assert len(found[2]["across"].conditions) == 6
+    metrics = found[3]["study"].metrics.to_pandas()
     assert "settling_time" in set(metrics["metric"])
     assert (tmp_path / "step" / "report.html").exists()
-    assert namespace["linear"].to_control().nstates >= 2
+    assert found[3]["linear"].to_control().nstates >= 2
