@@ -30,6 +30,7 @@ from pneumact.core.features import loop_width_pressure
 from pneumact.core.signals import Constant, pack_channels
 from pneumact.errors import ExportError
 from pneumact.export import find_compiler
+from pneumact.parameters.family import ActuatorFamily
 
 fmpy = pytest.importorskip("fmpy", reason="FMPy (the test extra) simulates the FMUs")
 from fmpy.fmi2 import FMU2Model  # noqa: E402
@@ -113,8 +114,9 @@ def test_fmpy_runs_the_fmu_like_pa_simulate(exported, valve):
 def test_the_fmu_s_equations_are_the_kernel_s(exported, tmp_path):
     """Derivatives, outputs and the Jacobian at random states: the FMU's (C, through FMPy)
     against the compiled kernel's, with the same parameters and input (the regulator:
-    mechanics, friction, chamber and regulator states all in one); the external force
-    input against its known answer, d(dv/dt)/dF = −1/m."""
+    mechanics, friction, chamber and regulator states all in one), then with every
+    parameter set to another actuator of the family; the external force input against its
+    known answer, d(dv/dt)/dF = −1/m."""
     model, fmu = exported["regulator"]
     description = read_model_description(str(fmu.path))
     refs = {v.name: v.valueReference for v in description.modelVariables}
@@ -157,13 +159,27 @@ def test_the_fmu_s_equations_are_the_kernel_s(exported, tmp_path):
         for j in range(n):
             column = instance.getDirectionalDerivative(derivatives, [states[j]], [1.0])
             assert np.allclose(column, jac[:, j], rtol=ref.FMU_KERNEL_RTOL, atol=0)
+    # every parameter is tunable: another actuator of the family, warmer gas of another
+    # heat ratio (derived flow constants change: the FMU re-derives), set into the FMU
+    drawn = ActuatorFamily().draw(2, seed=ref.FAMILY_SEED)[1]
+    other = drawn.replace(T=drawn["T"] + 40.0, gamma=1.3)
+    vec = asm.pack(other)
+    values = asm.values(vec)
+    instance.setReal([refs[name] for name in values], list(values.values()))
+    for _ in range(2):
+        y = rest * (1.0 + 0.2 * rng.standard_normal(n))
+        instance.setContinuousStates(pointer(y), n)
+        rates, fmu_rates = np.zeros(n), np.zeros(n)
+        kernel.rhs(0.0, 0.0, y, vec, sig, ptr, rates)
+        instance.getDerivatives(pointer(fmu_rates), n)
+        assert np.allclose(fmu_rates, rates, rtol=ref.FMU_KERNEL_RTOL, atol=0)
     acceleration = refs["der(velocity)"]
     column = instance.getDirectionalDerivative([acceleration], [refs["external_force"]], [1.0])
-    assert column[0] == pytest.approx(-1.0 / model.params["m"], rel=ref.FMU_INPUT_JACOBIAN_RTOL)
+    assert column[0] == pytest.approx(-1.0 / values["m"], rel=ref.FMU_INPUT_JACOBIAN_RTOL)
     before = instance.getReal([acceleration])[0]
     instance.setReal([refs["external_force"]], [3.0])
     after = instance.getReal([acceleration])[0]
-    assert after - before == pytest.approx(-3.0 / model.params["m"], rel=1e-9)
+    assert after - before == pytest.approx(-3.0 / values["m"], rel=1e-9)
     instance.terminate()
     instance.freeInstance()
 
