@@ -41,7 +41,13 @@ from ..files import atomic_write
 from ..models import Actuator
 from ..parameters.catalogue import catalogue
 from ..version import __version__
-from .compiler import binary_folder, build_binary, find_compiler, shared_library_suffix
+from .compiler import (
+    binary_folder,
+    build_binary,
+    find_compiler,
+    fmi_headers,
+    shared_library_suffix,
+)
 
 __all__ = ["ExportedFmu", "FmuVariable", "export_fmu"]
 
@@ -363,8 +369,9 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
         raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
     fmu_model = exportable(model)
     starts = input_starts(fmu_model, inputs)
-    if binary:
-        compiler = find_compiler(compiler)  # before any work: a missing compiler fails fast
+    if binary:  # before any work: a missing compiler or FMPy's headers fail fast
+        compiler = find_compiler(compiler)
+        fmi_headers()
     asm = assemble(fmu_model)
     kernel = asm.kernel
     vec = asm.pack()
