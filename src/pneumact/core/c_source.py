@@ -379,12 +379,7 @@ class _FunctionWriter:
         have = self.type_of(v)
         if not (isinstance(to, types.BaseTuple) and isinstance(have, types.BaseTuple)):
             return self.var(v)
-        if self.unit.ctype(to) == self.unit.ctype(have):
-            return self.var(v)
-        items = [self._member(f"{self.var(v)}.f{i}", h, t)
-                 for i, (h, t) in enumerate(zip(_members(have), _members(to), strict=True))
-                 if self.unit.ctype(t) is not None]
-        return f"(({self.unit.ctype(to)}){{{', '.join(items)}}})"
+        return self._member(self.var(v), have, to)
 
     def _member(self, expr: str, have, to) -> str:
         if isinstance(to, types.BaseTuple) and isinstance(have, types.BaseTuple):

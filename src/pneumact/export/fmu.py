@@ -156,12 +156,11 @@ def has_events(kernel: ModuleType) -> bool:
     return bool(getattr(kernel, "HAS_EVENTS", False))
 
 
-def guard_counts(model: Actuator, kernel: ModuleType, asm: Assembly) -> tuple[int, int]:
+def guard_counts(kernel: ModuleType, vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray,
+                 n_states: int) -> tuple[int, int]:
     """How many guards the model's kinks (end stops) and its friction law's modes have."""
-    vec = asm.pack()
-    sig, ptr = pack_channels(model.channels(Constant(0.0)))
-    y = np.zeros(len(asm.states))
-    out = np.zeros(len(asm.states) + 2)
+    y = np.zeros(n_states)
+    out = np.zeros(n_states + 2)
     switches = int(kernel.switch_guards(0.0, 0.0, y, vec, sig, ptr, out))
     if not has_events(kernel):
         return switches, 0
@@ -169,10 +168,11 @@ def guard_counts(model: Actuator, kernel: ModuleType, asm: Assembly) -> tuple[in
 
 
 # ------------------------------------------------------------------------------ variables
-def parameter_variables(model: Actuator, asm: Assembly) -> list[FmuVariable]:
+def parameter_variables(model: Actuator, asm: Assembly, vec: np.ndarray
+                        ) -> list[FmuVariable]:
     specs = catalogue()
     info = model.params.info
-    values = asm.values(asm.pack())
+    values = asm.values(vec)
     out = []
     for k, name in enumerate(asm.parameter_names):
         spec = specs[name]
@@ -251,12 +251,12 @@ def rate_unit(unit: str) -> str:
     return f"{unit}/s"
 
 
-def all_variables(model: Actuator, asm: Assembly, kernel: ModuleType, ptr: np.ndarray,
-                  starts: Mapping[str, float]) -> list[FmuVariable]:
+def all_variables(model: Actuator, asm: Assembly, kernel: ModuleType, vec: np.ndarray,
+                  ptr: np.ndarray, starts: Mapping[str, float]) -> list[FmuVariable]:
     nominals = np.zeros(len(asm.states))
-    kernel.state_scales(asm.pack(), nominals)
+    kernel.state_scales(vec, nominals)
     nominals = np.where(np.isfinite(nominals) & (nominals > 0.0), nominals, 1.0)
-    head = parameter_variables(model, asm) + input_variables(model, ptr, starts)
+    head = parameter_variables(model, asm, vec) + input_variables(model, ptr, starts)
     states, derivatives = state_variables(asm, nominals, first=len(head) + 1)
     return head + states + derivatives + output_variables(asm)
 
@@ -376,11 +376,11 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     kernel = asm.kernel
     vec = asm.pack()
     sig, ptr = pack_channels(fmu_model.channels(Constant(0.0)))
-    variables = all_variables(fmu_model, asm, kernel, ptr, starts)
+    variables = all_variables(fmu_model, asm, kernel, vec, ptr, starts)
     for v in variables:
         if v.kind == "input":
             sig[v.index] = v.start
-    guards = guard_counts(fmu_model, kernel, asm)
+    guards = guard_counts(kernel, vec, sig, ptr, len(asm.states))
     unit = translate(kernel_roots(kernel, guards[1] > 0))
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
