@@ -164,8 +164,10 @@ def test_bad_input_is_one_clear_message(canudas, vgt):
     with pytest.raises(ExperimentError, match="out of reach"):
         ClosedLoop(actuator, PID(kp=1.0, u_min=0.0, u_max=1.0)).holding_input(0.5)
     loop, experiment = canudas_hunting(canudas, t_end=1.0)
-    with pytest.raises(ParameterError, match="sensitivities"):
-        pa.simulate_sensitivities(loop, experiment, ["Fc"])
+    with pytest.raises(ParameterError, match=r"'kq' is not a parameter.*kp, ki, kd"):
+        pa.simulate(loop, experiment, values={"kq": 1.0})
+    with pytest.raises(ParameterError, match="kx not among its parameters"):
+        loop.controller.with_parameters(kx=1.0)
 
 
 def test_dither_frees_a_pd_loop_stuck_short_of_the_target(canudas):

@@ -54,8 +54,6 @@ class ClosedLoop:
     disturbance: Signal | None = None
     compensation_gain: float | None = None
     template: ClassVar[str] = LOOP_TEMPLATE
-    sensitivity_refusal: ClassVar[str | None] = (
-        "a closed loop's controller is not differentiated through")
 
     def __post_init__(self):
         kind = input_kind(self.plant, "ClosedLoop")
@@ -87,7 +85,24 @@ class ClosedLoop:
     # -- what the plant is ---------------------------------------------------------------
     @property
     def params(self):
+        """The plant's parameter set (the controller's parameters: ``gains``)."""
         return self.plant.params
+
+    @property
+    def gains(self) -> dict[str, float]:
+        """The controller's parameters by name (SI; units: ``gain_units``): varied by
+        name like the plant's in batches, studies, fits and sensitivities."""
+        return self.controller.parameters()
+
+    @property
+    def gain_units(self) -> dict[str, str]:
+        return self.controller.parameter_units(self.command_unit)
+
+    @property
+    def sensitivity_refusal(self) -> str | None:
+        """Sensitivities pass through the controller (its jumps too); the plant's law may
+        refuse them."""
+        return self.plant.sensitivity_refusal
 
     @property
     def plant_kind(self) -> str:

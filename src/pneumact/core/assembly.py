@@ -69,6 +69,12 @@ class Assembly:
             if slot.kind == PARAMETER:
                 slots.setdefault(slot.name, []).append(slot.index)
         self.slots: dict[str, tuple[int, ...]] = {k: tuple(v) for k, v in slots.items()}
+        #: parameters whose values the components fix (a controller's gains), and the
+        #: units the model gives them
+        self.own_values: dict[str, float] = {n: float(v) for part in self.parts
+                                             for n, v in part.values.items()}
+        self.parameter_units: dict[str, str] = {n: u for part in self.parts
+                                                for n, u in part.units.items()}
         self.states: tuple[StateSpec, ...] = tuple(s for part in self.parts for s in part.states)
         module = importlib.import_module(self.template)
         # a model may name its outputs itself (a closed loop: its plant's, then its own)
@@ -138,14 +144,16 @@ class Assembly:
     # -- the vector --------------------------------------------------------------------
     def pack(self, params: Mapping[str, float] | None = None) -> np.ndarray:
         """The kernel vector: parameters from ``params`` (default: the model's set;
-        given values, else catalogue defaults), settings from the components, derived
+        given values, else catalogue defaults; those a component fixes, such as a
+        controller's gains, from the component), settings from the components, derived
         quantities computed."""
         params = self.model.params if params is None else params
         settings = {name: value for part in self.parts for name, value in part.settings.items()}
+        own = self.own_values
         vec = np.zeros(self.size)
         for slot in self.entries:
             if slot.kind == PARAMETER:
-                vec[slot.index] = params[slot.name]
+                vec[slot.index] = own[slot.name] if slot.name in own else params[slot.name]
             elif slot.kind == SETTING:
                 vec[slot.index] = settings[slot.name]
         self.kernel.derive(vec)

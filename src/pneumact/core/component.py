@@ -86,6 +86,9 @@ class Part:
     ``"module:function"``; ``constants`` likewise for compile-time constants.
     ``settings`` gives the values of the block's setting entries; ``label`` describes the
     component for people, ``key`` names its compiled variant in the kernel's file name.
+    ``values`` gives the values of block parameters the component fixes itself (a
+    controller's gains: varied by name like any parameter, but not in the parameter set)
+    and ``units`` their units where they depend on the model (a gain's on the plant).
     ``templates`` are kernel templates of the component's own (a friction law's functions
     on its slice of the state vector), bound before the model's templates and visible to
     a closed loop's plant.
@@ -100,3 +103,5 @@ class Part:
     label: str = ""
     key: str = ""
     templates: tuple[str, ...] = ()
+    values: Mapping[str, float] = field(default_factory=dict)
+    units: Mapping[str, str] = field(default_factory=dict)

@@ -77,6 +77,8 @@ TIME_FD = 1.4901161193847656e-08
 OUTPUT_FD = 1e-7
 #: relative distance below a breakpoint from which an output point waits for its jump
 JUMP_EDGE = 1e-12
+#: relative step (of each parameter's value) of the jump's directional differences
+JUMP_FD = 1e-6
 #: an event located within this fraction of a step's end ends that step; an earlier one
 #: cuts the step there (the step is taken again, ending at the event). A step already cut
 #: at an event ends at it if it is found again within EVENT_CUT_EDGE of the end: the
@@ -429,8 +431,14 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
         ts = 0.5 * (t + t_end)
         t_stop = t_end
         if HAS_JUMPS:
+            if sens is not None:
+                _sens_jump(t, ts, y, prm, sig, ptr, sens, s)
             jump(t, ts, y, prm, sig, ptr)
+            j_before = j
             j = _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out)
+            if sens is not None:
+                for jj in range(j_before, j):
+                    _sens_point(s, sens.s_out, jj)
             if seg < tb.shape[0] - 2:  # a point on the next breakpoint: after its jump
                 t_stop = t_end - JUMP_EDGE * max(1.0, abs(t_end))
         if HAS_EVENTS:  # the interval's inputs (a reversal of a prescribed motion) decide
@@ -755,6 +763,39 @@ def _sens_accept(work, s, jm):
             work.gw[0, a, p] = work.gwend[a, p]
         for b in range(NSTATE):
             jm[a, b] = work.jend[a, b]
+
+
+@kernel()
+def _sens_jump(t, ts, y, prm, sig, ptr, sens, s):
+    """The sensitivities across a jump y⁺ = jump(y⁻, θ): s⁺ = ∂jump/∂y·s⁻ + ∂jump/∂θ, by
+    central differences of the compiled ``jump`` along each parameter's direction (the
+    state moved by ±ε·s, the vector by ±ε·w). A state the jump leaves alone keeps its
+    sensitivity exactly."""
+    n = NSTATE
+    yp = np.empty(n)
+    ym = np.empty(n)
+    up = prm.copy()
+    down = prm.copy()
+    w_ptr, w_idx, w_val = sens.w_ptr, sens.w_idx, sens.w_val
+    for p in range(s.shape[1]):
+        scale = 0.0
+        for k in range(w_ptr[p], w_ptr[p + 1]):
+            scale = max(scale, abs(prm[w_idx[k]]))
+        eps = JUMP_FD * (scale if scale > 0.0 else 1.0)
+        for k in range(w_ptr[p], w_ptr[p + 1]):
+            up[w_idx[k]] = prm[w_idx[k]] + eps * w_val[k]
+            down[w_idx[k]] = prm[w_idx[k]] - eps * w_val[k]
+        for a in range(n):
+            yp[a] = y[a] + eps * s[a, p]
+            ym[a] = y[a] - eps * s[a, p]
+        jump(t, ts, yp, up, sig, ptr)
+        jump(t, ts, ym, down, sig, ptr)
+        for a in range(n):
+            if yp[a] != y[a] + eps * s[a, p] or ym[a] != y[a] - eps * s[a, p]:
+                s[a, p] = (yp[a] - ym[a]) / (2.0 * eps)
+        for k in range(w_ptr[p], w_ptr[p + 1]):
+            up[w_idx[k]] = prm[w_idx[k]]
+            down[w_idx[k]] = prm[w_idx[k]]
 
 
 @kernel()

@@ -20,8 +20,10 @@ import math
 from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
-from ..core.component import Block, Part, StateSpec
+from ..core.component import PARAMETER, SETTING, Block, Part, StateSpec
 from ..errors import ParameterError
+from ..parameters.catalogue import ParameterSpec as P
+from ..parameters.catalogue import declare
 
 __all__ = [
     "CONTROL_BLOCK", "PID", "Cascade", "Compensation", "Controller", "Dither", "LuGreObserver",
@@ -47,6 +49,41 @@ CT_OBS_FC, CT_OBS_FS, CT_OBS_VS, CT_OBS_K = (CT["obs_fc"], CT["obs_fs"], CT["obs
                                              CT["obs_gain"])
 CT_DERIVATIVE, CT_ANTI_WINDUP = CT["derivative_mode"], CT["anti_windup_mode"]
 CT_CASCADE = CT["cascade_mode"]
+
+#: The block's entries a controller may read as *parameters* (batches, studies, fits and
+#: sensitivities vary them by name), with the catalogue's unit for a controller output
+#: without unit (a command valve's); a loop states the units for its plant
+#: (``Controller.parameter_units``: kp is Pa/m behind a pressure regulator, N/m on a rig).
+declare(
+    P("kp", "1/m", "proportional gain (controller output per metre of position error)",
+      None, 0.0, group="controller"),
+    P("ki", "1/(m*s)", "integral gain (controller output per metre-second of error; a "
+      "cascade's: per metre)", None, 0.0, group="controller"),
+    P("kd", "s/m", "derivative gain (controller output per m/s)", None, 0.0,
+      group="controller"),
+    P("kv", "s/m", "cascade: inner velocity gain (controller output per m/s)", None, 0.0,
+      group="controller"),
+    P("kx", "1/s", "cascade: outer position gain (velocity reference per metre)", None, 0.0,
+      group="controller"),
+    P("filter_time", "s", "time constant of the derivative filter", None, 0.0, True,
+      group="controller"),
+    P("tracking_time", "s", "back-calculation anti-windup tracking time", None, 0.0, True,
+      group="controller"),
+    P("velocity_ff", "s/m", "feed-forward gain on the set-point velocity", None,
+      group="controller"),
+    P("ff_fc", "N", "static friction compensation: Coulomb level", None, 0.0,
+      group="controller"),
+    P("ff_fs", "N", "static friction compensation: break-away level", None, 0.0,
+      group="controller"),
+    P("dither_amplitude", "1", "dither amplitude (controller output units)", None,
+      group="controller"),
+    P("dither_frequency", "Hz", "dither frequency", None, 0.0, True, group="controller"),
+    P("obs_gain", "1/s", "LuGre observer gain k", None, group="controller"),
+)
+
+#: the entries a controller may read as parameters (the rest are always settings)
+TUNABLE = ("kp", "ki", "kd", "filter_time", "tracking_time", "kx", "velocity_ff", "ff_fc",
+           "ff_fs", "dither_amplitude", "dither_frequency", "obs_gain")
 
 #: derivative options -> the ``derivative_mode`` setting the kernel reads
 DERIVATIVES = {"none": 0, "error": 1, "measurement": 2, "velocity": 3}
@@ -92,6 +129,16 @@ class Compensation:
     def settings(self) -> dict[str, float]:
         raise NotImplementedError
 
+    #: its settings a loop reads as parameters -> its own field
+    parameter_fields: ClassVar[dict[str, str]] = {}
+
+    def with_settings(self, values: dict[str, float]) -> Compensation:
+        """This term with the parameters among ``values`` (loop names) changed."""
+        import dataclasses
+
+        changes = {f: float(values[n]) for n, f in self.parameter_fields.items() if n in values}
+        return dataclasses.replace(self, **changes) if changes else self  # type: ignore[type-var]
+
 
 @dataclass(frozen=True)
 class StaticCompensation(Compensation):
@@ -102,6 +149,7 @@ class StaticCompensation(Compensation):
     Fc: float
     Fs: float | None = None
     vs: float = 1e-3
+    parameter_fields: ClassVar[dict[str, str]] = {"ff_fc": "Fc", "ff_fs": "Fs"}
     delta: float = 2.0
     v_smooth: float = 1e-4
 
@@ -125,6 +173,8 @@ class Dither(Compensation):
 
     amplitude: float
     frequency: float
+    parameter_fields: ClassVar[dict[str, str]] = {"dither_amplitude": "amplitude",
+                                                  "dither_frequency": "frequency"}
 
     def __post_init__(self):
         _finite("Dither", amplitude=self.amplitude)
@@ -150,6 +200,7 @@ class LuGreObserver(Compensation):
     Fs: float
     vs: float
     gain: float = 0.0
+    parameter_fields: ClassVar[dict[str, str]] = {"obs_gain": "gain"}
 
     def __post_init__(self):
         _positive("LuGreObserver", sigma0=self.sigma0, Fc=self.Fc, Fs=self.Fs, vs=self.vs)
@@ -257,6 +308,74 @@ class Controller:
                 "DIFFERENCE_VELOCITY": self.velocity_estimate == "difference",
                 "OBSERVER": self.has(LuGreObserver)}
 
+    #: the block's entry names this controller calls otherwise (a cascade's inner gain)
+    renamed: ClassVar[dict[str, str]] = {}
+
+    def read_parameters(self) -> tuple[str, ...]:
+        """The block entries (CONTROL_BLOCK names) this controller reads as parameters."""
+        names = list(self.gain_names())
+        if self.anti_windup == "back-calculation":
+            names.append("tracking_time")
+        names.append("velocity_ff")
+        for term in self.compensation:
+            names.extend(n for n in term.settings() if n in TUNABLE)
+        return tuple(names)
+
+    def gain_names(self) -> tuple[str, ...]:
+        raise NotImplementedError
+
+    def block(self) -> Block:
+        """CONTROL_BLOCK with the entries this controller reads as parameters (by their
+        public names), the others settings: the local indices stay those of the kernel."""
+        read = set(self.read_parameters())
+        return Block(tuple((self.renamed.get(n, n), PARAMETER if n in read else SETTING)
+                           for n in CONTROL_BLOCK.names))
+
+    def parameters(self) -> dict[str, float]:
+        """The controller's parameters by name (``kp``, ``ki``, ``tracking_time``,
+        ``ff_fc`` ...), SI: what a batch, a study or a tuner varies."""
+        values = self.settings()
+        return {self.renamed.get(n, n): float(values[n]) for n in self.read_parameters()}
+
+    def parameter_units(self, command_unit: str = "1", position_unit: str = "m"
+                        ) -> dict[str, str]:
+        """The unit of each parameter when the controller output is in ``command_unit``."""
+        c = f"({command_unit})" if "/" in command_unit else command_unit
+
+        def per(unit: str) -> str:  # "1/m" -> "Pa/m", "s/m" -> "Pa*s/m"
+            if command_unit == "1":
+                return unit
+            return f"{c}{unit[1:]}" if unit.startswith("1/") else f"{c}*{unit}"
+
+        x = position_unit
+        units = {"kp": per(f"1/{x}"), "ki": per(f"1/({x}*s)"), "kd": per(f"s/{x}"),
+                 "kv": per(f"s/{x}"), "kx": "1/s", "filter_time": "s", "tracking_time": "s",
+                 "velocity_ff": per(f"s/{x}"), "ff_fc": "N", "ff_fs": "N",
+                 "dither_amplitude": command_unit, "dither_frequency": "Hz",
+                 "obs_gain": "1/s"}
+        if self.cascade:
+            units["ki"] = per(f"1/{x}")
+        return {name: units[name] for name in self.parameters()}
+
+    def with_parameters(self, **values: float) -> Controller:
+        """This controller with some of its parameters changed (names as in
+        ``parameters()``): a tuned controller, a batch row made an object."""
+        import dataclasses
+
+        own = self.parameters()
+        unknown = [n for n in values if n not in own]
+        if unknown:
+            raise ParameterError(f"{type(self).__name__}: {', '.join(unknown)} not among its "
+                                 f"parameters ({', '.join(own)})")
+        fields_of = {"velocity_ff": "velocity_feedforward"}
+        changes: dict[str, object] = {fields_of.get(n, n): float(v) for n, v in values.items()
+                                      if n in self.field_parameters()}
+        changes["compensation"] = tuple(term.with_settings(values) for term in self.compensation)
+        return dataclasses.replace(self, **changes)
+
+    def field_parameters(self) -> tuple[str, ...]:
+        return (*self.gain_names(), "tracking_time", "velocity_ff")
+
     @property
     def filtered_derivative(self) -> bool:
         return DERIVATIVES[getattr(self, "derivative", "none")] in (1, 2)
@@ -280,9 +399,13 @@ class Controller:
     def part(self, loop_settings: dict[str, float], command_unit: str = "1") -> Part:
         values = self.settings()
         values.update(loop_settings)
-        return Part(role="controller", block=CONTROL_BLOCK,
+        values = {self.renamed.get(n, n): v for n, v in values.items()}
+        block = self.block()
+        return Part(role="controller", block=block,
                     states=self.states(command_unit=command_unit),
-                    settings=values, label=repr(self), key="")
+                    settings=values, label=repr(self), key="",
+                    values={n: values[n] for n in block.parameters},
+                    units=self.parameter_units(command_unit))
 
     def _tracking(self, ti: float, td: float) -> float:
         if self.tracking_time is not None:
@@ -316,6 +439,13 @@ class PID(Controller):
         if self.kd == 0.0 and self.derivative != "none":
             object.__setattr__(self, "derivative", "none")
 
+    def gain_names(self) -> tuple[str, ...]:
+        if self.derivative == "none":
+            return ("kp", "ki")
+        if self.filtered_derivative:
+            return ("kp", "ki", "kd", "filter_time")
+        return ("kp", "ki", "kd")
+
     def gain_settings(self) -> dict[str, float]:
         ti = self.kp / self.ki if self.ki and self.kp else 0.0
         td = self.kd / self.kp if self.kp else 0.0
@@ -333,10 +463,17 @@ class Cascade(Controller):
     kv: float
     ki: float = 0.0
     cascade: ClassVar[bool] = True
+    renamed: ClassVar[dict[str, str]] = {"kp": "kv"}
 
     def __post_init__(self):
         super().__post_init__()
         _gains("Cascade", kx=self.kx, kv=self.kv, ki=self.ki)
+
+    def gain_names(self) -> tuple[str, ...]:
+        return ("kx", "kp", "ki")
+
+    def field_parameters(self) -> tuple[str, ...]:
+        return ("kx", "kv", "ki", "tracking_time", "velocity_ff")
 
     def gain_settings(self) -> dict[str, float]:
         ti = self.kv / self.ki if self.ki and self.kv else 0.0

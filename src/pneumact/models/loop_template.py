@@ -71,6 +71,7 @@ NOUT = None  # generated: the plant's outputs and the loop's
 PLANT_NSTATE = 3
 PLANT_NOUT = 0
 CONTROLLER_LO = 0
+CONTROLLER_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
 S_CONTROL_INTEGRAL = 3
@@ -264,12 +265,9 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
 
 
 @kernel()
-def jac(t, ts, y, prm, sig, ptr, out):
-    """∂f/∂y: the plant's analytic Jacobian at its present input, plus the coupling
-    through the controller, (∂f_plant/∂input)·(∂input/∂y), and the controller's rows,
-    both by finite differences of the (cheap) law."""
-    value = _apply(t, ts, y, prm, sig, ptr)
-    plant_jac(t, ts, y, prm, sig, ptr, out)
+def _input_gain(t, ts, y, value, prm, sig, ptr, b):
+    """b = ∂f_plant/∂input at the plant input ``value`` (written in its channel), by a
+    forward difference of the plant's right-hand side."""
     f0 = np.empty(NSTATE)
     f1 = np.empty(NSTATE)
     plant_rhs(t, ts, y, prm, sig, ptr, f0)
@@ -277,9 +275,19 @@ def jac(t, ts, y, prm, sig, ptr, out):
     sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value + dv
     plant_rhs(t, ts, y, prm, sig, ptr, f1)
     sig[ptr[CH_DRIVE] + INPUT_OFFSET] = value
-    b = np.empty(PLANT_NSTATE)
     for a in range(PLANT_NSTATE):
         b[a] = (f1[a] - f0[a]) / dv
+
+
+@kernel()
+def jac(t, ts, y, prm, sig, ptr, out):
+    """∂f/∂y: the plant's analytic Jacobian at its present input, plus the coupling
+    through the controller, (∂f_plant/∂input)·(∂input/∂y), and the controller's rows,
+    both by finite differences of the (cheap) law."""
+    value = _apply(t, ts, y, prm, sig, ptr)
+    plant_jac(t, ts, y, prm, sig, ptr, out)
+    b = np.empty(PLANT_NSTATE)
+    _input_gain(t, ts, y, value, prm, sig, ptr, b)
     scales = np.empty(NSTATE)
     state_scales(prm, scales)
     yp = y.copy()
@@ -304,10 +312,43 @@ def jac(t, ts, y, prm, sig, ptr, out):
 
 @kernel()
 def param_jac(t, ts, y, prm, sig, ptr, g, needed):
-    """The plant's ∂f/∂prm at its present input (closed loops refuse sensitivities, so
-    the controller's share is never needed)."""
-    _apply(t, ts, y, prm, sig, ptr)
+    """∂f/∂prm: the plant's at its present input; for the controller's parameters (a
+    continuous controller's: a sampled one acts through its jumps), the coupling
+    (∂f_plant/∂input)·(∂input/∂prm) and the controller's rows, by central differences
+    of the law."""
+    value = _apply(t, ts, y, prm, sig, ptr)
     plant_param_jac(t, ts, y, prm, sig, ptr, g, needed)
+    for a in range(PLANT_NSTATE, NSTATE):
+        for k in range(g.shape[1]):
+            g[a, k] = 0.0
+    if SAMPLED:
+        return
+    wanted = False
+    for k in range(CONTROLLER_LO, CONTROLLER_HI):
+        wanted = wanted or needed[k]
+    if not wanted:
+        return
+    b = np.empty(PLANT_NSTATE)
+    _input_gain(t, ts, y, value, prm, sig, ptr, b)
+    moved = prm.copy()
+    r0 = np.empty(NSTATE)
+    r1 = np.empty(NSTATE)
+    for k in range(CONTROLLER_LO, CONTROLLER_HI):
+        if not needed[k]:
+            continue
+        h = COUPLING_FD * (abs(prm[k]) if prm[k] != 0.0 else 1.0)
+        moved[k] = prm[k] + h
+        up = _plant_input(t, ts, _command(t, ts, y, moved, sig, ptr), moved, sig, ptr)
+        _controller_rates(t, ts, y, moved, sig, ptr, r1)
+        moved[k] = prm[k] - h
+        down = _plant_input(t, ts, _command(t, ts, y, moved, sig, ptr), moved, sig, ptr)
+        _controller_rates(t, ts, y, moved, sig, ptr, r0)
+        moved[k] = prm[k]
+        slope = (up - down) / (2.0 * h)
+        for a in range(PLANT_NSTATE):
+            g[a, k] = b[a] * slope
+        for a in range(PLANT_NSTATE, NSTATE):
+            g[a, k] = (r1[a] - r0[a]) / (2.0 * h)
 
 
 @kernel()

@@ -187,8 +187,9 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
                                     (w_ptr, w_idx, w_val), len(names))
     specs = catalogue()
     values = np.array([prep.vector[assembly.slots[n][0]] for n in names])
+    own = assembly.parameter_units  # a controller's gains: in the loop's units
     return SensitivityResult(result, names, values, sens, derived,
-                             {n: specs[n].unit for n in names})
+                             {n: own.get(n) or specs[n].unit for n in names})
 
 
 def _output_sensitivities(prep, experiment, result, sens, y_out, s_out, directions,

@@ -86,10 +86,12 @@ class BatchSpec:
 
     @property
     def units(self) -> dict[str, str]:
+        from ...core.assembly import assemble
         from ...parameters import catalogue
 
         specs = catalogue()
-        units = {c: specs[c].unit for c in self.columns}
+        own = assemble(self.model).parameter_units  # a controller's gains: the loop's
+        units = {c: own.get(c) or specs[c].unit for c in self.columns}
         units.update({f: FEATURE_UNITS[f] for f in self.features})
         return units
 
