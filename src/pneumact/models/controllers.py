@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from ..core.component import PARAMETER, SETTING, Block, Part, StateSpec
 from ..errors import ParameterError
@@ -368,8 +368,8 @@ class Controller:
             raise ParameterError(f"{type(self).__name__}: {', '.join(unknown)} not among its "
                                  f"parameters ({', '.join(own)})")
         fields_of = {"velocity_ff": "velocity_feedforward"}
-        changes: dict[str, object] = {fields_of.get(n, n): float(v) for n, v in values.items()
-                                      if n in self.field_parameters()}
+        changes: dict[str, Any] = {fields_of.get(n, n): float(v) for n, v in values.items()
+                                   if n in self.field_parameters()}
         changes["compensation"] = tuple(term.with_settings(values) for term in self.compensation)
         return dataclasses.replace(self, **changes)
 
