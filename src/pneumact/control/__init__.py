@@ -5,19 +5,24 @@ friction compensation, set-point experiments, loop metrics and the linearised pl
     study = run_loop(loop, pa.SetpointStep(0.004, 0.008, 0.1, 1.0))
     study.metrics.to_pandas(); study.write("step")
     linear = linearise(plant, input_value, regime="presliding"); linear.to_control()
+    tuned = tune(loop, "settling=0.3,overshoot=5%,error=20um,no-hunting", uncertainty=fit)
 """
 
 from ..models.controllers import PID, Cascade, Controller, Dither, LuGreObserver, StaticCompensation
 from .drives import DriveReplay, control_law_check, drive_plant, replay_drive
 from .linear import LinearPlant, frequency_response, linearise, plot_bode
 from .loop import ClosedLoop
-from .metrics import LoopMetrics, loop_metrics
+from .metrics import LoopMetrics, loop_metrics, step_metrics
 from .plots import plot_loop
+from .specs import Move, Specs, default_moves
 from .study import LoopStudy, canudas_hunting, run_loop
+from .tuning import TuningResult, draw_samples, load_gains, tune, write_gains
 
 __all__ = [
     "PID", "Cascade", "ClosedLoop", "Controller", "Dither", "DriveReplay", "LinearPlant",
-    "LoopMetrics", "LoopStudy", "LuGreObserver", "StaticCompensation", "canudas_hunting",
-    "control_law_check", "drive_plant", "frequency_response", "linearise", "loop_metrics",
-    "plot_bode", "plot_loop", "replay_drive", "run_loop",
+    "LoopMetrics", "LoopStudy", "LuGreObserver", "Move", "Specs", "StaticCompensation",
+    "TuningResult", "canudas_hunting", "control_law_check", "default_moves", "draw_samples",
+    "drive_plant", "frequency_response", "linearise", "load_gains", "loop_metrics",
+    "plot_bode", "plot_loop", "replay_drive", "run_loop", "step_metrics", "tune",
+    "write_gains",
 ]

@@ -10,6 +10,7 @@ plant receives: drive_gain·command + disturbance) and ``friction_compensation``
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -251,10 +252,12 @@ class ClosedLoop:
 
     # -- operating points ------------------------------------------------------------------
     def holding_input(self, position: float, lo: float | None = None,
-                      hi: float | None = None) -> float:
+                      hi: float | None = None, *, values: Mapping[str, float] | None = None
+                      ) -> float:
         """The constant controller output that holds the plant at rest at ``position``
         (friction unloaded), by bisection on the plant's static equilibrium; default
-        bracket: the controller's limits within the plant's input range."""
+        bracket: the controller's limits within the plant's input range. ``values``:
+        plant parameters changed for this answer (an uncertainty sample)."""
         from scipy.optimize import brentq
 
         from ..core.signals import pack_channels
@@ -268,7 +271,8 @@ class ClosedLoop:
         natural = input_range(plant)
         lo = max(self.controller.u_min * self.drive_gain, natural[0]) if lo is None else lo
         hi = min(self.controller.u_max * self.drive_gain, natural[1]) if hi is None else hi
-        prep = prepare(plant, Experiment(Constant(lo), plant.drive_quantity, 1.0), Rodas4())
+        prep = prepare(plant, Experiment(Constant(lo), plant.drive_quantity, 1.0), Rodas4(),
+                       values=values)
         y0 = np.empty_like(prep.y0)
         at = prep.assembly.state_index("position")
 

@@ -70,7 +70,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
-__all__ = ["LoopMetrics", "loop_metrics"]
+__all__ = ["LoopMetrics", "loop_metrics", "step_metrics"]
 
 #: default evaluation window: this fraction of the record's duration (at the end)
 WINDOW_FRACTION = 0.1
@@ -529,3 +529,71 @@ def loop_metrics(result: Any, *, start: float | None = None, target: float | Non
         stick_speed=float(stick_speed), window=float(window), min_stick=float(min_stick),
         position_unit=str(units.get("position", "m")) or "m",
         command_unit=str(units.get("command", "")) if u is not None else "")
+
+
+def _rows_from(t: np.ndarray, y: np.ndarray, t_from: float) -> tuple[np.ndarray, np.ndarray]:
+    """``_from`` for every row of ``y`` (columns on the shared times ``t``)."""
+    i = int(np.clip(np.searchsorted(t, t_from, side="right") - 1, 0, t.size - 2))
+    w = (t_from - t[i]) / (t[i + 1] - t[i])
+    first = y[:, i] * (1.0 - w) + y[:, i + 1] * w
+    keep = t > t_from
+    return (np.concatenate([[t_from], t[keep]]),
+            np.concatenate([first[:, None], y[:, keep]], axis=1))
+
+
+def _rows_first_reach(t: np.ndarray, p: np.ndarray, level: float) -> np.ndarray:
+    hits = p >= level
+    k = np.argmax(hits, axis=1)
+    rows = np.arange(p.shape[0])
+    before = np.maximum(k - 1, 0)
+    p0, p1 = p[rows, before], p[rows, k]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        at = t[before] + (level - p0) / (p1 - p0) * (t[k] - t[before])
+    at = np.where(k == 0, t[0], at)
+    return np.where(hits.any(axis=1), at, math.nan)
+
+
+def _rows_settling(ts: np.ndarray, xs: np.ndarray, target: float, tol: float) -> np.ndarray:
+    outside = np.abs(xs - target) > tol
+    n = xs.shape[1]
+    k = n - 1 - np.argmax(outside[:, ::-1], axis=1)  # the last sample outside
+    rows = np.arange(xs.shape[0])
+    after = np.minimum(k + 1, n - 1)
+    x0, x1 = xs[rows, k], xs[rows, after]
+    edge = target + np.copysign(tol, x0 - target)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        at = ts[k] + (edge - x0) / (x1 - x0) * (ts[after] - ts[k])
+    at = np.where(outside.any(axis=1), at, ts[0])
+    return np.where(outside[:, -1], math.nan, at)
+
+
+def step_metrics(time: Any, position: Any, setpoint: Any, command: Any = None, *,
+                 t_step: float, start: float, target: float, tol: float,
+                 window: float) -> dict[str, np.ndarray]:
+    """``loop_metrics``' step, error, effort and limit-cycle metrics of many runs at once:
+    rows of ``position`` (and ``command``) on the shared ``time``, one ``setpoint``, the
+    step (``t_step``, ``start``, ``target``), the settling band ``tol`` [m] (absolute)
+    and the evaluation ``window`` [s] given. What a tuner measures thousands of times;
+    the definitions are ``loop_metrics``' (a test holds the two together)."""
+    t = np.asarray(time, dtype=float)
+    x = np.atleast_2d(np.asarray(position, dtype=float))
+    r = np.asarray(setpoint, dtype=float)
+    step = target - start
+    ts, xs = _rows_from(t, x, t_step)
+    p = (xs - start) / step
+    rise = _rows_first_reach(ts, p, RISE_LEVELS[1]) - _rows_first_reach(ts, p, RISE_LEVELS[0])
+    beyond = np.max((xs - target) * math.copysign(1.0, step), axis=1)
+    wt, wx = _rows_from(t, x, t[-1] - window)
+    result = {
+        "rise_time": rise,
+        "settling_time": _rows_settling(ts, xs, target, tol) - t_step,
+        "overshoot": 100.0 * np.maximum(beyond, 0.0) / abs(step),
+        "steady_state_error": target - np.trapezoid(wx, wt, axis=1) / (wt[-1] - wt[0]),
+        "limit_cycle_amplitude": 0.5 * np.ptp(wx, axis=1),
+        "iae": np.trapezoid(np.abs(r[None, :] - x), t, axis=1),
+    }
+    if command is not None:
+        u = np.atleast_2d(np.asarray(command, dtype=float))
+        result["control_effort"] = np.trapezoid((u - u[:, :1]) ** 2, t, axis=1)
+        result["command_variation"] = np.sum(np.abs(np.diff(u, axis=1)), axis=1)
+    return result

@@ -39,7 +39,7 @@ from .fit import FitResult, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
 
 __all__ = ["InputNoise", "PredictionBand", "input_noise", "input_noise_covariance",
-           "input_noise_weights", "input_replicates", "nuisance_covariance",
+           "input_noise_weights", "input_replicates", "nuisance_covariance", "parameter_draws",
            "prediction_band", "with_covariance"]
 
 #: Replicates of the input-noise bootstrap: the variance of a 64-sample estimate is
@@ -260,28 +260,21 @@ class PredictionBand:
         return pd.DataFrame(columns, index=pd.Index(self.time, name="time"))
 
 
-def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100,
-                    level: float = 0.95, signals: Sequence[str] = ("position", "pressure"),
-                    t_eval=None, seed: int = 0, solver=None,
-                    executor: Executor | int | str | None = None) -> PredictionBand:
-    """The band of ``signals`` under ``experiment`` that the uncertainty of
-    ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets with
-    a non-positive value of a positive parameter are drawn again), simulated on the
-    batch engine (``executor``: where, see ``simulate_batch``); ``level`` is the central
-    probability of the band."""
+def parameter_draws(estimates: Estimates, draws: int, seed: int = 0, *,
+                    what: str = "parameter draws") -> pd.DataFrame:
+    """``draws`` parameter sets from N(values, covariance) of ``estimates`` (its model
+    parameters; offsets left out), one row each; a set with a non-positive value of a
+    positive parameter is drawn again. The input of a prediction band and of a robust
+    controller design."""
     from ..parameters import catalogue
-    from ..simulation import simulate
-    from ..simulation.batch import simulate_batch
 
-    if not 0 < level < 1:
-        raise ParameterError(f"prediction band: level = {level}; must be in (0, 1)")
     names = [n for n in estimates.names if "[" not in n]
     idx = [estimates.names.index(n) for n in names]
     mean = estimates.values[idx]
     cov = estimates.covariance[np.ix_(idx, idx)]
     if not np.all(np.isfinite(cov)):
-        raise ParameterError("prediction band: the covariance is not finite (a parameter "
-                             "is not identifiable)")
+        raise ParameterError(f"{what}: the covariance is not finite (a parameter is not "
+                             "identifiable)")
     rng = np.random.default_rng(seed)
     specs = catalogue()
     minima = [specs[n].minimum for n in names]
@@ -291,8 +284,25 @@ def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100
         batch = rng.multivariate_normal(mean, cov, size=draws, method="svd")
         ok = np.all((batch > 0) | ~positive, axis=1)
         rows.extend(batch[ok][: draws - len(rows)])
-    table = pd.DataFrame(np.array(rows), columns=names)
-    values = dict(zip(names, mean, strict=True))
+    return pd.DataFrame(np.array(rows), columns=names)
+
+
+def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100,
+                    level: float = 0.95, signals: Sequence[str] = ("position", "pressure"),
+                    t_eval=None, seed: int = 0, solver=None,
+                    executor: Executor | int | str | None = None) -> PredictionBand:
+    """The band of ``signals`` under ``experiment`` that the uncertainty of
+    ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets with
+    a non-positive value of a positive parameter are drawn again), simulated on the
+    batch engine (``executor``: where, see ``simulate_batch``); ``level`` is the central
+    probability of the band."""
+    from ..simulation import simulate
+    from ..simulation.batch import simulate_batch
+
+    if not 0 < level < 1:
+        raise ParameterError(f"prediction band: level = {level}; must be in (0, 1)")
+    table = parameter_draws(estimates, draws, seed, what="prediction band")
+    values = {n: float(estimates.values[estimates.names.index(n)]) for n in table.columns}
     nominal = simulate(model, experiment, solver, t_eval=t_eval, values=values)
     result = simulate_batch(model, experiment, table, signals=list(signals),
                             t_eval=nominal.time, solver=solver, executor=executor,

@@ -79,6 +79,8 @@ declare(
       group="controller"),
     P("dither_frequency", "Hz", "dither frequency", None, 0.0, True, group="controller"),
     P("obs_gain", "1/s", "LuGre observer gain k", None, group="controller"),
+    P("bias", "1", "controller output its terms add to (the loop's holding input)", None,
+      group="controller"),
 )
 
 #: the entries a controller may read as parameters (the rest are always settings)
@@ -327,7 +329,7 @@ class Controller:
     def block(self) -> Block:
         """CONTROL_BLOCK with the entries this controller reads as parameters (by their
         public names), the others settings: the local indices stay those of the kernel."""
-        read = set(self.read_parameters())
+        read = {*self.read_parameters(), "bias"}  # the loop's, a parameter of each sample
         return Block(tuple((self.renamed.get(n, n), PARAMETER if n in read else SETTING)
                            for n in CONTROL_BLOCK.names))
 
@@ -405,7 +407,7 @@ class Controller:
                     states=self.states(command_unit=command_unit),
                     settings=values, label=repr(self), key="",
                     values={n: values[n] for n in block.parameters},
-                    units=self.parameter_units(command_unit))
+                    units={**self.parameter_units(command_unit), "bias": command_unit})
 
     def _tracking(self, ti: float, td: float) -> float:
         if self.tracking_time is not None:

@@ -1,0 +1,618 @@
+"""Controller synthesis on the nonlinear loop, robust to the identified uncertainty.
+
+``tune(loop, specs)`` finds the controller's gains (parameters of its block, varied by
+name on the batch engine) that meet ``specs`` on reference moves (``default_moves``):
+
+1. **global**: a scrambled Sobol design of ``n_global`` gain vectors in a log box around
+   the loop's gains (×/÷ ``spread``), every one run on every move and on the design
+   samples in one batch per move (all cores, or Dask);
+2. **local**: Nelder-Mead in log-gain space from the best (the metrics are not smooth:
+   settling times jump as the response crosses the band's edge, so a gradient method
+   stalls), each evaluation one batch over the design samples;
+3. **robust**: with uncertainty samples (an identification's ``Estimates``, or a table
+   of parameter values), the design is checked on all of them; while fewer than
+   ``specs.fraction`` meet the specs, the worst failing samples join the design set and
+   the local search runs again (a scenario design), at most ``rounds`` times.
+
+Each candidate's cost: 10 × the ``fraction``-quantile over samples of the summed spec
+violations (each relative to its limit, capped at 4), plus their mean, plus 0.01 × the
+normalised IAE (among designs that meet the specs, the faster one). A run that fails
+counts as every spec violated to the cap.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time as _time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ParameterError
+from ..io.report import ResultVocabulary
+from ..progress import ProgressCallback, check_progress, notify
+from .loop import ClosedLoop
+from .metrics import step_metrics
+from .specs import Move, Specs, default_moves
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..models.controllers import Controller
+
+__all__ = ["TuningResult", "draw_samples", "load_gains", "tune", "write_gains"]
+
+#: a violation counts at most this much (a failed run: every spec at this)
+CAP = 4.0
+#: the weights of the cost: the quantile over samples, the mean, the speed
+QUANTILE_WEIGHT, PERFORMANCE_WEIGHT = 10.0, 0.01
+#: gains left alone unless asked for: structure, not tuning knobs
+NOT_TUNED = ("velocity_ff", "tracking_time", "filter_time", "ff_fc", "ff_fs",
+             "dither_amplitude", "dither_frequency", "obs_gain")
+#: the design samples the global search and the first local search use
+FIRST_DESIGN = 4
+#: samples added to the design set per robust round
+ADDED_PER_ROUND = 4
+GAINS_FORMAT = "pneumact-gains/1"
+
+
+def draw_samples(estimates, n: int, seed: int = 0) -> pd.DataFrame:
+    """``n`` parameter sets from an identification's ``Estimates`` (normal with their
+    covariance; a set with a non-positive value of a positive parameter is drawn
+    again), one row each: the uncertainty a robust design must hold over."""
+    from ..identification.uncertainty import parameter_draws
+
+    return parameter_draws(estimates, n, seed)
+
+
+# --------------------------------------------------------------------------- evaluation
+@dataclass(eq=False)
+class _Evaluator:
+    """Runs candidates (rows of gains) on every move and sample; keeps what it ran."""
+
+    loop: ClosedLoop
+    specs: Specs
+    moves: tuple[Move, ...]
+    names: tuple[str, ...]
+    samples: pd.DataFrame  # one row per sample (plant parameters), the nominal first
+    biases: np.ndarray  # samples × moves: the holding input at each move's start
+    executor: Any
+    progress: ProgressCallback | None
+    margin: float = 0.0
+    runs: int = 0
+    history: list[tuple[float, ...]] = field(default_factory=list)
+
+    def metrics(self, gains: np.ndarray, which: np.ndarray) -> list[dict[str, np.ndarray]]:
+        """Per move: step_metrics of every (candidate, sample) row, candidate-major, and
+        'ok' (the run finished)."""
+        from ..simulation.batch import simulate_batch
+
+        n_c, n_s = gains.shape[0], which.size
+        out = []
+        for m, move in enumerate(self.moves):
+            table = pd.DataFrame(np.repeat(gains, n_s, axis=0), columns=list(self.names))
+            plant = self.samples.iloc[which].reset_index(drop=True)
+            for name in plant.columns:
+                table[name] = np.tile(plant[name].to_numpy(), n_c)
+            table["bias"] = np.tile(self.biases[which, m], n_c)
+            experiment = move.experiment()
+            batch = simulate_batch(self.loop, experiment, table, features=(),
+                                   signals=["position", "command", "position_setpoint"],
+                                   executor=self.executor)
+            self.runs += len(table)
+            ok = (batch.table["status"] == "ok").to_numpy()
+            assert batch.time is not None  # a batch's result has its output grid
+            x = np.nan_to_num(batch.signals["position"], nan=move.start)
+            u = np.nan_to_num(batch.signals["command"], nan=0.0)
+            r = batch.signals["position_setpoint"][int(np.argmax(ok))] if ok.any() else (
+                np.full(batch.time.size, move.stop))
+            found = step_metrics(batch.time, x, r, u, t_step=move.t_ref, start=move.start,
+                                 target=move.stop, tol=move.tolerance(self.specs),
+                                 window=move.window())
+            found["ok"] = ok
+            out.append(found)
+        return out
+
+    def violations(self, found: list[dict[str, np.ndarray]], margin: float = 0.0
+                   ) -> np.ndarray:
+        """Rows × moves × specs: each spec's violation (0: met) of the limits tightened
+        by ``margin`` (a fraction), capped."""
+        specs = self.specs
+        limits = {n: v * (1.0 - margin) for n, v in specs.limits().items()}
+        columns = []
+        for move, metrics in zip(self.moves, found, strict=True):
+            per = []
+            for name, limit in limits.items():
+                if name == "rise" and move.duration > 0:
+                    per.append(np.zeros_like(metrics["iae"]))
+                    continue
+                value = {"settling": metrics["settling_time"], "rise": metrics["rise_time"],
+                         "overshoot": metrics["overshoot"],
+                         "error": np.abs(metrics["steady_state_error"]),
+                         "effort": metrics.get("control_effort"),
+                         "variation": metrics.get("command_variation")}[name]
+                scale = limit if limit > 0 else 1.0  # overshoot 0 %: per % over
+                per.append(np.where(np.isfinite(value), value / scale - (limit > 0), CAP))
+            if specs.no_hunting:
+                band = move.tolerance(specs) * (1.0 - margin)
+                per.append(metrics["limit_cycle_amplitude"] / band - 1.0)
+            v = np.clip(np.stack(per, axis=-1), 0.0, CAP)
+            v[~metrics["ok"]] = CAP
+            columns.append(v)
+        return np.stack(columns, axis=1)
+
+    def spec_names(self) -> list[str]:
+        return [*self.specs.limits(), *(["hunting"] if self.specs.no_hunting else [])]
+
+    def performance(self, found: list[dict[str, np.ndarray]]) -> np.ndarray:
+        """Rows: the IAE of each move over |step| × its duration, summed over moves."""
+        return sum((np.where(m["ok"], m["iae"], np.nan) / (abs(mv.size) * mv.t_end)
+                    for mv, m in zip(self.moves, found, strict=True)), start=np.zeros(1))
+
+    def cost(self, gains: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """The cost of each candidate (rows of gains) over the samples ``which``."""
+        found = self.metrics(gains, which)
+        per_sample = self.violations(found, self.margin).sum(axis=(1, 2)).reshape(
+            gains.shape[0], -1)
+        speed = np.nan_to_num(self.performance(found), nan=CAP).reshape(gains.shape[0], -1)
+        q = np.quantile(per_sample, self.specs.fraction, axis=1, method="higher")
+        costs = (QUANTILE_WEIGHT * q + per_sample.mean(axis=1)
+                 + PERFORMANCE_WEIGHT * speed.mean(axis=1))
+        for g, c in zip(gains, costs, strict=True):
+            self.history.append((*map(float, g), float(c), float(which.size)))
+        notify(self.progress, "tune", len(self.history), len(self.history) + 1)
+        return costs
+
+
+# --------------------------------------------------------------------------- the result
+@dataclass(eq=False)
+class TuningResult(ResultVocabulary):
+    """A tuned controller and how it does on every move and uncertainty sample.
+
+    ``controller`` / ``loop``: the tuned ones; ``gains``: name -> SI value (``units``);
+    ``met``: the share of samples meeting every spec (``specs.fraction`` asked).
+    ``to_pandas()``: the gains (SI and datasheet units); ``"metrics"``: every (sample,
+    move) run's metrics and violations; ``"spread"``: each metric's nominal, median, 5 %
+    / 95 % and worst value per move against its limit; ``"history"``: every candidate
+    tried. ``plot()``: each move's responses (nominal, all samples, the worst drawn
+    bold). ``write(folder)``: the tables, the figure, report.html and ``gains.toml``
+    (``pneumact control step --gains``)."""
+
+    report_title = "Controller tuning"
+    figure_name = "tuning"
+
+    loop: ClosedLoop
+    specs: Specs
+    moves: tuple[Move, ...]
+    gains: dict[str, float]
+    units: dict[str, str]
+    metrics_table: pd.DataFrame
+    history_table: pd.DataFrame
+    samples: pd.DataFrame
+    biases: np.ndarray
+    met: float
+    worst: int
+    seconds: float
+    runs: int
+    start_gains: dict[str, float]
+
+    @property
+    def controller(self) -> Controller:
+        return self.loop.controller
+
+    @property
+    def meets_specs(self) -> bool:
+        return bool(self.met >= self.specs.fraction)
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {"gains": self.gains_table(), "spread": self.spread_table(),
+                "metrics": self.metrics_table, "history": self.history_table}
+
+    def gains_table(self) -> pd.DataFrame:
+        """Each gain: SI value and unit, the start, and the datasheet form (per mm, kPa or
+        %; Ti = Kp/Ki, Td = Kd/Kp)."""
+        rows = []
+        for name, value in self.gains.items():
+            shown, unit = datasheet(name, value, self.units[name])
+            rows.append((name, value, self.units[name], self.start_gains.get(name, math.nan),
+                         shown, unit))
+        kp, ki, kd = (self.gains.get(n) for n in ("kp", "ki", "kd"))
+        if kp and ki:
+            rows.append(("Ti = Kp/Ki", kp / ki, "s", math.nan, kp / ki, "s"))
+        if kp and kd:
+            rows.append(("Td = Kd/Kp", kd / kp, "s", math.nan, kd / kp, "s"))
+        return pd.DataFrame(rows, columns=["gain", "value", "unit", "start",
+                                           "datasheet value", "datasheet unit"])
+
+    def spread_table(self) -> pd.DataFrame:
+        """Per move and metric: nominal, median, 5 % and 95 % quantiles, the worst, the
+        limit, and the share of samples within it."""
+        frame = self.metrics_table
+        rows = []
+        limits = {**self.specs.limits(), "hunting": 0.0}
+        names = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
+                 "error": "abs_steady_state_error", "effort": "control_effort",
+                 "variation": "command_variation", "hunting": "limit_cycle_amplitude"}
+        for move in self.moves:
+            runs = frame[frame["move"] == move.label]
+            for spec in self.specs.limits() | ({"hunting": 0.0} if self.specs.no_hunting
+                                               else {}):
+                values = runs[names[spec]].to_numpy(dtype=float)
+                finite = values[np.isfinite(values)]
+                met = 1.0 - float(np.mean(runs[f"violates_{spec}"] > 0))
+                rows.append((move.label, names[spec], float(values[0]),
+                             *(np.quantile(finite, [0.5, 0.05, 0.95]) if finite.size
+                               else [math.nan] * 3),
+                             float(np.max(finite)) if finite.size else math.nan,
+                             limits[spec] if spec != "hunting" else move.tolerance(self.specs),
+                             met))
+        return pd.DataFrame(rows, columns=["move", "metric", "nominal", "median", "q05", "q95",
+                                           "worst", "limit", "share met"])
+
+    def report_text(self) -> str:
+        n = len(self.samples)
+        verdict = ("meets" if self.meets_specs else "does NOT meet")
+        return (f"{self.loop.describe()}: {type(self.controller).__name__} tuned for "
+                f"{self.specs.describe()} on {len(self.moves)} moves "
+                f"({', '.join(m.label for m in self.moves)}) over {n} plant "
+                f"{'sample' if n == 1 else 'samples'} (the nominal first). The design "
+                f"{verdict} the specs on {100 * self.met:.0f} % of the samples "
+                f"({100 * self.specs.fraction:.0f} % asked); the worst sample is #{self.worst}."
+                f" {self.runs} closed-loop runs in {self.seconds:.1f} s.")
+
+    def plot(self) -> Figure:
+        """Each move: the nominal response, every sample's (thin) and the worst (bold)."""
+        import matplotlib.pyplot as plt
+
+        from ..simulation import simulate
+
+        fig, axes = plt.subplots(1, len(self.moves), figsize=(3.6 * len(self.moves), 3.4),
+                                 squeeze=False)
+        for ax, (m, move) in zip(axes[0], enumerate(self.moves), strict=True):
+            experiment = move.experiment()
+            for s in _drawn(len(self.samples), self.worst):
+                values = {**self.samples.iloc[s].to_dict(), "bias": self.biases[s, m]}
+                run = simulate(self.loop, experiment, values=values)
+                style = ({"color": "C3", "lw": 1.8, "label": f"worst (#{s})"}
+                         if s == self.worst else
+                         {"color": "C0", "lw": 1.6, "label": "nominal"} if s == 0 else
+                         {"color": "0.6", "lw": 0.6})
+                ax.plot(run.time, 1e3 * run["position"], **style)
+            ax.plot(run.time, 1e3 * run["position_setpoint"], "k--", lw=0.8, label="set-point")
+            ax.set_title(move.label, fontsize=9)
+            ax.set_xlabel("time [s]")
+            ax.grid(True, alpha=0.3)
+        axes[0, 0].set_ylabel("position [mm]")
+        axes[0, 0].legend(fontsize=7, loc="lower right")
+        fig.tight_layout()
+        return fig
+
+    def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:
+        """The tables, the figure, report.html and gains.toml, all or nothing."""
+        import functools
+
+        from ..io.report import figure_png, table_writer
+        from ..io.tables import write_files
+        from ..plotting import PNG_DPI
+
+        png = figure_png(self.plot(), dpi=PNG_DPI)
+        writers: dict[str, Any] = {"gains.toml": self.write_gains}
+        writers.update({f"{n}.csv": table_writer(f) for n, f in self.tables().items()})
+        writers[f"{self.figure_name}.png"] = functools.partial(_write_bytes, png)
+        writers["report.html"] = self.report(call, png).write
+        return write_files(out_dir, writers)
+
+    def write_gains(self, path: str | os.PathLike) -> Path:
+        """The tuned controller as a TOML file ``load_gains`` and ``pneumact control step
+        --gains`` read."""
+        return write_gains(self.controller, path, self.units, self.specs.describe())
+
+
+def _write_bytes(data: bytes, path: Path) -> None:
+    path.write_bytes(data)
+
+
+def _drawn(n: int, worst: int, most: int = 30) -> list[int]:
+    """The samples drawn: up to ``most``, the nominal and the worst always."""
+    keep = list(range(min(n, most)))
+    if worst not in keep:
+        keep.append(worst)
+    return keep
+
+
+def datasheet(name: str, value: float, unit: str) -> tuple[float, str]:
+    """A gain in the units a controller datasheet uses: per mm of error, kPa for Pa, %
+    for a command of 0..1 (SI otherwise)."""
+    scale, shown = 1.0, unit
+    if unit.endswith("/m") or "/(m*" in unit or unit.endswith("*s/m"):
+        scale, shown = 1e-3, unit.replace("/m", "/mm").replace("/(m*", "/(mm*")
+    if shown.startswith("Pa"):
+        scale, shown = scale * 1e-3, "k" + shown
+    elif shown.startswith(("1/", "s/")) and name not in ("kx",):
+        scale, shown = scale * 100.0, "%" + shown[1:] if shown.startswith("1/") else (
+            "%*" + shown)
+    return value * scale, shown
+
+
+# --------------------------------------------------------------------------- gains files
+def write_gains(controller: Controller, path: str | os.PathLike,
+                units: Mapping[str, str] | None = None, note: str = "") -> Path:
+    """``controller`` as a gains file (TOML: its type and options, the gains in SI with
+    their units), written atomically."""
+    from ..files import atomic_write
+    from ..models.controllers import PID
+
+    lines = [f'format = "{GAINS_FORMAT}"', f'controller = "{type(controller).__name__}"']
+    if note:
+        lines.append(f'specs = "{note}"')
+    options: dict[str, object] = {"anti_windup": controller.anti_windup,
+                                  "velocity_estimate": controller.velocity_estimate}
+    if isinstance(controller, PID):
+        options["derivative"] = controller.derivative
+    for limit in ("u_min", "u_max", "sample_time"):
+        value = getattr(controller, limit)
+        if value is not None and math.isfinite(value):
+            options[limit] = float(value)
+    lines.append("\n[options]")
+    lines += [f"{k} = {_toml(v)}" for k, v in options.items()]
+    lines.append("\n[gains]  # SI")
+    gains = controller.parameters()
+    lines += [f"{k} = {v!r}" for k, v in gains.items()]
+    if units:
+        lines.append("\n[units]")
+        lines += [f'{k} = "{units[k]}"' for k in gains if k in units]
+    target = Path(path)
+    with atomic_write(target) as staged:
+        staged.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return target
+
+
+def _toml(value: object) -> str:
+    return f'"{value}"' if isinstance(value, str) else repr(value)
+
+
+def load_gains(path: str | os.PathLike) -> Controller:
+    """The controller a gains file (``TuningResult.write_gains``) describes."""
+    import tomllib
+
+    from ..errors import DataError
+    from ..models.controllers import PID, Cascade
+
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise DataError(f"gains file {path}: not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise DataError(f"gains file {path}: not TOML ({exc})") from None
+    if data.get("format") != GAINS_FORMAT:
+        raise DataError(f"gains file {path}: format = {data.get('format')!r}; expected "
+                        f"{GAINS_FORMAT!r} (written by pneumact control tune)")
+    kinds = {"PID": PID, "Cascade": Cascade}
+    kind = kinds.get(str(data.get("controller")))
+    if kind is None:
+        raise DataError(f"gains file {path}: controller = {data.get('controller')!r}; "
+                        f"allowed: {', '.join(kinds)}")
+    options = dict(data.get("options", {}))
+    gains = dict(data.get("gains", {}))
+    base = kind(**options, **{n: gains[n] for n in ("kp", "ki", "kd", "kx", "kv")
+                              if n in gains})
+    rest = {n: v for n, v in gains.items() if n in base.parameters()}
+    return base.with_parameters(**rest)
+
+
+# --------------------------------------------------------------------------- tuning
+def _tuned_names(loop: ClosedLoop, gains: Sequence[str] | None) -> tuple[str, ...]:
+    own = loop.gains
+    if gains is None:
+        return tuple(n for n in own if n not in NOT_TUNED)
+    unknown = [n for n in gains if n not in own]
+    if unknown:
+        raise ParameterError(f"tune: gains {unknown} are not parameters of "
+                             f"{loop.describe()}; its parameters: {', '.join(own)}")
+    if not gains:
+        raise ParameterError("tune: gains = (); name at least one gain to tune")
+    return tuple(gains)
+
+
+def _start_loop(loop: ClosedLoop, names: Sequence[str]) -> ClosedLoop:
+    """The loop with the structure to tune: a PID asked to tune kd keeps a filtered
+    derivative on the measurement (``PID(kd=0)`` has none)."""
+    import dataclasses
+
+    from ..models.controllers import PID
+
+    controller = loop.controller
+    if isinstance(controller, PID) and "kd" in names and controller.derivative == "none":
+        kd = 0.05 * controller.kp  # Td = 50 ms
+        controller = dataclasses.replace(controller, kd=kd, derivative="measurement")
+        loop = dataclasses.replace(loop, controller=controller)
+    return loop
+
+
+def _box(loop: ClosedLoop, names: Sequence[str], bounds: Mapping[str, tuple[float, float]]
+         | None, spread: float) -> np.ndarray:
+    """names × (low, high), log10 of the gains."""
+    own = loop.gains
+    rows = []
+    for name in names:
+        if bounds and name in bounds:
+            lo, hi = map(float, bounds[name])
+        else:
+            start = own[name] if own[name] > 0 else 1.0
+            lo, hi = start / spread, start * spread
+        if not 0 < lo < hi:
+            raise ParameterError(f"tune: bounds[{name!r}] = ({lo:g}, {hi:g}); need "
+                                 "0 < low < high")
+        rows.append((math.log10(lo), math.log10(hi)))
+    return np.array(rows)
+
+
+def _samples(loop: ClosedLoop, uncertainty, n: int, seed: int) -> pd.DataFrame:
+    """The nominal plant (first row) and ``n`` draws of the uncertainty."""
+    if uncertainty is None:
+        return pd.DataFrame(index=[0])
+    if isinstance(uncertainty, pd.DataFrame):
+        table = uncertainty.reset_index(drop=True)
+        if len(table) == 0:
+            raise ParameterError("tune: the uncertainty table has no rows")
+    else:
+        estimates = getattr(uncertainty, "estimates", uncertainty)
+        if not hasattr(estimates, "covariance"):
+            raise ParameterError(
+                f"tune: uncertainty = {type(uncertainty).__name__}; give an identification "
+                "result or its Estimates, or a DataFrame of parameter samples")
+        table = draw_samples(estimates, n, seed)
+    from ..core.assembly import assemble
+
+    assemble(loop).check_parameters(list(table.columns), "uncertainty column")
+    nominal = {c: float(loop.params[c]) for c in table.columns}
+    return pd.concat([pd.DataFrame([nominal]), table], ignore_index=True)
+
+
+def _holding(loop: ClosedLoop, samples: pd.DataFrame, moves: Sequence[Move]) -> np.ndarray:
+    """samples × moves: the controller output that holds each sample at each move's start."""
+    biases = np.empty((len(samples), len(moves)))
+    for s in range(len(samples)):
+        values = {k: float(v) for k, v in samples.iloc[s].items()} or None
+        cache: dict[float, float] = {}
+        for m, move in enumerate(moves):
+            if move.start not in cache:
+                cache[move.start] = loop.holding_input(move.start, values=values)
+            biases[s, m] = cache[move.start]
+    return biases
+
+
+def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None = None,
+         gains: Sequence[str] | None = None,
+         bounds: Mapping[str, tuple[float, float]] | None = None, spread: float = 30.0,
+         uncertainty=None, samples: int = 50, n_global: int = 32,
+         max_evaluations: int = 40, rounds: int = 2, margin: float = 0.05, seed: int = 0,
+         executor=None,
+         progress: ProgressCallback | None = None) -> TuningResult:
+    """Gains of ``loop``'s controller that meet ``specs`` on the nonlinear model (see the
+    module docstring). ``moves``: the reference moves (default ``default_moves``);
+    ``gains``: the names tuned (default every gain but filter, tracking and feed-forward
+    ones); ``bounds``: name -> (low, high) (default the loop's value ×/÷ ``spread``);
+    ``uncertainty``: an identification result, its ``Estimates`` or a DataFrame of
+    plant parameter samples; ``samples``: how many to draw from estimates;
+    ``margin``: the search aims at limits this much tighter (a fraction), so that
+    samples it did not see meet the real ones; ``executor``: where the batches run (see
+    ``simulate_batch``)."""
+    import dataclasses
+
+    from scipy.optimize import minimize
+    from scipy.stats import qmc
+
+    from ..checks import check_type
+
+    check_type("loop", loop, ClosedLoop, where="tune", what="a control.ClosedLoop")
+    check_progress(progress, "tune")
+    specs = Specs.of(specs)
+    for name, value, low in (("samples", samples, 1), ("n_global", n_global, 0),
+                             ("max_evaluations", max_evaluations, 0), ("rounds", rounds, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise ParameterError(f"tune: {name} = {value!r}; must be an integer ≥ {low}")
+    if not (isinstance(margin, int | float) and 0 <= margin < 1):
+        raise ParameterError(f"tune: margin = {margin!r}; must be in [0, 1)")
+    if not (isinstance(spread, int | float) and spread > 1):
+        raise ParameterError(f"tune: spread = {spread!r}; must be a number > 1")
+    started = _time.perf_counter()
+    names = _tuned_names(loop, gains)
+    loop = _start_loop(loop, names)
+    moves = tuple(default_moves(loop, specs) if moves is None else moves)
+    if not moves or not all(isinstance(m, Move) for m in moves):
+        raise ParameterError("tune: moves must be a non-empty sequence of Move")
+    box = _box(loop, names, bounds, spread)
+    table = _samples(loop, uncertainty, samples, seed)
+    biases = _holding(loop, table, moves)
+    evaluator = _Evaluator(loop, specs, moves, names, table, biases, executor, progress,
+                           margin)
+    start = np.clip(np.log10([max(loop.gains[n], 1e-300) for n in names]), box[:, 0],
+                    box[:, 1])
+
+    def gains_of(logs: np.ndarray) -> np.ndarray:
+        return 10.0 ** np.clip(np.atleast_2d(logs), box[:, 0], box[:, 1])
+
+    n_all = len(table)
+    design = np.arange(min(n_all, 1 + FIRST_DESIGN))
+    candidates = np.atleast_2d(start)
+    if n_global:
+        sobol = qmc.Sobol(len(names), scramble=True, seed=seed).random(n_global)
+        candidates = np.vstack([start, box[:, 0] + sobol * (box[:, 1] - box[:, 0])])
+    costs = evaluator.cost(gains_of(candidates), design)
+    best = candidates[int(np.argmin(costs))]
+    for round_ in range(rounds + 1):
+        if max_evaluations:
+            found = minimize(_scalar_cost, best, args=(evaluator, gains_of, design),
+                             method="Nelder-Mead",
+                             options={"maxfev": max_evaluations if round_ == 0
+                                      else max(max_evaluations // 2, 1),
+                                      "xatol": 1e-3, "fatol": 1e-4, "initial_simplex":
+                                      _simplex(best, box)})
+            best = np.clip(found.x, box[:, 0], box[:, 1])
+        if n_all == 1 or round_ == rounds:
+            break
+        per_sample = _per_sample(evaluator, gains_of(best), np.arange(n_all))
+        if np.mean(per_sample == 0) >= specs.fraction:
+            break
+        failing = [int(s) for s in np.argsort(-per_sample) if per_sample[s] > 0
+                   and s not in design][:ADDED_PER_ROUND]
+        if not failing:
+            break
+        design = np.concatenate([design, failing])
+    tuned = dict(zip(names, map(float, gains_of(best)[0]), strict=True))
+    controller = loop.controller.with_parameters(**tuned)
+    final = dataclasses.replace(loop, controller=controller)
+    evaluator.loop = final
+    found_all = evaluator.metrics(gains_of(best), np.arange(n_all))
+    violations = evaluator.violations(found_all)
+    per_sample = violations.sum(axis=(1, 2))
+    metrics_table = _metrics_table(moves, found_all, violations, evaluator.spec_names())
+    history = pd.DataFrame(evaluator.history, columns=[*names, "cost", "samples"])
+    return TuningResult(final, specs, moves, final.gains, final.gain_units, metrics_table,
+                        history, table, biases, float(np.mean(per_sample == 0)),
+                        int(np.argmax(per_sample)) if per_sample.max() > 0 else 0,
+                        _time.perf_counter() - started, evaluator.runs,
+                        {n: float(v) for n, v in loop.gains.items()})
+
+
+def _scalar_cost(z: np.ndarray, evaluator: _Evaluator, gains_of, design: np.ndarray) -> float:
+    return float(evaluator.cost(gains_of(z), design)[0])
+
+
+def _simplex(best: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """A starting simplex of a tenth of the box's width along each gain."""
+    d = best.size
+    simplex = np.repeat(best[None, :], d + 1, axis=0)
+    width = 0.1 * (box[:, 1] - box[:, 0])
+    for i in range(d):
+        step = width[i] if best[i] + width[i] <= box[i, 1] else -width[i]
+        simplex[i + 1, i] += step
+    return simplex
+
+
+def _per_sample(evaluator: _Evaluator, gains: np.ndarray, which: np.ndarray) -> np.ndarray:
+    return evaluator.violations(evaluator.metrics(gains, which), evaluator.margin).sum(
+        axis=(1, 2))
+
+
+def _metrics_table(moves, found, violations, spec_names) -> pd.DataFrame:
+    frames = []
+    for m, (move, metrics) in enumerate(zip(moves, found, strict=True)):
+        frame = pd.DataFrame({"sample": np.arange(metrics["iae"].size), "move": move.label,
+                              "ok": metrics["ok"]})
+        for key in ("rise_time", "settling_time", "overshoot", "steady_state_error",
+                    "limit_cycle_amplitude", "iae", "control_effort", "command_variation"):
+            frame[key] = metrics[key]
+        frame["abs_steady_state_error"] = np.abs(metrics["steady_state_error"])
+        for k, spec in enumerate(spec_names):
+            frame[f"violates_{spec}"] = violations[:, m, k]
+        frame["meets_specs"] = violations[:, m, :].sum(axis=1) == 0
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True)
