@@ -61,6 +61,8 @@ API: dict[str, tuple[str, ...]] = {
     "control step": ("pneumact.experiments:SetpointStep", *_CONTROL),
     "control profile": ("pneumact.experiments:SetpointProfile", *_CONTROL),
     "control hunting": ("pneumact.control.study:canudas_hunting", "pneumact.simulation:Rodas4"),
+    "control tune": ("pneumact.control:tune", "pneumact.control:default_moves", *_CONTROL,
+                     "pneumact.options:Executor"),
     "export fmu": ("pneumact.export:export_fmu", *_MODEL),
 }
 
@@ -85,6 +87,8 @@ SPELLED: dict[str, str] = {
     "atol_factor": "pneumact.simulation:Rodas4.atol",
     "convergence": "pneumact.sensitivity:sobol_convergence",
     "times": "pneumact.sensitivity:model_signal.times",
+    "spec": "pneumact.control:tune.specs",
+    "tuned": "pneumact.control:tune.gains",
 }
 
 #: the command line's own options: what a command reads, where it writes, what it shows
@@ -95,6 +99,7 @@ OWN: dict[str, str] = {
     "partial": "identify paper: write identified.toml even with unidentified parameters",
     "validate": "identify friction: a second record to validate the estimates on",
     "version": "print the version",
+    "gains": "control step: a gains file written by control tune (its controller)",
     "format": "identify friction, compare: the reader of the record files (auto, record, "
               "emps, tudelft)",
 }
@@ -115,4 +120,5 @@ UNITS: dict[str, float] = {
     "resolution": 1e-6,  # µm
     "start": 1e-3,  # mm
     "stop": 1e-3,  # mm
+    "at": 1e-3,  # mm
 }

@@ -23,6 +23,9 @@ from pneumact.cli.common import (
     FrictionOption,
     ParamsOption,
     RtolOption,
+    SchedulerOption,
+    WorkersOption,
+    executor_of,
     load_quietly,
     out_console,
     run_with_progress,
@@ -36,7 +39,7 @@ if TYPE_CHECKING:
     from pneumact.models import Actuator, FrictionRig
     from pneumact.models.controllers import Compensation
 
-control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting.",
+control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting, tune.",
                           no_args_is_help=True)
 
 
@@ -165,8 +168,9 @@ def build_controller(plant: Plant, params, options: ControllerOptions):
 
 
 def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
-               start: float):
-    """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0."""
+               start: float, gains: Path | None = None):
+    """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0; the
+    controller of a ``gains`` file (``control tune``) if given."""
     from pneumact.control import ClosedLoop
     from pneumact.models import VALVES, Actuator, FrictionRig, friction_models
 
@@ -177,7 +181,12 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
         model = FrictionRig(params, law, drive="force")
     else:
         model = Actuator(params, law, valve=VALVES[plant.value]())
-    controller = build_controller(plant, params, options)
+    if gains is not None:
+        from pneumact.control import load_gains
+
+        controller = load_gains(gains)
+    else:
+        controller = build_controller(plant, params, options)
     loop = ClosedLoop(model, controller)
     bias = loop.holding_input(start)
     return params, ClosedLoop(model, controller, bias=bias)
@@ -235,6 +244,27 @@ def _options(ctx: typer.Context) -> ControllerOptions:
     return ControllerOptions(**given)
 
 
+GainsFileOption = Annotated[Path | None, typer.Option(
+    "--gains", help="A gains file written by 'pneumact control tune' (gains.toml): its "
+                    "controller replaces the gain and controller options.")]
+#: the options a gains file replaces
+CONTROLLER_WORDS = ("controller", "kp", "ki", "kd", "derivative", "filter_time", "kx", "kv",
+                    "u_min", "u_max", "anti_windup", "tracking_time", "sample_time",
+                    "velocity_estimate")
+
+
+def _refuse_with_gains(ctx: typer.Context, gains: Path | None) -> None:
+    if gains is None:
+        return
+    given = [f"--{n.replace('_', '-')}" for n in CONTROLLER_WORDS
+             if (src := ctx.get_parameter_source(n)) is not None and src.name != "DEFAULT"]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: the gains file {gains} gives the "
+                             "controller; leave them out or leave out --gains")
+    if not gains.is_file():
+        raise ParameterError(f"--gains {gains}: no such file")
+
+
 #: options that only one controller structure reads
 PID_ONLY = ("kp", "kd", "derivative", "filter_time")
 CASCADE_ONLY = ("kx", "kv")
@@ -280,6 +310,7 @@ def step_command(
     coulomb_ff: CoulombOption = None, dither: DitherOption = None,
     observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
     rtol: RtolOption = 1e-6,
+    gains: GainsFileOption = None,
     out: OutOption = Path("pneumact-control-step"),
 ) -> None:
     """A position set-point step: rise and settling time, overshoot, steady-state
@@ -289,9 +320,10 @@ def step_command(
 
         out = check_out_dir("--out", out)
         options = _options(ctx)
+        _refuse_with_gains(ctx, gains)
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
-        _, loop = build_loop(plant, params, friction, options, start * 1e-3)
+        _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position step {start:g} → {stop:g} mm ({plant.value})")
 
@@ -374,3 +406,97 @@ def hunting_command(
                                            sample_time=sample_time)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        "Hunting (Canudas de Wit et al. 1995)")
+
+
+@control_app.command("tune")
+def tune_command(
+    ctx: typer.Context,
+    spec: Annotated[str, typer.Option(
+        help="Specifications, comma-separated: settling=0.3 (s), rise=…, overshoot=5% "
+             "(of the step), error=20um (steady state), no-hunting, effort=…, "
+             "variation=…, band=2%, fraction=95% (of the uncertainty samples).")
+    ] = "settling=0.3,overshoot=5%,error=20um,no-hunting",
+    plant: PlantOption = Plant.regulator,
+    params: ParamsOption = "vgt-paper",
+    friction: FrictionOption = Friction.lugre,
+    kp: KpOption = None, ki: KiOption = None,
+    kd: Annotated[float, typer.Option(help="Starting derivative gain (0: a PID tunes kd "
+                                           "from Td = 2 ms).")] = 0.0,
+    filter_time: FilterOption = 2e-3,
+    u_min: UMinOption = None, u_max: UMaxOption = None,
+    sample_time: SampleOption = None,
+    tuned: Annotated[str, typer.Option(
+        "--tune", help="The gains to tune, comma-separated.")] = "kp,ki,kd",
+    at: Annotated[float | None, typer.Option(
+        help="Position the moves start from [mm] (default mid-stroke).")] = None,
+    uncertainty: Annotated[Path | None, typer.Option(
+        help="CSV of plant parameter samples (one column per parameter, SI): the design "
+             "must hold over them.")] = None,
+    spread: Annotated[float, typer.Option(
+        help="Search box: each gain's start ×/÷ this.")] = 30.0,
+    n_global: Annotated[int, typer.Option(help="Gain vectors of the global search.")] = 64,
+    max_evaluations: Annotated[int, typer.Option(
+        help="Evaluations of each local search.")] = 40,
+    rounds: Annotated[int, typer.Option(help="Robust rounds (samples added).")] = 2,
+    margin: Annotated[float, typer.Option(
+        help="Aim at limits this fraction tighter.")] = 0.05,
+    seed: Annotated[int, typer.Option(help="Seed of the global search.")] = 0,
+    workers: WorkersOption = None, scheduler: SchedulerOption = None,
+    out: OutOption = Path("pneumact-control-tune"),
+) -> None:
+    """Tune the controller's gains on the nonlinear loop to meet --spec on four
+    reference moves (a small step, steps up and down across break-away, a ramp), over
+    the --uncertainty samples; write gains.toml (for 'control step --gains'), the
+    metrics, their spread, the figure and a report."""
+    with user_errors():
+        import pandas as pd
+
+        from pneumact.control import Specs, default_moves, tune
+        from pneumact.errors import DataError
+
+        out = check_out_dir("--out", out)
+        specs = Specs.parse(spec)
+        names = [n.strip() for n in tuned.split(",") if n.strip()]
+        executor = executor_of(workers, scheduler)
+        samples = None
+        if uncertainty is not None:
+            try:
+                samples = pd.read_csv(uncertainty)
+            except (OSError, ValueError) as exc:
+                raise DataError(f"--uncertainty {uncertainty}: cannot read it as a CSV "
+                                f"({exc})") from None
+        options = ControllerOptions(Structure.pid, kp, ki, kd, "measurement", filter_time,
+                                    50.0, 1e4, u_min, u_max, "back-calculation", None,
+                                    sample_time, "measured", None, None, False, 0.0)
+        if at is not None:
+            _check_setpoints(plant, params, **{"--at": at})
+        start = None if at is None else at * 1e-3
+        _, loop = build_loop(plant, params, friction, options,
+                             start if start is not None else _mid(plant, params))
+        moves = default_moves(loop, specs, start)
+        result = run_with_progress(lambda report: tune(
+            loop, specs, moves=moves, gains=names, uncertainty=samples, spread=spread,
+            n_global=n_global, max_evaluations=max_evaluations, rounds=rounds,
+            margin=margin, seed=seed, executor=executor, progress=report))
+        use_agg()
+        written = result.write(out, call=the_call(ctx))
+        _print_gains(result)
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+def _mid(plant: Plant, params_name: str) -> float:
+    return 0.0 if plant is Plant.rig else 0.5 * float(load_quietly(params_name)["x_max"])
+
+
+def _print_gains(result) -> None:
+    from pneumact.cli.common import fmt
+
+    table = Table(title=f"tuned: specs met on {100 * result.met:.0f} % of "
+                        f"{len(result.samples)} samples")
+    for column in ("gain", "value", "unit", "datasheet value", "datasheet unit"):
+        table.add_column(column)
+    for _, row in result.gains_table().iterrows():
+        table.add_row(str(row["gain"]), fmt(float(row["value"]), 4), str(row["unit"]),
+                      fmt(float(row["datasheet value"]), 4), str(row["datasheet unit"]))
+    out_console.print(table)

@@ -30,6 +30,8 @@ SPEC_UNITS = {"settling": "s", "rise": "s", "overshoot": "%", "error": "m",
 T_BEFORE = 0.05
 #: output points per second of a move (the metrics' time resolution: 2 ms)
 POINTS_PER_SECOND = 500
+#: ... within these bounds (a long move is sampled coarser)
+MIN_POINTS, MAX_POINTS = 401, 4001
 
 
 @dataclass(frozen=True)
@@ -177,7 +179,7 @@ class Move:
     def experiment(self) -> Experiment:
         from ..experiments.setpoints import SetpointRamp, SetpointStep
 
-        n = round(self.t_end * POINTS_PER_SECOND) + 1
+        n = min(max(round(self.t_end * POINTS_PER_SECOND) + 1, MIN_POINTS), MAX_POINTS)
         if self.duration > 0:
             return SetpointRamp(self.start, self.stop, self.duration, T_BEFORE, self.t_end,
                                 n_points=n)

@@ -429,7 +429,7 @@ def _start_loop(loop: ClosedLoop, names: Sequence[str]) -> ClosedLoop:
 
     controller = loop.controller
     if isinstance(controller, PID) and "kd" in names and controller.derivative == "none":
-        kd = 0.05 * controller.kp  # Td = 50 ms
+        kd = 0.002 * controller.kp  # Td = 2 ms
         controller = dataclasses.replace(controller, kd=kd, derivative="measurement")
         loop = dataclasses.replace(loop, controller=controller)
     return loop
@@ -491,7 +491,7 @@ def _holding(loop: ClosedLoop, samples: pd.DataFrame, moves: Sequence[Move]) -> 
 def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None = None,
          gains: Sequence[str] | None = None,
          bounds: Mapping[str, tuple[float, float]] | None = None, spread: float = 30.0,
-         uncertainty=None, samples: int = 50, n_global: int = 32,
+         uncertainty=None, samples: int = 50, n_global: int = 64,
          max_evaluations: int = 40, rounds: int = 2, margin: float = 0.05, seed: int = 0,
          executor=None,
          progress: ProgressCallback | None = None) -> TuningResult:
@@ -523,8 +523,8 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     if not (isinstance(spread, int | float) and spread > 1):
         raise ParameterError(f"tune: spread = {spread!r}; must be a number > 1")
     started = _time.perf_counter()
+    loop = _start_loop(loop, () if gains is None else tuple(gains))
     names = _tuned_names(loop, gains)
-    loop = _start_loop(loop, names)
     moves = tuple(default_moves(loop, specs) if moves is None else moves)
     if not moves or not all(isinstance(m, Move) for m in moves):
         raise ParameterError("tune: moves must be a non-empty sequence of Move")
