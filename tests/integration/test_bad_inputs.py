@@ -55,6 +55,8 @@ BASE = {
     "control step": ["--out", "OUT"],
     "control profile": [str(GOOD / "profile.csv"), "--out", "OUT"],
     "control hunting": ["--out", "OUT"],
+    "control tune": ["--n-global", "0", "--max-evaluations", "1", "--rounds", "0",
+                     "--out", "OUT"],
     "export fmu": ["--out", "OUT"],
 }
 
@@ -177,6 +179,16 @@ BAD_VALUES: dict[str, list[str]] = {
     "--position-setpoint": [],
     "hunting --t-end": ["0"],
     "--binary": [],
+    "--spec": ["speed=3", "settling=-1", "overshoot=five", ""],
+    "tune --gains": ["kx", ""],
+    "--at": ["-1", "100"],
+    "--uncertainty": ["missing.csv"],
+    "--gain-spread": ["1", "0"],
+    "--n-global": ["-1"],
+    "--max-evaluations": ["-1"],
+    "--rounds": ["-1"],
+    "--margin": ["1", "-0.1"],
+    "--gains-file": ["missing.toml"],
     "--compiler": ["no-such-cc"],
 }
 #: arguments (not options) and the bad values each command must refuse

@@ -92,6 +92,14 @@ def _closed_loop(setup, progress):
              progress=progress)
 
 
+def _tuning(setup, progress):
+    from pneumact.control import Move, canudas_hunting, tune
+
+    loop, _ = canudas_hunting(_canudas())
+    tune(loop, "settling=10,no-hunting", moves=(Move("step", 0.0, 1.0, 20.0),), n_global=2,
+         max_evaluations=2, progress=progress)
+
+
 def _canudas():
     from conftest import load_quietly
 
@@ -120,6 +128,7 @@ CALLS = {
     "pneumact.sensitivity.methods.model_outputs": (True, _sensitivity_outputs),
     "pneumact.sensitivity.along.model_signal": (True, _sensitivity_signal),
     "pneumact.control.study.run_loop": (True, _closed_loop),
+    "pneumact.control.tuning.tune": (True, _tuning),
     "pneumact.identification.paper.identify_paper": (
         False, lambda s, p: pa.identify_paper(s[2], s[0].params, progress=p)),
     "pneumact.reproduction.reproduce": (

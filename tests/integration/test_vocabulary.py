@@ -169,6 +169,15 @@ def _loop_metrics():
                        1, 0.2, 0.0, 0.0, 1e-3, 0.02, 1e-4, 0.5, 0.01, "m", "1")
 
 
+def _tuning():
+    from conftest import load_quietly
+    from pneumact.control import Move, canudas_hunting, tune
+
+    loop, _ = canudas_hunting(load_quietly("canudas1995"))
+    return tune(loop, "settling=10,no-hunting", moves=(Move("step", 0.0, 1.0, 20.0),),
+                n_global=2, max_evaluations=2)
+
+
 def _loop_study():
     from pneumact.control import PID, ClosedLoop, LoopStudy
 
@@ -285,6 +294,7 @@ FACTORIES = {
     "pneumact.validation.friction.FrictionValidation": lambda f: _friction_validation(),
     "pneumact.control.metrics.LoopMetrics": lambda f: _loop_metrics(),
     "pneumact.control.study.LoopStudy": lambda f: _loop_study(),
+    "pneumact.control.tuning.TuningResult": lambda f: _tuning(),
     "pneumact.control.linear.LinearPlant": lambda f: _linear(),
     "pneumact.control.drives.DriveReplay": lambda f: _replay(),
     "pneumact.reproduction.Reproduction": _reproduction,

@@ -88,7 +88,7 @@ SPELLED: dict[str, str] = {
     "convergence": "pneumact.sensitivity:sobol_convergence",
     "times": "pneumact.sensitivity:model_signal.times",
     "spec": "pneumact.control:tune.specs",
-    "tuned": "pneumact.control:tune.gains",
+    "gain_spread": "pneumact.control:tune.spread",
 }
 
 #: the command line's own options: what a command reads, where it writes, what it shows
@@ -99,7 +99,7 @@ OWN: dict[str, str] = {
     "partial": "identify paper: write identified.toml even with unidentified parameters",
     "validate": "identify friction: a second record to validate the estimates on",
     "version": "print the version",
-    "gains": "control step: a gains file written by control tune (its controller)",
+    "gains_file": "control step: a gains file written by control tune (its controller)",
     "format": "identify friction, compare: the reader of the record files (auto, record, "
               "emps, tudelft)",
 }

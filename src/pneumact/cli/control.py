@@ -123,9 +123,10 @@ class ControllerOptions:
 
 
 def _limits(plant: Plant, params, options: ControllerOptions) -> tuple[float, float]:
-    natural = {"regulator": (REGULATOR_MIN_PRESSURE, params["p_atm"]),
-               "source": (REGULATOR_MIN_PRESSURE, params["p_atm"]),
-               "command": (0.0, 1.0), "rig": (-math.inf, math.inf)}[plant.value]
+    if plant in (Plant.regulator, Plant.source):  # a rig's set has no p_atm
+        natural = (REGULATOR_MIN_PRESSURE, float(params["p_atm"]))
+    else:
+        natural = {"command": (0.0, 1.0), "rig": (-math.inf, math.inf)}[plant.value]
     return (natural[0] if options.u_min is None else options.u_min,
             natural[1] if options.u_max is None else options.u_max)
 
@@ -245,7 +246,7 @@ def _options(ctx: typer.Context) -> ControllerOptions:
 
 
 GainsFileOption = Annotated[Path | None, typer.Option(
-    "--gains", help="A gains file written by 'pneumact control tune' (gains.toml): its "
+    help="A gains file written by 'pneumact control tune' (gains.toml): its "
                     "controller replaces the gain and controller options.")]
 #: the options a gains file replaces
 CONTROLLER_WORDS = ("controller", "kp", "ki", "kd", "derivative", "filter_time", "kx", "kv",
@@ -260,9 +261,9 @@ def _refuse_with_gains(ctx: typer.Context, gains: Path | None) -> None:
              if (src := ctx.get_parameter_source(n)) is not None and src.name != "DEFAULT"]
     if given:
         raise ParameterError(f"{', '.join(given)}: the gains file {gains} gives the "
-                             "controller; leave them out or leave out --gains")
+                             "controller; leave them out or leave out --gains-file")
     if not gains.is_file():
-        raise ParameterError(f"--gains {gains}: no such file")
+        raise ParameterError(f"--gains-file {gains}: no such file")
 
 
 #: options that only one controller structure reads
@@ -310,7 +311,7 @@ def step_command(
     coulomb_ff: CoulombOption = None, dither: DitherOption = None,
     observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
     rtol: RtolOption = 1e-6,
-    gains: GainsFileOption = None,
+    gains_file: GainsFileOption = None,
     out: OutOption = Path("pneumact-control-step"),
 ) -> None:
     """A position set-point step: rise and settling time, overshoot, steady-state
@@ -320,10 +321,10 @@ def step_command(
 
         out = check_out_dir("--out", out)
         options = _options(ctx)
-        _refuse_with_gains(ctx, gains)
+        _refuse_with_gains(ctx, gains_file)
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
-        _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains)
+        _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position step {start:g} → {stop:g} mm ({plant.value})")
 
@@ -422,17 +423,18 @@ def tune_command(
     kp: KpOption = None, ki: KiOption = None,
     kd: Annotated[float, typer.Option(help="Starting derivative gain (0: a PID tunes kd "
                                            "from Td = 2 ms).")] = 0.0,
-    filter_time: FilterOption = 2e-3,
+    filter_time: FilterOption = 1e-3,
     u_min: UMinOption = None, u_max: UMaxOption = None,
     sample_time: SampleOption = None,
-    tuned: Annotated[str, typer.Option(
-        "--tune", help="The gains to tune, comma-separated.")] = "kp,ki,kd",
+    gains: Annotated[str | None, typer.Option(
+        help="The gains to tune, comma-separated, e.g. kp,ki,kd (default: kp, ki, and kd "
+             "when --kd is given).")] = None,
     at: Annotated[float | None, typer.Option(
         help="Position the moves start from [mm] (default mid-stroke).")] = None,
     uncertainty: Annotated[Path | None, typer.Option(
         help="CSV of plant parameter samples (one column per parameter, SI): the design "
              "must hold over them.")] = None,
-    spread: Annotated[float, typer.Option(
+    gain_spread: Annotated[float, typer.Option(
         help="Search box: each gain's start ×/÷ this.")] = 30.0,
     n_global: Annotated[int, typer.Option(help="Gain vectors of the global search.")] = 64,
     max_evaluations: Annotated[int, typer.Option(
@@ -446,7 +448,7 @@ def tune_command(
 ) -> None:
     """Tune the controller's gains on the nonlinear loop to meet --spec on four
     reference moves (a small step, steps up and down across break-away, a ramp), over
-    the --uncertainty samples; write gains.toml (for 'control step --gains'), the
+    the --uncertainty samples; write gains.toml (for 'control step --gains-file'), the
     metrics, their spread, the figure and a report."""
     with user_errors():
         import pandas as pd
@@ -456,7 +458,8 @@ def tune_command(
 
         out = check_out_dir("--out", out)
         specs = Specs.parse(spec)
-        names = [n.strip() for n in tuned.split(",") if n.strip()]
+        names = None if gains is None else [n.strip() for n in gains.split(",")
+                                            if n.strip()]
         executor = executor_of(workers, scheduler)
         samples = None
         if uncertainty is not None:
@@ -475,7 +478,7 @@ def tune_command(
                              start if start is not None else _mid(plant, params))
         moves = default_moves(loop, specs, start)
         result = run_with_progress(lambda report: tune(
-            loop, specs, moves=moves, gains=names, uncertainty=samples, spread=spread,
+            loop, specs, moves=moves, gains=names, uncertainty=samples, spread=gain_spread,
             n_global=n_global, max_evaluations=max_evaluations, rounds=rounds,
             margin=margin, seed=seed, executor=executor, progress=report))
         use_agg()

@@ -16,13 +16,13 @@ from .metrics import LoopMetrics, loop_metrics, step_metrics
 from .plots import plot_loop
 from .specs import Move, Specs, default_moves
 from .study import LoopStudy, canudas_hunting, run_loop
-from .tuning import TuningResult, draw_samples, load_gains, tune, write_gains
+from .tuning import TuningResult, draw_samples, evaluate_design, load_gains, tune, write_gains
 
 __all__ = [
     "PID", "Cascade", "ClosedLoop", "Controller", "Dither", "DriveReplay", "LinearPlant",
     "LoopMetrics", "LoopStudy", "LuGreObserver", "Move", "Specs", "StaticCompensation",
     "TuningResult", "canudas_hunting", "control_law_check", "default_moves", "draw_samples",
-    "drive_plant", "frequency_response", "linearise", "load_gains", "loop_metrics",
-    "plot_bode", "plot_loop", "replay_drive", "run_loop", "step_metrics", "tune",
-    "write_gains",
+    "drive_plant", "evaluate_design", "frequency_response", "linearise", "load_gains",
+    "loop_metrics", "plot_bode", "plot_loop", "replay_drive", "run_loop", "step_metrics",
+    "tune", "write_gains",
 ]

@@ -126,7 +126,10 @@ class Specs:
                     values[key] = parse_value(key, given, unit)
                 except ParameterError as exc:
                     raise ParameterError(f"--spec: {name} = {given!r}: {exc}") from None
-        return cls(**values)  # type: ignore[arg-type]
+        try:
+            return cls(**values)  # type: ignore[arg-type]
+        except ParameterError as exc:
+            raise ParameterError(f"--spec {text!r}: {exc}") from None
 
     @classmethod
     def of(cls, value: Specs | str) -> Specs:

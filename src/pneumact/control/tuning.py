@@ -45,7 +45,8 @@ if TYPE_CHECKING:
 
     from ..models.controllers import Controller
 
-__all__ = ["TuningResult", "draw_samples", "load_gains", "tune", "write_gains"]
+__all__ = ["TuningResult", "draw_samples", "evaluate_design", "load_gains", "tune",
+           "write_gains"]
 
 #: a violation counts at most this much (a failed run: every spec at this)
 CAP = 4.0
@@ -84,6 +85,7 @@ class _Evaluator:
     executor: Any
     progress: ProgressCallback | None
     margin: float = 0.0
+    budget: int = 1  # candidates the search expects to try (the progress's total)
     runs: int = 0
     history: list[tuple[float, ...]] = field(default_factory=list)
 
@@ -165,7 +167,8 @@ class _Evaluator:
                  + PERFORMANCE_WEIGHT * speed.mean(axis=1))
         for g, c in zip(gains, costs, strict=True):
             self.history.append((*map(float, g), float(c), float(which.size)))
-        notify(self.progress, "tune", len(self.history), len(self.history) + 1)
+        done = len(self.history)
+        notify(self.progress, "tune", done, max(self.budget, done + 1))
         return costs
 
 
@@ -181,7 +184,7 @@ class TuningResult(ResultVocabulary):
     / 95 % and worst value per move against its limit; ``"history"``: every candidate
     tried. ``plot()``: each move's responses (nominal, all samples, the worst drawn
     bold). ``write(folder)``: the tables, the figure, report.html and ``gains.toml``
-    (``pneumact control step --gains``)."""
+    (``pneumact control step --gains-file``)."""
 
     report_title = "Controller tuning"
     figure_name = "tuning"
@@ -514,7 +517,7 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     check_type("loop", loop, ClosedLoop, where="tune", what="a control.ClosedLoop")
     check_progress(progress, "tune")
     specs = Specs.of(specs)
-    for name, value, low in (("samples", samples, 1), ("n_global", n_global, 0),
+    for name, value, low in (("samples", samples, 1), ("n_global", n_global, 0), ("seed", seed, 0),
                              ("max_evaluations", max_evaluations, 0), ("rounds", rounds, 0)):
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise ParameterError(f"tune: {name} = {value!r}; must be an integer ≥ {low}")
@@ -531,8 +534,9 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     box = _box(loop, names, bounds, spread)
     table = _samples(loop, uncertainty, samples, seed)
     biases = _holding(loop, table, moves)
+    budget = n_global + 1 + max_evaluations + rounds * (max(max_evaluations // 2, 1) + 1)
     evaluator = _Evaluator(loop, specs, moves, names, table, biases, executor, progress,
-                           margin)
+                           margin, budget)
     start = np.clip(np.log10([max(loop.gains[n], 1e-300) for n in names]), box[:, 0],
                     box[:, 1])
 
@@ -575,6 +579,7 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     per_sample = violations.sum(axis=(1, 2))
     metrics_table = _metrics_table(moves, found_all, violations, evaluator.spec_names())
     history = pd.DataFrame(evaluator.history, columns=[*names, "cost", "samples"])
+    notify(progress, "tune", len(history), len(history))
     return TuningResult(final, specs, moves, final.gains, final.gain_units, metrics_table,
                         history, table, biases, float(np.mean(per_sample == 0)),
                         int(np.argmax(per_sample)) if per_sample.max() > 0 else 0,
@@ -584,6 +589,17 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
 
 def _scalar_cost(z: np.ndarray, evaluator: _Evaluator, gains_of, design: np.ndarray) -> float:
     return float(evaluator.cost(gains_of(z), design)[0])
+
+
+def evaluate_design(loop: ClosedLoop, specs: Specs | str, *,
+                    moves: Sequence[Move] | None = None, uncertainty=None, samples: int = 50,
+                    seed: int = 0, executor=None) -> TuningResult:
+    """How ``loop`` as it is meets ``specs`` on the moves and the uncertainty samples
+    (the result of a tuning that moves nothing): check a design on samples it was not
+    tuned on, or the gains a user already has."""
+    return tune(loop, specs, moves=moves, uncertainty=uncertainty, samples=samples,
+                n_global=0, max_evaluations=0, rounds=0, margin=0.0, seed=seed,
+                executor=executor, spread=1.0 + 1e-9)
 
 
 def _simplex(best: np.ndarray, box: np.ndarray) -> np.ndarray:
