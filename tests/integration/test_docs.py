@@ -110,3 +110,13 @@ def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
     assert (tmp_path / "vgt_actuator.fmu").exists()
     stroke = namespace["actuator"].params["x_max"]
     assert namespace["rms"] <= ref.FMU_POSITION_RMS_OF_STROKE * stroke
+
+
+def test_the_control_tuning_page_runs(tmp_path, monkeypatch):
+    """docs/control-tuning.md: the Canudas loop tuned robustly; fresh samples meet it."""
+    import reference as ref
+
+    namespace = _run_page("control-tuning.md", tmp_path, monkeypatch)
+    assert namespace["result"].meets_specs
+    assert namespace["fresh"].met >= ref.FRESH_SAMPLES_MET
+    assert (tmp_path / "canudas-tuned" / "gains.toml").is_file()
