@@ -280,6 +280,13 @@ def _input_gain(t, ts, y, value, prm, sig, ptr, b):
 
 
 @kernel()
+def _input_and_rates(t, ts, y, prm, sig, ptr, rates):
+    """The plant input and the controller's rates at (y, prm): one side of a difference."""
+    _controller_rates(t, ts, y, prm, sig, ptr, rates)
+    return _plant_input(t, ts, _command(t, ts, y, prm, sig, ptr), prm, sig, ptr)
+
+
+@kernel()
 def jac(t, ts, y, prm, sig, ptr, out):
     """∂f/∂y: the plant's analytic Jacobian at its present input, plus the coupling
     through the controller, (∂f_plant/∂input)·(∂input/∂y), and the controller's rows,
@@ -296,11 +303,9 @@ def jac(t, ts, y, prm, sig, ptr, out):
     for j in range(NSTATE):
         h = COUPLING_FD * max(abs(y[j]), scales[j])
         yp[j] = y[j] + h
-        up = _plant_input(t, ts, _command(t, ts, yp, prm, sig, ptr), prm, sig, ptr)
-        _controller_rates(t, ts, yp, prm, sig, ptr, r1)
+        up = _input_and_rates(t, ts, yp, prm, sig, ptr, r1)
         yp[j] = y[j] - h
-        down = _plant_input(t, ts, _command(t, ts, yp, prm, sig, ptr), prm, sig, ptr)
-        _controller_rates(t, ts, yp, prm, sig, ptr, r0)
+        down = _input_and_rates(t, ts, yp, prm, sig, ptr, r0)
         yp[j] = y[j]
         slope = (up - down) / (2.0 * h)
         if slope != 0.0:
@@ -338,11 +343,9 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
             continue
         h = COUPLING_FD * (abs(prm[k]) if prm[k] != 0.0 else 1.0)
         moved[k] = prm[k] + h
-        up = _plant_input(t, ts, _command(t, ts, y, moved, sig, ptr), moved, sig, ptr)
-        _controller_rates(t, ts, y, moved, sig, ptr, r1)
+        up = _input_and_rates(t, ts, y, moved, sig, ptr, r1)
         moved[k] = prm[k] - h
-        down = _plant_input(t, ts, _command(t, ts, y, moved, sig, ptr), moved, sig, ptr)
-        _controller_rates(t, ts, y, moved, sig, ptr, r0)
+        down = _input_and_rates(t, ts, y, moved, sig, ptr, r0)
         moved[k] = prm[k]
         slope = (up - down) / (2.0 * h)
         for a in range(PLANT_NSTATE):
