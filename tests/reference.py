@@ -439,9 +439,12 @@ FAMILY_MIN_INTERVALS = 60  # at least this many reported intervals make the cove
 # the stick-slip records are chaotic, so the last bits of the arithmetic move verdicts);
 # benchmarks/README.md, "identification on a family", has the longer study.
 FAMILY_MIN_IDENTIFIED = 0.4
-# A thinner campaign (issue 18, found by the family study): family actuator 7 with 4 ramp
-# pairs has one ramp below vs, left out of the joint fit (stick-slip)
-THIN_ACTUATOR = 7
+# A thinner campaign (issue 18, found by the family study): family actuator 1 with 4 ramp
+# pairs has one ramp below vs (0.16·vs), left out of the joint fit: the model fitted to
+# the steadier records predicts it 30× the noise (the admission limit is 10×); the next
+# ramp is at 6.6·vs. (Actuator 7 served until its slow ramp's ratio, 11× in the first
+# round, fell under 10× in the second after a dependency update: too near the limit.)
+THIN_ACTUATOR = 1
 THIN_RAMPS = 4
 SENSOR_LAG = 5e-3  # s: a first-order position sensor of 5 ms (issue 18's mismatch case)
 
@@ -492,3 +495,19 @@ LOOP_SENSITIVITY_RTOL = 5e-3
 #: the robust design: the share of *fresh* samples (another seed) meeting the specs it was
 #: tuned to meet on 95 % of its own samples, with a 5 % margin
 FRESH_SAMPLES_MET = 0.85
+
+# --- linear design against the nonlinear loop (control/linear_design.py, issue 23) ------------
+#: the specs of the known answers: a mass-damper (LINEAR_LOOP_MASS_DAMPER, no friction) and
+#: the Canudas rig (the published gains hunt)
+LINEAR_DESIGN_SPECS = "settling=1,overshoot=10%,error=1mm"
+CANUDAS_DESIGN_SPECS = "settling=4,overshoot=10%,error=5mm,no-hunting"
+#: without friction the nonlinear run of the python-control design has the step metrics
+#: python-control predicts: overshoot within this many %-points, settling time within
+#: this fraction (measured: 0.0 %-points and 0.03 %; the margin covers the two metric
+#: codes' sampling of the band crossing)
+LINEAR_DESIGN_OVERSHOOT_POINTS = 0.5
+LINEAR_DESIGN_SETTLING_RTOL = 0.02
+#: tuned on the frictionless loop from the python-control design (search box ×/÷ 3), Kp and
+#: Kd stay within this factor of the design's (measured 1.57 and 1.39: the tuner trades
+#: the same overshoot for a faster settling, 0.22 s against 0.28 s)
+LINEAR_TUNED_GAIN_FACTOR = 2.0

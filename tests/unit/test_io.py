@@ -236,6 +236,14 @@ def test_record_arrays_are_read_only(tmp_path):
         record["position"][0] = 5.0
 
 
+def test_record_name_drops_only_a_record_files_suffix(tmp_path):
+    path = _write(tmp_path / "ramp_0.5mm_s.csv", "time [s],position [m]\n0,1\n1,2\n")
+    assert read_record(path).name == "ramp_0.5mm_s"
+    synthetic = Record.from_arrays([0.0, 1.0], {"position": [0.0, 1.0]},
+                                   source="ramp_0.05mm_s")
+    assert synthetic.name == "ramp_0.05mm_s"
+
+
 # --------------------------------------------------------------------------- bad input
 
 

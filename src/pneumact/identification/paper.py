@@ -638,7 +638,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
     slow = [(r, v) for r, v in ramps if v < vs]
     if not slow or any(r.source in used for r, _ in slow):
         return judged
-    names = ", ".join(r.name for r, _ in slow)
+    names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
               "the joint fit: Fs and vs rest on faster records")
     diagnostics.append(Diagnostic("warning", "joint", reason, "ramps below vs that the "

@@ -39,6 +39,8 @@ __all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_c
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
 INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
+#: the files a record is read from (their suffix is not part of its name)
+RECORD_SUFFIXES = (".csv", ".parquet")
 _NA_STRINGS = {"nan", "na", "n/a", "#n/a", "null", "none", "-nan"}
 
 
@@ -65,8 +67,10 @@ class Record(ResultVocabulary):
     @property
     def name(self) -> str:
         """The record's name: its file name without folder and suffix ("presliding" for
-        bench/presliding.csv), to choose records by name rather than by position."""
-        return Path(self.source).stem if self.source else ""
+        bench/presliding.csv), to choose records by name rather than by position. Only a
+        record file's suffix goes: "ramp_0.05mm_s" stays whole."""
+        path = Path(self.source) if self.source else Path("")
+        return path.stem if path.suffix.lower() in RECORD_SUFFIXES else path.name
 
     @classmethod
     def from_arrays(cls, time, signals: Mapping[str, object],
@@ -560,7 +564,7 @@ def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]
     for entry in (check_path("paths", p, where="read_records") for p in paths):
         if entry.is_dir():
             found = sorted(p for p in entry.iterdir()
-                           if p.suffix.lower() in (".csv", ".parquet") and p.is_file())
+                           if p.suffix.lower() in RECORD_SUFFIXES and p.is_file())
             if not found:
                 raise DataError(f"{entry}: folder holds no .csv or .parquet record")
             files.extend(found)
