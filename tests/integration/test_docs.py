@@ -113,10 +113,17 @@ def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
 
 
 def test_the_control_tuning_page_runs(tmp_path, monkeypatch):
-    """docs/control-tuning.md: the Canudas loop tuned robustly; fresh samples meet it."""
+    """docs/control-tuning.md: the Canudas loop tuned robustly; fresh samples meet it; the
+    python-control design meets the specs on the linear model, not on the nonlinear one,
+    where the tuned loop does."""
     import reference as ref
 
     namespace = _run_page("control-tuning.md", tmp_path, monkeypatch)
     assert namespace["result"].meets_specs
     assert namespace["fresh"].met >= ref.FRESH_SAMPLES_MET
     assert (tmp_path / "canudas-tuned" / "gains.toml").is_file()
+    assert namespace["linear"].meets_specs  # on the linear model, and broken by friction:
+    comparison = namespace["comparison"]
+    assert not comparison.meets("linear (python-control)")
+    assert comparison.meets("tuned (nonlinear)")
+    assert (tmp_path / "canudas-designs" / "summary.csv").is_file()
