@@ -178,6 +178,27 @@ def _tuning():
                 n_global=2, max_evaluations=2)
 
 
+
+def _canudas_loop():
+    from conftest import load_quietly
+    from pneumact.control import canudas_hunting
+
+    return canudas_hunting(load_quietly("canudas1995"))[0]
+
+
+def _linear_design():
+    from pneumact.control import linear_design
+
+    return linear_design(_canudas_loop(), "settling=4,overshoot=10%", velocity=0.25)
+
+
+def _design_comparison():
+    from pneumact.control import Move, compare_designs
+
+    loop = _canudas_loop()
+    return compare_designs(loop, "settling=10,no-hunting", {"published": loop},
+                           moves=(Move("step", 0.0, 1.0, 20.0),))
+
 def _loop_study():
     from pneumact.control import PID, ClosedLoop, LoopStudy
 
@@ -295,6 +316,8 @@ FACTORIES = {
     "pneumact.control.metrics.LoopMetrics": lambda f: _loop_metrics(),
     "pneumact.control.study.LoopStudy": lambda f: _loop_study(),
     "pneumact.control.tuning.TuningResult": lambda f: _tuning(),
+    "pneumact.control.linear_design.LinearDesign": lambda f: _linear_design(),
+    "pneumact.control.comparison.DesignComparison": lambda f: _design_comparison(),
     "pneumact.control.linear.LinearPlant": lambda f: _linear(),
     "pneumact.control.drives.DriveReplay": lambda f: _replay(),
     "pneumact.reproduction.Reproduction": _reproduction,
