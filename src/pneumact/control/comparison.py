@@ -54,7 +54,7 @@ def friction_designs(linear: LinearDesign) -> dict[str, ClosedLoop]:
     loop = linear.loop
     params = loop.params
     designs = {"linear (python-control)": loop}
-    force_gain = _force_gain(loop)
+    force_gain = loop.force_gain
     if force_gain is None:
         return designs
     base = loop.controller
@@ -68,18 +68,6 @@ def friction_designs(linear: LinearDesign) -> dict[str, ClosedLoop]:
         designs[name] = dataclasses.replace(
             loop, controller=dataclasses.replace(base, compensation=(term,)))
     return designs
-
-
-def _force_gain(loop: ClosedLoop) -> float | None:
-    """Controller units per newton (None: a command valve without compensation_gain)."""
-    if loop.compensation_gain is not None:
-        return float(loop.compensation_gain)
-    kind = loop.plant_kind
-    if kind == "force":
-        return 1.0 / loop.drive_gain
-    if kind == "pressure":
-        return -1.0 / (float(loop.params["A_d"]) * loop.drive_gain)
-    return None
 
 
 @dataclass(eq=False)

@@ -125,6 +125,12 @@ class ClosedLoop:
             return self.input_unit
         return f"{self.input_unit}/{self.drive_gain:g}"
 
+    @property
+    def force_gain(self) -> float | None:
+        """Controller units per newton of friction compensation (None: a command valve
+        without ``compensation_gain``)."""
+        return self._compensation_gain()
+
     def _compensation_gain(self) -> float | None:
         if self.compensation_gain is not None:
             return float(self.compensation_gain)
