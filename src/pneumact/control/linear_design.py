@@ -143,18 +143,20 @@ class LinearDesign(ResultVocabulary):
 
     def closed_loop(self):
         """The linear closed loop y/r (a python-control system)."""
+        return self._loops()[0]
+
+    def _loops(self):
+        """(y/r, the open loop L) of the designed gains on the linear plant."""
         c = self.controller
         return _closed_loop(_scaled_plant(self.plant, self.sign), c.kp, c.ki, c.kd,
-                            c.filter_time)[0]
+                            c.filter_time)
 
     def plot(self) -> Figure:
         """Left: |L(jω)| and its phase (the crossover marked); right: the linear step."""
         import control
         import matplotlib.pyplot as plt
 
-        c = self.controller
-        plant = _scaled_plant(self.plant, self.sign)
-        response, open_loop = _closed_loop(plant, c.kp, c.ki, c.kd, c.filter_time)
+        response, open_loop = self._loops()
         omega = self.crossover * np.logspace(-2, 2, 400)
         fr = control.frequency_response(open_loop, omega)
         gain = np.abs(np.asarray(fr.complex).ravel())
