@@ -57,6 +57,7 @@ BASE = {
     "control hunting": ["--out", "OUT"],
     "control tune": ["--n-global", "0", "--max-evaluations", "1", "--rounds", "0",
                      "--out", "OUT"],
+    "control compare": ["--out", "OUT"],
     "export fmu": ["--out", "OUT"],
 }
 
@@ -189,6 +190,9 @@ BAD_VALUES: dict[str, list[str]] = {
     "--rounds": ["-1"],
     "--margin": ["1", "-0.1"],
     "--gains-file": ["missing.toml"],
+    "--regime": ["gliding"],
+    "--velocity": ["0", "-5"],
+    "--tuned": ["missing.toml", str(BAD / "not_toml.toml")],
     "--compiler": ["no-such-cc"],
 }
 #: arguments (not options) and the bad values each command must refuse

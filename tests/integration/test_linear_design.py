@@ -19,7 +19,16 @@ import numpy as np
 import pytest
 
 import pneumact as pa
-from pneumact.control import PID, Cascade, ClosedLoop, Move, Specs, canudas_hunting, tune
+from pneumact.control import (
+    PID,
+    Cascade,
+    ClosedLoop,
+    Move,
+    Specs,
+    canudas_hunting,
+    load_gains,
+    tune,
+)
 from pneumact.control.comparison import compare_designs, friction_designs
 from pneumact.control.linear_design import linear_design
 from pneumact.errors import ParameterError
@@ -119,6 +128,40 @@ def test_friction_breaks_the_linear_design_on_the_canudas_rig():
     assert both.meets("tuned"), both.to_pandas()
 
 
+def test_the_command_line_compares_the_designs_with_a_tuned_gains_file(tmp_path):
+    """``pneumact control compare``: the linear design and its compensations beside a
+    tuned gains file on the rig; the tables name every design, the linear gains file
+    runs in ``control step``; a bad --regime is refused by name (exit 2)."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from pneumact.cli import app
+    from pneumact.control import write_gains
+
+    runner = CliRunner()
+    gains = write_gains(PID(kp=10.0, ki=1.0, kd=10.0, filter_time=0.02), tmp_path / "t.toml")
+    rig = ["--plant", "rig", "--params", "canudas1995", "--at", "0", "--velocity", "250"]
+    done = runner.invoke(app, ["control", "compare", *rig, "--spec", CANUDAS_DESIGN_SPECS,
+                               "--tuned", str(gains), "--out", str(tmp_path / "cmp")])
+    assert done.exit_code == 0, done.output
+    summary = pd.read_csv(tmp_path / "cmp" / "summary.csv")
+    assert list(summary["design"]) == ["linear (python-control)",
+                                       "linear + static compensation", "linear + dither",
+                                       "linear + LuGre observer", "tuned (t.toml)"]
+    linear = load_gains(tmp_path / "cmp" / "linear_gains.toml")
+    table = pd.read_csv(tmp_path / "cmp" / "linear_gains.csv").set_index("gain")
+    assert linear.kp == pytest.approx(table.loc["kp", "value"], rel=1e-12)
+    step = runner.invoke(app, ["control", "step", "--plant", "rig", "--params",
+                               "canudas1995", "--start", "0", "--stop", "100", "--t-end", "5",
+                               "--gains-file", str(tmp_path / "cmp" / "linear_gains.toml"),
+                               "--out", str(tmp_path / "step")])
+    assert step.exit_code == 0, step.output
+    bad = runner.invoke(app, ["control", "compare", *rig, "--regime", "gliding",
+                              "--out", str(tmp_path / "bad")])
+    assert bad.exit_code == 2 and "regime" in bad.output, bad.output
+    assert not (tmp_path / "bad").exists()
+
+
 def test_bad_input_is_refused_by_name(frictionless):
     loop, _ = frictionless
     cascade = dataclasses.replace(loop, controller=Cascade(kx=1.0, kv=1.0))
@@ -143,3 +186,11 @@ def test_results_write_their_tables_and_figures(frictionless, tmp_path):
                                  {"linear": design.loop, "start": loop}, moves=MOVES)
     written = {p.name for p in comparison.write(tmp_path / "compare")}
     assert {"metrics.csv", "summary.csv", "designs.png", "report.html"} <= written
+    assert "linear_gains.toml" not in written  # no linear design given
+    with_linear = compare_designs(loop, LINEAR_DESIGN_SPECS, {"linear": design.loop},
+                                  moves=MOVES, linear=design)
+    written = {p.name for p in with_linear.write(tmp_path / "with-linear")}
+    assert {"linear_gains.toml", "linear_gains.csv", "linear_predicted.csv",
+            "linear_design.png"} <= written
+    again = load_gains(tmp_path / "with-linear" / "linear_gains.toml")
+    assert again.parameters() == pytest.approx(design.controller.parameters(), rel=1e-15)

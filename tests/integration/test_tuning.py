@@ -146,6 +146,57 @@ def test_a_robust_design_meets_its_specs_on_fresh_samples(canudas, tmp_path):
         result.controller.parameters(), rel=1e-15)
 
 
+def test_uncertainty_samples_are_plants_that_can_exist(canudas):
+    """Fc and Fs drawn 25 % wide overlap: a tenth of the normal's draws have Fs < Fc, a
+    plant that cannot exist (the batch refuses it, and a robust design counted it as a
+    failure). The draws are truncated to valid sets; a table with such a row is refused
+    by row; a distribution almost all outside is refused."""
+    from pneumact.control import draw_samples
+
+    loop, _ = canudas_hunting(canudas)
+    values = np.array([canudas["Fc"], canudas["Fs"]])
+    cov = np.diag((0.25 * values) ** 2)
+    estimates = Estimates(("Fc", "Fs"), values, np.sqrt(np.diag(cov)), cov, 100)
+    raw = np.random.default_rng(0).multivariate_normal(values, cov, size=200)
+    assert np.mean(raw[:, 1] < raw[:, 0]) > 0.05  # the untruncated draws break Fs >= Fc
+    drawn = draw_samples(estimates, 200, seed=0, base=canudas.values)
+    assert len(drawn) == 200 and (drawn["Fs"] >= drawn["Fc"]).all()
+    table = drawn.head(3).copy()
+    table.loc[1, "Fs"] = 0.5 * table.loc[1, "Fc"]
+    with pytest.raises(ParameterError, match=r"1 of 3 uncertainty samples .*row 1: Fs ="):
+        tune(loop, "settling=10", uncertainty=table)
+    far = Estimates(("Fc", "Fs"), np.array([2.0, 0.2]), np.array([0.01, 0.01]),
+                    np.diag([1e-4, 1e-4]), 100)
+    with pytest.raises(ParameterError, match="valid parameter sets"):
+        draw_samples(far, 10)
+
+
+def test_a_design_that_misses_says_where_and_on_which_plants(canudas):
+    """The published (hunting) Canudas gains over Fs samples: the result does not meet
+    the specs and says so, with the failing samples, what they miss in words, and which
+    parameter they share; the tuned design's statement is that it meets them."""
+    loop, _ = canudas_hunting(canudas)
+    samples = pd.DataFrame({"Fs": np.linspace(1.0, 2.0, 11)})
+    specs = Specs.parse("settling=10,error=5mm,no-hunting,fraction=90%")
+    moves = (Move("step", 0.0, 1.0, 60.0),)
+    published = evaluate_design(loop, specs, moves=moves, uncertainty=samples)
+    assert not published.meets_specs
+    failing = published.failing_table()
+    assert len(failing) == round((1 - published.met) * len(published.samples)) > 0
+    hunting = published.metrics_table["violates_hunting"] > 0
+    assert failing["misses"].str.contains("step: hunts").sum() == hunting.sum() > 0
+    assert failing["misses"].str.contains("step: error").all()
+    text = published.feasibility()
+    assert text.startswith("Does NOT meet the specs on 90 % of the 12 samples")
+    assert f"step hunting on {hunting.sum()}" in text
+    assert "90 % of the samples hold step settling at no limit" in text
+    met = pd.DataFrame({"Fs": [1.5]})
+    tuned = tune(loop, specs, moves=moves, uncertainty=met, n_global=16,
+                 max_evaluations=20, seed=1)
+    assert tuned.meets_specs and tuned.feasibility().startswith("Meets every spec")
+    assert tuned.failing_table().empty
+
+
 def test_bad_tuning_input_is_one_clear_message(canudas):
     loop, _ = canudas_hunting(canudas)
     with pytest.raises(ParameterError, match="'speed' is not a specification"):

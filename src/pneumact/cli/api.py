@@ -63,6 +63,8 @@ API: dict[str, tuple[str, ...]] = {
     "control hunting": ("pneumact.control.study:canudas_hunting", "pneumact.simulation:Rodas4"),
     "control tune": ("pneumact.control:tune", "pneumact.control:default_moves", *_CONTROL,
                      "pneumact.options:Executor"),
+    "control compare": ("pneumact.control:linear_design", "pneumact.control:compare_designs",
+                        *_CONTROL),
     "export fmu": ("pneumact.export:export_fmu", *_MODEL),
 }
 
@@ -100,6 +102,8 @@ OWN: dict[str, str] = {
     "validate": "identify friction: a second record to validate the estimates on",
     "version": "print the version",
     "gains_file": "control step: a gains file written by control tune (its controller)",
+    "tuned": "control compare: a gains file written by control tune, run beside the "
+             "linear designs",
     "format": "identify friction, compare: the reader of the record files (auto, record, "
               "emps, tudelft)",
 }
@@ -121,4 +125,5 @@ UNITS: dict[str, float] = {
     "start": 1e-3,  # mm
     "stop": 1e-3,  # mm
     "at": 1e-3,  # mm
+    "velocity": 1e-3,  # mm/s
 }

@@ -39,7 +39,8 @@ if TYPE_CHECKING:
     from pneumact.models import Actuator, FrictionRig
     from pneumact.models.controllers import Compensation
 
-control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting, tune.",
+control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting, tune, "
+                               "compare.",
                           no_args_is_help=True)
 
 
@@ -48,6 +49,11 @@ class Plant(StrEnum):
     command = "command"
     source = "source"
     rig = "rig"
+
+
+class Regime(StrEnum):
+    sliding = "sliding"
+    presliding = "presliding"
 
 
 class Structure(StrEnum):
@@ -486,6 +492,84 @@ def tune_command(
         _print_gains(result)
         for path in written:
             out_console.print(f"wrote {path}")
+
+
+@control_app.command("compare")
+def compare_command(
+    ctx: typer.Context,
+    spec: Annotated[str, typer.Option(
+        help="Specifications, as for 'control tune' (settling, overshoot, error, "
+             "no-hunting, band).")] = "settling=0.3,overshoot=5%,error=20um,no-hunting",
+    plant: PlantOption = Plant.regulator,
+    params: ParamsOption = "vgt-paper",
+    friction: FrictionOption = Friction.lugre,
+    u_min: UMinOption = None, u_max: UMaxOption = None,
+    at: Annotated[float | None, typer.Option(
+        help="Operating point and the moves' start [mm] (default mid-stroke).")] = None,
+    regime: Annotated[Regime, typer.Option(
+        help="The linearisation: sliding (at the speed of a 20 %-of-stroke move within "
+             "the settling spec) or presliding.")] = Regime.sliding,
+    velocity: Annotated[float | None, typer.Option(
+        help="Sliding: the speed of the linearisation [mm/s] (default 20 % of the stroke "
+             "over the settling spec).")] = None,
+    tuned: Annotated[Path | None, typer.Option(
+        help="A gains file (from 'control tune') to run beside the linear designs.")] = None,
+    out: OutOption = Path("pneumact-control-compare"),
+) -> None:
+    """Design a PID on the linearised plant with python-control, then run it on the
+    nonlinear loop as it is and with static, dither and LuGre-observer friction
+    compensation (and the --tuned gains): which design meets --spec on the reference
+    moves and what breaks (hunts, sticks short, creeps, overshoots); write the tables,
+    the responses, the Bode plot, linear_gains.toml and a report."""
+    with user_errors():
+        from pneumact.control import Specs
+
+        out = check_out_dir("--out", out)
+        specs = Specs.parse(spec)
+        if at is not None:
+            _check_setpoints(plant, params, **{"--at": at})
+        start = _mid(plant, params) if at is None else at * 1e-3
+        options = ControllerOptions(Structure.pid, None, None, 0.0, "measurement", 1e-3,
+                                    50.0, 1e4, u_min, u_max, "back-calculation", None, None,
+                                    "measured", None, None, False, 0.0)
+        _, loop = build_loop(plant, params, friction, options, start)
+        if velocity is not None:
+            check_range("--velocity", velocity, 0.0, unit="mm/s", low_open=True)
+        speed = None if velocity is None else velocity * 1e-3
+        extra = None
+        if tuned is not None:
+            from pneumact.control import load_gains
+
+            extra = (f"tuned ({tuned.name})", load_gains(tuned))
+        comparison = run_with_progress(lambda report: _compare(
+            loop, specs, start, regime.value, speed, extra))
+        use_agg()
+        written = comparison.write(out, call=the_call(ctx))
+        _print_comparison(comparison)
+        for path in written:
+            out_console.print(f"wrote {path}")
+
+
+def _compare(loop, specs, start: float, regime: str, velocity: float | None, tuned):
+    """The linear PID with each friction compensation, and ``tuned`` (name, controller)
+    if given, on the nonlinear loop."""
+    from pneumact.control import compare_designs, friction_designs, linear_design
+
+    linear = linear_design(loop, specs, at=start, regime=regime, velocity=velocity)
+    designs = dict(friction_designs(linear))
+    if tuned is not None:
+        designs[tuned[0]] = tuned[1]
+    return compare_designs(loop, specs, designs, at=start, linear=linear)
+
+
+def _print_comparison(comparison) -> None:
+    table = Table(title=f"on the nonlinear loop: {comparison.specs.describe()}")
+    for column in ("design", "moves met", "what broke"):
+        table.add_column(column)
+    for _, row in comparison.summary().iterrows():
+        table.add_row(str(row["design"]), f"{row['moves met']} of {row['moves']}",
+                      str(row["what broke"]))
+    out_console.print(table)
 
 
 def _mid(plant: Plant, params_name: str) -> float:

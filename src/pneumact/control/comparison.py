@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -77,7 +78,9 @@ class DesignComparison(ResultVocabulary):
     ``to_pandas()``: one row per (design, move): settling, rise, overshoot, steady-state
     error, limit-cycle amplitude, IAE, whether it meets the specs and, if not, what
     broke; ``"summary"``: per design, the moves met and the failures in words.
-    ``plot()``: each move's responses, one line per design."""
+    ``plot()``: each move's responses, one line per design. With ``linear`` (the
+    ``LinearDesign`` the designs came from), its gains, its linear predictions and its
+    Bode plot join the tables, the figures and ``write``'s ``linear_gains.toml``."""
 
     report_title = "Designs on the nonlinear loop"
     figure_name = "designs"
@@ -86,9 +89,32 @@ class DesignComparison(ResultVocabulary):
     specs: Specs
     moves: tuple[Move, ...]
     table: pd.DataFrame
+    linear: LinearDesign | None = None
 
     def tables(self) -> dict[str, pd.DataFrame]:
-        return {"metrics": self.table, "summary": self.summary()}
+        found = {"metrics": self.table, "summary": self.summary()}
+        if self.linear is not None:
+            found |= {"linear_gains": self.linear.gains_table(),
+                      "linear_predicted": self.linear.predicted_table()}
+        return found
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        found: dict[str, Callable[[], Figure]] = {self.figure_name: self.plot}
+        if self.linear is not None:
+            found[self.linear.figure_name] = self.linear.plot
+        return found
+
+    def extra_files(self) -> dict[str, Callable[[Path], object]]:
+        """With a linear design: its gains as ``linear_gains.toml`` (``pneumact control
+        step --gains-file``)."""
+        from .tuning import write_gains
+
+        linear = self.linear
+        if linear is None:
+            return {}
+        note = f"linear design for {self.specs.describe()}"
+        return {"linear_gains.toml": lambda path: write_gains(
+            linear.controller, path, linear.loop.gain_units, note)}
 
     def summary(self) -> pd.DataFrame:
         rows = []
@@ -104,9 +130,10 @@ class DesignComparison(ResultVocabulary):
 
     def report_text(self) -> str:
         met = [n for n in self.loops if self.meets(n)]
-        return (f"{len(self.loops)} designs on {len(self.moves)} moves of the nonlinear loop "
+        text = (f"{len(self.loops)} designs on {len(self.moves)} moves of the nonlinear loop "
                 f"({self.specs.describe()}); every spec met by: "
                 f"{', '.join(met) if met else 'none'}.")
+        return text if self.linear is None else f"{text} {self.linear.report_text()}"
 
     def plot(self) -> Figure:
         import matplotlib.pyplot as plt
@@ -135,11 +162,12 @@ class DesignComparison(ResultVocabulary):
 
 def compare_designs(loop: ClosedLoop, specs: Specs | str,
                     designs: Mapping[str, ClosedLoop | Controller], *,
-                    moves: Sequence[Move] | None = None, at: float | None = None
-                    ) -> DesignComparison:
+                    moves: Sequence[Move] | None = None, at: float | None = None,
+                    linear: LinearDesign | None = None) -> DesignComparison:
     """Run each of ``designs`` (name -> a loop, or a controller put in ``loop``) on the
     ``moves`` (default ``default_moves(loop, specs, at)``) of the nonlinear model and
-    say where each meets ``specs`` and where it breaks (module docstring)."""
+    say where each meets ``specs`` and where it breaks (module docstring). ``linear``:
+    the linear design they came from, reported beside them."""
     from .tuning import evaluate_design
 
     specs = Specs.of(specs)
@@ -157,7 +185,7 @@ def compare_designs(loop: ClosedLoop, specs: Specs | str,
                             zip(table.to_dict("records"), moves, strict=True)]
         frames.append(table)
     return DesignComparison(loops=loops, specs=specs, moves=moves,
-                            table=pd.concat(frames, ignore_index=True))
+                            table=pd.concat(frames, ignore_index=True), linear=linear)
 
 
 def _as_loop(loop: ClosedLoop, name: str, design) -> ClosedLoop:

@@ -60,15 +60,19 @@ FIRST_DESIGN = 4
 #: samples added to the design set per robust round
 ADDED_PER_ROUND = 4
 GAINS_FORMAT = "pneumact-gains/1"
+#: a parameter drives the failures when the failing samples' mean rank is in this tail
+DRIVER_TAIL = 0.25
 
 
-def draw_samples(estimates, n: int, seed: int = 0) -> pd.DataFrame:
+def draw_samples(estimates, n: int, seed: int = 0, *,
+                 base: Mapping[str, float] | None = None) -> pd.DataFrame:
     """``n`` parameter sets from an identification's ``Estimates`` (normal with their
-    covariance; a set with a non-positive value of a positive parameter is drawn
-    again), one row each: the uncertainty a robust design must hold over."""
+    covariance, truncated to the sets the model accepts: one with Fs < Fc, against the
+    other drawn values or ``base``'s, is drawn again), one row each: the uncertainty a
+    robust design must hold over."""
     from ..identification.uncertainty import parameter_draws
 
-    return parameter_draws(estimates, n, seed)
+    return parameter_draws(estimates, n, seed, what="tune: uncertainty samples", base=base)
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -214,7 +218,94 @@ class TuningResult(ResultVocabulary):
 
     def tables(self) -> dict[str, pd.DataFrame]:
         return {"gains": self.gains_table(), "spread": self.spread_table(),
-                "metrics": self.metrics_table, "history": self.history_table}
+                "failing": self.failing_table(), "metrics": self.metrics_table,
+                "history": self.history_table}
+
+    def failing_table(self) -> pd.DataFrame:
+        """The samples that miss a spec: their plant parameters and what they miss, in
+        words ("step up: settling 0.311 s > 0.3 s"), the worst first."""
+        frame = self.metrics_table
+        missed: dict[int, list[str]] = {}
+        for row in frame[~frame["meets_specs"]].itertuples(index=False):
+            for spec in self._spec_metrics():
+                if getattr(row, f"violates_{spec}") > 0:
+                    missed.setdefault(int(row.sample), []).append(
+                        f"{row.move}: {self._missed(spec, row)}")
+        per_sample = frame.groupby("sample")[[c for c in frame if c.startswith(
+            "violates_")]].sum().sum(axis=1)
+        order = sorted(missed, key=lambda s: -float(per_sample[s]))
+        table = self.samples.iloc[order].copy() if len(self.samples.columns) else (
+            pd.DataFrame(index=order))
+        table.insert(0, "sample", order)
+        table["misses"] = ["; ".join(missed[s]) for s in order]
+        return table.reset_index(drop=True)
+
+    def _spec_metrics(self) -> dict[str, str]:
+        names = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
+                 "error": "abs_steady_state_error", "effort": "control_effort",
+                 "variation": "command_variation", "hunting": "limit_cycle_amplitude"}
+        specs = [*self.specs.limits(), *(["hunting"] if self.specs.no_hunting else [])]
+        return {spec: names[spec] for spec in specs}
+
+    def _missed(self, spec: str, row) -> str:
+        if not row.ok:
+            return "run failed"
+        value = getattr(row, self._spec_metrics()[spec])
+        if spec == "hunting":
+            return f"hunts ({_shown('hunting', value)} limit cycle)"
+        if not math.isfinite(value):
+            return f"{spec}: never within the band" if spec in ("settling", "rise") else (
+                f"{spec}: not measured")
+        limit = self.specs.limits()[spec]
+        return f"{spec} {_shown(spec, value)} > {_shown(spec, limit)}"
+
+    def feasibility(self) -> str:
+        """One statement of what the design holds: that it meets the specs on the asked
+        share of the samples, or, if not, which (move, spec) pairs miss on how many
+        samples and what limits these gains do hold on the asked share (the search found
+        none better; a search is no proof that none exists)."""
+        n, fraction = len(self.samples), self.specs.fraction
+        if self.meets_specs:
+            return (f"Meets every spec on {100 * self.met:.0f} % of the {n} samples "
+                    f"({100 * fraction:.0f} % asked).")
+        spec_of = {metric: spec for spec, metric in self._spec_metrics().items()}
+        spread = self.spread_table()
+        short = spread[spread["share_met"] < 1.0].sort_values("share_met")
+        misses = [f"{r.move} {spec_of[r.metric]} on {round((1 - r.share_met) * n)}"
+                  for r in short.itertuples()]
+        holds = [f"{r.move} {spec_of[r.metric]} ≤ {_shown(spec_of[r.metric], r.at_fraction)}"
+                 if math.isfinite(r.at_fraction) else
+                 f"{r.move} {spec_of[r.metric]} at no limit (runs never within the band)"
+                 for r in short.itertuples() if r.at_fraction > r.limit]
+        text = (f"Does NOT meet the specs on {100 * fraction:.0f} % of the {n} samples: "
+                f"{100 * self.met:.0f} % meet all of them. Missed: {', '.join(misses)} "
+                "samples (failing.csv lists them).")
+        if holds:
+            text += (f" With these gains, {100 * fraction:.0f} % of the samples hold "
+                     f"{', '.join(holds)}: loosen those limits, narrow the uncertainty, or "
+                     "ask for a smaller fraction.")
+        else:
+            text += (f" Each spec alone holds on {100 * fraction:.0f} % of the samples; "
+                     "they miss on different ones.")
+        drivers = self._drivers()
+        if drivers:
+            text += f" The failing samples have {', '.join(drivers)}."
+        return text
+
+    def _drivers(self) -> list[str]:
+        """The uncertain parameters whose failing samples sit in one tail (their mean
+        rank among all samples below 25 % or above 75 %)."""
+        failing = self.failing_table()["sample"].to_numpy()
+        if not failing.size or failing.size == len(self.samples):
+            return []
+        found = []
+        for name in self.samples.columns:
+            ranks = self.samples[name].rank(pct=True).to_numpy()[failing]
+            mean = float(np.mean(ranks))
+            if mean > 1 - DRIVER_TAIL or mean < DRIVER_TAIL:
+                found.append(f"{'high' if mean > 0.5 else 'low'} {name} (mean rank "
+                             f"{100 * mean:.0f} %)")
+        return found
 
     def gains_table(self) -> pd.DataFrame:
         """Each gain: SI value and unit, the start, and the datasheet form (per mm, kPa or
@@ -252,21 +343,20 @@ class TuningResult(ResultVocabulary):
                              *(np.quantile(finite, [0.5, 0.05, 0.95]) if finite.size
                                else [math.nan] * 3),
                              float(np.max(finite)) if finite.size else math.nan,
+                             _at_fraction(values, self.specs.fraction),
                              limits[spec] if spec != "hunting" else move.tolerance(self.specs),
                              met))
         return pd.DataFrame(rows, columns=["move", "metric", "nominal", "median", "q05", "q95",
-                                           "worst", "limit", "share met"])
+                                           "worst", "at_fraction", "limit", "share_met"])
 
     def report_text(self) -> str:
         n = len(self.samples)
-        verdict = ("meets" if self.meets_specs else "does NOT meet")
         return (f"{self.loop.describe()}: {type(self.controller).__name__} tuned for "
                 f"{self.specs.describe()} on {len(self.moves)} moves "
                 f"({', '.join(m.label for m in self.moves)}) over {n} plant "
-                f"{'sample' if n == 1 else 'samples'} (the nominal first). The design "
-                f"{verdict} the specs on {100 * self.met:.0f} % of the samples "
-                f"({100 * self.specs.fraction:.0f} % asked); the worst sample is #{self.worst}."
-                f" {self.runs} closed-loop runs in {self.seconds:.1f} s.")
+                f"{'sample' if n == 1 else 'samples'} (the nominal first). "
+                f"{self.feasibility()} The worst sample is #{self.worst}; {self.runs} "
+                f"closed-loop runs in {self.seconds:.1f} s.")
 
     def plot(self) -> Figure:
         """Each move: the nominal response, every sample's (thin) and the worst (bold)."""
@@ -314,6 +404,25 @@ class TuningResult(ResultVocabulary):
         """The tuned controller as a TOML file ``load_gains`` and ``pneumact control step
         --gains`` read."""
         return write_gains(self.controller, path, self.units, self.specs.describe())
+
+
+def _shown(spec: str, value: float) -> str:
+    """A metric's value with its unit, as a statement shows it ("never" past any)."""
+    if not math.isfinite(value):
+        return "never within the band" if spec in ("settling", "rise") else "beyond any"
+    if spec in ("settling", "rise"):
+        return f"{value:.3g} s"
+    if spec == "overshoot":
+        return f"{value:.3g} %"
+    if spec in ("error", "hunting"):
+        return f"{1e6 * value:.3g} µm" if abs(value) < 1e-3 else f"{1e3 * value:.3g} mm"
+    return f"{value:.3g}"
+
+
+def _at_fraction(values: np.ndarray, fraction: float) -> float:
+    """The value ``fraction`` of the samples stay within (a failed run: beyond any)."""
+    return float(np.quantile(np.where(np.isfinite(values), values, np.inf), fraction,
+                             method="higher"))
 
 
 def _write_bytes(data: bytes, path: Path) -> None:
@@ -470,10 +579,19 @@ def _samples(loop: ClosedLoop, uncertainty, n: int, seed: int) -> pd.DataFrame:
             raise ParameterError(
                 f"tune: uncertainty = {type(uncertainty).__name__}; give an identification "
                 "result or its Estimates, or a DataFrame of parameter samples")
-        table = draw_samples(estimates, n, seed)
+        table = draw_samples(estimates, n, seed, base=loop.params.values)
     from ..core.assembly import assemble
+    from ..parameters.validation import row_problems
 
     assemble(loop).check_parameters(list(table.columns), "uncertainty column")
+    problems = row_problems(loop.params.values, list(table.columns),
+                            table.to_numpy(dtype=float))
+    bad = [(i, p) for i, p in enumerate(problems) if p is not None]
+    if bad:
+        raise ParameterError(
+            f"tune: {len(bad)} of {len(table)} uncertainty samples are not valid parameter "
+            f"sets (the first, row {bad[0][0]}: {bad[0][1].removeprefix('invalid parameters: ')}"
+            "); a robust design holds over plants that can exist: drop or redraw them")
     nominal = {c: float(loop.params[c]) for c in table.columns}
     return pd.concat([pd.DataFrame([nominal]), table], ignore_index=True)
 

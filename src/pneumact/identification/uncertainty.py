@@ -25,7 +25,7 @@ leaves.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -260,13 +260,19 @@ class PredictionBand:
         return pd.DataFrame(columns, index=pd.Index(self.time, name="time"))
 
 
+#: draws tried per set kept before the uncertainty is refused as mostly invalid
+MAX_DRAW_FACTOR = 100
+
+
 def parameter_draws(estimates: Estimates, draws: int, seed: int = 0, *,
-                    what: str = "parameter draws") -> pd.DataFrame:
+                    what: str = "parameter draws",
+                    base: Mapping[str, float] | None = None) -> pd.DataFrame:
     """``draws`` parameter sets from N(values, covariance) of ``estimates`` (its model
-    parameters; offsets left out), one row each; a set with a non-positive value of a
-    positive parameter is drawn again. The input of a prediction band and of a robust
-    controller design."""
-    from ..parameters import catalogue
+    parameters; offsets left out), one row each. A set the model would refuse (a value
+    out of its range, as a negative Coulomb force, or a broken relation with the other
+    drawn values or ``base``'s, as Fs < Fc) is drawn again: the normal truncated to the
+    valid region. The input of a prediction band and of a robust controller design."""
+    from ..parameters.validation import row_problems
 
     names = [n for n in estimates.names if "[" not in n]
     idx = [estimates.names.index(n) for n in names]
@@ -276,13 +282,19 @@ def parameter_draws(estimates: Estimates, draws: int, seed: int = 0, *,
         raise ParameterError(f"{what}: the covariance is not finite (a parameter is not "
                              "identifiable)")
     rng = np.random.default_rng(seed)
-    specs = catalogue()
-    minima = [specs[n].minimum for n in names]
-    positive = np.array([m is not None and m >= 0 for m in minima])
+    known = dict(base or {})
     rows: list[np.ndarray] = []
+    tried = 0
     while len(rows) < draws:
+        if tried >= MAX_DRAW_FACTOR * draws:
+            raise ParameterError(
+                f"{what}: {len(rows)} of {tried} draws from N(values, covariance) are valid "
+                f"parameter sets (fewer than 1 in {MAX_DRAW_FACTOR}); the uncertainty "
+                "reaches far outside the model's valid region (e.g. Fs < Fc): it is not a "
+                "usable description of the parameters")
         batch = rng.multivariate_normal(mean, cov, size=draws, method="svd")
-        ok = np.all((batch > 0) | ~positive, axis=1)
+        tried += draws
+        ok = np.array([p is None for p in row_problems(known, names, batch)])
         rows.extend(batch[ok][: draws - len(rows)])
     return pd.DataFrame(np.array(rows), columns=names)
 
@@ -292,8 +304,8 @@ def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100
                     t_eval=None, seed: int = 0, solver=None,
                     executor: Executor | int | str | None = None) -> PredictionBand:
     """The band of ``signals`` under ``experiment`` that the uncertainty of
-    ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets with
-    a non-positive value of a positive parameter are drawn again), simulated on the
+    ``estimates`` leaves: ``draws`` parameter sets from N(values, covariance) (sets the
+    model refuses, as Fs < Fc, are drawn again: ``parameter_draws``), simulated on the
     batch engine (``executor``: where, see ``simulate_batch``); ``level`` is the central
     probability of the band."""
     from ..simulation import simulate
@@ -301,7 +313,9 @@ def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100
 
     if not 0 < level < 1:
         raise ParameterError(f"prediction band: level = {level}; must be in (0, 1)")
-    table = parameter_draws(estimates, draws, seed, what="prediction band")
+    params = getattr(model, "params", None)
+    table = parameter_draws(estimates, draws, seed, what="prediction band",
+                            base=getattr(params, "values", None))
     values = {n: float(estimates.values[estimates.names.index(n)]) for n in table.columns}
     nominal = simulate(model, experiment, solver, t_eval=t_eval, values=values)
     result = simulate_batch(model, experiment, table, signals=list(signals),

@@ -237,5 +237,11 @@ class ResultVocabulary:
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
         for name, png in pngs.items():
             writers[f"{name}.png"] = functools.partial(_write_bytes, png)
+        writers.update(self.extra_files())
         writers["report.html"] = self.report(call, next(iter(pngs.values()), None)).write
         return write_files(out_dir, writers)
+
+    def extra_files(self) -> dict[str, Callable[[Path], object]]:
+        """Files beyond the tables, figures and report that ``write`` adds (name ->
+        a function writing it to a path): none by default."""
+        return {}
