@@ -69,6 +69,54 @@ def test_sensitivities_pass_through_the_controller(canudas, sample_time):
         assert err < ref.LOOP_SENSITIVITY_RTOL, (name, err)
 
 
+def test_step_metric_gradients_are_the_metrics_central_differences(canudas):
+    """∂(rise, settling, overshoot, steady-state error, IAE)/∂(kp, ki, kd) of a Canudas
+    step from the position's sensitivities, against central differences of the metrics
+    of whole runs; the tuner's cost and its gradient from them against its batch cost."""
+    from pneumact.control import step_metric_gradients
+    from pneumact.control.tuning import _Evaluator, _holding
+
+    loop, _ = canudas_hunting(canudas)
+    loop = dataclasses.replace(loop, controller=PID(kp=100.0, ki=50.0, kd=20.0,
+                                                    filter_time=0.02))
+    move = Move("step", 0.0, 0.1, 8.0)
+    specs = Specs.parse("settling=2,overshoot=0.3%,error=1mm")
+    experiment = move.experiment()
+    kw = {"t_step": move.t_ref, "start": move.start, "target": move.stop,
+          "tol": move.tolerance(specs), "window": move.window()}
+    names = ["kp", "ki", "kd"]
+    solver = pa.Rodas4(rtol=1e-9)
+    sens = pa.simulate_sensitivities(loop, experiment, names, solver)
+    run = sens.result
+    slopes = step_metric_gradients(run.time, run["position"], run["position_setpoint"],
+                                   sens["position"], **kw)
+    for k, name in enumerate(names):
+        h = 1e-4 * sens.values[k]
+        up, down = (pa.simulate(loop, experiment, solver, values={name: sens.values[k] + d})
+                    for d in (h, -h))
+        metrics = [step_metrics(r.time, r["position"], r["position_setpoint"], **kw)
+                   for r in (up, down)]
+        for key in ("rise_time", "settling_time", "overshoot", "steady_state_error", "iae"):
+            fd = float(metrics[0][key][0] - metrics[1][key][0]) / (2 * h)
+            assert slopes[key][k] == pytest.approx(fd, rel=ref.METRIC_GRADIENT_RTOL,
+                                                   abs=1e-12), (key, name)
+    samples = pd.DataFrame({"Fs": [1.5, 1.8]})
+    moves = (move,)
+    evaluator = _Evaluator(loop, specs, moves, tuple(names), samples,
+                           _holding(loop, samples, moves), None, None, 0.05)
+    gains = np.array([100.0, 50.0, 20.0])
+    cost, gradient = evaluator.cost_and_gradient(gains, np.arange(2))
+    assert cost == pytest.approx(evaluator.cost(gains[None, :], np.arange(2))[0], rel=1e-9)
+    violated = evaluator.violations(evaluator.metrics(gains[None, :], np.arange(2)), 0.05)
+    assert violated[:, 0, 1].min() > 0  # the overshoot spec is missed: a slope to follow
+    for k in range(3):
+        h = np.zeros(3)
+        h[k] = 1e-4 * gains[k]
+        up, down = evaluator.cost(np.vstack([gains + h, gains - h]), np.arange(2))
+        assert gradient[k] == pytest.approx((up - down) / (2 * h[k]),
+                                            rel=ref.METRIC_GRADIENT_RTOL), names[k]
+
+
 def test_a_batch_row_of_gains_is_the_controller_with_those_gains(canudas):
     loop, _ = canudas_hunting(canudas)
     experiment = pa.experiments.SetpointStep(0.0, 1.0, 0.1, 5.0, n_points=201)

@@ -15,7 +15,7 @@ from .drives import DriveReplay, control_law_check, drive_plant, replay_drive
 from .linear import LinearPlant, frequency_response, linearise, plot_bode
 from .linear_design import LinearDesign, linear_design
 from .loop import ClosedLoop
-from .metrics import LoopMetrics, loop_metrics, step_metrics
+from .metrics import LoopMetrics, loop_metrics, step_metric_gradients, step_metrics
 from .plots import plot_loop
 from .specs import Move, Specs, default_moves
 from .study import LoopStudy, canudas_hunting, run_loop
@@ -55,6 +55,7 @@ __all__ = [
     "plot_loop",
     "replay_drive",
     "run_loop",
+    "step_metric_gradients",
     "step_metrics",
     "tune",
     "write_gains",

@@ -70,7 +70,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
-__all__ = ["LoopMetrics", "loop_metrics", "step_metrics"]
+__all__ = ["LoopMetrics", "loop_metrics", "step_metric_gradients", "step_metrics"]
 
 #: default evaluation window: this fraction of the record's duration (at the end)
 WINDOW_FRACTION = 0.1
@@ -597,3 +597,75 @@ def step_metrics(time: Any, position: Any, setpoint: Any, command: Any = None, *
         result["control_effort"] = np.trapezoid((u - u[:, :1]) ** 2, t, axis=1)
         result["command_variation"] = np.sum(np.abs(np.diff(u, axis=1)), axis=1)
     return result
+
+
+def step_metric_gradients(time: Any, position: Any, setpoint: Any, sensitivity: Any, *,
+                          t_step: float, start: float, target: float, tol: float,
+                          window: float) -> dict[str, np.ndarray]:
+    """The derivatives of one run's ``step_metrics`` (rise and settling time, overshoot,
+    steady-state error, limit-cycle amplitude, IAE) along parameters, from the position's
+    sensitivity (n_time × P, ``simulate_sensitivities``): the exact derivative of the
+    discrete definitions where they are differentiable (a settling time moves with the
+    crossing it interpolates; an overshoot with its peak sample), NaN where the metric
+    is (never settles). What a gradient step of the tuner follows; checked against
+    central differences of whole runs."""
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(position, dtype=float)
+    s = np.asarray(sensitivity, dtype=float).T  # P × n_time
+    n_par = s.shape[0]
+    step = target - start
+    ts, xs = _rows_from(t, x[None, :], t_step)
+    _, ss = _rows_from(t, s, t_step)
+    xs = xs[0]
+    sign = math.copysign(1.0, step)
+    beyond = (xs - target) * sign
+    peak = int(np.argmax(beyond))
+    wt, wx = _rows_from(t, x[None, :], t[-1] - window)
+    _, ws = _rows_from(t, s, t[-1] - window)
+    wx = wx[0]
+    return {
+        "rise_time": (_crossing_gradient(ts, (xs - start) / step, ss / step,
+                                         RISE_LEVELS[1])
+                      - _crossing_gradient(ts, (xs - start) / step, ss / step,
+                                           RISE_LEVELS[0])),
+        "settling_time": _settling_gradient(ts, xs, ss, target, tol),
+        "overshoot": (100.0 * sign * ss[:, peak] / abs(step) if beyond[peak] > 0
+                      else np.zeros(n_par)),
+        "steady_state_error": -np.trapezoid(ws, wt, axis=1) / (wt[-1] - wt[0]),
+        "limit_cycle_amplitude": 0.5 * (ws[:, int(np.argmax(wx))] - ws[:, int(np.argmin(wx))]),
+        "iae": np.trapezoid(np.sign(x - np.asarray(setpoint, dtype=float))[None, :] * s, t,
+                            axis=1),
+    }
+
+
+def _interpolated_gradient(dt: float, edge: float, x0: float, x1: float, s0: np.ndarray,
+                           s1: np.ndarray) -> np.ndarray:
+    """∂/∂θ of t0 + (edge − x0)/(x1 − x0)·dt, the time a line between samples reaches edge."""
+    return dt * (-s0 * (x1 - x0) - (edge - x0) * (s1 - s0)) / (x1 - x0) ** 2
+
+
+def _crossing_gradient(t: np.ndarray, p: np.ndarray, sp: np.ndarray, level: float
+                       ) -> np.ndarray:
+    """∂/∂θ of ``_rows_first_reach`` for one row ``p`` with sensitivity rows ``sp``."""
+    hits = np.flatnonzero(p >= level)
+    if not hits.size:
+        return np.full(sp.shape[0], math.nan)
+    k = int(hits[0])
+    if k == 0:
+        return np.zeros(sp.shape[0])
+    return _interpolated_gradient(t[k] - t[k - 1], level, p[k - 1], p[k], sp[:, k - 1],
+                                  sp[:, k])
+
+
+def _settling_gradient(ts: np.ndarray, xs: np.ndarray, ss: np.ndarray, target: float,
+                       tol: float) -> np.ndarray:
+    """∂/∂θ of ``_rows_settling`` for one row."""
+    outside = np.flatnonzero(np.abs(xs - target) > tol)
+    if not outside.size:
+        return np.zeros(ss.shape[0])
+    k = int(outside[-1])
+    if k == xs.size - 1:
+        return np.full(ss.shape[0], math.nan)
+    edge = target + math.copysign(tol, xs[k] - target)
+    return _interpolated_gradient(ts[k + 1] - ts[k], edge, xs[k], xs[k + 1], ss[:, k],
+                                  ss[:, k + 1])

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SolverError
 from ..io.report import ResultVocabulary
 from ..progress import ProgressCallback, check_progress, notify
 from .loop import ClosedLoop
@@ -159,6 +159,81 @@ class _Evaluator:
         """Rows: the IAE of each move over |step| × its duration, summed over moves."""
         return sum((np.where(m["ok"], m["iae"], np.nan) / (abs(mv.size) * mv.t_end)
                     for mv, m in zip(self.moves, found, strict=True)), start=np.zeros(1))
+
+    def cost_and_gradient(self, gains: np.ndarray, which: np.ndarray
+                          ) -> tuple[float, np.ndarray] | None:
+        """One candidate's cost over the samples ``which`` and its gradient along the
+        gains (SI), from forward sensitivities through the controller (one run per sample
+        and move); None where a run fails or a violated metric has no derivative."""
+        from ..simulation.forward_sensitivity import simulate_sensitivities
+        from .metrics import step_metric_gradients
+
+        values = dict(zip(self.names, map(float, gains), strict=True))
+        n_s, n_p = which.size, len(self.names)
+        found, slopes = [], []
+        for m, move in enumerate(self.moves):
+            experiment = move.experiment()
+            kw = {"t_step": move.t_ref, "start": move.start, "target": move.stop,
+                  "tol": move.tolerance(self.specs), "window": move.window()}
+            rows, grads = [], []
+            for s in which:
+                plant = {k: float(v) for k, v in self.samples.iloc[s].items()}
+                try:
+                    run = simulate_sensitivities(
+                        self.loop, experiment, list(self.names),
+                        values={**values, **plant, "bias": float(self.biases[s, m])})
+                except SolverError:
+                    return None
+                self.runs += 1
+                r = run.result
+                args = (r.time, r["position"], r["position_setpoint"])
+                rows.append(step_metrics(*args, **kw))
+                grads.append(step_metric_gradients(*args, run["position"], **kw))
+            found.append({k: np.concatenate([row[k] for row in rows]) for k in rows[0]}
+                         | {"ok": np.ones(n_s, dtype=bool)})
+            slopes.append({k: np.stack([g[k] for g in grads]) for k in grads[0]})
+        per_sample = np.zeros(n_s)
+        gradient = np.zeros((n_s, n_p))
+        for move, metrics, slope in zip(self.moves, found, slopes, strict=True):
+            for value, d_value, scale, offset in self._terms(move, metrics, slope):
+                v = value / scale - offset
+                active = (v > 0) & (v < CAP)
+                if np.any(~np.isfinite(d_value[active])) or np.any(~np.isfinite(v)):
+                    return None
+                per_sample += np.clip(v, 0.0, CAP)
+                gradient += np.where(active[:, None], d_value / scale, 0.0)
+        speed = sum(m["iae"] / (abs(mv.size) * mv.t_end) for mv, m in
+                    zip(self.moves, found, strict=True))
+        d_speed = sum(g["iae"] / (abs(mv.size) * mv.t_end) for mv, g in
+                      zip(self.moves, slopes, strict=True))
+        q = int(np.argsort(per_sample, kind="stable")[
+            math.ceil(self.specs.fraction * (n_s - 1))])
+        cost = (QUANTILE_WEIGHT * per_sample[q] + per_sample.mean()
+                + PERFORMANCE_WEIGHT * float(np.mean(speed)))
+        grad = (QUANTILE_WEIGHT * gradient[q] + gradient.mean(axis=0)
+                + PERFORMANCE_WEIGHT * np.mean(d_speed, axis=0))
+        return float(cost), grad
+
+    def _terms(self, move: Move, metrics: dict[str, np.ndarray], slope: dict[str, np.ndarray]):
+        """(value, ∂value/∂gains, scale, offset) per spec of one move: violation =
+        clip(value/scale − offset, 0, CAP), as ``violations`` with the margin."""
+        limits = {n: v * (1.0 - self.margin) for n, v in self.specs.limits().items()}
+        keys = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
+                "error": "steady_state_error"}
+        for name, limit in limits.items():
+            if name not in keys:
+                raise ParameterError(f"tune: polish follows gradients of {', '.join(keys)} "
+                                     f"and hunting; not of the {name!r} spec")
+            if name == "rise" and move.duration > 0:
+                continue
+            value, d_value = metrics[keys[name]], slope[keys[name]]
+            if name == "error":
+                value, d_value = np.abs(value), np.sign(value)[:, None] * d_value
+            yield value, d_value, (limit if limit > 0 else 1.0), float(limit > 0)
+        if self.specs.no_hunting:
+            band = move.tolerance(self.specs) * (1.0 - self.margin)
+            yield (metrics["limit_cycle_amplitude"], slope["limit_cycle_amplitude"], band,
+                   1.0)
 
     def cost(self, gains: np.ndarray, which: np.ndarray) -> np.ndarray:
         """The cost of each candidate (rows of gains) over the samples ``which``."""
@@ -614,7 +689,7 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
          bounds: Mapping[str, tuple[float, float]] | None = None, spread: float = 30.0,
          uncertainty=None, samples: int = 50, n_global: int = 64,
          max_evaluations: int = 40, rounds: int = 2, margin: float = 0.05, seed: int = 0,
-         executor=None,
+         polish: int = 0, executor=None,
          progress: ProgressCallback | None = None) -> TuningResult:
     """Gains of ``loop``'s controller that meet ``specs`` on the nonlinear model (see the
     module docstring). ``moves``: the reference moves (default ``default_moves``);
@@ -623,8 +698,10 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     ``uncertainty``: an identification result, its ``Estimates`` or a DataFrame of
     plant parameter samples; ``samples``: how many to draw from estimates;
     ``margin``: the search aims at limits this much tighter (a fraction), so that
-    samples it did not see meet the real ones; ``executor``: where the batches run (see
-    ``simulate_batch``)."""
+    samples it did not see meet the real ones; ``polish``: iterations of a gradient
+    search (L-BFGS-B along the cost's gradient from forward sensitivities through the
+    controller) after each local search, kept only where it lowers the cost (0: none);
+    ``executor``: where the batches run (see ``simulate_batch``)."""
     import dataclasses
 
     from scipy.optimize import minimize
@@ -636,13 +713,22 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
     check_progress(progress, "tune")
     specs = Specs.of(specs)
     for name, value, low in (("samples", samples, 1), ("n_global", n_global, 0), ("seed", seed, 0),
-                             ("max_evaluations", max_evaluations, 0), ("rounds", rounds, 0)):
+                             ("max_evaluations", max_evaluations, 0), ("rounds", rounds, 0),
+                             ("polish", polish, 0)):
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise ParameterError(f"tune: {name} = {value!r}; must be an integer ≥ {low}")
     if not (isinstance(margin, int | float) and 0 <= margin < 1):
         raise ParameterError(f"tune: margin = {margin!r}; must be in [0, 1)")
     if not (isinstance(spread, int | float) and spread > 1):
         raise ParameterError(f"tune: spread = {spread!r}; must be a number > 1")
+    if polish and loop.sensitivity_refusal is not None:
+        raise ParameterError(f"tune: polish = {polish}; {loop.describe()} carries no forward "
+                             f"sensitivities ({loop.sensitivity_refusal}): use polish = 0")
+    unsupported = set(specs.limits()) - {"settling", "rise", "overshoot", "error"}
+    if polish and unsupported:
+        raise ParameterError(f"tune: polish = {polish} follows the gradients of settling, "
+                             f"rise, overshoot, error and hunting; not of {sorted(unsupported)}"
+                             ": use polish = 0")
     started = _time.perf_counter()
     loop = _start_loop(loop, () if gains is None else tuple(gains))
     names = _tuned_names(loop, gains)
@@ -678,6 +764,8 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
                                       "xatol": 1e-3, "fatol": 1e-4, "initial_simplex":
                                       _simplex(best, box)})
             best = np.clip(found.x, box[:, 0], box[:, 1])
+        if polish:
+            best = _polish(evaluator, best, box, design, polish)
         if n_all == 1 or round_ == rounds:
             break
         per_sample = _per_sample(evaluator, gains_of(best), np.arange(n_all))
@@ -703,6 +791,31 @@ def tune(loop: ClosedLoop, specs: Specs | str, *, moves: Sequence[Move] | None =
                         int(np.argmax(per_sample)) if per_sample.max() > 0 else 0,
                         _time.perf_counter() - started, evaluator.runs,
                         {n: float(v) for n, v in loop.gains.items()})
+
+
+def _polish(evaluator: _Evaluator, best: np.ndarray, box: np.ndarray, design: np.ndarray,
+            iterations: int) -> np.ndarray:
+    """L-BFGS-B in log-gain space from ``best`` along the sensitivities' gradient of the
+    cost over the design samples, where some of them miss a spec (where all meet them,
+    only the speed term is left, and following its gradient trades the slack unseen
+    samples need for speed); its end point where the (batch) cost is lower."""
+    from scipy.optimize import minimize
+
+    if not np.any(_per_sample(evaluator, 10.0 ** best[None, :], design) > 0):
+        return best
+
+    def cost_and_slope(z: np.ndarray) -> tuple[float, np.ndarray]:
+        gains = 10.0 ** np.clip(z, box[:, 0], box[:, 1])
+        found = evaluator.cost_and_gradient(gains, design)
+        if found is None:
+            return math.inf, np.zeros_like(z)
+        return found[0], found[1] * gains * math.log(10.0)
+
+    result = minimize(cost_and_slope, best, jac=True, method="L-BFGS-B",
+                      bounds=list(map(tuple, box)), options={"maxiter": iterations})
+    end = np.clip(result.x, box[:, 0], box[:, 1])
+    before, after = evaluator.cost(10.0 ** np.vstack([best, end]), design)
+    return end if after < before else best
 
 
 def _scalar_cost(z: np.ndarray, evaluator: _Evaluator, gains_of, design: np.ndarray) -> float:
