@@ -490,6 +490,7 @@ def tune_command(
         use_agg()
         written = result.write(out, call=the_call(ctx))
         _print_gains(result)
+        out_console.print(result.feasibility())
         for path in written:
             out_console.print(f"wrote {path}")
 
