@@ -146,21 +146,6 @@ def test_invalid_and_failing_sets_fail_alone():
     assert_close(batch.table["stroke"].iloc[5], good["stroke"], FEATURE_RTOL, "stroke")
 
 
-def test_simulate_refuses_the_values_a_batch_row_refuses():
-    """One run and a batch row are held together: values a batch calls invalid (Fs < Fc,
-    a negative mass) are refused by ``simulate(values=)`` with the same reason."""
-    bad = pd.DataFrame({"Fc": [PARAMS["Fc"], PARAMS["Fc"]],
-                        "Fs": [0.5 * PARAMS["Fc"], PARAMS["Fs"]],
-                        "m": [PARAMS["m"], -1.0]})
-    batch = simulate_batch(MODEL, EXPERIMENT, bad, features=())
-    assert batch.table["status"].tolist() == ["invalid", "invalid"]
-    for row, reason in zip(bad.to_dict("records"), batch.table["error"], strict=True):
-        with pytest.raises(ParameterError) as refused:
-            pa.simulate(MODEL, EXPERIMENT, values=row)
-        assert str(refused.value).removeprefix("values: ") == reason.removeprefix(
-            "invalid parameters: ")
-
-
 def test_bad_table_and_names_are_refused():
     with pytest.raises(ParameterError, match="did you mean 'sigma0'"):
         simulate_batch(MODEL, EXPERIMENT, pd.DataFrame({"sigma_0": [1e5]}))

@@ -202,18 +202,6 @@ def _output_count(experiment: Experiment, t_eval) -> int:
     return int(np.size(t_eval))
 
 
-def _check_values(model, values: Mapping[str, float]) -> None:
-    """Refuse a run's ``values`` out of their ranges or breaking a relation (Fs >= Fc)
-    with the model's other values, as the batch engine refuses such a row."""
-    from ..parameters.validation import row_problems
-
-    params = getattr(model, "params", None)
-    base = dict(getattr(params, "values", {}) or {})
-    problem = row_problems(base, list(values), np.array([list(values.values())]))[0]
-    if problem is not None:
-        raise ParameterError(f"values: {problem.removeprefix('invalid parameters: ')}")
-
-
 def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
             vector: np.ndarray | None = None, values: Mapping[str, float] | None = None
             ) -> Prepared:
@@ -237,7 +225,6 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
         assembly.check_parameters(list(values), "values")
         values = {n: check_finite(f"values[{n!r}]", v, error=ParameterError)
                   for n, v in values.items()}
-        _check_values(model, values)
         assembly.update(vec, values)
     else:
         kernel.derive(vec)
