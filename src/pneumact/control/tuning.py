@@ -60,6 +60,10 @@ FIRST_DESIGN = 4
 #: samples added to the design set per robust round
 ADDED_PER_ROUND = 4
 GAINS_FORMAT = "pneumact-gains/1"
+#: each spec's column in the metrics table (the error's absolute value)
+SPEC_METRICS = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
+                "error": "abs_steady_state_error", "effort": "control_effort",
+                "variation": "command_variation", "hunting": "limit_cycle_amplitude"}
 #: a parameter drives the failures when the failing samples' mean rank is in this tail
 DRIVER_TAIL = 0.25
 
@@ -316,11 +320,8 @@ class TuningResult(ResultVocabulary):
         return table.reset_index(drop=True)
 
     def _spec_metrics(self) -> dict[str, str]:
-        names = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
-                 "error": "abs_steady_state_error", "effort": "control_effort",
-                 "variation": "command_variation", "hunting": "limit_cycle_amplitude"}
         specs = [*self.specs.limits(), *(["hunting"] if self.specs.no_hunting else [])]
-        return {spec: names[spec] for spec in specs}
+        return {spec: SPEC_METRICS[spec] for spec in specs}
 
     def _missed(self, spec: str, row) -> str:
         if not row.ok:
@@ -404,9 +405,7 @@ class TuningResult(ResultVocabulary):
         frame = self.metrics_table
         rows = []
         limits = {**self.specs.limits(), "hunting": 0.0}
-        names = {"settling": "settling_time", "rise": "rise_time", "overshoot": "overshoot",
-                 "error": "abs_steady_state_error", "effort": "control_effort",
-                 "variation": "command_variation", "hunting": "limit_cycle_amplitude"}
+        names = SPEC_METRICS
         for move in self.moves:
             runs = frame[frame["move"] == move.label]
             for spec in self.specs.limits() | ({"hunting": 0.0} if self.specs.no_hunting
