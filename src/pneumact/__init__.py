@@ -66,6 +66,7 @@ _EXPORTS: dict[str, str] = {
     "Profile": "pneumact.options",
     "Weights": "pneumact.options",
     "identify_paper": "pneumact.identification",
+    "identify_signature": "pneumact.identification",
     "inverse_friction": "pneumact.identification",
     "synthetic_campaign": "pneumact.identification",
     "validate": "pneumact.validation",
@@ -154,6 +155,7 @@ __all__ = [
     "fit",
     "friction_rig_for",
     "identify_paper",
+    "identify_signature",
     "inverse_friction",
     "load_params",
     "read_record",
@@ -212,6 +214,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from pneumact.identification import (
         fit,
         identify_paper,
+        identify_signature,
         inverse_friction,
         synthetic_campaign,
     )

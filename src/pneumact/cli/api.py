@@ -57,6 +57,7 @@ API: dict[str, tuple[str, ...]] = {
     "params show": ("pneumact.parameters:load_params",),
     "params check": ("pneumact.parameters:load_params",),
     "identify paper": ("pneumact.identification:identify_paper",),
+    "identify signature": ("pneumact.identification:identify_signature",),
     "identify friction": ("pneumact.identification:inverse_friction",),
     "control step": ("pneumact.experiments:SetpointStep", *_CONTROL),
     "control profile": ("pneumact.experiments:SetpointProfile", *_CONTROL),
@@ -98,7 +99,8 @@ OWN: dict[str, str] = {
     "out": "the folder a command writes its files into (atomically, all or none)",
     "input_csv": "a CSV of time and an input signal, read by experiments.from_csv",
     "plan": "campaign: write the plan of the tests instead of simulating them",
-    "partial": "identify paper: write identified.toml even with unidentified parameters",
+    "partial": "identify paper: no longer needed (hidden; identified.toml is always "
+               "written, the prior's values marked)",
     "validate": "identify friction: a second record to validate the estimates on",
     "version": "print the version",
     "gains_file": "control step: a gains file written by control tune (its controller)",

@@ -161,7 +161,7 @@ def campaign(
 
 # --------------------------------------------------------------------------- identify
 def _verdict_table(result) -> Table:
-    table = Table(title="identification: " + result.summary())
+    table = Table(title="identification: " + result.headline())
     for column in ("parameter", "value", "95 % interval", "unit", "verdict", "reason"):
         table.add_column(column, overflow="fold")
     estimates = result.to_pandas()
@@ -194,15 +194,18 @@ def identify_paper_command(
         "--staged-only", help="Stop after the paper's four stages (fast; their intervals "
                               "are conditional on the earlier stages).")] = False,
     partial: Annotated[bool, typer.Option(
-        "--partial", help="Write identified.toml even when some parameters are not "
-                          "identified (they keep the values of --params).")] = False,
+        "--partial", hidden=True, help="No longer needed: identified.toml always holds "
+                                       "the identified values, the others at the "
+                                       "prior's, marked.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the input-noise replicates.")] = 0,
     workers: WorkersOption = Executor.workers,
 ) -> None:
     """Identify the actuator from bench records named sweep*, ramp* and presliding*: the
     paper's staged procedure (section III.2), then a joint refinement of every spring and
     friction parameter, intervals that include the noise on the measured inputs, and a
-    verdict per parameter. Exits 3 when a parameter is not identified."""
+    verdict per parameter. Exits 3 when a parameter is not identified; identified.toml
+    holds the identified values and the prior's for the others, each marked. A folder
+    with a sweep and no ramp is a signature (see ``pneumact identify signature``)."""
     with user_errors():
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
@@ -222,21 +225,74 @@ def identify_paper_command(
                 sliding_speed=None if sliding_speed is None else sliding_speed * 1e-3,
                 chamber=build_chamber(chamber), refine=not staged_only, seed=seed,
                 executor=executor, progress=progress)
-        use_agg()
-        written = write_outputs(out, result.writers(call=the_call(ctx), partial=partial))
-        out_console.print(_verdict_table(result))
-        for finding in result.diagnostics:
-            style = {"error": "red", "warning": "yellow"}.get(finding.severity, "")
-            err_console.print(Text(finding.line(), style=style), soft_wrap=True)
-        for path in written:
-            out_console.print(f"wrote {path}")
-        if not result.ok:
-            err_console.print(Text(
-                "not every parameter is identified: " + ("identified.toml holds the "
-                "identified ones and the prior's values for the others (--partial)"
-                if partial else "identified.toml was not written (use --partial to "
-                "write the identified ones)"), style="red"), soft_wrap=True)
-            raise typer.Exit(EXIT_NOT_IDENTIFIED)
+        if partial:
+            err_console.print("note: --partial is no longer needed: identified.toml always "
+                              "holds the identified values, the others at the prior's, "
+                              "marked", style="yellow", soft_wrap=True)
+        _finish_identification(result, out, the_call(ctx))
+
+
+def _finish_identification(result, out: Path, call: str) -> None:
+    """Write an identification's files, print its verdicts, findings and, for a
+    signature, the valve engineer's numbers; exit 3 unless what the records can tell
+    is identified."""
+    from pneumact.identification import SignatureIdentification
+
+    use_agg()
+    written = write_outputs(out, result.writers(call=call))
+    out_console.print(_verdict_table(result))
+    signature = isinstance(result, SignatureIdentification)
+    if signature:
+        out_console.print(_valve_table(result.valve))
+    for finding in result.diagnostics:
+        style = {"error": "red", "warning": "yellow"}.get(finding.severity, "")
+        err_console.print(Text(finding.line(), style=style), soft_wrap=True)
+    for path in written:
+        out_console.print(f"wrote {path}")
+    done = result.signature_ok if signature else result.ok
+    if not result.ok:
+        err_console.print(Text(
+            ("a signature tells F0, k and Fc; " if signature else "") + "not every "
+            "parameter is identified: identified.toml holds the identified ones and the "
+            "prior's values for the others, each marked in its source", style="yellow"
+            if done else "red"), soft_wrap=True)
+    if not done:
+        raise typer.Exit(EXIT_NOT_IDENTIFIED)
+
+
+def _valve_table(valve) -> Table:
+    table = Table(title="the valve engineer's numbers (95 % intervals)")
+    for column in ("quantity", "value", "meaning"):
+        table.add_column(column, overflow="fold")
+    for name, row in valve.iterrows():
+        table.add_row(str(name), str(row["display"]), escape(str(row["meaning"])))
+    return table
+
+
+@identify_app.command("signature")
+def identify_signature_command(
+    ctx: typer.Context,
+    records: RecordsArgument,
+    params: ParamsOption = "vgt-paper",
+    out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-identify"),
+    spread: Annotated[float, typer.Option(
+        help="How far off the spring and friction values of --params may be [%].")] = 50.0,
+) -> None:
+    """Identify what one slow pressure sweep up and down (a valve signature) tells: F0, k
+    and Fc (sigma2 where the speed varies), the bench set, spring rate, friction band and
+    dead band with intervals; the other parameters are named with the test that would
+    tell each. Exits 3 when F0, k or Fc is not identified."""
+    with user_errors():
+        from pneumact.identification import identify_signature
+        from pneumact.io import read_records
+
+        check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
+        out = check_out_dir("--out", out)
+        parameter_set = load_quietly(params)
+        recs = read_records(records, required=("pressure", "position"),
+                            p_atm=parameter_set["p_atm"])
+        result = identify_signature(recs, parameter_set, prior_spread=spread / 100)
+        _finish_identification(result, out, the_call(ctx))
 
 
 class DataFormat(StrEnum):

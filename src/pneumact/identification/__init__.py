@@ -2,7 +2,8 @@
 
 - ``identify_paper``: the paper's staged procedure (section III.2) on bench records,
   then a joint refinement, intervals that include the input noise, and a verdict per
-  parameter;
+  parameter; ``identify_signature``: what one slow up-and-down loop tells (F0, k, Fc,
+  the valve engineer's bench set, spring rate, friction band and dead band);
 - ``fit``: any parameters of any model fitted to one or several records (forward
   sensitivities as the Jacobian, shared or per-record parameters, multistart, profile
   likelihood);
@@ -23,7 +24,14 @@ from .campaign import (
 from .estimates import Estimates, linear_least_squares
 from .fit import FitResult, ProfileLikelihood, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
-from .paper import PaperIdentification, StageResult, identify_paper, record_kind
+from .paper import (
+    PaperIdentification,
+    SignatureIdentification,
+    StageResult,
+    identify_paper,
+    identify_signature,
+    record_kind,
+)
 
 __all__ = [
     "BenchTest",
@@ -34,11 +42,13 @@ __all__ = [
     "Noise",
     "PaperIdentification",
     "ProfileLikelihood",
+    "SignatureIdentification",
     "StageResult",
     "design_campaign",
     "experiment_for",
     "fit",
     "identify_paper",
+    "identify_signature",
     "inverse_friction",
     "linear_least_squares",
     "paper_campaign",

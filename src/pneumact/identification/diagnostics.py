@@ -36,6 +36,7 @@ from .inputs import sensor_noise
 __all__ = [
     "IDENTIFIED_HALF_WIDTH",
     "MISFIT_RATIO",
+    "MISFIT_REMEDY",
     "MISFIT_STRUCTURE",
     "MODEL_FIDELITY",
     "POORLY_HALF_WIDTH",
@@ -90,6 +91,12 @@ REMEDIES = {
     "sigma0": "a presliding test: small fast pressure steps below break-away after a stop",
     "sigma1": "a presliding test with steps fast enough to ring the stuck mode",
 }
+
+
+#: What to do when the model does not fit a record (then no parameter is trusted).
+MISFIT_REMEDY = ("find what the model misses in the records the diagnostics name (a "
+                 "sensor lag or offset, another friction law, the chamber's "
+                 "thermodynamics) and compare the residual plots")
 
 
 @dataclass(frozen=True)
@@ -183,7 +190,7 @@ def verdicts(names: Sequence[str], values: np.ndarray, half_widths: np.ndarray,
             out.append(Verdict(name, NOT_IDENTIFIABLE, f"95 % interval ±{100 * relative:.0f} %"
                                " of the value", remedy))
         elif caveat:
-            out.append(Verdict(name, POORLY, caveat, ""))
+            out.append(Verdict(name, POORLY, caveat, MISFIT_REMEDY))
         elif relative > identified:
             out.append(Verdict(name, POORLY, f"95 % interval ±{100 * relative:.0f} % of the "
                                "value", remedy))

@@ -38,6 +38,8 @@ from ..io.report import ResultVocabulary
 from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
+    MISFIT_REMEDY,
+    MISFIT_STRUCTURE,
     MODEL_FIDELITY,
     POORLY,
     REMEDIES,
@@ -80,8 +82,8 @@ if TYPE_CHECKING:
     from ..io.report import Report
     from ..parameters.parameter_set import ParameterSet
 
-__all__ = ["STAGES", "PaperIdentification", "StageResult", "identify_paper", "record_kind",
-           "with_estimates"]
+__all__ = ["STAGES", "PaperIdentification", "SignatureIdentification", "StageResult",
+           "identify_paper", "identify_signature", "record_kind", "with_estimates"]
 
 #: The presliding test is presliding while its excursion after the approach stays below
 #: this many static deflections Fs/σ0 (LuGre's presliding creep ends near 3·Fs/σ0).
@@ -130,6 +132,11 @@ class PaperIdentification(ResultVocabulary):
     """The stages, the joint refinement, the final estimates with their verdicts, and
     the identified parameter set (see the module docstring).
 
+    ``parameters``: the identified set, only when every parameter is identified (else it
+    raises and says why); ``parameter_set(partial=True)``: the identified values with the
+    prior's for the others, each marked in its source; ``parameters_unchecked``: every
+    estimate as it came out, unchecked (for diagnosis, not for use).
+
     ``to_pandas(truth=None)``: the estimates (``"verdicts"``, ``"diagnostics"``,
     ``"residuals"``: the others); ``plot()``: the joint fit (the first stage's fit when
     there is none); ``write(folder)``: every table and figure, report.md, report.html
@@ -145,7 +152,7 @@ class PaperIdentification(ResultVocabulary):
     verdicts: list[Verdict]
     diagnostics: list[Diagnostic]
     residuals: pd.DataFrame
-    parameters: ParameterSet
+    parameters_unchecked: ParameterSet
     initial: ParameterSet
     records: list[Record]
     input_noise: InputNoise | None = None
@@ -172,15 +179,49 @@ class PaperIdentification(ResultVocabulary):
     def identified(self) -> list[str]:
         return [v.parameter for v in self.verdicts if v.identified]
 
-    def summary(self) -> str:
-        """One line: how many parameters are identified, and what failed."""
-        bad = [f"{v.parameter} ({v.verdict})" for v in self.verdicts if not v.identified]
-        errors = [d.line() for d in self.diagnostics if d.severity == "error"]
-        if not bad and not errors:
+    @property
+    def parameters(self) -> ParameterSet:
+        """The identified parameter set, when every parameter is identified; otherwise a
+        ``ParameterError`` that names the others (``parameter_set(partial=True)`` gives
+        the identified values with the prior's for the rest, marked;
+        ``parameters_unchecked`` the estimates as they are)."""
+        if not self.ok:
+            raise ParameterError(
+                "identification: " + self.headline() + "; the parameter set is not "
+                "checked. Use parameter_set(partial=True) for the identified values with "
+                "the prior's for the others (each marked in its source), or "
+                "parameters_unchecked for the raw estimates")
+        return self.parameters_unchecked
+
+    def headline(self) -> str:
+        """One line: how many parameters are identified, and which are not."""
+        bad = [v.parameter for v in self.verdicts if not v.identified]
+        if not bad and self.ok:
             return f"all {len(self.verdicts)} parameters identified"
-        return "; ".join([f"{len(self.verdicts) - len(bad)} of {len(self.verdicts)} "
-                          "parameters identified" + (f"; not: {', '.join(bad)}" if bad
-                                                      else ""), *errors])
+        head = f"{len(self.verdicts) - len(bad)} of {len(self.verdicts)} parameters identified"
+        return head + (f" (not: {', '.join(bad)})" if bad else " (errors found)")
+
+    def summary(self) -> str:
+        """At most a screen: the headline, one line per parameter not identified (its
+        verdict and reason), each remedy once, and the errors found."""
+        lines = [self.headline()]
+        bad = [v for v in self.verdicts if not v.identified]
+        for v in bad:
+            lines.append(f"  {v.parameter}: {v.verdict}: {_shorten(v.reason)}")
+        errors = list(dict.fromkeys(_shorten(d.message) for d in self.diagnostics
+                                    if d.severity == "error"))
+        for message in errors[:SUMMARY_ERRORS]:
+            lines.append(f"  error: {message}")
+        if len(errors) > SUMMARY_ERRORS:
+            lines.append(f"  ... and {len(errors) - SUMMARY_ERRORS} more errors (see the "
+                         "diagnostics table)")
+        remedies = list(dict.fromkeys([v.remedy for v in bad if v.remedy]
+                                      + [d.remedy for d in self.diagnostics
+                                         if d.severity == "error" and d.remedy]))
+        if remedies:
+            lines.append("  what would fix it:")
+            lines += [f"  - {_shorten(r)}" for r in remedies[:SUMMARY_REMEDIES]]
+        return "\n".join(lines)
 
     # -- tables ------------------------------------------------------------------------
     def tables(self) -> dict[str, pd.DataFrame]:
@@ -237,6 +278,10 @@ class PaperIdentification(ResultVocabulary):
                              float(stage.estimates.stderr[j]))
         return out
 
+    def extra_tables(self) -> dict[str, pd.DataFrame]:
+        """Tables a kind of identification adds to its report, by caption (none here)."""
+        return {}
+
     def diagnostics_table(self) -> pd.DataFrame:
         return pd.DataFrame([{"severity": d.severity, "stage": d.stage,
                               "message": d.message, "remedy": d.remedy}
@@ -288,12 +333,21 @@ class PaperIdentification(ResultVocabulary):
         return fig
 
     def band(self, record: Record, draws: int = 60):
-        """``uncertainty.prediction_band`` of the identified model on ``record``."""
+        """``uncertainty.prediction_band`` of the identified model on ``record``, drawn
+        from the parameters with an interval; refused where no interval holds (the model
+        does not fit the records) or none has one."""
         from ..simulation import Rodas4
         from .fit import experiment_for
         from .joint import bench_model
 
-        model = bench_model(record, self.parameters, self.extra.get("friction"),
+        if not self.intervals_hold:
+            raise ParameterError("identification: no prediction band: the model does not "
+                                 "fit every record, so no interval holds (" +
+                                 self.headline() + ")")
+        if not np.any(np.isfinite(self.estimates.stderr)):
+            raise ParameterError("identification: no prediction band: no parameter has an "
+                                 "interval")
+        model = bench_model(record, self.parameters_unchecked, self.extra.get("friction"),
                             self.extra.get("chamber"))
         experiment = experiment_for(model, record, smooth=True)
         names = [n for j, n in enumerate(self.estimates.names)
@@ -306,11 +360,12 @@ class PaperIdentification(ResultVocabulary):
                                solver=Rodas4(rtol=JOINT_RTOL * 100))
 
     # -- output ------------------------------------------------------------------------
-    def writers(self, truth=None, call: str = "", partial: bool = False) -> dict:
+    def writers(self, truth=None, call: str = "", partial: bool = True) -> dict:
         """File name -> writer: estimates.csv, verdicts.csv, diagnostics.csv,
         residuals.csv, stage_*.png, joint_fit.png, band.png, report.md, report.html, and
-        identified.toml when every parameter is identified (or ``partial``: then only
-        the identified ones replace the prior's values)."""
+        identified.toml: the identified values, the prior's for the others, each marked
+        in its source (``parameter_set(partial=True)``; ``partial=False``: only when
+        every parameter is identified)."""
         from ..parameters import write_params
 
         rendered: dict[str, bytes] = {}
@@ -322,7 +377,8 @@ class PaperIdentification(ResultVocabulary):
 
         writers: dict = {}
         if self.ok or partial:
-            writers["identified.toml"] = lambda p: write_params(self.parameter_set(partial), p)
+            writers["identified.toml"] = lambda p: write_params(
+                self.parameter_set(partial=True), p)
         writers["estimates.csv"] = lambda p: self.to_pandas(truth=truth).to_csv(p)
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
@@ -359,21 +415,30 @@ class PaperIdentification(ResultVocabulary):
         from ..parameters.parameter_set import ParameterInfo, number_text
 
         if not (self.ok or partial):
-            raise ParameterError("identification: not every parameter is identified ("
-                                 + self.summary() + "); ask for a partial result "
-                                 "explicitly (partial=True, --partial)")
+            raise ParameterError("identification: " + self.headline() + "; ask for a "
+                                 "partial result explicitly (partial=True)")
         if self.ok:
-            return self.parameters
-        params = self.parameters
+            return self.parameters_unchecked
+        params = self.parameters_unchecked
         values, info = dict(params.values), dict(params.info)
         for v in self.verdicts:
             if not v.identified:
-                values[v.parameter] = self.initial[v.parameter]
+                values[v.parameter], source = self._fallback(v.parameter, values)
                 info[v.parameter] = ParameterInfo(
-                    number_text(v.parameter, values[v.parameter]),
-                    "prior value: not identified", f"{v.verdict}: {v.reason}")
+                    number_text(v.parameter, values[v.parameter]), source,
+                    f"{v.verdict}: {v.reason}")
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
+
+    def _fallback(self, name: str, values: dict[str, float]) -> tuple[float, str]:
+        """The value a parameter that is not identified takes in the partial set, and
+        its source: the prior's, except a static friction below the set's Coulomb
+        level (which no parameter set holds): the prior's ratio Fs/Fc on that level."""
+        prior = self.initial[name]
+        if name == "Fs" and "Fc" in values and prior < values["Fc"]:
+            return (prior / self.initial["Fc"] * values["Fc"],
+                    "prior's ratio Fs/Fc on the identified Fc: not identified")
+        return prior, "prior value: not identified"
 
     def report(self, call: str = "", png: bytes | None = None, truth=None,
                pngs: dict[str, bytes] | None = None) -> Report:
@@ -393,11 +458,14 @@ class PaperIdentification(ResultVocabulary):
             else:
                 report.figure(makers[name](), caption)
 
-        report = Report(self.report_title, call=call, parameters=self.parameters)
+        report = Report(self.report_title, call=call,
+                        parameters=self.parameter_set(partial=True))
         report.text(("Result: " if self.ok else "Result NOT usable as it is: ")
                     + self.summary())
         report.text("Records: " + ", ".join(Path(r.source).name for r in self.records))
         report.table(self.verdicts_table(), "Verdict per parameter")
+        for caption, table in self.extra_tables().items():
+            report.table(table, caption)
         report.table(self.to_pandas(truth=truth), "Staged and joint estimates, standard errors and "
                      "95 % intervals (SI; the joint ones include the input noise)")
         if len(self.diagnostics):
@@ -417,8 +485,10 @@ class PaperIdentification(ResultVocabulary):
         return report
 
     def write(self, out_dir: str | PathLike[str], truth=None, *, call: str = "",
-              partial: bool = False) -> list[Path]:
-        """Write every file of ``writers`` into ``out_dir``, all or none."""
+              partial: bool = True) -> list[Path]:
+        """Write every file of ``writers`` into ``out_dir``, all or none (identified.toml
+        with the prior's values for what is not identified, marked; ``partial=False``:
+        only when every parameter is identified)."""
         from ..io.tables import write_files
 
         return write_files(out_dir, self.writers(truth, call, partial))
@@ -437,6 +507,17 @@ class PaperIdentification(ResultVocabulary):
         for name in self.stages:
             lines += [f"## {STAGES[name]}", "", f"![{name}](stage_{name}.png)", ""]
         return "\n".join(lines)
+
+
+#: ``summary`` lists at most this many distinct errors and remedies (a screen).
+SUMMARY_ERRORS = 5
+SUMMARY_REMEDIES = 8
+#: ... each cut to this many characters.
+SUMMARY_WIDTH = 160
+
+
+def _shorten(text: str) -> str:
+    return text if len(text) <= SUMMARY_WIDTH else text[: SUMMARY_WIDTH - 1] + "…"
 
 
 def _markdown(table: pd.DataFrame) -> str:
@@ -461,7 +542,9 @@ def _kinds(records: Sequence[Record]) -> dict[str, list[Record]]:
     missing = [k for k, v in kinds.items() if not v]
     if missing:
         raise DataError(f"identify_paper: no {', '.join(missing)} record among "
-                        f"{', '.join(Path(r.source).name for r in records)}")
+                        f"{', '.join(Path(r.source).name for r in records)}; a sweep alone "
+                        "is a signature (identify_signature, pneumact identify signature); "
+                        "for every parameter, run the tests of `pneumact campaign --plan`")
     return kinds
 
 
@@ -688,6 +771,10 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     def step(label: str, fraction: float) -> None:
         notify(progress, label, fraction, 1.0)
 
+    if not any(record_kind(r) == "ramp" for r in records) and \
+            any(record_kind(r) == "sweep" for r in records):
+        return identify_signature(records, params, prior_spread=prior_spread, name=name,
+                                  progress=progress)
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)
@@ -821,3 +908,112 @@ def _staged_estimates(stages, staged, free: Sequence[str]) -> Estimates:
     dof = min(s.estimates.dof for s in stages.values())
     return Estimates(tuple(free), values, stderr, cov, dof,
                      tuple(catalogue()[n].unit for n in free))
+
+
+# --------------------------------------------------------------------------- a signature
+@dataclass(eq=False)
+class SignatureIdentification(PaperIdentification):
+    """What one slow up-and-down loop (a valve signature) tells (``identify_signature``):
+    F0, k, Fc (σ2 where the speed varies) with their verdicts, the others not
+    identifiable from a signature with the test that would tell each, and the valve
+    engineer's numbers (``to_pandas("valve")``: bench set, spring rate, friction band,
+    dead band, with 95 % intervals)."""
+
+    report_title = "Identification from a valve signature (one slow up-and-down loop)"
+    figure_name = "signature"
+
+    valve: pd.DataFrame = field(default_factory=pd.DataFrame)
+    structure: float = 0.0
+
+    @property
+    def intervals_hold(self) -> bool:
+        """The spring line with constant friction fits the branches."""
+        return self.structure <= MISFIT_STRUCTURE
+
+    @property
+    def signature_ok(self) -> bool:
+        """What a signature can tell (F0, k, Fc) is identified, and no error was found."""
+        return all(v.identified for v in self.verdicts if v.parameter in ("F0", "k", "Fc")) \
+            and not any(d.severity == "error" for d in self.diagnostics)
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {**super().tables(), "valve": self.valve}
+
+    def writers(self, truth=None, call: str = "", partial: bool = True) -> dict:
+        """``PaperIdentification.writers`` and valve_numbers.csv."""
+        writers = super().writers(truth, call, partial)
+        writers["valve_numbers.csv"] = lambda p: self.valve.to_csv(p)
+        return writers
+
+    def extra_tables(self) -> dict[str, pd.DataFrame]:
+        return {"The valve engineer's numbers, with 95 % intervals (SI; display: kPa, mm, "
+                "N)": self.valve}
+
+
+def identify_signature(records: Sequence[Record], params, *, prior_spread: float = 0.5,
+                       name: str | None = None,
+                       progress: ProgressCallback | None = None) -> SignatureIdentification:
+    """Identify what a valve signature can tell (``identification.signature``): F0, k,
+    Fc (σ2 where the speed varies) from the sweep records among ``records`` (slow
+    pressure sweeps up and down; other records are named and not used), with the
+    prior ``params`` (geometry, and rough friction values within ±``prior_spread``: they
+    bound the Stribeck term the friction level may hold); Fs, vs, σ0 and σ1 stay at the
+    prior's values, named as not identifiable from a signature with the test that would
+    tell each; and the valve engineer's numbers (bench set, spring rate, friction band,
+    dead band)."""
+    from ..io.records import as_records
+    from ..parameters import as_parameter_set
+    from ..version import __version__
+    from .signature import (
+        signature_fit,
+        signature_records,
+        signature_verdicts,
+        valve_numbers,
+    )
+
+    records = as_records(records, "identify_signature")
+    params = as_parameter_set(params, "identify_signature")
+    if not 0 <= prior_spread < 1:
+        raise ParameterError(f"identify_signature: prior_spread = {prior_spread}; must be "
+                             "in [0, 1) (the prior's relative uncertainty)")
+    check_progress(progress, "identify_signature")
+    notify(progress, "signature", 0.0, 1.0)
+    kinds = [record_kind(r) for r in records]
+    sweeps = signature_records(records, kinds)
+    diagnostics: list[Diagnostic] = []
+    unused = [Path(r.source).name for r, k in zip(records, kinds, strict=True) if k != "sweep"]
+    if unused:
+        diagnostics.append(Diagnostic(
+            "note", "signature", f"{', '.join(unused)} not used: without ramps the "
+            "friction curve below the sweep's speed is unknown, which the other stages need",
+            "ramps at steady speeds (pneumact campaign --plan) for the full procedure"))
+    fitted = signature_fit(sweeps, params, prior_spread)
+    diagnostics += list(fitted.diagnostics)
+    if not fitted.structure <= MISFIT_STRUCTURE:
+        diagnostics.append(Diagnostic(
+            "error", "signature", f"the spring line with constant friction does not fit the "
+            f"branches (structure {fitted.structure:.3g}× noise)", MISFIT_REMEDY))
+    names = [n for n in SPRING_AND_FRICTION if n in params]
+    judged = signature_verdicts(fitted, names)
+    est = fitted.estimates
+    held = [n for n in names if n not in est.names]
+    estimates = _with_held(est, held, params)
+    order = [estimates.names.index(n) for n in names]
+    estimates = Estimates(tuple(names), estimates.values[order], estimates.stderr[order],
+                          estimates.covariance[np.ix_(order, order)], estimates.dof,
+                          tuple(estimates.units[i] for i in order))
+    when = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    sources = {n: "identified, signature" if n in est.names and
+               np.isfinite(estimates.stderr[names.index(n)]) else
+               "prior value, held: not identifiable from a signature" for n in names}
+    identified = with_estimates(
+        params, estimates, sources, name or f"{params.name}-identified",
+        {"identified": f"pneumact {__version__} identify_signature, {when}",
+         "records": ", ".join(Path(r.source).name for r in sweeps)})
+    valve = valve_numbers(fitted, sweeps, params)
+    notify(progress, "done", 1.0, 1.0)
+    return SignatureIdentification(
+        {"signature": fitted.stage}, None, estimates, judged, diagnostics, pd.DataFrame(),
+        identified, params, list(records), None, None,
+        {"friction": None, "chamber": None, "joint_failed": False},
+        valve, fitted.structure)

@@ -39,14 +39,15 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range", "presliding_window",
-           "prior_bounds", "segments_of", "sliding_and_stribeck", "stage_presliding",
-           "stage_sliding", "stage_spring", "stage_stribeck", "within"]
+           "prior_bounds", "segments_of", "sliding_and_stribeck", "sliding_branches",
+           "stage_presliding", "stage_sliding", "stage_spring", "stage_stribeck", "within"]
 
 STAGES = {
     "spring": "(a) spring: F0, k from the quasi-static sweep",
     "sliding": "(b) sliding friction: Fc, σ2 by eq. 13 (|v| ≫ vs)",
     "stribeck": "(c) Stribeck: Fs, vs by eq. 12 (lower velocities)",
     "presliding": "(d) presliding: σ0, σ1 by output error, model in the loop",
+    "signature": "(a') signature: F0, k, Fc (σ2) from one slow up-and-down loop",
 }
 #: Fraction of the sweep's travel kept away from the rest stop and the turning point in
 #: stage (a): the spring line is fitted where the diaphragm slides freely.
@@ -129,30 +130,35 @@ class StageResult(ResultVocabulary):
 
 
 # --------------------------------------------------------------------------- (a)
+def sliding_branches(record: Record, params) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(position, drive force less inertia, velocity) of the samples of a sweep that
+    slide freely on either branch: faster than the velocity noise allows to call
+    "moving", ``SWEEP_MARGIN`` of the travel away from the rest stop and the turning
+    point, and on each branch at least ``SWEEP_STEADY`` × its median speed."""
+    kin = kinematics(record)
+    travel = float(np.ptp(kin.position))
+    margin = SWEEP_MARGIN * travel
+    moving = (np.abs(kin.velocity) > moving_threshold(kin, record)) & \
+        (kin.position > kin.position.min() + margin) & \
+        (kin.position < kin.position.max() - margin)
+    speed = np.abs(kin.velocity)
+    keep = np.zeros_like(moving)
+    for sign in (1, -1):
+        branch = moving & (np.sign(kin.velocity) == sign)
+        if branch.any():
+            keep |= branch & (speed >= SWEEP_STEADY * np.median(speed[branch]))
+    force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
+    return kin.position[keep], force[keep], kin.velocity[keep]
+
+
 def stage_spring(sweeps: Sequence[Record], params) -> StageResult:
     """(a): F0, k and the friction level from the moving parts of quasi-static sweeps:
     faster than the velocity noise allows to call "moving", ``SWEEP_MARGIN`` of the
     travel away from the rest stop and the turning point, and on each branch at least
     ``SWEEP_STEADY`` × its median speed."""
-    xs, fs, signs = [], [], []
-    for rec in sweeps:
-        kin = kinematics(rec)
-        travel = float(np.ptp(kin.position))
-        margin = SWEEP_MARGIN * travel
-        moving = (np.abs(kin.velocity) > moving_threshold(kin, rec)) & \
-            (kin.position > kin.position.min() + margin) & \
-            (kin.position < kin.position.max() - margin)
-        speed = np.abs(kin.velocity)
-        keep = np.zeros_like(moving)
-        for sign in (1, -1):
-            branch = moving & (np.sign(kin.velocity) == sign)
-            if branch.any():
-                keep |= branch & (speed >= SWEEP_STEADY * np.median(speed[branch]))
-        force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
-        xs.append(kin.position[keep])
-        fs.append(force[keep])
-        signs.append(np.sign(kin.velocity[keep]))
-    x, f, s = (np.concatenate(a) for a in (xs, fs, signs))
+    parts = [sliding_branches(rec, params) for rec in sweeps]
+    x, f, s = (np.concatenate([part[i] for part in parts]) for i in range(3))
+    s = np.sign(s)
     if not (np.any(s > 0) and np.any(s < 0)):
         raise DataError("stage (a): the sweep records need both branches (increasing and "
                         "decreasing position) off the rest stop")
