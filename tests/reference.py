@@ -514,3 +514,30 @@ LINEAR_DESIGN_SETTLING_RTOL = 0.02
 #: Kd stay within this factor of the design's (measured 1.57 and 1.39: the tuner trades
 #: the same overshoot for a faster settling, 0.22 s against 0.28 s)
 LINEAR_TUNED_GAIN_FACTOR = 2.0
+
+
+# --------------------------------------------------------------------------- identification read
+#: A refused identification's ``summary()`` fits a screen: at most this many lines ...
+SUMMARY_MAX_LINES = 25
+#: ... of at most this many characters.
+SUMMARY_MAX_WIDTH = 170
+
+
+# --------------------------------------------------------------------------- a signature
+#: Drawn actuators (``ActuatorFamily``, this seed) identified from a sweep alone ...
+SIGNATURE_ACTUATORS = 4
+SIGNATURE_SEED = 11
+#: ... from a prior whose spring and friction values are off by up to this fraction.
+SIGNATURE_PRIOR_ERROR = 0.4
+#: An identified estimate is within this fraction of the truth (the identification's
+#: promise: 5 %), and at least this share of the intervals hold the truth.
+SIGNATURE_TOLERANCE = {"F0": 0.05, "k": 0.05, "Fc": 0.05, "sigma2": 0.05}
+SIGNATURE_COVERAGE = 0.9
+#: The spring line's values agree with the truth within their interval plus this
+#: fraction (``identification.diagnostics.MODEL_FIDELITY`` and the inertia's share).
+SIGNATURE_FIDELITY = 2e-4
+#: The sine sweep that tells σ2: a peak speed [m/s] of this many vs, a viscous force
+#: there of this share of Fc.
+SIGNATURE_SINE_SPEED = 4e-3
+SIGNATURE_SINE_SPEED_VS = 20.0
+SIGNATURE_SIGMA2_SHARE = 0.3

@@ -135,12 +135,30 @@ def test_a_parameter_the_records_cannot_tell_is_refused(no_stribeck, start):
     assert verdicts.loc["vs", "verdict"] == "not identifiable", verdicts
     assert verdicts.loc["vs", "remedy"]
     assert not no_stribeck.ok
-    assert "identified.toml" not in no_stribeck.writers()
+    assert "identified.toml" in no_stribeck.writers()  # what is identified, priors marked
+    assert "identified.toml" not in no_stribeck.writers(partial=False)
     partial = no_stribeck.parameter_set(partial=True)
     assert partial["vs"] == start["vs"]
     assert "not identified" in partial.info["vs"].source
     with pytest.raises(ParameterError, match="partial"):
         no_stribeck.parameter_set()
+    with pytest.raises(ParameterError, match="vs.*parameter_set\\(partial=True\\)"):
+        no_stribeck.parameters  # noqa: B018 - the property refuses
+    assert no_stribeck.parameters_unchecked["vs"] > 0  # asked for by name
+
+
+def test_a_refused_result_reads_in_a_screen(no_stribeck):
+    """summary(): the headline, one line per parameter not identified, each remedy
+    once; every row that is not identified has a remedy."""
+    lines = no_stribeck.summary().splitlines()
+    bad = [v for v in no_stribeck.verdicts if not v.identified]
+    assert len(lines) <= ref.SUMMARY_MAX_LINES
+    assert all(len(line) <= ref.SUMMARY_MAX_WIDTH for line in lines)
+    remedies = [line for line in lines if line.startswith("  - ")]
+    assert len(remedies) == len(set(remedies))
+    assert all(v.remedy for v in bad), bad
+    for v in bad:
+        assert any(line.startswith(f"  {v.parameter}: ") for line in lines)
 
 
 def test_staged_procedure_names_missing_tests(campaign, start):
@@ -263,13 +281,14 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
     result = runner.invoke(app, ["identify", "paper", "fast", "--staged-only", "--out",
                                  "ident"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
-    assert not (tmp_path / "ident" / "identified.toml").exists()
     assert (tmp_path / "ident" / "report.html").exists()
-    assert "--partial" in result.output
+    with pytest.warns(PassivityWarning):
+        written = pa.load_params(tmp_path / "ident" / "identified.toml")
+    assert "prior" in written.info["vs"].source  # what is not identified says so
     result = runner.invoke(app, ["identify", "paper", "fast", "--partial", "--staged-only",
-                                 "--out", "ident"])
+                                 "--out", "ident2"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
-    assert (tmp_path / "ident" / "identified.toml").exists()
+    assert "no longer needed" in result.output
 
 
 def test_cli_bad_records_leave_nothing(tmp_path, monkeypatch):

@@ -39,6 +39,7 @@ from .diagnostics import (
     MISFIT_STRUCTURE,
     MODEL_FIDELITY,
     NOT_IDENTIFIABLE,
+    POORLY_HALF_WIDTH,
     REMEDIES,
     SMOOTHING_SAMPLES,
     Diagnostic,
@@ -58,6 +59,16 @@ SIGNATURE_PARAMETERS = ("F0", "k", "Fc", "sigma2")
 #: (10th to 90th percentile): on a sweep at one speed σ2·|v| is a constant, which Fc
 #: absorbs (the two columns of the regression are then the same up to a factor).
 SPEED_RANGE = 2.0
+#: Samples faster than this many of the highest plausible vs are used whatever the
+#: branch's median speed (the Stribeck term is below e^-3 = 5 % of Fs − Fc there, and
+#: its bound goes into Fc's interval): a sine sweep's varying speed tells σ2.
+STRIBECK_DECAYED = 3.0
+#: The velocity is differentiated over this many of the usual windows: its noise
+#: (5 % of the speed over the usual window) would bias σ2 low and Fc high by the
+#: share of the speed's variance it makes (errors in the regressor: 1-2 % measured on
+#: a sine sweep); a window 4× longer has 8× less noise, and the margins keep the
+#: reversals, where a long window blurs, out of the fit.
+SIGNATURE_SMOOTHING = 4.0
 #: The dead band is read where the position has left its turning value by this many
 #: position-noise standard deviations (a 5-σ move: noise alone never qualifies).
 DEAD_BAND_SIGMAS = 5.0
@@ -117,7 +128,8 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
     """The regression (p_atm − p)·A_d − m·a = F0 + k·x + F·sgn(v) (+ σ2·v where the
     speed varies) over the freely sliding samples of the ``sweeps``; Fc from the level F
     (see the module docstring), its interval including σ2's and the Stribeck bound's."""
-    parts = [sliding_branches(r, params) for r in sweeps]
+    fast = STRIBECK_DECAYED * params["vs"] * (1.0 + spread)
+    parts = [sliding_branches(r, params, fast, SIGNATURE_SMOOTHING) for r in sweeps]
     x, f, v = (np.concatenate([p[i] for p in parts]) for i in range(3))
     if not (np.any(v > 0) and np.any(v < 0)):
         raise DataError("signature: the records need both branches (the position rising "
@@ -135,7 +147,10 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
         trial, _, _ = linear_least_squares(np.column_stack([*columns, v]), f,
                                            [*names, "sigma2"], [*units, "N*s/m"],
                                            "signature", correlated=True)
-        sigma2_fitted = bool(trial.stderr[3] < prior_s2_sd and trial["sigma2"] > 0)
+        # the records tell σ2 when they pin it better than the prior does, or to
+        # within POORLY_HALF_WIDTH whatever the prior says
+        tells = max(prior_s2_sd, POORLY_HALF_WIDTH * abs(trial["sigma2"]) / 1.96)
+        sigma2_fitted = bool(trial["sigma2"] > 0 and trial.stderr[3] < tells)
     if sigma2_fitted:
         est, residual, _ = linear_least_squares(np.column_stack([*columns, v]), f,
                                                 [*names, "sigma2"], [*units, "N*s/m"],
@@ -297,7 +312,7 @@ def valve_numbers(fit: SignatureFit, records: Sequence[Record], params) -> pd.Da
          "half the friction band times A_d"),
         ("dead band", band, band_hw, "Pa", 1e-3, "kPa",
          f"pressure change after a reversal before the position moves ({reversals} "
-         "reversal(s) read)" if reversals else "no reversal off the rest stop to read"),
+         "reversal(s) read)" if reversals else "no reversal away from the end stops to read"),
     ]
     frame = pd.DataFrame(rows, columns=["quantity", "value", "ci95_half_width", "unit",
                                         "display_factor", "display_unit", "meaning"])

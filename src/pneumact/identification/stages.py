@@ -31,7 +31,13 @@ from scipy.optimize import least_squares
 from ..errors import DataError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
-from .bench import drive_force, kinematics, moving_threshold, steady_segments
+from .bench import (
+    drive_force,
+    kinematics,
+    moving_threshold,
+    smoothing_window,
+    steady_segments,
+)
 from .diagnostics import Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
 
@@ -130,12 +136,16 @@ class StageResult(ResultVocabulary):
 
 
 # --------------------------------------------------------------------------- (a)
-def sliding_branches(record: Record, params) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sliding_branches(record: Record, params, fast: float = np.inf, smoothing: float = 1.0
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(position, drive force less inertia, velocity) of the samples of a sweep that
     slide freely on either branch: faster than the velocity noise allows to call
     "moving", ``SWEEP_MARGIN`` of the travel away from the rest stop and the turning
-    point, and on each branch at least ``SWEEP_STEADY`` × its median speed."""
-    kin = kinematics(record)
+    point, and on each branch at least ``SWEEP_STEADY`` × its median speed or at least
+    ``fast`` [m/s] (a speed at which the Stribeck term has died out). ``smoothing``
+    lengthens the differentiation window (``bench.smoothing_window``) by that factor."""
+    kin = kinematics(record, None if smoothing == 1.0 else
+                     smoothing * smoothing_window(record))
     travel = float(np.ptp(kin.position))
     margin = SWEEP_MARGIN * travel
     moving = (np.abs(kin.velocity) > moving_threshold(kin, record)) & \
@@ -146,7 +156,8 @@ def sliding_branches(record: Record, params) -> tuple[np.ndarray, np.ndarray, np
     for sign in (1, -1):
         branch = moving & (np.sign(kin.velocity) == sign)
         if branch.any():
-            keep |= branch & (speed >= SWEEP_STEADY * np.median(speed[branch]))
+            keep |= branch & ((speed >= SWEEP_STEADY * np.median(speed[branch]))
+                              | (speed >= fast))
     force = drive_force(kin.pressure, params) - params["m"] * kin.acceleration
     return kin.position[keep], force[keep], kin.velocity[keep]
 
