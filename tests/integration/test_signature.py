@@ -4,6 +4,8 @@ engineer's numbers, and the command line."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -11,7 +13,7 @@ from typer.testing import CliRunner
 import pneumact as pa
 import reference as ref
 from pneumact.cli import app
-from pneumact.errors import ParameterError
+from pneumact.errors import ParameterError, PassivityWarning
 from pneumact.experiments import Experiment
 from pneumact.identification import (
     BenchTest,
@@ -156,6 +158,8 @@ def test_the_command_line_identifies_a_signature(tmp_path, monkeypatch, cases):
         assert result.exit_code == 0, result.output
         assert "bench set" in result.output and "friction band" in result.output
         assert (tmp_path / command / "valve_numbers.csv").exists()
-        written = pa.load_params(tmp_path / command / "identified.toml")
+        with warnings.catch_warnings():  # a drawn set may break LuGre's passivity
+            warnings.simplefilter("ignore", PassivityWarning)
+            written = pa.load_params(tmp_path / command / "identified.toml")
         assert "signature" in written.info["F0"].source
         assert "prior" in written.info["sigma1"].source
