@@ -119,6 +119,22 @@ def test_a_signature_result_hands_out_only_what_is_identified(results):
     assert len(result.summary().splitlines()) <= ref.SUMMARY_MAX_LINES
 
 
+def test_static_friction_in_the_level_widens_fc_not_biases_it(cases):
+    """A deep Stribeck dip (Fs = 2·Fc, δ = 1) with vs at the top of the prior's range:
+    a sweep at 2·vs, where the dip still adds 13 % of Fc to the level. Fc
+    is either refused or its interval holds the truth, never a wrong "identified"."""
+    truth, prior, _ = cases[1]
+    truth = truth.replace(Fs=ref.SIGNATURE_DEEP_DIP * truth["Fc"], delta=1.0,
+                          vs=ref.SIGNATURE_DEEP_DIP_VS)
+    prior = prior.replace(vs=truth["vs"] / 1.5, Fc=truth["Fc"], Fs=truth["Fs"], delta=1.0)
+    period = 2 * 0.9 * truth["x_max"] / (ref.SIGNATURE_DEEP_DIP_SPEED_VS * truth["vs"])
+    sweep = [t for t in design_campaign(prior, sweep_period=period).tests
+             if t.kind == "sweep"]
+    records = synthetic_campaign(truth, sweep, seed=2)
+    row = identify_signature(records, prior).to_pandas(truth=truth).loc["Fc"]
+    assert row["verdict"] != "identified" or row["truth_in_ci95"], row
+
+
 def test_sigma2_is_told_where_the_speed_varies(cases):
     """A slow sine sweep (the speed varies from 0 to its peak): σ2 fitted, right and
     covered, where the designed one-speed sweep leaves it not identifiable."""
