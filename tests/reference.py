@@ -545,3 +545,8 @@ SIGNATURE_SIGMA2_SHARE = 0.3
 SIGNATURE_DEEP_DIP = 2.0
 SIGNATURE_DEEP_DIP_VS = 2e-3
 SIGNATURE_DEEP_DIP_SPEED_VS = 2.0
+#: A prior whose k is off by this factor (beyond its ±50 %) ...
+SIGNATURE_FAR_PRIOR = 2.5
+#: ... and a plan's set-points read back from the CSV files within this [Pa] (written
+#: in kPa with full precision).
+PLAN_SETPOINT_ATOL = 1e-6

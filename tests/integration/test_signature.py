@@ -179,3 +179,33 @@ def test_the_command_line_identifies_a_signature(tmp_path, monkeypatch, cases):
             written = pa.load_params(tmp_path / command / "identified.toml")
         assert "signature" in written.info["F0"].source
         assert "prior" in written.info["sigma1"].source
+
+
+def test_a_plan_designed_from_the_prior_runs_on_the_truth(tmp_path, monkeypatch, cases):
+    """`campaign --plan --params PRIOR` then `campaign --simulate PLAN --params TRUTH`:
+    the truth's records under the prior's set-points; an estimate beyond the prior's
+    spread is named with the second round that fits it."""
+    monkeypatch.chdir(tmp_path)
+    truth, prior, _ = cases[2]
+    far = prior.replace(k=truth["k"] * ref.SIGNATURE_FAR_PRIOR)
+    pa.write_params(far, "prior.toml")
+    pa.write_params(truth, "truth.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PassivityWarning)
+        assert runner.invoke(app, ["campaign", "--plan", "--params", "prior.toml", "--out",
+                                   "plan"]).exit_code == 0
+        result = runner.invoke(app, ["campaign", "--simulate", "plan", "--params",
+                                     "truth.toml", "--out", "bench", "--seed", "1"])
+    assert result.exit_code == 0, result.output
+    planned = {t.name: t for t in design_campaign(far).tests}
+    records = pa.read_records("bench", p_atm=truth["p_atm"])
+    assert {r.name for r in records} == set(planned)
+    sweep = next(r for r in records if r.name == "sweep")
+    expected = planned["sweep"].experiment.drive(sweep.time)
+    assert np.allclose(sweep["setpoint"], expected, rtol=0, atol=ref.PLAN_SETPOINT_ATOL)
+    ident = identify_signature([sweep], far)
+    assert ident.to_pandas(truth=truth).loc["k", "truth_in_ci95"]
+    warned = [d for d in ident.diagnostics if d.stage == "prior" and "k =" in d.message]
+    assert warned and "campaign --plan" in warned[0].remedy
+    bad = runner.invoke(app, ["campaign", "--simulate", "nowhere", "--out", "b2"])
+    assert bad.exit_code == 2 and "plan.csv" in bad.output

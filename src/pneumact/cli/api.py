@@ -99,6 +99,7 @@ OWN: dict[str, str] = {
     "out": "the folder a command writes its files into (atomically, all or none)",
     "input_csv": "a CSV of time and an input signal, read by experiments.from_csv",
     "plan": "campaign: write the plan of the tests instead of simulating them",
+    "simulate": "campaign: run a plan written by --plan (from a prior) on --params",
     "partial": "identify paper: no longer needed (hidden; identified.toml is always "
                "written, the prior's values marked)",
     "validate": "identify friction: a second record to validate the estimates on",

@@ -120,12 +120,18 @@ def campaign(
         "--position-noise", help="Position sensor noise, standard deviation [µm].")] = 1.0,
     resolution: Annotated[float, typer.Option(
         help="Position sensor resolution [µm] (0: none).")] = 1.0,
+    simulate: Annotated[Path | None, typer.Option(
+        "--simulate", help="Run the plan written to this folder by --plan (designed from "
+                           "another set: a prior) on --params (the truth) instead of "
+                           "designing one.")] = None,
 ) -> None:
     """Design a bench campaign (sweep, ramps, presliding) for an actuator known roughly as
     --params, and simulate it as CSV records; with --plan, write the plan only (plan.csv
-    and the set-point of each test) for a real bench."""
+    and the set-point of each test) for a real bench; with --simulate PLAN, run a plan
+    designed earlier (from a prior) on --params."""
     with user_errors():
         from pneumact.identification import Noise, design_campaign, synthetic_campaign
+        from pneumact.identification.campaign import read_plan
 
         check_seed("--seed", seed)
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
@@ -135,6 +141,14 @@ def campaign(
             check_positive(label, value, strict=False)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        if simulate is not None:
+            if plan:
+                raise ParameterError("--simulate runs a written plan, --plan writes one: "
+                                     "give one of them")
+            _simulate_plan(read_plan(simulate), parameter_set, out, seed,
+                           Noise(pressure_noise * 1e3, position_noise * 1e-6,
+                                 resolution * 1e-6), simulate)
+            return
         designed = design_campaign(parameter_set, spread=spread / 100)
         if plan:  # the tests, for a real bench
             writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
@@ -157,6 +171,19 @@ def campaign(
             err_console.print(f"note: {note}", style="yellow", soft_wrap=True)
         what = "the plan" if plan else f"{len(designed.tests)} simulated records"
         out_console.print(f"wrote {what} ({len(written)} files) to {out}")
+
+
+def _simulate_plan(tests, parameter_set, out: Path, seed: int, noise, source: Path) -> None:
+    """Simulate a written plan's ``tests`` on ``parameter_set`` and write the records."""
+    from pneumact.identification import synthetic_campaign
+
+    with _status(f"simulating the plan of {source} on {parameter_set.name}"):
+        records = synthetic_campaign(parameter_set, tests, noise=noise, seed=seed)
+    units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
+    written = write_outputs(out, {f"{r.source}.csv": functools.partial(r.save, units=units)
+                                  for r in records})
+    out_console.print(f"ran the plan of {source} ({len(tests)} tests) on "
+                      f"{parameter_set.name}: wrote {len(written)} records to {out}")
 
 
 # --------------------------------------------------------------------------- identify

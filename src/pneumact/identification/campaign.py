@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -43,7 +45,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
-           "paper_campaign", "synthetic_campaign"]
+           "paper_campaign", "read_plan", "synthetic_campaign"]
 
 KINDS = ("sweep", "ramp", "presliding")
 
@@ -248,6 +250,59 @@ class CampaignPlan(ResultVocabulary):
         times = np.asarray(chosen.experiment.drive.breakpoints(), dtype=float)
         return pd.DataFrame({"time [s]": times,
                              "pressure [kPa abs]": chosen.experiment.drive(times) * 1e-3})
+
+
+#: The files of a written plan (``pneumact campaign --plan``): the table, and the
+#: set-point corners of each test.
+PLAN_TABLE = "plan.csv"
+SETPOINT_FILE = "setpoint_{}.csv"
+
+
+def read_plan(folder: str | PathLike[str]) -> list[BenchTest]:
+    """The bench tests of a plan written by ``pneumact campaign --plan`` (plan.csv and
+    one setpoint_<test>.csv per test), to run on another parameter set
+    (``synthetic_campaign(truth, read_plan(folder))``): a plan designed from a prior,
+    tested on the truth."""
+    root = Path(folder)
+    if not (root / PLAN_TABLE).is_file():
+        raise ExperimentError(f"read_plan: {root} has no {PLAN_TABLE}; write a plan with "
+                              "pneumact campaign --plan --out FOLDER")
+    table = _read_csv(root / PLAN_TABLE)
+    missing = [c for c in ("test", "kind", "valve", "sample rate [Hz]") if c not in table]
+    if missing:
+        raise ExperimentError(f"read_plan: {root / PLAN_TABLE} lacks the column(s) "
+                              f"{', '.join(missing)}")
+    tests = []
+    for _, row in table.iterrows():
+        name, kind, valve = str(row["test"]), str(row["kind"]), str(row["valve"])
+        path = root / SETPOINT_FILE.format(name)
+        if not path.is_file():
+            raise ExperimentError(f"read_plan: the plan names test {name!r} but {path} is "
+                                  "missing")
+        corners = _read_csv(path)
+        if list(corners.columns[:2]) != ["time [s]", "pressure [kPa abs]"]:
+            raise ExperimentError(f"read_plan: {path} must have the columns 'time [s]' and "
+                                  "'pressure [kPa abs]'")
+        times = corners["time [s]"].to_numpy(float)
+        values = corners["pressure [kPa abs]"].to_numpy(float) * 1e3
+        rate = float(row["sample rate [Hz]"])
+        if not (rate > 0 and np.all(np.diff(times) > 0) and np.all(values > 0)):
+            raise ExperimentError(f"read_plan: {path}: times must increase, pressures be "
+                                  f"absolute (> 0) and the sample rate ({rate}) > 0")
+        t_end = float(times[-1])
+        drive = PiecewiseLinear(times, values)
+        tests.append(BenchTest(name, kind, Experiment(drive, "pressure", t_end,
+                                                      n_points=round(t_end * rate) + 1,
+                                                      name=name),
+                               "regulator" if valve == "regulator" else "source", rate))
+    return tests
+
+
+def _read_csv(path: Path) -> pd.DataFrame:
+    try:
+        return pd.read_csv(path)
+    except (ValueError, OSError, UnicodeDecodeError) as exc:
+        raise ExperimentError(f"read_plan: cannot read {path}: {exc}") from None
 
 
 def _regulator_reach(params) -> float:

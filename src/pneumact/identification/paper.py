@@ -847,6 +847,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     if held:  # shown at the prior's values, with no interval
         judged += [Verdict(n, "not identifiable", why_not, REMEDIES[n]) for n in held]
         final_values = _with_held(final_values, list(held), staged)
+    diagnostics += _beyond_the_prior(final_values, params, prior_spread)
     when = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
     from ..version import __version__
 
@@ -867,6 +868,25 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
                                 "joint_failed": joint_failed})
+
+
+def _beyond_the_prior(estimates: Estimates, prior, spread: float) -> list[Diagnostic]:
+    """A warning for each estimate that left the prior's range (±``spread``): the
+    campaign was designed for another actuator, and a second round designed from the
+    estimates fits this one."""
+    out = []
+    for name, value in estimates.as_dict().items():
+        if "[" in name or name not in prior or prior[name] == 0:
+            continue
+        off = value / prior[name] - 1.0
+        if abs(off) > spread:
+            out.append(Diagnostic(
+                "warning", "prior", f"{name} = {value:.4g} is {100 * off:+.0f} % from the "
+                f"prior's {prior[name]:.4g}, beyond its ±{100 * spread:.0f} %: the tests "
+                "were designed for another actuator", "design a second round from these "
+                "estimates: pneumact campaign --plan --params identified.toml "
+                "(design_campaign(ident.parameter_set(partial=True)))"))
+    return out
 
 
 def _with_held(estimates: Estimates, names: Sequence[str], params) -> Estimates:
@@ -1010,6 +1030,7 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
         params, estimates, sources, name or f"{params.name}-identified",
         {"identified": f"pneumact {__version__} identify_signature, {when}",
          "records": ", ".join(Path(r.source).name for r in sweeps)})
+    diagnostics += _beyond_the_prior(est, params, prior_spread)
     valve = valve_numbers(fitted, sweeps, params)
     notify(progress, "done", 1.0, 1.0)
     return SignatureIdentification(
