@@ -51,6 +51,7 @@ BASE = {
     "params show": ["vgt-paper"],
     "params check": ["vgt-paper"],
     "identify paper": [str(GOOD / "record.csv"), "--out", "OUT"],
+    "identify signature": [str(GOOD / "record.csv"), "--out", "OUT"],
     "identify friction": [str(GOOD / "force_record.csv"), "--out", "OUT"],
     "control step": ["--out", "OUT"],
     "control profile": [str(GOOD / "profile.csv"), "--out", "OUT"],
@@ -91,6 +92,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--seed": ["-1"],
     "--spread": ["-1", "100", "150"],  # the prior's uncertainty, % in [0, 100)
     "--plan": [],
+    "--simulate": ["nowhere", "+--plan"],  # no plan there; with --plan: contradictory
     "--staged-only": [],
     "--partial": [],
     "identify paper --chamber": [],  # behind the regulator of the set-point records: legal
@@ -212,6 +214,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "unknown_unit.toml", "not_toml.toml", "negative_volume.toml", "missing.toml")],
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
     "identify paper": [str(BAD / "kpa_as_pa.csv")],
+    "identify signature": [str(BAD / "kpa_as_pa.csv")],
     "identify friction": [str(BAD / "missing.csv")],
     "sensitivity": ["sobbol"],
 }

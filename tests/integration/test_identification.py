@@ -142,7 +142,7 @@ def test_a_parameter_the_records_cannot_tell_is_refused(no_stribeck, start):
     assert "not identified" in partial.info["vs"].source
     with pytest.raises(ParameterError, match="partial"):
         no_stribeck.parameter_set()
-    with pytest.raises(ParameterError, match="vs.*parameter_set\\(partial=True\\)"):
+    with pytest.raises(ParameterError, match=r"vs.*parameter_set\(partial=True\)"):
         no_stribeck.parameters  # noqa: B018 - the property refuses
     assert no_stribeck.parameters_unchecked["vs"] > 0  # asked for by name
 

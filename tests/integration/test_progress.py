@@ -60,6 +60,11 @@ def _first(call) -> list:
     return seen
 
 
+def _as_sweep(record):
+    return [pa.Record.from_arrays(record.time, record.signals, record.units, "sweep",
+                                  {"kind": "sweep"})]
+
+
 def _table(model) -> pd.DataFrame:
     return pd.DataFrame({"Fc": [model.params["Fc"], 1.2 * model.params["Fc"]]})
 
@@ -131,6 +136,9 @@ CALLS = {
     "pneumact.control.tuning.tune": (True, _tuning),
     "pneumact.identification.paper.identify_paper": (
         False, lambda s, p: pa.identify_paper(s[2], s[0].params, progress=p)),
+    "pneumact.identification.paper.identify_signature": (
+        True, lambda s, p: pa.identify_signature(_as_sweep(s[2][0]), s[0].params,
+                                                 progress=p)),
     "pneumact.reproduction.reproduce": (
         False, lambda s, p: pa.reproduce("unused", quick=True, progress=p)),
     "pneumact.sensitivity.operating.across_conditions": (

@@ -164,7 +164,7 @@ def test_the_command_line_identifies_a_signature(tmp_path, monkeypatch, cases):
     exit 0, the valve numbers printed and written, identified.toml with the priors
     marked."""
     monkeypatch.chdir(tmp_path)
-    truth, prior, records = cases[0]
+    _, prior, records = cases[0]
     records[0].save("bench/sweep.csv", units={"pressure": "kPa", "position": "mm",
                                                "setpoint": "kPa"})
     pa.write_params(prior, "prior.toml")

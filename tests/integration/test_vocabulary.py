@@ -104,6 +104,22 @@ def _paper():
         pd.DataFrame(), params, params, [_record()])
 
 
+def _signature():
+    from pneumact.identification import SignatureIdentification
+    from pneumact.identification.diagnostics import Verdict
+
+    params = _params()
+    valve = pd.DataFrame({"value": [11.2e3], "ci95_half_width": [10.0], "unit": ["Pa"],
+                          "display_unit": ["kPa"], "meaning": ["F0/A_d"],
+                          "display": ["11.2 ± 0.01 kPa"]},
+                         index=pd.Index(["bench set: start of travel (vacuum)"],
+                                        name="quantity"))
+    return SignatureIdentification(
+        {"signature": _stage()}, None, _estimates(),
+        [Verdict("Fc", "identified", "tight"), Verdict("k", "identified", "tight")], [],
+        pd.DataFrame(), params, params, [_record()], valve=valve)
+
+
 def _inverse():
     from pneumact.identification import InverseFriction
 
@@ -303,6 +319,7 @@ FACTORIES = {
     "pneumact.identification.estimates.Estimates": lambda f: _estimates(),
     "pneumact.identification.stages.StageResult": lambda f: _stage(),
     "pneumact.identification.paper.PaperIdentification": lambda f: _paper(),
+    "pneumact.identification.paper.SignatureIdentification": lambda f: _signature(),
     "pneumact.identification.inverse.InverseFriction": lambda f: _inverse(),
     "pneumact.identification.campaign.CampaignPlan": lambda f: _campaign(),
     "pneumact.sensitivity.methods.StudyResult": lambda f: _study(),
