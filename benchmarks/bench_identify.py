@@ -11,7 +11,9 @@ Run: python benchmarks/bench_identify.py   (installed package or PYTHONPATH=src)
    parameters over all records, the input-noise share of the covariance, residual
    checks and verdicts; ``identify_paper`` defaults): median wall time on all cores
    (issue 18 target: under 30 s on 2 cores), and the result table against the truth.
-3. The σ0/σ1 output-error fit of stage (d) on the presliding record from a far-off
+3. The signature alone (``identify_signature`` on the campaign's sweep): median wall
+   time (issue 38 target: under 5 s).
+4. The σ0/σ1 output-error fit of stage (d) on the presliding record from a far-off
    start, with scipy least_squares and (i) the forward-sensitivity Jacobian, (ii) a
    2-point finite-difference Jacobian (what a user of scipy or lmfit gets), and (iii) a
    3-point one: wall time, simulations, iterations and the ratio.
@@ -25,7 +27,12 @@ import time
 import warnings
 
 import pneumact as pa
-from pneumact.identification import fit, identify_paper, synthetic_campaign
+from pneumact.identification import (
+    fit,
+    identify_paper,
+    identify_signature,
+    synthetic_campaign,
+)
 from pneumact.identification.stages import presliding_window
 
 START = {"F0": 0.92, "k": 0.86, "Fc": 0.77, "sigma2": 1.5, "Fs": 1.25, "vs": 2.0,
@@ -70,14 +77,20 @@ def main() -> None:
     wall, result = timed(lambda: identify_paper(fresh(records), start), args.repeats)
     print(f"whole procedure (stages, joint refinement, input-noise intervals, checks): "
           f"{wall:.2f} s (median of {args.repeats}), {result.joint.simulations} "
-          f"simulations in the joint fit; {result.summary()}")
+          f"simulations in the joint fit; {result.headline()}")
     table = result.to_pandas(truth=truth)
     print(table[["stage", "staged", "value", "stderr", "truth", "error_%",
                  "truth_in_ci95", "verdict"]].to_string())
     print(f"  -> target < 30 s on 2 cores: {'MET' if wall < 30 else 'NOT MET'}")
 
+    sweep = [r for r in records if r.meta["kind"] == "sweep"]
+    wall, signature = timed(lambda: identify_signature(fresh(sweep), start), args.repeats)
+    print(f"signature (one sweep: F0, k, Fc and the valve numbers): {1e3 * wall:.1f} ms "
+          f"(median of {args.repeats}); {signature.headline()}")
+    print(f"  -> target < 5 s: {'MET' if wall < 5 else 'NOT MET'}")
+
     presliding = next(r for r in records if r.meta["kind"] == "presliding")
-    current = staged.parameters  # stages a-c identified; σ0, σ1 refitted from the start
+    current = staged.parameters_unchecked  # stages a-c; σ0, σ1 refitted from the start
     model = pa.Actuator(current, valve=pa.PressureSource())
     window = (presliding_window(presliding, current), presliding.time[-1])
     begin = {"sigma0": start["sigma0"], "sigma1": start["sigma1"]}
