@@ -66,6 +66,7 @@ BASE = {
 #: "--option" (the same meaning in every command) or "command --option".
 BAD_VALUES: dict[str, list[str]] = {
     "--params": ["vgt-papr", str(BAD / "k_huge.toml"), str(BAD / "m_tiny.toml"),
+                 str(BAD / "k_in_n_per_mm.toml"),
                  str(BAD / "p_atm_in_kpa_as_pa.toml"), str(BAD / "p_atm_nan.toml"),
                  str(BAD / "fs_below_fc.toml"), str(BAD / "not_toml.toml")],
     "--out": [str(GOOD / "record.csv")],  # a file where a folder is expected
@@ -207,7 +208,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
     "validate": [str(BAD / "position_in_metres.csv"), str(BAD / "negative_pressure.csv")],
     "params show": ["vgt-papr", str(BAD / "k_huge.toml")],
     "params check": [str(BAD / name) for name in (
-        "k_huge.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml", "p_atm_nan.toml",
+        "k_huge.toml", "k_in_n_per_mm.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml", "p_atm_nan.toml",
         "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml", "bare_number.toml",
         "unknown_unit.toml", "not_toml.toml", "negative_volume.toml", "missing.toml")],
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
@@ -498,6 +499,7 @@ def _api_cases(vgt, actuator, record, folder: Path):
         *[(f"load_params {p.name}", lambda p=p: pa.load_params(p))
           for p in sorted(BAD.glob("*.toml"))],
         ("replace k=1e300", lambda: vgt.replace(k=1e300)),
+        ("replace k='12850 N/mm'", lambda: vgt.replace(k="12850 N/mm")),
         ("replace m=1e-30", lambda: vgt.replace(m=1e-30)),
         ("replace p_atm=nan", lambda: vgt.replace(p_atm=nan)),
         ("replace p_atm=100", lambda: vgt.replace(p_atm=100.0)),

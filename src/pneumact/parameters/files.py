@@ -21,9 +21,9 @@ from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
 from pneumact.parameters.validation import (
+    check_plausibility,
     message,
     unknown_name,
-    warn_implausible,
     warn_passivity,
 )
 
@@ -170,8 +170,9 @@ def load_params(name_or_path: str | os.PathLike[str]) -> ParameterSet:
             f"({', '.join(_shipped())}) or the path of a .toml file, not "
             f"{type(name_or_path).__name__}")
     ps = _load(name_or_path)
-    warn_implausible(ps.values, ps.name, stacklevel=2,
-                     given={n: i.given for n, i in ps.info.items()})
+    check_plausibility(ps.values, ps.name, stacklevel=2,
+                       given={n: i.given for n, i in ps.info.items()},
+                       source=ps.source_path)
     warn_passivity(ps.values, ps.name, stacklevel=2)
     return ps
 
