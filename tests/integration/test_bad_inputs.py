@@ -208,9 +208,10 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
     "validate": [str(BAD / "position_in_metres.csv"), str(BAD / "negative_pressure.csv")],
     "params show": ["vgt-papr", str(BAD / "k_huge.toml")],
     "params check": [str(BAD / name) for name in (
-        "k_huge.toml", "k_in_n_per_mm.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml", "p_atm_nan.toml",
-        "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml", "bare_number.toml",
-        "unknown_unit.toml", "not_toml.toml", "negative_volume.toml", "missing.toml")],
+        "k_huge.toml", "k_in_n_per_mm.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml",
+        "p_atm_nan.toml", "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml",
+        "bare_number.toml", "unknown_unit.toml", "not_toml.toml", "negative_volume.toml",
+        "missing.toml")],
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
     "identify paper": [str(BAD / "kpa_as_pa.csv")],
     "identify friction": [str(BAD / "missing.csv")],
@@ -552,6 +553,8 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("fit(bounds bad)", lambda: pa.fit(actuator, record, ["Fc"], bounds={"Fc": (3, 1)})),
         ("fit(weights<0)", lambda: pa.fit(actuator, record, ["Fc"],
                                           weights={"position": -1.0})),
+        ("fit(weights for an unfitted signal)", lambda: pa.fit(
+            actuator, record, ["Fc"], weights={"velocity": 1.0})),
         ("fit(solver='rodas')", lambda: pa.fit(actuator, record, ["Fc"], solver="rodas")),
         ("fit(unknown parameter)", lambda: pa.fit(actuator, record, ["Fcc"])),
         ("fit(position in metres)", lambda: pa.fit(actuator, _metres_record(record), ["Fc"])),
@@ -601,6 +604,17 @@ def test_public_entry_points_raise_pneumact_errors(api, tmp_path):
         failures.append(f"{label}: accepted")
     assert not failures, "\n".join(failures)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.txt"]
+
+
+def test_fit_weights_name_the_signal_and_what_is_allowed(api):
+    """A weight for a signal the fit does not fit is named, with the fitted signals (it
+    was a bare KeyError: 'position')."""
+    _, actuator, record = api
+    with pytest.raises(PneumactError) as error:
+        pa.fit(actuator, record, ["Fc"], weights={"velocity": 1.0})
+    text = str(error.value)
+    assert "weights for velocity" in text and "fitted signals (position)" in text, text
+    assert "'" not in text, text
 
 
 def test_friendlier_readings(api):
