@@ -419,6 +419,28 @@ def test_errors_speak_the_command_line(workdir):
     assert "columns=" not in result.output
 
 
+def test_a_record_given_twice_is_refused(workdir):
+    """The same file twice (named twice, or once by its folder) or the same data under a
+    second name would count as new data and narrow every interval: refused, naming it."""
+    bench = workdir / "bench"
+    bench.mkdir()
+    text = (GOOD / "record.csv").read_text(encoding="utf-8")
+    (bench / "record.csv").write_text(text, encoding="utf-8")
+    twice = _invoke(["fit", str(bench / "record.csv"), str(bench / "record.csv"),
+                     "--free", "Fc", "--out", "OUT"], workdir)
+    assert_refused(twice, "record.csv")
+    assert "given twice" in twice.stderr
+    by_folder = _invoke(["identify", "paper", str(bench), str(bench / "record.csv"),
+                         "--out", "OUT"], workdir)
+    assert_refused(by_folder, "record.csv")
+    assert "given twice" in by_folder.stderr
+    (bench / "copy.csv").write_text(text, encoding="utf-8")
+    copied = _invoke(["fit", str(bench), "--free", "Fc", "--out", "OUT"], workdir)
+    assert_refused(copied, "copy.csv")
+    assert "identical data" in copied.stderr
+    assert sorted(p.name for p in workdir.iterdir()) == ["bench"]
+
+
 # --------------------------------------------------------------------------- the API
 @pytest.fixture(scope="module")
 def api():
@@ -491,6 +513,9 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("read_record p_atm=nan", lambda: pa.read_record(GOOD / "record.csv", p_atm=nan)),
         ("read_record columns=5", lambda: pa.read_record(GOOD / "record.csv", columns=5)),
         ("read_records(5)", lambda: pa.read_records(5)),
+        ("read_records(a file twice)", lambda: pa.read_records([GOOD / "record.csv"] * 2)),
+        ("fit(a record twice)", lambda: pa.fit(actuator, [record, record], ["Fc"])),
+        ("validate(a record twice)", lambda: pa.validate(actuator, [record, record])),
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
           and p.name not in ("command_five.csv", "position_in_metres.csv")],

@@ -35,7 +35,8 @@ from pneumact.io.units import KNOWN, convert_column, same_unit
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv"]
+__all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv",
+           "refuse_duplicates"]
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
 INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
@@ -548,7 +549,46 @@ def as_records(records, where: str) -> list[Record]:
                                     f"a Record or a path, not {type(item).__name__}")
     if not out:
         raise DataError(f"{where}: give at least one record")
+    refuse_duplicates(out, where)
     return out
+
+
+def _file_of(record: Record) -> Path | None:
+    """The resolved file a record was read from, or None (built in memory)."""
+    path = Path(record.source) if record.source else None
+    return path.resolve() if path is not None and path.is_file() else None
+
+
+def _same_data(a: Record, b: Record) -> bool:
+    return (a.time.shape == b.time.shape and set(a.signals) == set(b.signals)
+            and np.array_equal(a.time, b.time)
+            and all(np.array_equal(a.signals[n], b.signals[n]) for n in a.signals))
+
+
+def refuse_duplicates(records: Sequence[Record], where: str) -> None:
+    """Refuse a record given twice (the same file, or identical data under two names): it
+    would count as new data and narrow every interval. Cheap: data are compared only
+    between records of equal length and time span."""
+    prefix = f"{where}: " if where else ""
+    seen: dict[object, int] = {}
+    groups: dict[tuple[int, float, float], list[int]] = {}
+    for i, record in enumerate(records):
+        file = _file_of(record)
+        if file is not None and file in seen:
+            raise DataError(f"{prefix}record {file} is given twice (records {seen[file] + 1} "
+                            f"and {i + 1}): a repeated record counts as new data and narrows "
+                            "every interval; give each record once")
+        if file is not None:
+            seen[file] = i
+        key = (record.time.size, float(record.time[0]), float(record.time[-1]))
+        for j in groups.get(key, []):
+            if _same_data(records[j], record):
+                first, second = records[j].source or "record", record.source or "record"
+                raise DataError(f"{prefix}records {j + 1} ({first}) and {i + 1} ({second}) "
+                                "hold identical data (the same record twice?): a repeated "
+                                "record counts as new data and narrows every interval; give "
+                                "each record once")
+        groups.setdefault(key, []).append(i)
 
 
 def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]:
@@ -572,4 +612,6 @@ def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]
             files.append(entry)
     if not files:
         raise DataError("read_records: no record given")
-    return [read_record(f, **kwargs) for f in files]
+    records = [read_record(f, **kwargs) for f in files]
+    refuse_duplicates(records, "")
+    return records
