@@ -24,6 +24,7 @@ import pneumact as pa
 from pneumact import sensitivity as sa
 from pneumact.cli import app, finite_float
 from pneumact.errors import PassivityWarning, PlausibilityWarning, PneumactError
+from pneumact.identification import inverse_friction
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 BAD, GOOD = DATA / "bad", DATA / "good"
@@ -214,7 +215,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "missing.toml")],
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
     "identify paper": [str(BAD / "kpa_as_pa.csv")],
-    "identify friction": [str(BAD / "missing.csv")],
+    "identify friction": [str(BAD / "missing.csv"), str(BAD / "no_motion.csv")],
     "sensitivity": ["sobbol"],
 }
 
@@ -518,7 +519,9 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("validate(a record twice)", lambda: pa.validate(actuator, [record, record])),
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
-          and p.name not in ("command_five.csv", "position_in_metres.csv")],
+          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv")],
+        ("inverse_friction(no motion)", lambda: inverse_friction(
+            pa.read_record(BAD / "no_motion.csv"))),
         ("command record of 5", lambda: pa.read_record(BAD / "command_five.csv")),
         ("Record.from_arrays negative pressure", lambda: pa.Record.from_arrays(
             [0.0, 1.0], {"pressure": [1e5, -1.0]})),
