@@ -212,7 +212,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "k_huge.toml", "k_in_n_per_mm.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml",
         "p_atm_nan.toml", "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml",
         "bare_number.toml", "unknown_unit.toml", "not_toml.toml", "negative_volume.toml",
-        "missing.toml")],
+        "missing.toml", "params.json")] + [str(BAD)],  # a folder where a file is expected
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
     "identify paper": [str(BAD / "kpa_as_pa.csv")],
     "identify friction": [str(BAD / "missing.csv"), str(BAD / "no_motion.csv")],
@@ -527,6 +527,8 @@ def _api_cases(vgt, actuator, record, folder: Path):
             [0.0, 1.0], {"pressure": [1e5, -1.0]})),
         *[(f"load_params {p.name}", lambda p=p: pa.load_params(p))
           for p in sorted(BAD.glob("*.toml"))],
+        ("load_params a JSON file", lambda: pa.load_params(BAD / "params.json")),
+        ("load_params a folder", lambda: pa.load_params(BAD)),
         ("replace k=1e300", lambda: vgt.replace(k=1e300)),
         ("replace k='12850 N/mm'", lambda: vgt.replace(k="12850 N/mm")),
         ("replace m=1e-30", lambda: vgt.replace(m=1e-30)),

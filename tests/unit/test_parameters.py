@@ -288,6 +288,22 @@ def test_a_unit_slip_by_a_thousand_is_refused_naming_it(tmp_path: Path) -> None:
     assert ps.replace(k="12.85 kN/m")["k"] == 12850.0
 
 
+def test_a_bom_is_read_and_other_formats_or_a_folder_are_named(tmp_path: Path) -> None:
+    """A TOML file saved with a BOM (Windows editors) loads; JSON, YAML and a folder are
+    refused naming what they are and what is expected."""
+    shipped = Path(__file__).parents[2] / "src/pneumact/parameters/sets/vgt-paper.toml"
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + shipped.read_bytes())
+    assert _load_quietly(bom).values == _load_quietly("vgt-paper").values
+    for suffix, kind in ((".json", "is JSON"), (".yaml", "is YAML")):
+        other = tmp_path / f"set{suffix}"
+        other.write_text("k: 12850 N/m\n", encoding="utf-8")
+        with pytest.raises(ParameterError, match=f"{kind}: parameter sets are TOML files"):
+            load_params(other)
+    with pytest.raises(ParameterError, match=r"is a folder; a parameter file .* is expected"):
+        load_params(tmp_path)
+
+
 def test_immutable_and_picklable() -> None:
     ps = _load_quietly("vgt-paper")
     with pytest.raises(AttributeError):
