@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import gzip
+import importlib
 import json
 import os
 import re
@@ -565,7 +566,7 @@ def read_excel(path: Path) -> tuple[pd.DataFrame, list[str]]:
         raise DataError(f"{path}: an old Excel workbook (.xls) is not read; save the sheet "
                         "as .xlsx or as CSV (UTF-8)")
     try:
-        import openpyxl  # noqa: F401
+        importlib.import_module("openpyxl")  # optional: pandas reads .xlsx through it
     except ImportError:
         raise DataError(f"{path}: an Excel workbook (.xlsx): reading it needs the optional "
                         "package openpyxl (pip install openpyxl); or save the sheet as CSV "
