@@ -220,7 +220,8 @@ class Bounds:
 @dataclass(frozen=True)
 class Weights:
     """What each residual counts for: ``signals`` multiplies each fitted signal's
-    residuals (default 1/std of the measured signal); ``records`` each record's (one
+    residuals (keys among the fitted signals; a signal not named: 1/std of its
+    measurement); ``records`` each record's (one
     finite weight > 0 per record; default 1): a record whose measured input carries more
     noise counts for less."""
 

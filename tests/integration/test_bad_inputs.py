@@ -24,6 +24,7 @@ import pneumact as pa
 from pneumact import sensitivity as sa
 from pneumact.cli import app, finite_float
 from pneumact.errors import PassivityWarning, PlausibilityWarning, PneumactError
+from pneumact.identification import inverse_friction
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 BAD, GOOD = DATA / "bad", DATA / "good"
@@ -67,6 +68,7 @@ BASE = {
 #: "--option" (the same meaning in every command) or "command --option".
 BAD_VALUES: dict[str, list[str]] = {
     "--params": ["vgt-papr", str(BAD / "k_huge.toml"), str(BAD / "m_tiny.toml"),
+                 str(BAD / "k_in_n_per_mm.toml"),
                  str(BAD / "p_atm_in_kpa_as_pa.toml"), str(BAD / "p_atm_nan.toml"),
                  str(BAD / "fs_below_fc.toml"), str(BAD / "not_toml.toml")],
     "--out": [str(GOOD / "record.csv")],  # a file where a folder is expected
@@ -209,13 +211,14 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
     "validate": [str(BAD / "position_in_metres.csv"), str(BAD / "negative_pressure.csv")],
     "params show": ["vgt-papr", str(BAD / "k_huge.toml")],
     "params check": [str(BAD / name) for name in (
-        "k_huge.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml", "p_atm_nan.toml",
-        "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml", "bare_number.toml",
-        "unknown_unit.toml", "not_toml.toml", "negative_volume.toml", "missing.toml")],
+        "k_huge.toml", "k_in_n_per_mm.toml", "m_tiny.toml", "p_atm_in_kpa_as_pa.toml",
+        "p_atm_nan.toml", "p_atm_gauge.toml", "fs_below_fc.toml", "unknown_parameter.toml",
+        "bare_number.toml", "unknown_unit.toml", "not_toml.toml", "negative_volume.toml",
+        "missing.toml", "params.json")] + [str(BAD)],  # a folder where a file is expected
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
     "identify paper": [str(BAD / "kpa_as_pa.csv")],
     "identify signature": [str(BAD / "kpa_as_pa.csv")],
-    "identify friction": [str(BAD / "missing.csv")],
+    "identify friction": [str(BAD / "missing.csv"), str(BAD / "no_motion.csv")],
     "sensitivity": ["sobbol"],
 }
 
@@ -420,6 +423,28 @@ def test_errors_speak_the_command_line(workdir):
     assert "columns=" not in result.output
 
 
+def test_a_record_given_twice_is_refused(workdir):
+    """The same file twice (named twice, or once by its folder) or the same data under a
+    second name would count as new data and narrow every interval: refused, naming it."""
+    bench = workdir / "bench"
+    bench.mkdir()
+    text = (GOOD / "record.csv").read_text(encoding="utf-8")
+    (bench / "record.csv").write_text(text, encoding="utf-8")
+    twice = _invoke(["fit", str(bench / "record.csv"), str(bench / "record.csv"),
+                     "--free", "Fc", "--out", "OUT"], workdir)
+    assert_refused(twice, "record.csv")
+    assert "given twice" in twice.stderr
+    by_folder = _invoke(["identify", "paper", str(bench), str(bench / "record.csv"),
+                         "--out", "OUT"], workdir)
+    assert_refused(by_folder, "record.csv")
+    assert "given twice" in by_folder.stderr
+    (bench / "copy.csv").write_text(text, encoding="utf-8")
+    copied = _invoke(["fit", str(bench), "--free", "Fc", "--out", "OUT"], workdir)
+    assert_refused(copied, "copy.csv")
+    assert "identical data" in copied.stderr
+    assert sorted(p.name for p in workdir.iterdir()) == ["bench"]
+
+
 # --------------------------------------------------------------------------- the API
 @pytest.fixture(scope="module")
 def api():
@@ -492,15 +517,23 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("read_record p_atm=nan", lambda: pa.read_record(GOOD / "record.csv", p_atm=nan)),
         ("read_record columns=5", lambda: pa.read_record(GOOD / "record.csv", columns=5)),
         ("read_records(5)", lambda: pa.read_records(5)),
+        ("read_records(a file twice)", lambda: pa.read_records([GOOD / "record.csv"] * 2)),
+        ("fit(a record twice)", lambda: pa.fit(actuator, [record, record], ["Fc"])),
+        ("validate(a record twice)", lambda: pa.validate(actuator, [record, record])),
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
-          and p.name not in ("command_five.csv", "position_in_metres.csv")],
+          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv")],
+        ("inverse_friction(no motion)", lambda: inverse_friction(
+            pa.read_record(BAD / "no_motion.csv"))),
         ("command record of 5", lambda: pa.read_record(BAD / "command_five.csv")),
         ("Record.from_arrays negative pressure", lambda: pa.Record.from_arrays(
             [0.0, 1.0], {"pressure": [1e5, -1.0]})),
         *[(f"load_params {p.name}", lambda p=p: pa.load_params(p))
           for p in sorted(BAD.glob("*.toml"))],
+        ("load_params a JSON file", lambda: pa.load_params(BAD / "params.json")),
+        ("load_params a folder", lambda: pa.load_params(BAD)),
         ("replace k=1e300", lambda: vgt.replace(k=1e300)),
+        ("replace k='12850 N/mm'", lambda: vgt.replace(k="12850 N/mm")),
         ("replace m=1e-30", lambda: vgt.replace(m=1e-30)),
         ("replace p_atm=nan", lambda: vgt.replace(p_atm=nan)),
         ("replace p_atm=100", lambda: vgt.replace(p_atm=100.0)),
@@ -553,6 +586,8 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("fit(bounds bad)", lambda: pa.fit(actuator, record, ["Fc"], bounds={"Fc": (3, 1)})),
         ("fit(weights<0)", lambda: pa.fit(actuator, record, ["Fc"],
                                           weights={"position": -1.0})),
+        ("fit(weights for an unfitted signal)", lambda: pa.fit(
+            actuator, record, ["Fc"], weights={"velocity": 1.0})),
         ("fit(solver='rodas')", lambda: pa.fit(actuator, record, ["Fc"], solver="rodas")),
         ("fit(unknown parameter)", lambda: pa.fit(actuator, record, ["Fcc"])),
         ("fit(position in metres)", lambda: pa.fit(actuator, _metres_record(record), ["Fc"])),
@@ -602,6 +637,17 @@ def test_public_entry_points_raise_pneumact_errors(api, tmp_path):
         failures.append(f"{label}: accepted")
     assert not failures, "\n".join(failures)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.txt"]
+
+
+def test_fit_weights_name_the_signal_and_what_is_allowed(api):
+    """A weight for a signal the fit does not fit is named, with the fitted signals (it
+    was a bare KeyError: 'position')."""
+    _, actuator, record = api
+    with pytest.raises(PneumactError) as error:
+        pa.fit(actuator, record, ["Fc"], weights={"velocity": 1.0})
+    text = str(error.value)
+    assert "weights for velocity" in text and "fitted signals (position)" in text, text
+    assert "'" not in text, text
 
 
 def test_friendlier_readings(api):

@@ -170,6 +170,25 @@ def test_the_friction_of_a_record_is_its_force_less_inertia_and_offset():
     assert friction.units["friction"] == "N"
 
 
+def test_inverse_model_refuses_a_record_that_does_not_move():
+    """Position within its noise (or constant), motion one way only, estimates no
+    friction can have: a clear refusal, not a mass of 1e12 kg and a negative Fc."""
+    rng = np.random.default_rng(1)
+    t = np.arange(0, 2, 5e-3)
+    force = 2.3 + 0.01 * rng.standard_normal(t.size)
+    for position in (0.005 + 1e-6 * rng.standard_normal(t.size), np.full(t.size, 0.005)):
+        still = Record.from_arrays(t, {"position": position, "force": force}, source="still")
+        with pytest.raises(DataError, match="still: the record does not move"):
+            inverse_friction(still)
+    one_way = Record.from_arrays(t, {"position": 0.01 * t, "force": force}, source="ramp")
+    with pytest.raises(DataError, match="regressors are not excited: condition number"):
+        inverse_friction(one_way)
+    with pytest.raises(DataError, match=r"impossible estimates: Fc = -20 \(a negative"):
+        inverse_friction(_motion_record(fc=-20.0))
+    with pytest.raises(DataError, match=r"impossible estimates: mass = 2e\+05 kg"):
+        inverse_friction(_motion_record(mass=2e5))
+
+
 def test_inverse_model_stribeck_and_asymmetric():
     stribeck = inverse_friction(_motion_record(stribeck=(30.0, 0.02)), "stribeck")
     assert stribeck.estimates["Fs"] == pytest.approx(30.0, rel=10 * ref.INVERSE_RTOL)

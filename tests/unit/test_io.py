@@ -15,6 +15,7 @@ from pneumact.io import (
     Record,
     atomic_write,
     read_record,
+    read_records,
     read_signal_csv,
     read_table,
     write_table,
@@ -242,6 +243,70 @@ def test_record_name_drops_only_a_record_files_suffix(tmp_path):
     synthetic = Record.from_arrays([0.0, 1.0], {"position": [0.0, 1.0]},
                                    source="ramp_0.05mm_s")
     assert synthetic.name == "ramp_0.05mm_s"
+
+
+# ------------------------------------------------------------------ spreadsheet habits
+EXPECTED = {"time": [0.0, 0.5, 1.0], "pressure": [100.5e3, 90.25e3, 80e3],
+            "position": [0.0, 1.5e-3, 3e-3]}
+
+
+def _same(record: Record) -> None:
+    np.testing.assert_allclose(record.time, EXPECTED["time"], rtol=IO_ROUND_TRIP_RTOL)
+    for name in ("pressure", "position"):
+        np.testing.assert_allclose(record[name], EXPECTED[name], rtol=IO_ROUND_TRIP_RTOL)
+
+
+def test_semicolons_with_decimal_commas_are_read(tmp_path):
+    """A German Excel CSV: ';' between cells, ',' as the decimal mark."""
+    path = _write(tmp_path / "de.csv", "time [s];pressure [kPa];position [mm]\n"
+                  "0;100,5;0\n0,5;90,25;1,5\n1;80;3\n")
+    _same(read_record(path))
+    table = _write(tmp_path / "table.csv", "Fc [N];Fs [N]\n2,6;3,2\n")
+    frame, units = read_table(table)
+    assert list(frame.columns) == ["Fc", "Fs"] and frame["Fs"].iloc[0] == pytest.approx(3.2)
+    assert units == {"Fc": "N", "Fs": "N"}
+
+
+def test_gzip_bom_and_trailing_empty_columns_are_read(tmp_path):
+    import gzip
+
+    text = "time [s],pressure [kPa],position [mm],,\n0,100.5,0,,\n0.5,90.25,1.5,,\n1,80,3,,\n"
+    _same(read_record(_write(tmp_path / "trailing.csv", text)))
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    _same(read_record(bom))
+    (tmp_path / "bench").mkdir()
+    packed = tmp_path / "bench" / "ramp_1mm_s.csv.gz"
+    packed.write_bytes(gzip.compress(text.encode()))
+    record = read_record(packed)
+    _same(record)
+    assert record.name == "ramp_1mm_s"
+    assert [r.name for r in read_records(tmp_path / "bench")] == ["ramp_1mm_s"]
+    unnamed = _write(tmp_path / "unnamed.csv", "time [s],,position [mm]\n0,5,0\n1,,1\n")
+    assert "column 2 has no name in the header but holds data" in _error(unnamed)
+
+
+def test_excel_is_read_with_openpyxl_or_refused_naming_what_to_do(tmp_path, monkeypatch):
+    import sys
+
+    book = tmp_path / "bench.xlsx"
+    try:
+        import openpyxl
+    except ImportError:
+        book.write_bytes(b"not a workbook")
+        message = _error(book)
+        assert "Excel workbook (.xlsx)" in message and "pip install openpyxl" in message
+        assert "save the sheet as CSV" in message
+        return
+    sheet = openpyxl.Workbook()
+    rows = [["time [s]", "pressure [kPa]", "position [mm]", None],
+            [0, 100.5, 0, None], [0.5, 90.25, 1.5, None], [1, 80, 3, None]]
+    for row in rows:
+        sheet.active.append(row)
+    sheet.save(book)
+    _same(read_record(book))
+    monkeypatch.setitem(sys.modules, "openpyxl", None)  # as if it were not installed
+    assert "pip install openpyxl" in _error(book)
 
 
 # --------------------------------------------------------------------------- bad input

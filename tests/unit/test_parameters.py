@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumact.errors import ParameterError, PassivityWarning
+from pneumact.errors import ParameterError, PassivityWarning, PlausibilityWarning
 from pneumact.io.quantities import SI_PREFIXES, si_prefix_factor
 from pneumact.parameters import (
     ParameterSet,
@@ -267,6 +267,41 @@ def test_replace_validates_and_copies() -> None:
         ps.replace({"Fs": 2.0})
     with pytest.raises(ParameterError, match=r"unknown parameter 'Fss'.*did you mean 'Fs'"):
         ps.replace(Fss=3.0)
+
+
+def test_a_unit_slip_by_a_thousand_is_refused_naming_it(tmp_path: Path) -> None:
+    """12850 N/mm for a spring of 12850 N/m is legal (below k's hard limit) but can only
+    be a slip: refused like kPa typed as Pa, naming the value meant; just outside the
+    plausible range is only a warning."""
+    ps = _load_quietly("vgt-paper")
+    for call in (lambda: ps.replace(k="12850 N/mm"), lambda: ps.replace(k=1.285e7),
+                 lambda: load_params(Path(__file__).parents[1] / "data" / "bad"
+                                     / "k_in_n_per_mm.toml"),
+                 lambda: ParameterSet.from_dict({"p_res": "50 Pa"})):
+        with pytest.raises(ParameterError, match=r"unit slip by a factor 1000: did you mean"):
+            call()
+    with pytest.raises(ParameterError, match=r"k = 1\.285e\+07 N/m \(given as '12850 N/mm'\)"
+                       r".*did you mean 12850 N/m\?"):
+        ps.replace(k="12850 N/mm")
+    with pytest.warns(PlausibilityWarning, match="outside the plausible range"):
+        ps.replace(k=2e6)  # odd, but it could be meant: a warning
+    assert ps.replace(k="12.85 kN/m")["k"] == 12850.0
+
+
+def test_a_bom_is_read_and_other_formats_or_a_folder_are_named(tmp_path: Path) -> None:
+    """A TOML file saved with a BOM (Windows editors) loads; JSON, YAML and a folder are
+    refused naming what they are and what is expected."""
+    shipped = Path(__file__).parents[2] / "src/pneumact/parameters/sets/vgt-paper.toml"
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + shipped.read_bytes())
+    assert _load_quietly(bom).values == _load_quietly("vgt-paper").values
+    for suffix, kind in ((".json", "is JSON"), (".yaml", "is YAML")):
+        other = tmp_path / f"set{suffix}"
+        other.write_text("k: 12850 N/m\n", encoding="utf-8")
+        with pytest.raises(ParameterError, match=f"{kind}: parameter sets are TOML files"):
+            load_params(other)
+    with pytest.raises(ParameterError, match=r"is a folder; a parameter file .* is expected"):
+        load_params(tmp_path)
 
 
 def test_immutable_and_picklable() -> None:

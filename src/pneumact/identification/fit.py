@@ -769,10 +769,18 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     log_mask = np.array([c.name in names_log and theta0[j] > 0
                          for j, c in enumerate(columns)])
     lo, hi = _bounds(columns, theta0, bounds.ranges, log_mask)
-    signal_weights = weights.signals
-    if signal_weights is None:
-        signal_weights = {}
-        for s in signals:
+    given_weights = dict(weights.signals or {})
+    stray = [s for s in given_weights if s not in signals]
+    if stray:
+        raise ParameterError(f"fit: weights for {', '.join(stray)}, which "
+                             f"{'is' if len(stray) == 1 else 'are'} not fitted: the keys of"
+                             f" weights must be among the fitted signals ({', '.join(signals)}); "
+                             "fit more signals with signals=[...]")
+    signal_weights = {}
+    for s in signals:  # a fitted signal without a given weight: 1/std of its measurement
+        if s in given_weights:
+            signal_weights[s] = given_weights[s]
+        else:
             y = np.concatenate([r[s] for r in records])
             signal_weights[s] = 1.0 / (np.std(y) or max(abs(np.mean(y)), 1.0))
     record_weights = weights.records

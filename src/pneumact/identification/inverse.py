@@ -31,6 +31,60 @@ __all__ = ["InverseFriction", "inverse_friction"]
 
 #: the laws of the inverse model (named as ``--friction`` names the simulated laws)
 MODELS = ("coulomb-viscous", "stribeck")
+#: a record moves when its position range exceeds this many times its sensor noise
+MOTION_NOISE_MULTIPLE = 20.0
+#: a regression whose column-scaled design is worse conditioned cannot separate its terms
+MAX_CONDITION = 1e8
+#: the heaviest moving mass an estimate may give [kg] (the catalogue's hard limit of m)
+MAX_MASS = 1e5
+#: an estimate below zero by more than this many standard errors is impossible
+IMPOSSIBLE_SIGMAS = 2.0
+
+
+def position_noise(position: np.ndarray) -> float:
+    """The position sensor's noise (std) from the second differences, robustly (MAD):
+    a smooth motion barely changes them, white noise of std s gives std s·sqrt(6)."""
+    second = np.diff(position, 2)
+    if second.size == 0:
+        return 0.0
+    mad = float(np.median(np.abs(second - np.median(second))))
+    return 1.4826 * mad / np.sqrt(6.0)
+
+
+def _refuse_still(record: Record) -> None:
+    """Refuse a record whose position never leaves its noise: nothing to regress on."""
+    position = record["position"]
+    travel, noise = float(np.ptp(position)), position_noise(position)
+    if travel <= MOTION_NOISE_MULTIPLE * noise:
+        raise DataError(
+            f"{record.source}: the record does not move: its position spans "
+            f"{travel * 1e3:.3g} mm, within {MOTION_NOISE_MULTIPLE:g} times its noise "
+            f"({noise * 1e3:.2g} mm); the inverse model needs motion back and forth at "
+            "several speeds (the regressors sign(v), v and a are not excited)")
+
+
+def _refuse_impossible(est: Estimates, cond: float, source: str) -> None:
+    """Refuse estimates that no real friction can have: a badly conditioned regression,
+    a negative mass, Coulomb or viscous force (beyond their errors), an absurd mass."""
+    if not np.isfinite(cond) or cond > MAX_CONDITION:
+        raise DataError(f"{source}: the regressors are not excited: condition number "
+                        f"{cond:.3g} (above {MAX_CONDITION:g}), so the terms "
+                        f"{', '.join(est.names)} cannot be told apart; the record needs "
+                        "motion in both directions at several speeds")
+    values, errors = est.as_dict(), dict(zip(est.names, est.stderr, strict=True))
+    wrong = []
+    for name, value in values.items():
+        if name.startswith(("Fc", "Fv", "Fs", "mass")) and value < 0 and not (
+                -value <= IMPOSSIBLE_SIGMAS * errors[name]):
+            wrong.append(f"{name} = {value:.3g} (a negative "
+                         f"{'mass' if name == 'mass' else 'friction force'} cannot be)")
+    if values.get("mass", 0.0) > MAX_MASS:
+        wrong.append(f"mass = {values['mass']:.3g} kg (above {MAX_MASS:g} kg)")
+    if wrong:
+        raise DataError(f"{source}: physically impossible estimates: {'; '.join(wrong)}; "
+                        "the record does not excite the inverse model (check that it "
+                        "moves back and forth at several speeds, the force's sign and "
+                        "units, and mass=False where the force is already the friction)")
 
 
 @dataclass(frozen=True)
@@ -208,6 +262,9 @@ def inverse_friction(record: Record, friction: str = "coulomb-viscous", *, force
     ``offset`` (a constant force) is fitted by default, except with ``asymmetric``: then
     the Coulomb levels per direction already hold it (1(v>0) + 1(v<0) = 1 on every
     moving sample, so offset and the two levels are one regressor too many).
+    A record whose position stays within its noise, a regression that cannot separate
+    its terms and estimates no friction can have (a negative mass, Coulomb or viscous
+    force beyond their errors, a mass above 1e5 kg) raise a DataError.
     """
     if offset is None:
         offset = not asymmetric
@@ -223,6 +280,7 @@ def inverse_friction(record: Record, friction: str = "coulomb-viscous", *, force
         raise ParameterError("inverse_friction: the Stribeck model is symmetric; use "
                              "asymmetric=False")
     record.require(["position", force], "the inverse friction model")
+    _refuse_still(record)
     m = _motion(record.time, record["position"], record[force], cutoff, decimate)
     speed_floor = 0.01 * np.max(np.abs(m.velocity)) if min_speed is None else min_speed
     used = np.abs(m.velocity) >= speed_floor
@@ -236,6 +294,7 @@ def inverse_friction(record: Record, friction: str = "coulomb-viscous", *, force
                                           correlated=True)
     if model == "stribeck":
         est, res = _stribeck(est, v, a, f, delta)
+    _refuse_impossible(est, cond, record.source)
     predicted = f - res
     data = pd.DataFrame({"time": m.time[used], "velocity": v, "acceleration": a, "force": f,
                          "predicted": predicted})

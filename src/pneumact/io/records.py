@@ -26,6 +26,7 @@ from pneumact.io.tables import (
     PathLike,
     check_unique,
     parse_cell,
+    read_excel,
     read_parquet,
     read_text,
     require_file,
@@ -35,13 +36,23 @@ from pneumact.io.units import KNOWN, convert_column, same_unit
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv"]
+__all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv",
+           "refuse_duplicates"]
 
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
 INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
 #: the files a record is read from (their suffix is not part of its name)
-RECORD_SUFFIXES = (".csv", ".parquet")
+RECORD_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".xlsx")
+#: Excel workbooks (.xlsx read with the optional openpyxl; .xls refused with a hint)
+EXCEL_SUFFIXES = (".xlsx", ".xlsm", ".xls")
 _NA_STRINGS = {"nan", "na", "n/a", "#n/a", "null", "none", "-nan"}
+
+
+def _record_suffix(file_name: str) -> str:
+    """The record-file suffix ``file_name`` ends with ('.csv.gz', '.csv', ...), or ''."""
+    lowered = file_name.lower()
+    return next((s for s in sorted(RECORD_SUFFIXES, key=len, reverse=True)
+                 if lowered.endswith(s)), "")
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,8 +80,9 @@ class Record(ResultVocabulary):
         """The record's name: its file name without folder and suffix ("presliding" for
         bench/presliding.csv), to choose records by name rather than by position. Only a
         record file's suffix goes: "ramp_0.05mm_s" stays whole."""
-        path = Path(self.source) if self.source else Path("")
-        return path.stem if path.suffix.lower() in RECORD_SUFFIXES else path.name
+        name = Path(self.source).name if self.source else ""
+        suffix = _record_suffix(name)
+        return name[:-len(suffix)] if suffix else name
 
     @classmethod
     def from_arrays(cls, time, signals: Mapping[str, object],
@@ -355,7 +367,12 @@ def _load(source: Path, names: Sequence[str] | None):
         frame, file_units = read_parquet(source)
         cells = [str(c) for c in frame.columns]
         return frame, cells, [(c, file_units.get(c)) for c in cells]
-    frame, cells = read_text(source, names, numeric=True)
+    if source.suffix.lower() in EXCEL_SUFFIXES:
+        if names is not None:
+            raise DataError(f"{source}: names= is for text files without a header, not Excel")
+        frame, cells = read_excel(source)
+    else:
+        frame, cells = read_text(source, names, numeric=True)
     return frame, cells, [parse_cell(c) for c in cells]
 
 
@@ -414,6 +431,10 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
                 units: Mapping[str, str] | None = None, required: Sequence[str] = ("time",),
                 names: Sequence[str] | None = None, p_atm: float | None = None) -> Record:
     """Read a measured record (CSV, whitespace text or Parquet), check it, convert to SI.
+
+    - Text: ',' or ';' separated (with decimal commas, as spreadsheets write them in many
+      locales) or whitespace; ``.csv.gz`` is read compressed; ``.xlsx`` (the first
+      sheet) needs the optional openpyxl. Header columns without a name or data go.
 
     - Header cells ``name [unit]`` or ``name (unit)`` give each column's unit; ``units``
       gives it (keyed by our or the file's name) for columns whose header has none.
@@ -548,7 +569,46 @@ def as_records(records, where: str) -> list[Record]:
                                     f"a Record or a path, not {type(item).__name__}")
     if not out:
         raise DataError(f"{where}: give at least one record")
+    refuse_duplicates(out, where)
     return out
+
+
+def _file_of(record: Record) -> Path | None:
+    """The resolved file a record was read from, or None (built in memory)."""
+    path = Path(record.source) if record.source else None
+    return path.resolve() if path is not None and path.is_file() else None
+
+
+def _same_data(a: Record, b: Record) -> bool:
+    return (a.time.shape == b.time.shape and set(a.signals) == set(b.signals)
+            and np.array_equal(a.time, b.time)
+            and all(np.array_equal(a.signals[n], b.signals[n]) for n in a.signals))
+
+
+def refuse_duplicates(records: Sequence[Record], where: str) -> None:
+    """Refuse a record given twice (the same file, or identical data under two names): it
+    would count as new data and narrow every interval. Cheap: data are compared only
+    between records of equal length and time span."""
+    prefix = f"{where}: " if where else ""
+    seen: dict[object, int] = {}
+    groups: dict[tuple[int, float, float], list[int]] = {}
+    for i, record in enumerate(records):
+        file = _file_of(record)
+        if file is not None and file in seen:
+            raise DataError(f"{prefix}record {file} is given twice (records {seen[file] + 1} "
+                            f"and {i + 1}): a repeated record counts as new data and narrows "
+                            "every interval; give each record once")
+        if file is not None:
+            seen[file] = i
+        key = (record.time.size, float(record.time[0]), float(record.time[-1]))
+        for j in groups.get(key, []):
+            if _same_data(records[j], record):
+                first, second = records[j].source or "record", record.source or "record"
+                raise DataError(f"{prefix}records {j + 1} ({first}) and {i + 1} ({second}) "
+                                "hold identical data (the same record twice?): a repeated "
+                                "record counts as new data and narrows every interval; give "
+                                "each record once")
+        groups.setdefault(key, []).append(i)
 
 
 def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]:
@@ -563,13 +623,17 @@ def read_records(paths: PathLike | Sequence[PathLike], **kwargs) -> list[Record]
     files: list[Path] = []
     for entry in (check_path("paths", p, where="read_records") for p in paths):
         if entry.is_dir():
-            found = sorted(p for p in entry.iterdir()
-                           if p.suffix.lower() in RECORD_SUFFIXES and p.is_file())
+            found = sorted(p for p in entry.iterdir()  # not Excel's lock files ~$...
+                           if _record_suffix(p.name) and not p.name.startswith("~$")
+                           and p.is_file())
             if not found:
-                raise DataError(f"{entry}: folder holds no .csv or .parquet record")
+                raise DataError(f"{entry}: folder holds no record "
+                                f"({', '.join(RECORD_SUFFIXES)})")
             files.extend(found)
         else:
             files.append(entry)
     if not files:
         raise DataError("read_records: no record given")
-    return [read_record(f, **kwargs) for f in files]
+    records = [read_record(f, **kwargs) for f in files]
+    refuse_duplicates(records, "")
+    return records

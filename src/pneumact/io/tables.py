@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import gzip
+import importlib
 import json
 import os
 import re
@@ -391,6 +393,8 @@ def _csv_line(cells: Sequence[str]) -> str:
 def require_file(path: Path) -> None:
     if not path.exists():
         raise DataError(f"{path}: file not found")
+    if path.is_dir():
+        raise DataError(f"{path}: is a folder; a file is expected here")
     if not path.is_file():
         raise DataError(f"{path}: is not a file")
 
@@ -405,22 +409,57 @@ def parse_cell(cell: str) -> tuple[str, str | None]:
     return match["name"], unit or None
 
 
-def _first_line(path: Path) -> tuple[int, str]:
-    """(0-based index, text) of the first non-blank line: the header, or the first row."""
+def _open_text(path: Path):
+    """A text file (gzip-compressed when it ends in .gz), a UTF-8 BOM skipped."""
+    if path.suffix.lower() == ".gz":
+        return gzip.open(path, "rt", encoding="utf-8-sig", newline="")
+    return open(path, encoding="utf-8-sig", newline="")
+
+
+def _first_lines(path: Path) -> tuple[int, str, str]:
+    """(0-based index, text) of the first non-blank line (the header, or the first row),
+    and the text of the next non-blank line ('' if none)."""
+    found: list[tuple[int, str]] = []
     try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
+        with _open_text(path) as fh:
             for index, line in enumerate(fh):
                 if line.strip():
-                    return index, line.rstrip("\r\n")
+                    found.append((index, line.rstrip("\r\n")))
+                    if len(found) == 2:
+                        break
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
-    raise DataError(f"{path}: file is empty")
+    except (OSError, EOFError) as exc:  # gzip.BadGzipFile is an OSError
+        raise DataError(f"{path}: cannot read as gzip-compressed text ({exc})") from exc
+    if not found:
+        raise DataError(f"{path}: file is empty")
+    return found[0][0], found[0][1], found[1][1] if len(found) > 1 else ""
+
+
+def _first_line(path: Path) -> tuple[int, str]:
+    """(0-based index, text) of the first non-blank line: the header, or the first row."""
+    index, line, _ = _first_lines(path)
+    return index, line
+
+
+#: a number written with a decimal comma, as a field of a ';'-separated line
+_DECIMAL_COMMA_RE = re.compile(r"(?:^|;)\s*[-+]?\d*,\d")
+
+
+def _dialect(line: str, following: str) -> tuple[str, str]:
+    """(separator, decimal mark) of a text table from its first two lines: ';' with
+    decimal commas (a spreadsheet in a German or French locale), ',' or whitespace."""
+    if ";" in line:
+        return ";", "," if _DECIMAL_COMMA_RE.search(following or line) else "."
+    if "," in line:
+        return ",", "."
+    return r"\s+", "."
 
 
 def _split_header(path: Path, line: str, sep: str) -> list[str]:
     """Header cells of ``line``; in whitespace mode ``time [s]`` stays one cell."""
-    if sep == ",":
-        return [c.strip() for c in next(csv.reader([line]))]
+    if sep != r"\s+":
+        return [c.strip() for c in next(csv.reader([line], delimiter=sep))]
     cells, pos = [], 0
     while pos < len(line.rstrip()):
         match = _WS_TOKEN_RE.match(line, pos)
@@ -434,24 +473,49 @@ def _split_header(path: Path, line: str, sep: str) -> list[str]:
     return cells
 
 
+def drop_unnamed_empty(path: Path, frame: pd.DataFrame, cells: list[str]
+                       ) -> tuple[pd.DataFrame, list[str]]:
+    """Drop the columns without a header name that hold nothing (a spreadsheet's
+    trailing separators: 'a,b,'); an unnamed column that holds data is refused."""
+    unnamed = [i for i, c in enumerate(cells) if not c.strip()]
+    if not unnamed:
+        return frame, cells
+    for i in unnamed:
+        column = frame.iloc[:, i]
+        text = column.astype(object).map(lambda v: "" if v is None or v != v else str(v))
+        filled = np.flatnonzero(text.str.strip().to_numpy() != "")
+        if filled.size:
+            raise DataError(f"{path}: column {i + 1} has no name in the header but holds "
+                            f"data ({text.iloc[filled[0]].strip()} at data row "
+                            f"{filled[0] + 1}); name it, e.g. 'force [N]', or delete it")
+    keep = [i for i in range(len(cells)) if i not in unnamed]
+    frame = frame.iloc[:, keep]
+    frame.columns = list(range(len(keep)))
+    return frame, [cells[i] for i in keep]
+
+
 def read_text(
     path: Path, names: Sequence[str] | None, *, numeric: bool
 ) -> tuple[pd.DataFrame, list[str]]:
     """Read a CSV/whitespace text file; return the cells (by position) and header cells.
 
+    ',' or ';' separated (';' with decimal commas too, as spreadsheets write them in
+    many locales), or whitespace; gzip-compressed when the name ends in .gz; a UTF-8
+    BOM is skipped; header columns without a name and without data are dropped.
     With ``numeric`` the fast path parses floats; if a cell is not a number it rereads
     everything as text so the caller can report exactly which cell is wrong.
     """
     import pandas as pd
 
-    first, line = _first_line(path)
-    sep = "," if "," in line else r"\s+"
+    first, line, following = _first_lines(path)
+    sep, decimal = _dialect(line, following)
     if names is None:
         cells = _split_header(path, line, sep)
         skip = first + 1
     else:
         cells = [str(n) for n in names]
-        found = len(next(csv.reader([line]))) if sep == "," else len(line.split())
+        found = (len(next(csv.reader([line], delimiter=sep))) if sep != r"\s+"
+                 else len(line.split()))
         if found != len(cells):
             raise DataError(
                 f"{path}: names= gives {len(cells)} column names but the file has "
@@ -460,6 +524,7 @@ def read_text(
         skip = first
     kwargs: dict[str, Any] = dict(
         sep=sep,
+        decimal=decimal,
         header=None,
         skiprows=skip,
         names=list(range(len(cells))),
@@ -476,6 +541,8 @@ def read_text(
                 raise
             except ValueError:
                 frame = pd.read_csv(path, dtype=str, keep_default_na=False, **kwargs)
+                if decimal == ",":  # the text reread keeps the commas: make them points
+                    frame = frame.apply(lambda c: c.str.replace(",", ".", regex=False))
         else:
             frame = pd.read_csv(path, **kwargs)
     except pd.errors.ParserError as exc:
@@ -487,7 +554,34 @@ def read_text(
         frame = pd.DataFrame({i: pd.Series(dtype="float64") for i in range(len(cells))})
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
-    return frame, cells
+    return drop_unnamed_empty(path, frame, cells)
+
+
+def read_excel(path: Path) -> tuple[pd.DataFrame, list[str]]:
+    """The first sheet of an Excel workbook (.xlsx, with the optional openpyxl): its
+    first non-empty row is the header; (cells by position, header cells)."""
+    import pandas as pd
+
+    if path.suffix.lower() == ".xls":
+        raise DataError(f"{path}: an old Excel workbook (.xls) is not read; save the sheet "
+                        "as .xlsx or as CSV (UTF-8)")
+    try:
+        importlib.import_module("openpyxl")  # optional: pandas reads .xlsx through it
+    except ImportError:
+        raise DataError(f"{path}: an Excel workbook (.xlsx): reading it needs the optional "
+                        "package openpyxl (pip install openpyxl); or save the sheet as CSV "
+                        "(UTF-8)") from None
+    try:
+        sheet = pd.read_excel(path, sheet_name=0, header=None, dtype=object)
+    except Exception as exc:  # openpyxl and zipfile raise several unrelated types
+        raise DataError(f"{path}: cannot read as an Excel workbook ({exc})") from exc
+    sheet = sheet.dropna(how="all")
+    if sheet.empty:
+        raise DataError(f"{path}: the first sheet is empty")
+    cells = ["" if v is None or v != v else str(v).strip() for v in sheet.iloc[0]]
+    frame = sheet.iloc[1:].reset_index(drop=True)
+    frame.columns = list(range(len(cells)))
+    return drop_unnamed_empty(path, frame, cells)
 
 
 def read_parquet(path: Path) -> tuple[pd.DataFrame, dict[str, str]]:

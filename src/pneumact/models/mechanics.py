@@ -27,8 +27,9 @@ declare(
       group="mechanics", plausible=(1e-3, 1e3)),
     P("F0", "N", "spring preload at the rest stop", None, 0.0, False, 1e7, group="mechanics",
       plausible=(0.0, 1e5)),
+    # plausible k: VGT and wastegate springs ~1e4 N/m, large valve actuators up to ~1e6
     P("k", "N/m", "spring (+ membrane) stiffness", None, 0.0, False, 1e10,
-      group="mechanics", plausible=(0.0, 1e8)),
+      group="mechanics", plausible=(0.0, 1e6)),
     P("x_max", "m", "stroke: position of the far end stop", None, 0.0, True, 10.0,
       group="mechanics", plausible=(1e-4, 2.0)),
     P("k_stop", "N/m", "end-stop contact stiffness (penalty)", 1e8, 0.0, True, 1e14,

@@ -43,6 +43,13 @@ DECLARING_MODULES = (
 )
 
 
+#: a unit slip: a value typed in a unit this many times too large or too small ...
+SLIP_FACTOR = 1000.0
+#: ... recognised when the value lies at least this many times outside the plausible
+#: range (just outside it is only implausible: a warning)
+SLIP_MARGIN = 10.0
+
+
 @dataclass(frozen=True)
 class ParameterSpec:
     """One parameter: SI unit (a pint expression), meaning, default and allowed range."""
@@ -87,6 +94,20 @@ class ParameterSpec:
             return True
         lo, hi = self.plausible
         return lo <= value <= hi
+
+    def unit_slip(self, value: float) -> str:
+        """'did you mean 12850 N/m?' when ``value`` lies more than ``SLIP_MARGIN`` times
+        outside the plausible range and a factor ``SLIP_FACTOR`` brings it inside (a
+        unit typed a thousand times too large or small); '' otherwise."""
+        if self.plausible is None or not math.isfinite(value):
+            return ""
+        lo, hi = self.plausible
+        for outside, scaled in ((value > SLIP_MARGIN * hi, value / SLIP_FACTOR),
+                                (value < lo / SLIP_MARGIN, value * SLIP_FACTOR)):
+            if outside and lo <= scaled <= hi:
+                return (f"likely a unit slip by a factor {SLIP_FACTOR:g}: did you mean "
+                        f"{scaled:g} {self.unit}?".replace(" ?", "?"))
+        return ""
 
     def hint(self, value: float) -> str:
         """The likely mistake behind an impossible or implausible ``value``, or ''."""

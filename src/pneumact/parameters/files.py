@@ -21,9 +21,9 @@ from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
 from pneumact.parameters.validation import (
+    check_plausibility,
     message,
     unknown_name,
-    warn_implausible,
     warn_passivity,
 )
 
@@ -53,7 +53,7 @@ def _shipped() -> dict[str, Any]:
 
 def _read_toml(data: bytes, label: str) -> dict[str, Any]:
     try:
-        return tomllib.loads(data.decode("utf-8"))
+        return tomllib.loads(data.decode("utf-8-sig"))  # a BOM (Windows editors) skipped
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"cannot parse parameter file {label}: {exc}") from None
 
@@ -132,7 +132,30 @@ def _looks_like_path(text: str) -> bool:
     return text.endswith(".toml") or any(s in text for s in seps)
 
 
+#: formats a parameter file is sometimes written in, which pneumact does not read
+_OTHER_FORMATS = {".json": "JSON", ".yaml": "YAML", ".yml": "YAML", ".csv": "CSV",
+                  ".xlsx": "an Excel workbook"}
+
+
+def _refuse_not_a_file(path: Path) -> None:
+    """A folder, or a file in another format than TOML, named for what it is."""
+    if path.is_dir():
+        inside = sorted(p.name for p in path.glob("*.toml"))
+        hint = f" (it holds {', '.join(inside[:3])})" if inside else ""
+        raise ParameterError(f"'{path}' is a folder; a parameter file (.toml) is expected"
+                             f"{hint}")
+    kind = _OTHER_FORMATS.get(path.suffix.lower())
+    if kind is not None and path.is_file():
+        raise ParameterError(
+            f"parameter file '{path}' is {kind}: parameter sets are TOML files, one value "
+            'with its unit per line under [parameters], e.g. k = { value = "12850 N/m", '
+            'source = "datasheet" } (pneumact params show vgt-paper shows a whole set)')
+
+
 def _load(name_or_path: str | os.PathLike[str]) -> ParameterSet:
+    text = str(name_or_path)
+    if isinstance(name_or_path, Path) or _looks_like_path(text) or text not in _shipped():
+        _refuse_not_a_file(Path(name_or_path))  # a shipped name wins over a folder of it
     if not isinstance(name_or_path, Path) and not _looks_like_path(str(name_or_path)):
         shipped = _shipped()
         resource = shipped.get(str(name_or_path))
@@ -170,8 +193,9 @@ def load_params(name_or_path: str | os.PathLike[str]) -> ParameterSet:
             f"({', '.join(_shipped())}) or the path of a .toml file, not "
             f"{type(name_or_path).__name__}")
     ps = _load(name_or_path)
-    warn_implausible(ps.values, ps.name, stacklevel=2,
-                     given={n: i.given for n, i in ps.info.items()})
+    check_plausibility(ps.values, ps.name, stacklevel=2,
+                       given={n: i.given for n, i in ps.info.items()},
+                       source=ps.source_path)
     warn_passivity(ps.values, ps.name, stacklevel=2)
     return ps
 

@@ -19,13 +19,13 @@ from pneumact.io.quantities import parse_value
 from pneumact.io.report import ResultVocabulary
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.validation import (
+    check_plausibility,
     implausible,
     lugre_passivity_problem,
     message,
     passivity_note,
     problems,
     unknown_name,
-    warn_implausible,
     warn_passivity,
 )
 
@@ -210,8 +210,9 @@ class ParameterSet(ResultVocabulary, Mapping[str, float]):
         """Build a validated set from Python: numbers are SI, strings carry units."""
         parsed, info = parse_entries(values, f"parameter set '{name}'", "from_dict")
         ps = cls(parsed, name=name, description=description, info=info)
-        warn_implausible(ps.values, ps.name, stacklevel=2,
-                         given={n: i.given for n, i in info.items()})
+        check_plausibility(ps.values, ps.name, stacklevel=2,
+                           given={n: i.given for n, i in info.items()},
+                           source=ps.source_path)
         warn_passivity(ps.values, ps.name, stacklevel=2)
         return ps
 
@@ -228,8 +229,9 @@ class ParameterSet(ResultVocabulary, Mapping[str, float]):
         ps = ParameterSet({**self._values, **parsed}, name=self._name,
                           description=self._description, provenance=self._provenance,
                           info={**self._info, **info}, source_path=self._source_path)
-        warn_implausible(ps.values, ps.name, stacklevel=2, names=list(parsed),
-                         given={n: i.given for n, i in info.items()})
+        check_plausibility(ps.values, ps.name, stacklevel=2, names=list(parsed),
+                           given={n: i.given for n, i in info.items()},
+                           source=ps.source_path)
         if lugre_passivity_problem(self._values) is None:
             warn_passivity(ps.values, ps.name, stacklevel=2)
         return ps

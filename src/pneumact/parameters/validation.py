@@ -21,14 +21,15 @@ from pneumact.io.quantities import NUMBER_THEN_UNIT
 from pneumact.parameters.catalogue import catalogue, relations
 
 __all__ = [
+    "check_plausibility",
     "implausible",
     "lugre_passivity_problem",
     "message",
     "problems",
     "row_problems",
+    "unit_slips",
     "unknown_name",
     "validate",
-    "warn_implausible",
     "warn_passivity",
 ]
 
@@ -99,6 +100,25 @@ def problems(values: Mapping[str, Any], where: str,
     return found
 
 
+def unit_slips(values: Mapping[str, float], names: Iterable[str] | None = None,
+               given: Mapping[str, str] | None = None) -> list[str]:
+    """One line per value (of ``names``, default all) that can only be a unit slip: far
+    outside the plausible range, and inside it a factor 1000 away."""
+    specs = catalogue()
+    found = []
+    for name in (values if names is None else names):
+        spec = specs.get(name)
+        if spec is None or spec.plausible is None or name not in values:
+            continue
+        value = float(values[name])
+        slip = spec.unit_slip(value)
+        if slip:
+            lo, hi = spec.plausible
+            found.append(f"{_shown(name, value, given)} is far outside the plausible range "
+                         f"[{lo:g}, {hi:g}] {spec.unit}: {slip}")
+    return found
+
+
 def implausible(values: Mapping[str, float], names: Iterable[str] | None = None,
                 given: Mapping[str, str] | None = None) -> list[str]:
     """One line per value (of ``names``, default all) that is legal but outside the range
@@ -119,11 +139,20 @@ def implausible(values: Mapping[str, float], names: Iterable[str] | None = None,
     return found
 
 
-def warn_implausible(values: Mapping[str, float], set_name: str, stacklevel: int,
-                     names: Iterable[str] | None = None,
-                     given: Mapping[str, str] | None = None) -> None:
-    """One PlausibilityWarning listing the implausible values of a set (if any)."""
-    found = implausible(values, names, given)
+def check_plausibility(values: Mapping[str, float], set_name: str, stacklevel: int,
+                       names: Iterable[str] | None = None,
+                       given: Mapping[str, str] | None = None,
+                       source: object = None) -> None:
+    """Raise one ParameterError for the values that can only be unit slips (like kPa
+    typed as Pa: 12850 N/mm for a spring of 12850 N/m); else one PlausibilityWarning
+    listing the values that are legal but implausible (if any). ``source``: the file the
+    set was read from, named in the message."""
+    wanted = list(values if names is None else names)
+    slips = unit_slips(values, wanted, given)
+    if slips:
+        where = f" ({source})" if source is not None else ""
+        raise ParameterError(message(f"invalid parameter set '{set_name}'{where}", slips))
+    found = implausible(values, wanted, given)
     if found:
         warnings.warn(f"parameter set '{set_name}': {'; '.join(found)}; check the units "
                       "(if the values are meant, the run goes on as given)",
