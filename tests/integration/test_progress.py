@@ -36,8 +36,13 @@ def setup(vgt):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     cycle = pa.PressureCycle(high=100e3, low=40e3, period=2.0, n_points=201)
     run = pa.simulate(model, cycle)
-    records = [pa.Record.from_arrays(run.time, {s: run[s] for s in ("pressure", "position")},
-                                     source=f"{kind}.csv", meta={"kind": kind})
+    # three records of one run, each with its own sensor noise (the same data twice is
+    # refused as a repeated record)
+    rng = np.random.default_rng(0)
+    records = [pa.Record.from_arrays(
+        run.time, {"pressure": run["pressure"] + rng.normal(0.0, 20.0, run.time.size),
+                   "position": run["position"] + rng.normal(0.0, 1e-6, run.time.size)},
+        source=f"{kind}.csv", meta={"kind": kind})
                for kind in ("sweep", "ramp", "presliding")]
     return model, cycle, records
 
