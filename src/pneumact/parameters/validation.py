@@ -100,17 +100,22 @@ def problems(values: Mapping[str, Any], where: str,
     return found
 
 
+def _with_plausible_range(values: Mapping[str, float], names: Iterable[str] | None):
+    """(name, value, catalogue entry) of each value (of ``names``, default all) whose
+    entry states a plausible range."""
+    specs = catalogue()
+    for name in (values if names is None else names):
+        spec = specs.get(name)
+        if spec is not None and spec.plausible is not None and name in values:
+            yield name, float(values[name]), spec
+
+
 def unit_slips(values: Mapping[str, float], names: Iterable[str] | None = None,
                given: Mapping[str, str] | None = None) -> list[str]:
     """One line per value (of ``names``, default all) that can only be a unit slip: far
     outside the plausible range, and inside it a factor 1000 away."""
-    specs = catalogue()
     found = []
-    for name in (values if names is None else names):
-        spec = specs.get(name)
-        if spec is None or spec.plausible is None or name not in values:
-            continue
-        value = float(values[name])
+    for name, value, spec in _with_plausible_range(values, names):
         slip = spec.unit_slip(value)
         if slip:
             lo, hi = spec.plausible
@@ -123,13 +128,8 @@ def implausible(values: Mapping[str, float], names: Iterable[str] | None = None,
                 given: Mapping[str, str] | None = None) -> list[str]:
     """One line per value (of ``names``, default all) that is legal but outside the range
     real actuators and rigs have, with the likely mistake where one is recognisable."""
-    specs = catalogue()
     found = []
-    for name in (values if names is None else names):
-        spec = specs.get(name)
-        if spec is None or spec.plausible is None or name not in values:
-            continue
-        value = float(values[name])
+    for name, value, spec in _with_plausible_range(values, names):
         if not spec.is_plausible(value):
             lo, hi = spec.plausible
             hint = spec.hint(value)
