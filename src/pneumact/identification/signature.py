@@ -144,18 +144,14 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
     names, units = ["F0", "k", "friction_level"], ["N", "N/m", "N"]
     sigma2_fitted = False
     if high >= SPEED_RANGE * low:  # the speed varies: try σ2
-        trial, _, _ = linear_least_squares(np.column_stack([*columns, v]), f,
-                                           [*names, "sigma2"], [*units, "N*s/m"],
-                                           "signature", correlated=True)
-        # the records tell σ2 when they pin it better than the prior does, or to
-        # within POORLY_HALF_WIDTH whatever the prior says
-        tells = max(prior_s2_sd, POORLY_HALF_WIDTH * abs(trial["sigma2"]) / 1.96)
-        sigma2_fitted = bool(trial["sigma2"] > 0 and trial.stderr[3] < tells)
-    if sigma2_fitted:
         est, residual, _ = linear_least_squares(np.column_stack([*columns, v]), f,
                                                 [*names, "sigma2"], [*units, "N*s/m"],
                                                 "signature", correlated=True)
-    else:
+        # the records tell σ2 when they pin it better than the prior does, or to
+        # within POORLY_HALF_WIDTH whatever the prior says
+        tells = max(prior_s2_sd, POORLY_HALF_WIDTH * abs(est["sigma2"]) / 1.96)
+        sigma2_fitted = bool(est["sigma2"] > 0 and est.stderr[3] < tells)
+    if not sigma2_fitted:
         est, residual, _ = linear_least_squares(np.column_stack(columns), f, names, units,
                                                 "signature", correlated=True)
     slowest = float(low)
