@@ -965,6 +965,53 @@ class SignatureIdentification(PaperIdentification):
         writers["valve_numbers.csv"] = lambda p: self.valve.to_csv(p)
         return writers
 
+    def plot(self) -> Figure:
+        """The signature as a valve engineer reads it: vacuum against travel, measured,
+        with the spring line (the bench set); below it, zoomed, the measurement less the
+        spring line, where the friction band shows, with the two branches the friction
+        level puts either side; at the bottom the residual of the branches."""
+        import matplotlib.pyplot as plt
+
+        area, p_atm = self.initial["A_d"], self.initial["p_atm"]
+        f0, k = self.estimates["F0"], self.estimates["k"]
+        level = float(self.valve.loc["friction force on the branches", "value"]) / area
+        fig, (ax, axb, axr) = plt.subplots(3, 1, sharex=True, figsize=(7.0, 7.5),
+                                           gridspec_kw={"height_ratios": [2, 2, 1]})
+        x = np.linspace(0.0, self.initial["x_max"], 50)
+        for record in (r for r in self.records if record_kind(r) == "sweep"):
+            position = record["position"]
+            vacuum = p_atm - record["pressure"]
+            ax.plot(position * 1e3, vacuum * 1e-3, "k.", ms=1, alpha=0.4,
+                    label=f"measured: {Path(record.source).name}")
+            axb.plot(position * 1e3, (vacuum - (f0 + k * position) / area) * 1e-3, "k.",
+                     ms=1, alpha=0.4)
+        line = (f0 + k * x) / area
+        ax.plot(x * 1e3, line * 1e-3, "C0-", lw=1.2, label="spring line (bench set)")
+        ax.set_ylabel("vacuum p_atm − p [kPa]")
+        ax.set_title(f"valve signature: bench set {line[0] * 1e-3:.4g}–{line[-1] * 1e-3:.4g}"
+                     f" kPa, friction band {2 * level * 1e-3:.3g} kPa", fontsize=10)
+        ax.legend(fontsize=8, loc="upper left")
+        axb.axhline(0.0, color="C0", lw=1.2)
+        for sign in (1, -1):
+            axb.axhline(sign * level * 1e-3, color="C3", ls="--", lw=0.9)
+        axb.set_ylim(-3 * level * 1e-3, 3 * level * 1e-3)
+        axb.set_ylabel("less the spring line [kPa]")
+        axb.set_title("zoomed: the friction band (branches: ± friction level / A_d)",
+                      fontsize=9)
+        data = self.stages["signature"].data
+        axr.plot(data["x"], (data["measured"] - data["fitted"]) / area * 1e-3, "C3.", ms=1)
+        axr.axhline(0.0, color="k", lw=0.6)
+        axr.set_ylabel("residual [kPa]")
+        axr.set_xlabel("position [mm]")
+        for a in (ax, axb, axr):
+            a.grid(True, alpha=0.3)
+        fig.tight_layout()
+        return fig
+
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        """The signature (``plot``): vacuum against travel with the fitted lines."""
+        return {"stage_signature": self.plot}
+
     def extra_tables(self) -> dict[str, pd.DataFrame]:
         return {"The valve engineer's numbers, with 95 % intervals (SI; display: kPa, mm, "
                 "N)": self.valve}

@@ -123,7 +123,8 @@ class StageResult(ResultVocabulary):
         axr.plot(d["x"], d["measured"] - d["fitted"], "C3.", ms=3)
         axr.axhline(0, color="k", lw=0.6)
         ax.set_ylabel(self.ylabel)
-        axr.set_ylabel("residual")
+        unit = self.ylabel[self.ylabel.rfind("["):] if self.ylabel.endswith("]") else ""
+        axr.set_ylabel(f"residual {unit}".strip())
         axr.set_xlabel(self.xlabel)
         ax.set_title(self.title, fontsize=10)
         ax.legend(fontsize=8)
