@@ -105,19 +105,27 @@ def _paper():
 
 
 def _signature():
-    from pneumact.identification import SignatureIdentification
+    from pneumact.identification import Estimates, SignatureIdentification, StageResult
     from pneumact.identification.diagnostics import Verdict
 
     params = _params()
-    valve = pd.DataFrame({"value": [11.2e3], "ci95_half_width": [10.0], "unit": ["Pa"],
-                          "display_unit": ["kPa"], "meaning": ["F0/A_d"],
-                          "display": ["11.2 ± 0.01 kPa"]},
-                         index=pd.Index(["bench set: start of travel (vacuum)"],
-                                        name="quantity"))
+    names = ("F0", "k", "Fc")
+    estimates = Estimates(names, np.array([32.7, 12850.0, 2.6]), np.array([0.01, 2.0, 0.02]),
+                          np.diag([1e-4, 4.0, 4e-4]), 38, ("N", "N/m", "N"))
+    data = pd.DataFrame({"x": POSITION * 1e3, "measured": 32.7 + 12850.0 * POSITION,
+                         "fitted": 32.7 + 12850.0 * POSITION})
+    stage = StageResult("signature", estimates, ("sweep.csv",), data, "position [mm]",
+                        "drive force [N]")
+    valve = pd.DataFrame({"value": [11.2e3, 2.6], "ci95_half_width": [10.0, 0.02],
+                          "unit": ["Pa", "N"], "display_unit": ["kPa", "N"],
+                          "meaning": ["F0/A_d", "half the friction band times A_d"],
+                          "display": ["11.2 ± 0.01 kPa", "2.6 ± 0.02 N"]},
+                         index=pd.Index(["bench set: start of travel (vacuum)",
+                                         "friction force on the branches"], name="quantity"))
     return SignatureIdentification(
-        {"signature": _stage()}, None, _estimates(),
-        [Verdict("Fc", "identified", "tight"), Verdict("k", "identified", "tight")], [],
-        pd.DataFrame(), params, params, [_record()], valve=valve)
+        {"signature": stage}, None, estimates,
+        [Verdict(n, "identified", "tight") for n in names], [], pd.DataFrame(), params,
+        params, [_record()], valve=valve)
 
 
 def _inverse():
