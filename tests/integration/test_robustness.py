@@ -199,3 +199,31 @@ def test_friction_experiments_on_a_frictionless_rig(canudas):
     assert np.all(np.isfinite(run.result["position"]))
     with pytest.raises(PneumactError, match="measures friction"):
         run_friction_test(Presliding(t_end=1.0), params)
+
+
+#: An interrupt that arrives while the command line is still being imported, made
+#: deterministic: the import of pneumact.cli itself raises KeyboardInterrupt.
+_INTERRUPTED_IMPORT = """
+import sys
+
+class Interrupt:
+    @staticmethod
+    def find_spec(name, path=None, target=None):
+        if name == "pneumact.cli":
+            raise KeyboardInterrupt
+        return None
+
+sys.meta_path.insert(0, Interrupt)
+from pneumact.__main__ import main
+main()
+"""
+
+
+def test_ctrl_c_while_the_command_line_imports_exits_130_without_a_traceback():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _INTERRUPTED_IMPORT], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 130, done.stderr
+    assert "Traceback" not in done.stderr and "interrupted" in done.stderr
