@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -35,8 +36,10 @@ from .inputs import sensor_noise
 
 __all__ = [
     "IDENTIFIED_HALF_WIDTH",
+    "MISFIT_INFORMATION",
     "MISFIT_RATIO",
     "MISFIT_REMEDY",
+    "MISFIT_SHIFT",
     "MISFIT_STRUCTURE",
     "MODEL_FIDELITY",
     "POORLY_HALF_WIDTH",
@@ -45,6 +48,7 @@ __all__ = [
     "SMOOTHING_SAMPLES",
     "Diagnostic",
     "Verdict",
+    "misfit_influence",
     "residual_checks",
     "verdicts",
 ]
@@ -97,6 +101,16 @@ REMEDIES = {
 MISFIT_REMEDY = ("find what the model misses in the records the diagnostics name (a "
                  "sensor lag or offset, another friction law, the chamber's "
                  "thermodynamics) and compare the residual plots")
+
+
+#: A parameter is still judged by its interval when the model does not fit some records
+#: if the records that fit carry at least this share of what the records tell about it
+#: (its column of the Jacobian) ...
+MISFIT_INFORMATION = 0.5
+#: ... and leaving the records it does not fit out (one Gauss-Newton step from the
+#: joint optimum) moves it by at most this many of its standard errors; that move is
+#: added to its variance.
+MISFIT_SHIFT = 1.0
 
 
 @dataclass(frozen=True)
@@ -198,3 +212,39 @@ def verdicts(names: Sequence[str], values: np.ndarray, half_widths: np.ndarray,
             out.append(Verdict(name, IDENTIFIED, f"95 % interval ±{100 * relative:.2g} % of "
                                "the value"))
     return out
+
+
+def misfit_influence(fit, fits: Sequence[bool], stderr: np.ndarray
+                     ) -> tuple[dict[str, str], dict[str, float]]:
+    """What the records the model does not fit (``fits`` False, one per record of the
+    ``FitResult``) do to each estimate: (name -> why it is refused, for the estimates
+    that rest on those records or that leaving them out moves by more than
+    ``MISFIT_SHIFT`` standard errors (``stderr``, per estimate); name -> that move, for
+    the others). A stage that fails thus refuses its own parameters and those that
+    depend on it, not the others."""
+    sizes = [int(m.sum()) * len(fit.signals) for m in fit.masks()]
+    bad = np.concatenate([np.full(n, not ok) for n, ok in zip(sizes, fits, strict=True)])
+    names = [Path(r.source).name for r, ok in zip(fit.records, fits, strict=True) if not ok]
+    jac = np.asarray(fit.jacobian, dtype=float)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    kept, left = jac[~bad] / scale, jac[bad] / scale
+    share = np.sum(kept**2, axis=0)  # the columns are unit vectors over all records
+    # the kept records' gradient at the joint optimum is minus the left-out ones'
+    move = np.linalg.lstsq(kept.T @ kept, left.T @ fit.residuals[bad], rcond=None)[0]
+    move = move / scale
+    refused, moves = {}, {}
+    shown = ", ".join(names)
+    for j, name in enumerate(fit.estimates.names):
+        if "[" in name:
+            continue
+        z = abs(move[j]) / stderr[j] if stderr[j] > 0 else np.inf
+        if share[j] < MISFIT_INFORMATION:
+            refused[name] = (f"it rests on {shown} ({100 * (1 - share[j]):.0f} % of what the "
+                             "records tell about it), which the model does not fit")
+        elif not z <= MISFIT_SHIFT:
+            refused[name] = (f"the model does not fit {shown}, and leaving it out moves "
+                             f"{name} by {z:.2g} standard errors")
+        else:
+            moves[name] = float(move[j])
+    return refused, moves

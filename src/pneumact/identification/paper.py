@@ -41,10 +41,12 @@ from .diagnostics import (
     MISFIT_REMEDY,
     MISFIT_STRUCTURE,
     MODEL_FIDELITY,
+    NOT_IDENTIFIABLE,
     POORLY,
     REMEDIES,
     Diagnostic,
     Verdict,
+    misfit_influence,
     residual_checks,
     verdicts,
 )
@@ -245,8 +247,10 @@ class PaperIdentification(ResultVocabulary):
         if name is not None:
             return super().to_pandas(name)
         ci = self.estimates.interval(0.95)
-        if not self.intervals_hold:
-            ci = np.full_like(ci, np.nan)
+        shown = self._with_interval()
+        for j, name in enumerate(self.estimates.names):
+            if name not in shown:
+                ci[j] = np.nan
         rows = []
         staged = self._staged_values()
         for j, name in enumerate(self.estimates.names):
@@ -257,7 +261,7 @@ class PaperIdentification(ResultVocabulary):
             row = {"parameter": name, "unit": self.estimates.units[j], "stage": stage,
                    "staged": s_value, "staged_stderr": s_err,
                    "value": self.estimates.values[j],
-                   "stderr": self.estimates.stderr[j] if self.intervals_hold else np.nan,
+                   "stderr": self.estimates.stderr[j] if name in shown else np.nan,
                    "ci95_low": ci[j, 0], "ci95_high": ci[j, 1],
                    "initial": self.initial[name], "verdict": verdict.verdict,
                    "reason": verdict.reason}
@@ -266,9 +270,16 @@ class PaperIdentification(ResultVocabulary):
                 row["staged_error_%"] = 100 * (s_value - truth[name]) / truth[name]
                 row["error_%"] = 100 * (row["value"] - truth[name]) / truth[name]
                 row["truth_in_ci95"] = (bool(ci[j, 0] <= truth[name] <= ci[j, 1])
-                                        if self.intervals_hold else None)
+                                        if name in shown else None)
             rows.append(row)
         return pd.DataFrame(rows).set_index("parameter")
+
+    def _with_interval(self) -> set[str]:
+        """The parameters whose interval holds: all when the model fits every record;
+        else those the misfit records neither carry nor move (``misfit_influence``)."""
+        if self.intervals_hold:
+            return set(self.estimates.names)
+        return set(self.extra.get("trusted", ()))
 
     def _staged_values(self) -> dict[str, tuple[str, float, float]]:
         out = {}
@@ -673,9 +684,7 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
                 "error", "joint", f"the model does not fit {Path(r.record).name}: its "
                 f"residual RMS is {r.ratio:.3g}× the noise ({r.residual_rms:.3g} against "
                 f"{r.sensor_noise:.3g}) and its slow part {r.structure:.3g}× what noise "
-                "leaves", "the model misses something this record shows (a sensor lag, "
-                "another friction law, the chamber's thermodynamics, the valve), or the "
-                "fit stopped in a local optimum: check the residual plot"))
+                "leaves", MISFIT_REMEDY + "; or the fit stopped in a local optimum"))
     return joint, noise, estimates, checks, diagnostics
 
 
@@ -834,13 +843,27 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             "Coulomb level, which LuGre cannot produce that way", "check the friction law "
             "(pneumact compare) and the slow ramps"))
         misfit = [*misfit, "the Stribeck curve (Fs < Fc)"]
+    refused: dict[str, str] = {}
+    trusted: list[str] = []
     if not refine and joint_failed:
         caveat = "the joint refinement could not run: staged values, no interval holds"
+    elif misfit and refine and converged and len(misfit) == int((~residuals["fits"]).sum()):
+        # only records misfit: judge each parameter by what those records do to it
+        assert joint is not None
+        refused, moves = misfit_influence(joint, list(residuals["fits"]),
+                                          final_values.stderr)
+        final_values = _with_moves(final_values, moves)
+        ci = final_values.interval(0.95)
+        half = (ci[idx, 1] - ci[idx, 0]) / 2
+        trusted = list(moves)
     elif misfit:
         caveat = f"the model does not fit {', '.join(misfit)}, so no interval holds"
     elif refine and not converged:
         caveat = "the joint fit did not converge, so no interval holds"
     judged = verdicts(names, final_values.values[idx], half, at_bound[idx], caveat)
+    judged = [Verdict(v.parameter, POORLY, refused[v.parameter], MISFIT_REMEDY)
+              if v.parameter in refused and v.verdict != NOT_IDENTIFIABLE else v
+              for v in judged]
     if refine:
         judged = _stribeck_dip_check(kinds["ramp"], residuals, estimate, judged,
                                      diagnostics)
@@ -867,7 +890,18 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
+                                "trusted": trusted,
                                 "joint_failed": joint_failed})
+
+
+def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:
+    """``estimates`` with each move that leaving the misfit records out makes
+    (``diagnostics.misfit_influence``) added to that estimate's variance."""
+    cov = estimates.covariance.copy()
+    for name, move in moves.items():
+        j = estimates.names.index(name)
+        cov[j, j] += move**2
+    return with_covariance(estimates, cov)
 
 
 def _beyond_the_prior(estimates: Estimates, prior, spread: float) -> list[Diagnostic]:
