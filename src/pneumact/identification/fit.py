@@ -141,7 +141,7 @@ class _Problem:
         cached = self._cache.get(key)
         if cached is not None and (cached[1] is not None or not with_jacobian):
             return cached
-        runs = _map(self.workers, lambda i: self._run(theta, i, with_jacobian),
+        runs = map_on_threads(self.workers, lambda i: self._run(theta, i, with_jacobian),
                     range(len(self.records)))
         rows, blocks, results = [], [], []
         for i, (result, sens) in enumerate(runs):
@@ -881,8 +881,9 @@ def _own_copy(problem: _Problem) -> _Problem:
     return own
 
 
-def _map(workers: int, fn, items):
-    """``list(map(fn, items))``, on ``workers`` threads when more than one."""
+def map_on_threads(workers: int, fn, items):
+    """``list(map(fn, items))``, on ``workers`` threads when more than one (the
+    compiled integrators release the GIL)."""
     items = list(items)
     if workers <= 1 or len(items) <= 1:
         return [fn(item) for item in items]

@@ -696,20 +696,22 @@ def _named(names: Sequence[str], shown: int = 3) -> str:
     return f"{', '.join(names[:shown])} and {len(names) - shown} more"
 
 
-def _staged_checks(records, staged, friction, chamber) -> pd.DataFrame:
+def _staged_checks(records, staged, friction, chamber, workers: int) -> pd.DataFrame:
     """Does the model at the staged values predict each record (``joint.
     prediction_ratio``: the position error's RMS within ``MISFIT_RATIO`` noise
     deviations)? The stages fit force balances, not the motion: a sensor lag that eq. 13
     takes for viscous friction (σ2 ten times too large) fits them and misses the
-    records; a staged result is judged by the same residual check as a joint one."""
+    records; a staged result is judged by the same residual check as a joint one. The
+    records run on ``workers`` threads."""
+    from .fit import map_on_threads
     from .joint import prediction_ratio
 
-    rows = []
-    for record in records:
-        ratio = prediction_ratio(record, record_kind(record), staged, friction, chamber)
-        rows.append({"record": record.source, "signal": "position", "ratio": ratio,
-                     "fits": bool(ratio <= MISFIT_RATIO)})
-    return pd.DataFrame(rows, columns=["record", "signal", "ratio", "fits"])
+    ratios = map_on_threads(workers, lambda r: prediction_ratio(
+        r, record_kind(r), staged, friction, chamber), records)
+    return pd.DataFrame([{"record": r.source, "signal": "position", "ratio": ratio,
+                          "fits": bool(ratio <= MISFIT_RATIO)}
+                         for r, ratio in zip(records, ratios, strict=True)],
+                        columns=["record", "signal", "ratio", "fits"])
 
 
 def _presliding_check(records, kinds, params) -> list[Diagnostic]:
@@ -795,7 +797,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
 
     records = as_records(records, "identify_paper")
     params = as_parameter_set(params, "identify_paper")
-    workers = Executor.of(executor, "identify_paper").workers
+    pool = Executor.of(executor, "identify_paper")
+    workers = pool.workers
     if not 0 <= prior_spread < 1:
         raise ParameterError(f"identify_paper: prior_spread = {prior_spread}; must be in "
                              "[0, 1) (the prior's relative uncertainty)")
@@ -850,7 +853,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     else:
         final_values = _staged_estimates(stages, staged, free)
         joint_failed = any(d.stage == "joint" for d in diagnostics)
-        residuals = _staged_checks(records, staged, friction, chamber)
+        residuals = _staged_checks(records, staged, friction, chamber, pool.threads)
         misfit = [Path(r).name for r, fits in zip(residuals["record"], residuals["fits"],
                                                    strict=True) if not fits]
         if misfit:
