@@ -35,6 +35,7 @@ import pandas as pd
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
@@ -52,6 +53,7 @@ from .diagnostics import (
     verdicts,
 )
 from .estimates import Estimates
+from .faults import LAG_GAIN, lag_search, pressure_side, sensor_notes
 from .fit import FitResult, one_blas_thread
 from .joint import (
     JOINT_RTOL,
@@ -119,7 +121,8 @@ def with_estimates(params, estimates: Estimates, sources: dict[str, str], name: 
     info = dict(params.info)
     chosen = feasible(estimates.as_dict(), params)  # Fs never below Fc in a parameter set
     for j, pname in enumerate(estimates.names):
-        if pname not in params or (keep is not None and pname not in keep):
+        if (pname not in params and pname not in SENSOR_PARAMETERS) or \
+                (keep is not None and pname not in keep):
             continue
         value = float(chosen.get(pname, estimates.values[j]))
         values[pname] = value
@@ -264,14 +267,15 @@ class PaperIdentification(ResultVocabulary):
                    "value": self.estimates.values[j],
                    "stderr": self.estimates.stderr[j] if name in shown else np.nan,
                    "ci95_low": ci[j, 0], "ci95_high": ci[j, 1],
-                   "initial": self.initial[name], "verdict": verdict.verdict,
+                   "initial": _value_in(self.initial, name), "verdict": verdict.verdict,
                    "reason": verdict.reason}
             if truth is not None:
-                row["truth"] = truth[name]
-                row["staged_error_%"] = 100 * (s_value - truth[name]) / truth[name]
-                row["error_%"] = 100 * (row["value"] - truth[name]) / truth[name]
-                row["truth_in_ci95"] = (bool(ci[j, 0] <= truth[name] <= ci[j, 1])
-                                        if name in shown else None)
+                true = _value_in(truth, name)
+                row["truth"] = true
+                row["staged_error_%"] = 100 * (s_value - true) / true
+                row["error_%"] = 100 * (row["value"] - true) / true
+                row["truth_in_ci95"] = (bool(ci[j, 0] <= true <= ci[j, 1])
+                                        if name in shown and np.isfinite(true) else None)
             rows.append(row)
         return pd.DataFrame(rows).set_index("parameter")
 
@@ -528,6 +532,11 @@ SUMMARY_REMEDIES = 8
 SUMMARY_WIDTH = 160
 
 
+def _value_in(params, name: str) -> float:
+    """``params[name]``, or NaN for a bench parameter the set does not state."""
+    return float(params[name]) if name in params else float("nan")
+
+
 def _shorten(text: str) -> str:
     return text if len(text) <= SUMMARY_WIDTH else text[: SUMMARY_WIDTH - 1] + "…"
 
@@ -689,6 +698,59 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     return joint, noise, estimates, checks, diagnostics
 
 
+def _attempt(records, kinds, staged, free, options) -> tuple[tuple | None, list[Diagnostic]]:
+    """The joint refinement (``_refine``) as (joint fit, input noise, estimates, residual
+    checks) and its diagnostics, or None and the reason it could not run."""
+    try:
+        joint, noise, final, residuals, found = _refine(records, kinds, staged, free=free,
+                                                        **options)
+    except DataError as exc:
+        return None, [Diagnostic("error", "joint", str(exc), "ramps at speeds where the "
+                                 "diaphragm slides steadily")]
+    return (joint, noise, final, residuals), found
+
+
+def _misfits(outcome) -> float:
+    """How many records the joint fit does not fit (inf when it could not run)."""
+    if outcome is None:
+        return np.inf
+    return float((~outcome[3]["fits"]).sum()) + (0.0 if outcome[0].success else 0.5)
+
+
+def _lag_hypothesis(records, kinds, staged, free, first, options):
+    """Where the model does not fit: does a position-sensor lag explain it? The lag that
+    predicts the records best (``faults.lag_search``) starts a joint fit that frees it
+    (``position_lag``) with σ2 less the k·τ stage (c) took for viscous friction; kept
+    when it fits more records than the fit without. Returns (outcome, its diagnostics,
+    the staged values it started from, the free names, notes)."""
+    outcome, found = first
+    tau, error_with, error_without = lag_search(records, kinds, staged,
+                                                options["friction"], options["chamber"],
+                                                options["workers"])
+    if not (tau > 0 and error_with <= LAG_GAIN * error_without):
+        return outcome, found, staged, free, []
+    lagged = staged.with_values({"position_lag": tau,
+                                 "sigma2": staged["sigma2"] - staged["k"] * tau})
+    with_lag = [*free, "position_lag"]
+    again, found_again = _attempt(records, kinds, lagged, with_lag, options)
+    if _misfits(again) >= _misfits(outcome):
+        return outcome, found, staged, free, [Diagnostic(
+            "note", "bench", f"a position-sensor lag of {tau * 1e3:.3g} ms predicts the "
+            "records better than none, but the joint fit with it fits no more of them")]
+    assert again is not None  # it fits more records than the first attempt
+    estimates = again[2]
+    j = estimates.names.index("position_lag")
+    low, high = estimates.interval(0.95)[j]
+    note = Diagnostic(
+        "warning", "bench", f"the position sensor lags: a first-order lag of "
+        f"{estimates.values[j] * 1e3:.4g} ms [{low * 1e3:.4g}, {high * 1e3:.4g}] makes the "
+        f"model fit records it did not without it; it is fitted with the other parameters "
+        f"(position_lag), and stage (c)'s σ2 = {staged['sigma2']:.4g}, which took k·τ of it "
+        "for viscous friction, corrected", "a faster position sensor, or state its time "
+        "constant as position_lag in the prior")
+    return again, found_again, lagged, with_lag, [note]
+
+
 def _named(names: Sequence[str], shown: int = 3) -> str:
     """'a, b, c and 4 more': a list of record names a line can hold."""
     if len(names) <= shown + 1:
@@ -811,9 +873,14 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             any(record_kind(r) == "sweep" for r in records):
         return identify_signature(records, params, prior_spread=prior_spread, name=name,
                                   progress=progress)
+    side = pressure_side(records, params, friction, chamber, workers)
+    records = side.records
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)
+    diagnostics = side.diagnostics + diagnostics
+    notes, sensors = sensor_notes(records, [record_kind(r) for r in records], params)
+    diagnostics += notes
     free = list(SPRING_AND_FRICTION) + (["delta"] if fit_delta else [])
     presliding_ok, why_not = _presliding_identifiable(kinds, staged)
     held: dict[str, float] = {}
@@ -829,17 +896,20 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             "steps if the friction allows"))
     joint = input_noise = None
     if refine:
-        try:
-            joint, input_noise, final_values, residuals, found = _refine(
-                records, [record_kind(r) for r in records], staged, friction=friction,
-                chamber=chamber, free=free, replicates=replicates, seed=seed,
-                workers=workers, step=step, prior=params, held=held,
-                max_evaluations=max_evaluations)
-            diagnostics += found
-        except DataError as exc:  # nothing left that output error can follow
-            diagnostics.append(Diagnostic("error", "joint", str(exc), "ramps at speeds "
-                                          "where the diaphragm slides steadily"))
+        options = dict(friction=friction, chamber=chamber, replicates=replicates, seed=seed,
+                       workers=workers, step=step, prior=params, held=held,
+                       max_evaluations=max_evaluations)
+        kind_list = [record_kind(r) for r in records]
+        outcome, found = _attempt(records, kind_list, staged, free, options)
+        if _misfits(outcome) and "position_lag" not in params:
+            outcome, found, staged, free, note = _lag_hypothesis(
+                records, kind_list, staged, free, (outcome, found), options)
+            diagnostics += note
+        diagnostics += found
+        if outcome is None:  # nothing left that output error can follow
             refine = False
+        else:
+            joint, input_noise, final_values, residuals = outcome
     joint_failed = False
     converged = False
     if refine:
@@ -924,7 +994,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
                                 "trusted": trusted,
-                                "joint_failed": joint_failed})
+                                "joint_failed": joint_failed,
+                                "pressure_side": side, "sensors": sensors})
 
 
 def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:
