@@ -553,3 +553,26 @@ PLAN_SETPOINT_ATOL = 1e-6
 #: The position-sensor lag [s] under which the staged values fit their force balances
 #: and miss the motion (issue 38's --staged-only finding: σ2 +966 % "identified").
 STAGED_LAG = 3e-3
+
+# --- the bench in the model (issue 38, item 1) -----------------------------------------------
+#: the drawn actuator of the bench-fault tests (index into the family's draw)
+BENCH_ACTUATOR = 0
+#: a pressure-sensor offset [Pa], a position-sensor lag [s], a position resolution [m] and
+#: a regulator whose valve time constant is this many times the model's
+BENCH_PRESSURE_OFFSET = 1000.0
+BENCH_LAG = 3e-3
+BENCH_RESOLUTION = 10e-6
+BENCH_REGULATOR_SLOWER = 4.0
+#: a named fault's size within this of the one put in
+BENCH_SIZE_RTOL = 0.05
+#: intervals of one run that may miss the truth (see the test)
+BENCH_MAX_MISSES = 1
+#: the sensor-model unit tests: a lag [s], the exactness of the filter on a ramp [m] and
+#: of its τ-derivative against central differences (relative)
+SENSOR_TEST_LAG = 4e-3
+SENSOR_LAG_ATOL = 1e-12
+SENSOR_DERIVATIVE_RTOL = 1e-5
+#: the lag [s] a fit frees, and the largest RMS residual of the fitted position against
+#: the position noise (the model seen through the lag fits to the noise)
+SENSOR_FIT_LAG = 5e-3
+MISFIT_NOISE_RATIO = 1.5

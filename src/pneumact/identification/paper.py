@@ -53,7 +53,15 @@ from .diagnostics import (
     verdicts,
 )
 from .estimates import Estimates
-from .faults import LAG_GAIN, lag_search, pressure_side, sensor_notes
+from .faults import (
+    LAG_GAIN,
+    lag_search,
+    pressure_side,
+    quantisation_covariance,
+    quantised_records,
+    regulator_check,
+    sensor_notes,
+)
 from .fit import FitResult, one_blas_thread
 from .joint import (
     JOINT_RTOL,
@@ -680,6 +688,9 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     fidelity = np.diag((MODEL_FIDELITY * joint.estimates.values) ** 2)
     fidelity[[j for j, n in enumerate(joint.estimates.names) if "[" in n]] = 0.0
     covariance = joint.estimates.covariance + noise.covariance + fidelity
+    steps = quantised_records(joint)
+    if steps:
+        covariance = covariance + quantisation_covariance(joint, steps, seed=seed + 2)
     if held:
         covariance = covariance + nuisance_covariance(joint, held, Rodas4(rtol=JOINT_RTOL),
                                                       workers)
@@ -717,26 +728,27 @@ def _misfits(outcome) -> float:
     return float((~outcome[3]["fits"]).sum()) + (0.0 if outcome[0].success else 0.5)
 
 
-def _lag_hypothesis(records, kinds, staged, free, first, options):
+def _lag_hypothesis(records, kinds, staged, free, first, options, restage):
     """Where the model does not fit: does a position-sensor lag explain it? The lag that
     predicts the records best (``faults.lag_search``) starts a joint fit that frees it
-    (``position_lag``) with σ2 less the k·τ stage (c) took for viscous friction; kept
-    when it fits more records than the fit without. Returns (outcome, its diagnostics,
-    the staged values it started from, the free names, notes)."""
+    (``position_lag``) from the stages run again on the records with that lag undone
+    (``restage``); kept only when the model with it fits every record. Returns
+    (outcome, its diagnostics, the staged values it started from, the free names,
+    notes)."""
     outcome, found = first
-    tau, error_with, error_without = lag_search(records, kinds, staged,
-                                                options["friction"], options["chamber"],
-                                                options["workers"])
+    tau, lagged, error_with, error_without = lag_search(
+        records, kinds, staged, restage, options["friction"], options["chamber"],
+        options["workers"])
     if not (tau > 0 and error_with <= LAG_GAIN * error_without):
         return outcome, found, staged, free, []
-    lagged = staged.with_values({"position_lag": tau,
-                                 "sigma2": staged["sigma2"] - staged["k"] * tau})
+    lagged = lagged.with_values({n: staged[n] for n in options["held"]})
     with_lag = [*free, "position_lag"]
     again, found_again = _attempt(records, kinds, lagged, with_lag, options)
-    if _misfits(again) >= _misfits(outcome):
+    if _misfits(again) > 0:
         return outcome, found, staged, free, [Diagnostic(
             "note", "bench", f"a position-sensor lag of {tau * 1e3:.3g} ms predicts the "
-            "records better than none, but the joint fit with it fits no more of them")]
+            "records better than none, but the joint fit with it does not fit them all: "
+            "not taken for the cause")]
     assert again is not None  # it fits more records than the first attempt
     estimates = again[2]
     j = estimates.names.index("position_lag")
@@ -745,9 +757,9 @@ def _lag_hypothesis(records, kinds, staged, free, first, options):
         "warning", "bench", f"the position sensor lags: a first-order lag of "
         f"{estimates.values[j] * 1e3:.4g} ms [{low * 1e3:.4g}, {high * 1e3:.4g}] makes the "
         f"model fit records it did not without it; it is fitted with the other parameters "
-        f"(position_lag), and stage (c)'s σ2 = {staged['sigma2']:.4g}, which took k·τ of it "
-        "for viscous friction, corrected", "a faster position sensor, or state its time "
-        "constant as position_lag in the prior")
+        f"(position_lag), started from the stages on the records with the lag "
+        "undone (stage (c) takes k·τ of a lag for viscous friction)",
+        "a faster position sensor, or state its time constant as position_lag in the prior")
     return again, found_again, lagged, with_lag, [note]
 
 
@@ -873,7 +885,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             any(record_kind(r) == "sweep" for r in records):
         return identify_signature(records, params, prior_spread=prior_spread, name=name,
                                   progress=progress)
-    side = pressure_side(records, params, friction, chamber, workers)
+    side = pressure_side(records, params, friction, chamber, pool.threads)
     records = side.records
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
@@ -894,7 +906,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             f"{100 * prior_spread:.0f} %) is carried into the other parameters' intervals",
             "a position sensor with less noise and a finer resolution, or larger presliding "
             "steps if the friction allows"))
-    joint = input_noise = None
+    joint = input_noise = regulator = None
     if refine:
         options = dict(friction=friction, chamber=chamber, replicates=replicates, seed=seed,
                        workers=workers, step=step, prior=params, held=held,
@@ -902,14 +914,24 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         kind_list = [record_kind(r) for r in records]
         outcome, found = _attempt(records, kind_list, staged, free, options)
         if _misfits(outcome) and "position_lag" not in params:
+            def restage(undone):
+                return _staged(_kinds(undone), params, friction, fit_delta, sliding_speed,
+                               prior_spread, lambda *_: None)[1]
+
             outcome, found, staged, free, note = _lag_hypothesis(
-                records, kind_list, staged, free, (outcome, found), options)
+                records, kind_list, staged, free, (outcome, found), options, restage)
             diagnostics += note
         diagnostics += found
         if outcome is None:  # nothing left that output error can follow
             refine = False
         else:
             joint, input_noise, final_values, residuals = outcome
+        if _misfits(outcome):  # is it the regulator? asked at the best values there are
+            best = staged if outcome is None else staged.with_values(
+                feasible(outcome[2].as_dict(), staged))
+            regulator, found = regulator_check(records, best, friction, chamber,
+                                               pool.threads)
+            diagnostics += found
     joint_failed = False
     converged = False
     if refine:
@@ -995,7 +1017,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                {"friction": friction, "chamber": chamber,
                                 "trusted": trusted,
                                 "joint_failed": joint_failed,
-                                "pressure_side": side, "sensors": sensors})
+                                "pressure_side": side, "sensors": sensors,
+                                "regulator": regulator})
 
 
 def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:
