@@ -557,10 +557,9 @@ STAGED_LAG = 3e-3
 # --- the bench in the model (issue 38, item 1) -----------------------------------------------
 #: the drawn actuator of the bench-fault tests (index into the family's draw)
 BENCH_ACTUATOR = 0
-#: a pressure-sensor offset [Pa], a position-sensor lag [s], a position resolution [m] and
+#: a pressure-sensor offset [Pa], a position resolution [m] and
 #: a regulator whose valve time constant is this many times the model's
 BENCH_PRESSURE_OFFSET = 1000.0
-BENCH_LAG = 3e-3
 BENCH_RESOLUTION = 10e-6
 BENCH_REGULATOR_SLOWER = 4.0
 #: a named fault's size within this of the one put in

@@ -43,7 +43,7 @@ def test_a_fit_finds_the_lag_and_the_viscous_friction_together(lagged):
 
 
 def test_a_lag_is_one_for_every_record_and_needs_its_signal(lagged):
-    truth, records, models = lagged
+    _, records, models = lagged
     with pytest.raises(ParameterError, match="one for every record"):
         pa.fit(models, records, ["position_lag"], per_record=["position_lag"])
     with pytest.raises(ParameterError, match="pressure_lag"):

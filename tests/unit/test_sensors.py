@@ -73,7 +73,7 @@ def test_sensors_read_offsets_lags_and_resolution_from_a_parameter_set():
 
 
 def test_impossible_sensors_are_refused_by_name():
-    with pytest.raises(ParameterError, match="position_lag = -0.001"):
+    with pytest.raises(ParameterError, match=r"position_lag = -0\.001"):
         Sensors(position_lag=-1e-3)
     with pytest.raises(ParameterError, match="sample_rate"):
         Sensors(sample_rate=0.0)

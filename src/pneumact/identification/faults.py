@@ -169,7 +169,7 @@ def pressure_side(records: Sequence[Record], prior, friction=None, chamber=None,
 
 def regulator_check(records: Sequence[Record], params, friction=None, chamber=None,
                     workers: int | None = 1) -> tuple[pd.DataFrame, list[Diagnostic]]:
-    """Does the model's regulator follow the bench's? At the identified ``params`` (the
+    """Does the model's chamber pressure follow the bench's? At the identified ``params`` (the
     friction right, so the motion and the chamber volume are), each record's measured
     pressure against the model's (``REGULATOR_RATIO``), and the median delay of those
     it does not follow. Returns the table and a diagnostic naming it, if any."""
@@ -181,13 +181,15 @@ def regulator_check(records: Sequence[Record], params, friction=None, chamber=No
     word = "later" if delay > 0 else "earlier"
     worst = slow.loc[slow["ratio"].idxmax()]
     return table, [Diagnostic(
-        "warning", "bench", f"the model's pressure regulator does not follow the chamber "
-        f"pressure of {_names(sorted(slow['record']))} (up to {worst['ratio']:.3g}× the "
-        f"pressure noise, {Path(worst['record']).name}; the bench's pressure follows "
-        f"{abs(delay) * 1e3:.3g} ms {word} than the model's): the records driven by the "
-        "set-point misfit for a reason that is not the actuator's",
-        "state the regulator's reg_kp, reg_ti, reg_tau from its datasheet or a step "
-        "response to a set-point step, and identify again")]
+        "warning", "bench", f"the chamber pressure the model makes from the set-point does "
+        f"not follow the measured one on {_names(sorted(slow['record']))} (up to "
+        f"{worst['ratio']:.3g}× the pressure noise, {Path(worst['record']).name}; the "
+        f"bench's pressure follows {abs(delay) * 1e3:.3g} ms {word} than the model's): the "
+        "bench's regulator or the chamber's thermodynamics are not the model's, and the "
+        "records driven by the set-point misfit for that reason",
+        "state the regulator's reg_kp, reg_ti, reg_tau (datasheet, or its response to a "
+        "set-point step), or try another chamber law (chamber=Adiabatic()), and identify "
+        "again")]
 
 
 def _names(names: Sequence[str], shown: int = 3) -> str:
