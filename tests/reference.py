@@ -575,3 +575,7 @@ SENSOR_DERIVATIVE_RTOL = 1e-5
 #: the position noise (the model seen through the lag fits to the noise)
 SENSOR_FIT_LAG = 5e-3
 MISFIT_NOISE_RATIO = 1.5
+#: draws of the quantisation's phase in its known-answer test, and the tolerance on the
+#: variance (its sampling error over that many draws is √(2/draws) ≈ 3 %)
+QUANTISATION_TEST_DRAWS = 2000
+QUANTISATION_TEST_RTOL = 0.12

@@ -86,3 +86,35 @@ def test_each_sensor_parameter_has_its_catalogue_entry():
     for name, unit in units.items():
         spec = catalogue()[name]
         assert spec.unit == unit and spec.group == "sensors" and spec.default is None
+
+
+class _HeldStill:
+    """A fit of one level to a position held still on a quantised sensor (what
+    ``faults.quantisation_covariance`` reads of a ``FitResult``)."""
+
+    signals = ("position",)
+
+    def __init__(self, level: float, samples: int):
+        self.level, self.samples = level, samples
+        self.jacobian = np.ones((samples, 1))
+
+    def masks(self):
+        return [np.ones(self.samples, bool)]
+
+    def fitted(self, i, signal):
+        return np.full(self.samples, self.level)
+
+    def weight(self, i, signal):
+        return 1.0
+
+
+def test_a_held_position_rounds_by_one_error_not_by_white_noise():
+    """Held still, every sample rounds by the same error, uniform over a step: the level
+    moves by it, variance q²/12, where white noise of that size would average to
+    q²/(12·n) over the n samples (the known answer of the quantisation covariance)."""
+    from pneumact.identification.faults import quantisation_covariance
+
+    step = ref.BENCH_RESOLUTION
+    covariance = quantisation_covariance(_HeldStill(3.3e-3, 500), {0: step},
+                                         draws=ref.QUANTISATION_TEST_DRAWS)
+    assert covariance.item() == pytest.approx(step**2 / 12, rel=ref.QUANTISATION_TEST_RTOL)
