@@ -72,6 +72,8 @@ def test_a_bench_fault_is_named_with_its_size(fault, actuator):
         found = float(re.search(r"reads ([+-][\d.]+) kPa", lines).group(1)) * 1e3
         assert found == pytest.approx(ref.BENCH_PRESSURE_OFFSET, rel=ref.BENCH_SIZE_RTOL)
         assert result.extra["pressure_side"].applied
+        assert result.parameter_set(partial=True)["pressure_offset"] == pytest.approx(found,
+                                                                                rel=1e-2)
         for name in ("F0", "k"):  # the spring rests on the corrected pressure
             assert table.loc[name, "verdict"] == "identified", table
     else:

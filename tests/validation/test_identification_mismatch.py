@@ -69,6 +69,10 @@ def test_a_sensor_lag_is_named_and_fitted(vgt):
     assert lag["ci95_low"] <= ref.SENSOR_LAG <= lag["ci95_high"], lag
     trusted = table[(table["verdict"] == "identified") & table["truth"].notna()]
     assert {"F0", "k", "Fc", "sigma2"} <= set(trusted.index), table
+    # the identified model carries its bench: identified.toml and the bench table
+    assert result.parameter_set(partial=True)["position_lag"] == lag["value"]
+    bench = result.bench_table().set_index("parameter")
+    assert bench.loc["position_lag", "value"] == lag["value"]
     tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in trusted.index])
     assert (trusted["error_%"].abs() <= tolerance).all(), trusted
 

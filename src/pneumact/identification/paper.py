@@ -240,7 +240,8 @@ class PaperIdentification(ResultVocabulary):
     # -- tables ------------------------------------------------------------------------
     def tables(self) -> dict[str, pd.DataFrame]:
         return {"estimates": self.to_pandas(), "verdicts": self.verdicts_table(),
-                "diagnostics": self.diagnostics_table(), "residuals": self.residuals}
+                "diagnostics": self.diagnostics_table(), "residuals": self.residuals,
+                "bench": self.bench_table()}
 
     def plot(self) -> Figure:
         """Measured and fitted position of the joint refinement (of the first stage when
@@ -303,8 +304,46 @@ class PaperIdentification(ResultVocabulary):
         return out
 
     def extra_tables(self) -> dict[str, pd.DataFrame]:
-        """Tables a kind of identification adds to its report, by caption (none here)."""
-        return {}
+        """Tables a kind of identification adds to its report, by caption: the bench."""
+        bench = self.bench_table()
+        return {"The bench: what the records say about the sensors and the regulator":
+                bench} if len(bench) else {}
+
+    def bench_table(self) -> pd.DataFrame:
+        """The bench's parameters as the records tell them (``models.sensors``): the
+        pressure sensor's offset (from the set-point/pressure pairs), the position
+        sensor's lag (fitted, when the records needed it), its resolution and the sample
+        rates (read from the records), each with how it was found."""
+        rows = []
+        side = self.extra.get("pressure_side")
+        if side is not None and len(side.table):
+            rows.append({"parameter": "pressure_offset", "value": side.offset,
+                         "ci95_low": side.offset - 1.96 * side.offset_stderr,
+                         "ci95_high": side.offset + 1.96 * side.offset_stderr, "unit": "Pa",
+                         "how": "set-point/pressure pairs, median of "
+                                f"{len(side.table)} records; "
+                                + ("taken off the records" if side.applied else
+                                   "not significant: left on")})
+        if "position_lag" in self.estimates.names:
+            j = self.estimates.names.index("position_lag")
+            low, high = self.estimates.interval(0.95)[j]
+            rows.append({"parameter": "position_lag", "value": self.estimates.values[j],
+                         "ci95_low": low, "ci95_high": high, "unit": "s",
+                         "how": "fitted with the spring and friction (joint)"})
+        sensors = self.extra.get("sensors")
+        if sensors is not None and len(sensors):
+            step = float(sensors["position_resolution"].max())
+            rows.append({"parameter": "position_resolution", "value": step,
+                         "ci95_low": np.nan, "ci95_high": np.nan, "unit": "m",
+                         "how": "read from the records (the smallest step)" if step else
+                                "no quantisation seen in the records"})
+            rates = sensors["sample_rate"]
+            rows.append({"parameter": "sample_rate", "value": float(rates.min()),
+                         "ci95_low": np.nan, "ci95_high": np.nan, "unit": "Hz",
+                         "how": f"read from the records ({rates.min():.4g}–"
+                                f"{rates.max():.4g} Hz)"})
+        return pd.DataFrame(rows, columns=["parameter", "value", "ci95_low", "ci95_high",
+                                           "unit", "how"])
 
     def diagnostics_table(self) -> pd.DataFrame:
         return pd.DataFrame([{"severity": d.severity, "stage": d.stage,
@@ -357,8 +396,9 @@ class PaperIdentification(ResultVocabulary):
         return fig
 
     def band(self, record: Record, draws: int = 60):
-        """``uncertainty.prediction_band`` of the identified model on ``record``, drawn
-        from the parameters with an interval; refused where no interval holds (the model
+        """``uncertainty.prediction_band`` of the identified model on ``record`` (the
+        actuator's signals, before its sensors), drawn from the parameters with an
+        interval; refused where no interval holds (the model
         does not fit the records) or none has one."""
         from ..simulation import Rodas4
         from .fit import experiment_for
@@ -374,8 +414,8 @@ class PaperIdentification(ResultVocabulary):
         model = bench_model(record, self.parameters_unchecked, self.extra.get("friction"),
                             self.extra.get("chamber"))
         experiment = experiment_for(model, record, smooth=True)
-        names = [n for j, n in enumerate(self.estimates.names)
-                 if "[" not in n and np.isfinite(self.estimates.stderr[j])]
+        names = [n for j, n in enumerate(self.estimates.names) if "[" not in n and
+                 n not in SENSOR_PARAMETERS and np.isfinite(self.estimates.stderr[j])]
         idx = [self.estimates.names.index(n) for n in names]
         est = Estimates(tuple(names), self.estimates.values[idx], self.estimates.stderr[idx],
                         self.estimates.covariance[np.ix_(idx, idx)], self.estimates.dof,
@@ -386,10 +426,10 @@ class PaperIdentification(ResultVocabulary):
     # -- output ------------------------------------------------------------------------
     def writers(self, truth=None, call: str = "", partial: bool = True) -> dict:
         """File name -> writer: estimates.csv, verdicts.csv, diagnostics.csv,
-        residuals.csv, stage_*.png, joint_fit.png, band.png, report.md, report.html, and
-        identified.toml: the identified values, the prior's for the others, each marked
-        in its source (``parameter_set(partial=True)``; ``partial=False``: only when
-        every parameter is identified)."""
+        residuals.csv, bench.csv (``bench_table``), stage_*.png, joint_fit.png, band.png,
+        report.md, report.html, and identified.toml: the identified values, the prior's
+        for the others, each marked in its source (``parameter_set(partial=True)``;
+        ``partial=False``: only when every parameter is identified)."""
         from ..parameters import write_params
 
         rendered: dict[str, bytes] = {}
@@ -407,6 +447,8 @@ class PaperIdentification(ResultVocabulary):
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
         writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
+        if len(self.bench_table()):
+            writers["bench.csv"] = lambda p: self.bench_table().to_csv(p, index=False)
         for name in self.figures():
             writers[f"{name}.png"] = lambda p, name=name: Path(p).write_bytes(pngs()[name])
         writers["report.md"] = lambda p: Path(p).write_text(self.markdown(truth),
@@ -446,7 +488,10 @@ class PaperIdentification(ResultVocabulary):
         params = self.parameters_unchecked
         values, info = dict(params.values), dict(params.info)
         for v in self.verdicts:
-            if not v.identified:
+            if not v.identified and v.parameter not in self.initial:
+                values.pop(v.parameter, None)  # a bench parameter: the ideal sensor
+                info.pop(v.parameter, None)
+            elif not v.identified:
                 values[v.parameter], source = self._fallback(v.parameter, values)
                 info[v.parameter] = ParameterInfo(
                     number_text(v.parameter, values[v.parameter]), source,
@@ -1011,6 +1056,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         sources, name or f"{params.name}-identified",
         {"identified": f"pneumact {__version__} identify_paper, {when}",
          "records": ", ".join(Path(r.source).name for r in records)})
+    identified = _with_bench(identified, side, sensors)
     step("done", 1.0)
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
@@ -1019,6 +1065,29 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                 "joint_failed": joint_failed,
                                 "pressure_side": side, "sensors": sensors,
                                 "regulator": regulator})
+
+
+def _with_bench(identified, side, sensors: pd.DataFrame):
+    """The identified set with what the records say of the bench: the pressure sensor's
+    offset where it was taken off, the position resolution where the records show one."""
+    from ..parameters import ParameterSet
+    from ..parameters.parameter_set import ParameterInfo, number_text
+
+    found: dict[str, tuple[float, str, str]] = {}
+    if side.applied:
+        found["pressure_offset"] = (side.offset, "bench: set-point/pressure pairs",
+                                    f"± {side.offset_stderr:.3g} (standard error)")
+    step = float(sensors["position_resolution"].max()) if len(sensors) else 0.0
+    if step > 0:
+        found["position_resolution"] = (step, "bench: read from the records", "")
+    if not found:
+        return identified
+    values, info = dict(identified.values), dict(identified.info)
+    for name, (value, source, note) in found.items():
+        values[name] = value
+        info[name] = ParameterInfo(number_text(name, value), source, note)
+    return ParameterSet(values, name=identified.name, description=identified.description,
+                        provenance=identified.provenance, info=info)
 
 
 def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:
