@@ -30,9 +30,10 @@ times too large on vgt-paper). Each is checked here where the records can tell:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -40,6 +41,9 @@ import pandas as pd
 from ..io.records import Record
 from .diagnostics import Diagnostic
 from .inputs import noise_level, resolution, sensor_noise
+
+if TYPE_CHECKING:
+    from ..parameters.parameter_set import ParameterSet
 
 __all__ = [
     "LAG_GAIN",
@@ -219,9 +223,10 @@ def without_lag(records: Sequence[Record], tau: float) -> list[Record]:
     return out
 
 
-def lag_search(records: Sequence[Record], kinds: Sequence[str], staged, restage,
-               friction=None, chamber=None, workers: int | None = 1
-               ) -> tuple[float, object, float, float]:
+def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: ParameterSet,
+               restage: Callable[[list[Record]], ParameterSet], friction=None,
+               chamber=None, workers: int | None = 1
+               ) -> tuple[float, ParameterSet, float, float]:
     """(the position lag [s] that predicts ``records`` best, the staged values with it,
     the records' error with it, without it). For each lag of the grid the stages run
     again (``restage``: records -> parameter set, or an exception) on the records with
