@@ -553,3 +553,8 @@ PLAN_SETPOINT_ATOL = 1e-6
 #: The position-sensor lag [s] under which the staged values fit their force balances
 #: and miss the motion (issue 38's --staged-only finding: σ2 +966 % "identified").
 STAGED_LAG = 3e-3
+
+# --------------------------------------------------------------------------- figures
+MAX_FIGURE_WIDTH_PX = 3000  # a written PNG: a report page shows it scaled, not scrolled
+MIN_PANEL_WIDTH_PX = 300  # each panel of a multi-record figure: readable in the report
+MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact campaign`)

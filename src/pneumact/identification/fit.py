@@ -521,11 +521,10 @@ class FitResult(ResultVocabulary):
         return fig
 
     def plot_profiles(self):
-        import matplotlib.pyplot as plt
+        from ..plotting import label_log_axis, panel_grid
 
-        n = max(1, len(self.profiles))
-        fig, axes = plt.subplots(1, n, squeeze=False, figsize=(4.2 * n, 3.4))
-        for ax, prof in zip(axes[0], self.profiles.values(), strict=False):
+        fig, panels = panel_grid(len(self.profiles), width=4.2)
+        for (ax,), prof in zip(panels, self.profiles.values(), strict=False):
             ax.plot(prof.grid, prof.delta, "o-")
             ax.axhline(prof.threshold, color="k", ls="--", lw=0.8, label="95 % threshold")
             ax.axvline(prof.estimate, color="C3", lw=0.8)
@@ -535,6 +534,7 @@ class FitResult(ResultVocabulary):
             ax.grid(True, alpha=0.3)
             if prof.grid.min() > 0 and prof.grid.max() / prof.grid.min() > 20:
                 ax.set_xscale("log")
+                label_log_axis(ax)
         fig.tight_layout()
         return fig
 

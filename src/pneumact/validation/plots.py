@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import DISPLAY_UNITS
+from ..plotting import DISPLAY_UNITS, panel_grid
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
 
@@ -13,19 +13,12 @@ def _display(rv, signal: str) -> tuple[str, float]:
     return DISPLAY_UNITS.get(rv.record.units.get(signal, ""), ("", 1.0))
 
 
-def _grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.4):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(rows_per, n, squeeze=False, figsize=(width * n, height * rows_per))
-    return fig, axes
-
-
 def plot_loops(validation):
     """Measured (black dashed) and predicted pressure–position loops, one panel per
     record with pressure and position."""
     records = [rv for rv in validation.records if rv.has_loop]
-    fig, axes = _grid(len(records))
-    for ax, rv in zip(axes[0], records, strict=True):
+    fig, panels = panel_grid(len(records))
+    for (ax,), rv in zip(panels, records, strict=True):
         ax.plot(rv.record["pressure"] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
                 label="measured")
         ax.plot(rv.predicted("pressure") * 1e-3, rv.predicted("position") * 1e3, "C0-",
@@ -34,7 +27,7 @@ def plot_loops(validation):
         ax.set_ylabel("position [mm]")
         ax.set_title(rv.name, fontsize=9)
         ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(fontsize=8)
+    panels[0][0].legend(fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -55,27 +48,27 @@ def plot_residuals(validation):
     from .metrics import autocorrelation
 
     signal = validation.signals[0]
-    fig, axes = _grid(len(validation.records), rows_per=2, height=3.0)
-    for i, rv in enumerate(validation.records):
+    fig, panels = panel_grid(len(validation.records), rows_per=2, height=3.0)
+    for (ax_res, ax_acf), rv in zip(panels, validation.records, strict=True):
         unit, factor = _display(rv, signal)
         residual = rv.residual(signal)
         if "pressure" in rv.record:
-            axes[0, i].plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
-            axes[0, i].set_xlabel("pressure [kPa abs]")
+            ax_res.plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
+            ax_res.set_xlabel("pressure [kPa abs]")
         else:
-            axes[0, i].plot(rv.record.time, residual * factor, ".", ms=1.5)
-            axes[0, i].set_xlabel("time [s]")
-        axes[0, i].set_ylabel(f"{signal} residual [{unit}]")
-        axes[0, i].set_title(rv.name, fontsize=9)
+            ax_res.plot(rv.record.time, residual * factor, ".", ms=1.5)
+            ax_res.set_xlabel("time [s]")
+        ax_res.set_ylabel(f"{signal} residual [{unit}]")
+        ax_res.set_title(rv.name, fontsize=9)
         acf, band = autocorrelation(residual)
         lags = np.arange(acf.size)
-        axes[1, i].vlines(lags, 0, acf, lw=1)
-        axes[1, i].axhspan(-band, band, color="C2", alpha=0.2, label="white noise, 95 %")
-        axes[1, i].set_xlabel("lag [samples]")
-        axes[1, i].set_ylabel("autocorrelation")
-        for ax in axes[:, i]:
+        ax_acf.vlines(lags, 0, acf, lw=1)
+        ax_acf.axhspan(-band, band, color="C2", alpha=0.2, label="white noise, 95 %")
+        ax_acf.set_xlabel("lag [samples]")
+        ax_acf.set_ylabel("autocorrelation")
+        for ax in (ax_res, ax_acf):
             ax.grid(True, alpha=0.3)
-    axes[1, 0].legend(fontsize=8)
+    panels[0][1].legend(fontsize=8)
     fig.tight_layout()
     return fig
 

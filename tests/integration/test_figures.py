@@ -1,0 +1,104 @@
+"""Figures that scale (issue #42): a figure of many records is a grid of readable panels
+(at most ``MAX_PANEL_COLUMNS`` side by side, wrapping into rows), never one long row;
+log axes are labelled with numbers; small effects get a zoom."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+import reference as ref
+from pneumact import plotting
+from pneumact.cli import app
+from pneumact.identification import paper_campaign, synthetic_campaign
+
+runner = CliRunner()
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """Every figure drawn as PNG (to a file or to a report's bytes): its width and its
+    visible axes' widths in pixels at the dpi it was drawn at."""
+    from matplotlib.figure import Figure
+
+    seen: list[tuple[str, float, list[float]]] = []
+    savefig = Figure.savefig
+
+    def spy(fig, target, *args, dpi=None, **kw):
+        savefig(fig, target, *args, dpi=dpi, **kw)
+        scale = (dpi or fig.dpi) / fig.dpi
+        widths = [ax.get_window_extent().width * scale for ax in fig.axes
+                  if ax.get_visible()]
+        name = str(getattr(target, "name", target)) if not hasattr(target, "getvalue") \
+            else fig.axes[0].get_title() or "(bytes)"
+        seen.append((name, fig.get_figwidth() * (dpi or fig.dpi), widths))
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return seen
+
+
+def assert_scaled(drawn, folder) -> None:
+    assert drawn, "no figure was written"
+    for name, width, panels in drawn:
+        assert width <= ref.MAX_FIGURE_WIDTH_PX, f"{name}: {width:.0f} px wide"
+        assert min(panels) >= ref.MIN_PANEL_WIDTH_PX, f"{name}: a panel {min(panels):.0f} px"
+    for png in folder.glob("*.png"):
+        assert png_size(png)[0] <= ref.MAX_FIGURE_WIDTH_PX, png.name
+
+
+def png_size(path) -> tuple[int, int]:
+    with Image.open(path) as image:
+        return image.size
+
+
+@pytest.fixture(scope="module")
+def campaign(vgt):
+    """Twelve short records, like `pneumact campaign` writes (sweep, ramps, presliding)."""
+    speeds = tuple(np.geomspace(5e-3, 4e-2, ref.MANY_RECORDS - 2))
+    records = synthetic_campaign(vgt, paper_campaign(vgt, speeds=speeds, sweep_period=4.0),
+                                 seed=2)
+    assert len(records) == ref.MANY_RECORDS
+    return records
+
+
+def test_validate_draws_twelve_records_as_a_grid(campaign, drawn, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for record in campaign:
+        record.save(tmp_path / "bench" / f"{record.source}.csv")
+    result = runner.invoke(app, ["validate", "bench", "--out", "val"])
+    assert result.exit_code == 0, result.output
+    assert {p.name for p in (tmp_path / "val").glob("*.png")} == {
+        "loops.png", "time.png", "residuals.png"}
+    assert_scaled(drawn, tmp_path / "val")
+
+
+def test_measured_and_model_of_twelve_records_wraps_into_rows(tmp_path):
+    """The figure of a joint fit (`identify paper`'s joint_fit.png, `fit`'s fit.png)."""
+    time = np.linspace(0.0, 1.0, 50)
+    entries = [(f"record {i}", time, {"position": time}, {"position": 0.9 * time},
+                {"position": "m"}) for i in range(ref.MANY_RECORDS)]
+    fig = plotting.plot_measured_and_model(entries, ["position"])
+    columns = {round(ax.get_position().x0, 3) for ax in fig.axes if ax.get_visible()}
+    assert len(columns) == plotting.MAX_PANEL_COLUMNS
+    path = plotting.save_figure(fig, tmp_path / "joint_fit.png")
+    width = png_size(path)[0]
+    assert width <= ref.MAX_FIGURE_WIDTH_PX
+    panel = min(ax.get_window_extent().width for ax in fig.axes) * plotting.PNG_DPI / fig.dpi
+    assert panel >= ref.MIN_PANEL_WIDTH_PX
+
+
+def test_a_log_axis_within_a_decade_is_labelled_with_numbers():
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    ax.plot([0.3, 3.0], [0.0, 1.0])
+    ax.set_xscale("log")
+    plotting.label_log_axis(ax)
+    fig.canvas.draw()
+    labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+    low, high = ax.get_xlim()
+    shown = [float(x) for x in labels if low <= float(x) <= high]
+    assert len(shown) >= 3, labels
+    plt.close(fig)
