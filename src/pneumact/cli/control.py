@@ -228,11 +228,12 @@ def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
 
 def _print_metrics(frame) -> None:
     from pneumact.cli.common import fmt
+    from pneumact.io.display import display_frame
 
     table = Table(title="closed loop")
     for column in ("metric", "value", "unit"):
         table.add_column(column, justify="right" if column == "value" else "left")
-    for _, row in frame.iterrows():
+    for _, row in display_frame(frame).iterrows():
         value = row["value"]
         text = str(value) if isinstance(value, bool) else fmt(float(value), 4)
         table.add_row(str(row["metric"]), text, str(row["unit"]))

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 from ..errors import ArgumentError
 from ..files import PathLike, atomic_write
 from ..plotting import PNG_DPI, write_png
+from .display import display_frame
 
 if TYPE_CHECKING:  # pandas is imported on use: a result class costs nothing to import
     import pandas as pd
@@ -221,7 +222,8 @@ class ResultVocabulary:
                          figure_png(make(), dpi=PNG_DPI), name.replace("_", " "))
         for name, frame in self.tables().items():
             cut = len(frame) > REPORT_ROWS
-            report.table(frame.head(REPORT_ROWS), f"{name.replace('_', ' ')}" + (
+            report.table(display_frame(frame.head(REPORT_ROWS)),
+                         f"{name.replace('_', ' ')}" + (
                 f" (first {REPORT_ROWS} of {len(frame)} rows; all in {name}.csv)"
                 if cut else ""), index=not _plain_index(frame))
         return report

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..io.display import display_frame
 from ..plotting import DISPLAY_UNITS, panel_grid
+from .metrics import metrics_for_reading
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
 
@@ -73,6 +75,16 @@ def plot_residuals(validation):
     return fig
 
 
+def _reversal_units(table) -> dict[str, str]:
+    """The SI unit of each column of a reversal table (``Validation.reversals``)."""
+    units = {}
+    for column in table.columns:
+        name = str(column)
+        units[column] = ("Pa" if "pressure" in name else "m" if "position" in name
+                         else "s" if "time" in name else "")
+    return {c: u for c, u in units.items() if u}
+
+
 def add_to_report(validation, report, title: str | None, figures: dict[str, bytes]) -> None:
     """Metrics, loop measures, reversals and the rendered ``figures``, as report
     sections."""
@@ -80,7 +92,8 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     report.heading(label)
     report.text(f"{len(validation.records)} record(s); compared: "
                 f"{', '.join(validation.signals)}. NRMSE = ‖y − ŷ‖/‖y − ȳ‖, "
-                "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; SI units.")
+                "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; shown in mm or µm, kPa and N (the "
+                "CSV files are SI).")
     verdicts = validation.verdicts()
     c = validation.criteria
     report.text("Verdict per record: fit % alone is not enough (a model whose loop is half "
@@ -96,15 +109,18 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     for _, row in verdicts[verdicts["verdict"] == "inadequate"].iterrows():
         report.note(f"{row['record']}: the model is inadequate for this record: "
                     f"{row['reasons']}.")
-    report.table(validation.metrics(), "Error metrics per record and pooled", index=False)
+    for signal, shown in metrics_for_reading(validation.metrics()).items():
+        report.table(shown, f"Error metrics of the {signal}, per record and pooled",
+                     index=False)
     loops = validation.loops()
     if len(loops):
-        report.table(loops, "Hysteresis-loop measures, model against measurement "
-                            "(difference = model − measured)", index=False)
+        report.table(display_frame(loops), "Hysteresis-loop measures, model against "
+                     "measurement (difference = model − measured)", index=False)
         report.image(figures["loops"], "Pressure–position loops: measured (dashed) and "
                                        "model (like the paper's Fig. 6)")
         reversal_table = validation.reversals()
         if len(reversal_table):
-            report.table(reversal_table, "Reversal points of the pressure", index=False)
+            report.table(display_frame(reversal_table, _reversal_units(reversal_table)),
+                         "Reversal points of the pressure", index=False)
     report.image(figures["time"], "Measured and predicted signals, residuals")
     report.image(figures["residuals"], "Residuals against pressure and their autocorrelation")

@@ -1,6 +1,6 @@
-"""Figures that scale (issue #42): a figure of many records is a grid of readable panels
-(at most ``MAX_PANEL_COLUMNS`` side by side, wrapping into rows), never one long row;
-log axes are labelled with numbers; small effects get a zoom."""
+"""Presentation (issue #42). Figures that scale: a figure of many records is a grid of
+readable panels (at most ``MAX_PANEL_COLUMNS`` side by side, wrapping into rows), never
+one long row; log axes are labelled with numbers. Units a person reads: mm or µm, kPa."""
 
 from __future__ import annotations
 
@@ -102,3 +102,32 @@ def test_a_log_axis_within_a_decade_is_labelled_with_numbers():
     shown = [float(x) for x in labels if low <= float(x) <= high]
     assert len(shown) >= 3, labels
     plt.close(fig)
+
+
+def test_validate_prints_and_reports_mm_um_and_kpa_and_writes_si(campaign, tmp_path,
+                                                                 monkeypatch):
+    """Units a person reads (issue #42): µm residuals, kPa·mm loop areas; CSV stays SI."""
+    monkeypatch.chdir(tmp_path)
+    for record in (campaign[0], campaign[-1]):  # the sweep and the presliding test
+        record.save(tmp_path / "bench" / f"{record.source}.csv")
+    result = runner.invoke(app, ["validate", "bench", "--out", "val"])
+    assert result.exit_code == 0, result.output
+    assert "rms [µm]" in result.output and "e-06" not in result.output
+    html = (tmp_path / "val" / "report.html").read_text(encoding="utf-8")
+    assert "rms [µm]" in html and "kPa·mm" in html and "Pa*m" not in html
+    import pandas as pd
+
+    metrics = pd.read_csv(tmp_path / "val" / "metrics.csv")
+    assert metrics["rms"].max() < 1e-3  # metres
+
+
+def test_control_step_prints_its_errors_in_um_or_mm(tmp_path):
+    """The loop of test_cli_control.py's step test (its kernel serves both)."""
+    result = runner.invoke(app, ["control", "step", "--plant", "command", "--start", "4",
+                                 "--stop", "8", "--t-end", "0.6", "--sample-time", "1e-3",
+                                 "--out", str(tmp_path / "step")])
+    assert result.exit_code == 0, result.output
+    rows = {line.split("│")[1].strip(): line.split("│")[3].strip()
+            for line in result.output.splitlines() if line.count("│") == 4}
+    assert rows["steady_state_error"] in ("µm", "mm") and rows["start"] == "mm"
+    assert rows["iae"] in ("µm·s", "mm·s")
