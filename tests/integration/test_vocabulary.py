@@ -398,3 +398,28 @@ def test_to_pandas_names_its_tables_and_refuses_others():
     assert list(fit.to_pandas("correlation").columns) == ["Fc", "k"]
     with pytest.raises(pa.ArgumentError, match="allowed: estimates, statistics"):
         fit.to_pandas("nonsense")
+
+
+@pytest.mark.parametrize("name", sorted(FACTORIES))
+def test_a_result_shows_itself_in_a_notebook(name, tmp_path_factory):
+    """``_repr_html_`` (issue #42): a title, the summary table in display units and,
+    where drawing it is cheap, the figure inline."""
+    import matplotlib.pyplot as plt
+
+    result = FACTORIES[name](tmp_path_factory)
+    shown = result._repr_html_()
+    assert isinstance(shown, str) and "<table" in shown, name
+    if type(result).inline_figure:
+        assert "data:image/png;base64," in shown and "(no figure" not in shown, name
+    plt.close("all")
+
+
+def test_a_record_and_sensitivities_are_short_and_labelled():
+    record = _record("bench/sweep.csv")
+    assert repr(record) == ("Record('sweep', 41 samples over 0..2 s, signals: "
+                            "pressure [Pa], position [m])")
+    sens = _sensitivities()
+    frame = sens.to_pandas("position")
+    assert list(frame.columns) == ["Fc"] and frame.index.name == "time"
+    np.testing.assert_array_equal(frame.to_numpy(), sens["position"])
+    assert frame.attrs["units"] == {"Fc": "m/(N)"}

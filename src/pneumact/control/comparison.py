@@ -82,6 +82,8 @@ class DesignComparison(ResultVocabulary):
     ``LinearDesign`` the designs came from), its gains, its linear predictions and its
     Bode plot join the tables, the figures and ``write``'s ``linear_gains.toml``."""
 
+    inline_figure = False  # plot() simulates every move: not for a display
+
     report_title = "Designs on the nonlinear loop"
     figure_name = "designs"
 

@@ -18,6 +18,7 @@ import pandas as pd
 from ..core.signals import Constant
 from ..errors import ArgumentError
 from ..experiments.actuator import Experiment
+from ..io.report import NotebookDisplay
 from ..models.controllers import PID
 from ..progress import ProgressCallback
 from .loop import ClosedLoop
@@ -37,7 +38,7 @@ TRACKING_METRICS = ("iae", "ise", "control_effort", "command_variation", "stick_
 
 
 @dataclass(eq=False)
-class LoopStudy:
+class LoopStudy(NotebookDisplay):
     """A closed-loop run: the loop, its experiment, the result and its metrics.
 
     ``to_pandas()``: the signals (``"metrics"``: the loop metrics, ``"controller"``: its

@@ -269,6 +269,8 @@ class TuningResult(ResultVocabulary):
     bold). ``write(folder)``: the tables, the figure, report.html and ``gains.toml``
     (``pneumact control step --gains-file``)."""
 
+    inline_figure = False  # plot() simulates every move: not for a display
+
     report_title = "Controller tuning"
     figure_name = "tuning"
 

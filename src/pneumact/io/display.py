@@ -21,7 +21,8 @@ from ..plotting import DISPLAY_UNITS
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["SMALL_LENGTH", "display_frame", "display_unit", "display_value", "pretty_unit"]
+__all__ = ["SMALL_LENGTH", "display_frame", "display_unit", "display_value", "pretty_unit",
+           "signal_summary"]
 
 #: lengths [m] all below this are shown in µm (a residual of 3 µm, not 0.003 mm)
 SMALL_LENGTH = 1e-4
@@ -36,8 +37,8 @@ _SHOWN: dict[str, str] = {
 _SHOWN_SMALL: dict[str, str] = {"m": "µm", "m*s": "µm*s",
                                 "m/s": "µm/s"}
 #: the columns of a long table (a ``unit`` column) that carry a value in that unit
-VALUE_COLUMNS = ("value", "measured", "model", "difference", "rms", "max", "estimate", "stderr",
-                 "nominal", "low", "high", "lower", "upper", "truth")
+VALUE_COLUMNS = ("value", "measured", "model", "difference", "rms", "min", "max", "first",
+                 "last", "estimate", "stderr", "nominal", "low", "high", "lower", "upper", "truth")
 _HEADER = re.compile(r"^(?P<name>.*?)\s*\[(?P<unit>[^\]]*)\]$")
 
 
@@ -117,3 +118,16 @@ def _numeric(series) -> bool:
 def _number(value) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
         value, (bool, np.bool_))
+
+
+def signal_summary(signals: Mapping[str, np.ndarray], units: Mapping[str, str]
+                   ) -> pd.DataFrame:
+    """Per signal: its first, smallest, largest and last value (SI, with a ``unit``
+    column: ``display_frame`` shows it in display units): a record or a run at a
+    glance, without its arrays."""
+    import pandas as pd
+
+    rows = [{"signal": name, "unit": units.get(name, ""), "first": float(v[0]),
+             "min": float(np.min(v)), "max": float(np.max(v)), "last": float(v[-1])}
+            for name, v in signals.items() if np.size(v)]
+    return pd.DataFrame(rows, columns=["signal", "unit", "first", "min", "max", "last"])

@@ -20,6 +20,7 @@ import pandas as pd
 
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
+from ..io.report import NotebookDisplay
 from .metrics import METRIC_NAMES, error_metrics
 
 if TYPE_CHECKING:
@@ -29,7 +30,7 @@ __all__ = ["FrictionValidation", "friction_across_levels", "validate_friction"]
 
 
 @dataclass(eq=False)
-class FrictionValidation:
+class FrictionValidation(NotebookDisplay):
     """Predicted against measured force per record (``predictions[name]``: time,
     velocity, measured, predicted, SI) and the parameters each prediction used.
 

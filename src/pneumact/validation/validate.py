@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
+from ..io.report import NotebookDisplay
 from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS, valve_for_signal
 from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
@@ -86,7 +87,7 @@ def _write_bytes(data: bytes, path: Path) -> None:
 
 
 @dataclass(eq=False)
-class RecordValidation:
+class RecordValidation(NotebookDisplay):
     """One record against the model's prediction of it: ``metrics()`` and
     ``to_pandas()`` (tables), ``plot()`` (a Figure) and ``write(folder)`` as those of a
     ``Validation`` of this record alone."""
@@ -107,6 +108,10 @@ class RecordValidation:
     def residual(self, signal: str) -> np.ndarray:
         """Measured − predicted, on the record's time grid."""
         return self.measured(signal) - self.predicted(signal)
+
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
 
     def metrics(self) -> pd.DataFrame:
         """Per signal: RMS, max, NRMSE, fit %, R², n (``validation.metrics``)."""
@@ -160,7 +165,7 @@ class RecordValidation:
 
 
 @dataclass(eq=False)
-class Validation:
+class Validation(NotebookDisplay):
     """Validation of one model on a set of records; ``label`` names the set (e.g. test).
 
     ``to_pandas()``: the time series, long (``"metrics"``, ``"verdicts"``, ``"loops"``:
@@ -172,6 +177,10 @@ class Validation:
     values: dict[str, float] = field(default_factory=dict)
     label: str = "validation"
     criteria: Criteria = field(default_factory=Criteria)
+
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
 
     def metrics(self) -> pd.DataFrame:
         """Per record and signal, plus all records pooled: RMS, max, NRMSE, fit %, R², n,
@@ -358,7 +367,7 @@ def validate(model, records: Record | Sequence[Record], *,
 
 
 @dataclass(eq=False)
-class TrainTest:
+class TrainTest(NotebookDisplay):
     """A fit on training records and its validation on those and on test records.
 
     ``to_pandas()``: training and test metrics (``metrics()``; ``"summary"``: pooled,
@@ -368,6 +377,10 @@ class TrainTest:
     fit: FitResult
     train: Validation
     test: Validation
+
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
 
     def metrics(self) -> pd.DataFrame:
         """Training and test metrics in one table (``set`` column): over-fitting shows as
