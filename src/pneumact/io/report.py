@@ -221,7 +221,7 @@ class NotebookDisplay:
     def _repr_html_(self) -> str:
         return notebook_html(self.notebook_title(), self.notebook_text(),
                              self.notebook_table(),
-                             self.plot if self.inline_figure else None)  # type: ignore
+                             self.plot if self.inline_figure else None)  # type: ignore[attr-defined]
 
 
 class ResultVocabulary(NotebookDisplay):
