@@ -131,3 +131,28 @@ def test_control_step_prints_its_errors_in_um_or_mm(tmp_path):
             for line in result.output.splitlines() if line.count("│") == 4}
     assert rows["steady_state_error"] in ("µm", "mm") and rows["start"] == "mm"
     assert rows["iae"] in ("µm·s", "mm·s")
+
+
+def test_validate_does_not_compare_a_record_with_its_own_input(vgt, campaign):
+    """A pressure-driven record: its pressure drives the model; comparing it would give
+    a fit of 100 % that says nothing (issue #42)."""
+    import pneumact as pa
+    from pneumact.errors import DataError
+    from pneumact.validation import validate
+
+    presliding = campaign[-1]
+    model = pa.Actuator(vgt, valve=pa.PressureRegulator())
+    validation = validate(model, presliding, signals=("position", "pressure"))
+    assert validation.records[0].input == "pressure"
+    assert set(validation.metrics()["signal"]) == {"position"}
+    assert "pressure not compared" in validation.verdicts()["reasons"].iloc[0]
+    with pytest.raises(DataError, match="repeat its input"):
+        validate(model, presliding, signals=("pressure",))
+
+
+def test_a_mistyped_command_and_flags_in_help():
+    result = runner.invoke(app, ["batch"])
+    assert result.exit_code != 0 and "simulate-batch" in result.output
+    result = runner.invoke(app, ["campaign", "--help"])
+    assert result.exit_code == 0 and "--plan" in result.output
+    assert "<bool>" not in result.output

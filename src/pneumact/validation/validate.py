@@ -98,6 +98,9 @@ class RecordValidation(NotebookDisplay):
     signals: tuple[str, ...]
     input: str = ""
     valve: str = ""
+    #: signals asked for but not compared: the record's input drives the model with
+    #: them, so the model would only repeat them (a fit of 100 % that says nothing)
+    dropped: tuple[str, ...] = ()
 
     def measured(self, signal: str) -> np.ndarray:
         return self.record[signal]
@@ -191,8 +194,11 @@ class Validation(NotebookDisplay):
             for row in rv.metrics().to_dict("records"):
                 rows.append({**row, "verdict": verdicts[rv.name]})
         for signal in self.signals:
-            measured = np.concatenate([rv.measured(signal) for rv in self.records])
-            predicted = np.concatenate([rv.predicted(signal) for rv in self.records])
+            compared = [rv for rv in self.records if signal in rv.signals]
+            if not compared:
+                continue
+            measured = np.concatenate([rv.measured(signal) for rv in compared])
+            predicted = np.concatenate([rv.predicted(signal) for rv in compared])
             rows.append({"record": ALL_RECORDS, "signal": signal,
                          **error_metrics(measured, predicted, f"{ALL_RECORDS}: {signal}"),
                          "verdict": worst_verdict(verdicts)})
@@ -225,7 +231,7 @@ class Validation(NotebookDisplay):
         """Autocorrelation of each record's residual (lag, acf, band) per signal."""
         rows = []
         for rv in self.records:
-            for signal in self.signals:
+            for signal in rv.signals:
                 acf, band = autocorrelation(rv.residual(signal), max_lag)
                 rows.append(pd.DataFrame({"record": rv.name, "signal": signal,
                                           "lag": np.arange(acf.size), "acf": acf,
@@ -243,7 +249,7 @@ class Validation(NotebookDisplay):
             return others[name]()
         frames = []
         for rv in self.records:
-            for s in self.signals:
+            for s in rv.signals:
                 frames.append(pd.DataFrame({"record": rv.name, "time": rv.record.time,
                                             "signal": s, "measured": rv.measured(s),
                                             "model": rv.predicted(s),
@@ -357,11 +363,17 @@ def validate(model, records: Record | Sequence[Record], *,
         record.require(signals, "validation")
         driven, signal = drive_for(model, record, input)
         name = os.path.basename(record.source) or f"record {i + 1}"
+        compared = tuple(s for s in signals if s != signal)
+        if not compared:
+            raise DataError(f"validate: {name} drives the model with its {signal}, the "
+                            f"only signal asked (signals={list(signals)}): the model would "
+                            "repeat its input; compare another signal (e.g. position)")
         experiment = experiment_for(driven, record, smooth_input)
         simulated = simulate(driven, experiment, solver, t_eval=record.time,
                              values=dict(values or {}))
-        out.append(RecordValidation(name, record, simulated, signals, signal,
-                                    driven.drive_label))
+        out.append(RecordValidation(name, record, simulated, compared, signal,
+                                    driven.drive_label, tuple(s for s in signals
+                                                              if s not in compared)))
         notify(progress, "validate", i + 1, len(records))
     return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
