@@ -156,3 +156,20 @@ def test_a_mistyped_command_and_flags_in_help():
     result = runner.invoke(app, ["campaign", "--help"])
     assert result.exit_code == 0 and "--plan" in result.output
     assert "<bool>" not in result.output
+
+
+def test_sliding_motion_tells_stick_slip_from_steady_sliding():
+    from pneumact.analysis import sliding_motion
+
+    t = np.linspace(0.0, 1.0, 2001)
+    steady = sliding_motion(1e-2 * t, np.full_like(t, 1e-2))
+    assert not steady.stick_slip and steady.min_speed == pytest.approx(1e-2)
+    jumps = 1e-3 * (np.sin(2 * np.pi * 20 * t) ** 2)  # stops 40 times
+    stepping = sliding_motion(1e-2 * t, 1e-2 * jumps / jumps.max() * 2)
+    assert stepping.stick_slip and stepping.stops >= 20
+
+
+def test_simulate_says_the_default_run_sticks_and_slips(tmp_path):
+    result = runner.invoke(app, ["simulate", "--out", str(tmp_path / "sim")])
+    assert result.exit_code == 0, result.output
+    assert "stick-slip" in result.output and "speed range" in result.output
