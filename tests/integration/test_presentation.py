@@ -173,3 +173,25 @@ def test_simulate_says_the_default_run_sticks_and_slips(tmp_path):
     result = runner.invoke(app, ["simulate", "--out", str(tmp_path / "sim")])
     assert result.exit_code == 0, result.output
     assert "stick-slip" in result.output and "speed range" in result.output
+
+
+def test_control_profile_takes_a_measured_profile_with_noise_at_the_rest_stop(tmp_path):
+    """A bench record rests at 0 with its sensor's noise, a few µm below 0 (issue #42);
+    a profile a millimetre outside the stroke is still refused."""
+    rng = np.random.default_rng(1)
+    time = np.linspace(0.0, 1.2, 121)
+    position = np.interp(time, [0.0, 0.3, 0.8, 1.2], [0.0, 0.0, 5.0, 5.0])
+    position = position + rng.normal(0.0, 1e-3, time.size)  # 1 µm of noise [mm]
+    assert position.min() < -0.002
+    profile = tmp_path / "profile.csv"
+    np.savetxt(profile, np.column_stack([time, position]), delimiter=",",
+               header="time [s],position [mm]", comments="")
+    args = ["control", "profile", str(profile), "--plant", "command", "--sample-time",
+            "1e-3"]  # the loop of test_cli_control.py's profile test: its kernel
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "past an end of the stroke" in result.output
+    np.savetxt(profile, np.column_stack([time, position - 1.0]), delimiter=",",
+               header="time [s],position [mm]", comments="")
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "bad")])
+    assert result.exit_code == 2 and "lowest set-point" in result.output

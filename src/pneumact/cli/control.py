@@ -209,6 +209,37 @@ def _check_setpoints(plant: Plant, params_name: str, **positions_mm: float) -> N
                     hint=f"the stroke of '{params_name}' is 0 to x_max = {x_max:g} mm")
 
 
+#: a measured profile may pass an end of the stroke by its sensor's noise: by this many
+#: standard deviations of it (estimated from the profile), and at least END_TOLERANCE [m]
+NOISE_SIGMAS = 5.0
+END_TOLERANCE = 10e-6
+
+
+def _within_stroke(plant: Plant, params_name: str, label: str, positions):
+    """A profile's positions [m], those past an end of the stroke by no more than the
+    noise of a measurement (``NOISE_SIGMAS`` σ, at least ``END_TOLERANCE``) put on that
+    end, with a note; farther ones are left for ``_check_setpoints`` to refuse."""
+    import numpy as np
+
+    from pneumact.cli.common import err_console
+
+    if plant is Plant.rig or len(positions) < 4:
+        return positions
+    x_max = load_quietly(params_name)["x_max"]
+    # white noise of σ gives second differences of standard deviation σ·√6
+    sigma = 1.4826 * float(np.median(np.abs(np.diff(positions, 2)))) / np.sqrt(6.0)
+    tolerance = max(END_TOLERANCE, NOISE_SIGMAS * sigma)
+    inside = np.clip(positions, 0.0, x_max)
+    moved = np.abs(inside - positions)
+    if not 0.0 < moved.max() <= tolerance:
+        return positions
+    err_console.print(f"note: {label}: {np.count_nonzero(moved)} set-point(s) up to "
+                      f"{moved.max() * 1e6:.3g} µm past an end of the stroke (within the "
+                      f"measurement's noise, {tolerance * 1e6:.3g} µm) put on that end",
+                      soft_wrap=True)
+    return inside
+
+
 def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
                    tracking: bool = False) -> None:
     import pneumact as pa
@@ -378,7 +409,7 @@ def profile_command(
                             f"'{record.units.get(name)}'; give it a length unit in the "
                             f"header, e.g. '{name} [mm]'")
         out = check_out_dir("--out", out)
-        positions = record[name]
+        positions = _within_stroke(plant, params, profile.name, record[name])
         experiment = SetpointProfile(record.time, positions, name=profile.name)
         _check_setpoints(plant, params, **{
             f"{profile.name}: lowest set-point": float(np.min(positions)) * 1e3,
