@@ -4,6 +4,8 @@ one long row; log axes are labelled with numbers. Units a person reads: mm or µ
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -195,3 +197,21 @@ def test_control_profile_takes_a_measured_profile_with_noise_at_the_rest_stop(tm
                header="time [s],position [mm]", comments="")
     result = runner.invoke(app, [*args, "--out", str(tmp_path / "bad")])
     assert result.exit_code == 2 and "lowest set-point" in result.output
+
+
+def test_a_record_has_one_name_in_every_table(vgt, campaign, tmp_path):
+    """`bench/presliding.csv` is `presliding.csv` in validation and fit tables alike, never
+    its folder's path (issue #42)."""
+    import pneumact as pa
+    from pneumact.identification import fit
+    from pneumact.validation import validate
+
+    campaign[-1].save(tmp_path / "bench" / "presliding.csv")
+    record = pa.read_record(tmp_path / "bench" / "presliding.csv")
+    record = record.crop(0.0, 0.8)
+    model = pa.Actuator(vgt, valve=pa.PressureSource())
+    names = set(validate(model, record).metrics()["record"]) - {"all records"}
+    result = fit(model, record, ["F0"])
+    assert names == set(result.to_pandas("statistics")["record"]) == {
+        os.path.basename(record.source)}
+    assert next(iter(names)).startswith("presliding.csv")  # (cropped: "... (0..0.8 s)")

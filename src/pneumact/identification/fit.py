@@ -599,7 +599,8 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
             e = sim[s] - rec[s]
             y = rec[s]
             nrmse = float(np.linalg.norm(e) / max(float(np.linalg.norm(y - y.mean())), 1e-300))
-            rows.append({"record": rec.source, "signal": s, "unit": rec.units.get(s, ""),
+            rows.append({"record": os.path.basename(rec.source), "signal": s,
+                         "unit": rec.units.get(s, ""),
                          "samples": e.size, "rms": float(np.sqrt(np.mean(e**2))),
                          "max_abs": float(np.max(np.abs(e))), "nrmse": nrmse,
                          "fit_percent": 100 * (1 - nrmse)})

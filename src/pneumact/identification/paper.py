@@ -721,7 +721,7 @@ def _staged_checks(records, staged, friction, chamber, workers: int) -> pd.DataF
 
     ratios = map_on_threads(workers, lambda r: prediction_ratio(
         r, record_kind(r), staged, friction, chamber), records)
-    return pd.DataFrame([{"record": r.source, "signal": "position", "ratio": ratio,
+    return pd.DataFrame([{"record": Path(r.source).name, "signal": "position", "ratio": ratio,
                           "fits": bool(ratio <= MISFIT_RATIO)}
                          for r, ratio in zip(records, ratios, strict=True)],
                         columns=["record", "signal", "ratio", "fits"])
@@ -767,7 +767,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
         return judged
     used = set(residuals["record"]) if len(residuals) else set()
     slow = [(r, v) for r, v in ramps if v < vs]
-    if not slow or any(r.source in used for r, _ in slow):
+    if not slow or any(Path(r.source).name in used for r, _ in slow):
         return judged
     names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
