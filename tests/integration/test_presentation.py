@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 
 import numpy as np
+import pandas as pd
 import pytest
 from PIL import Image
 from typer.testing import CliRunner
@@ -117,7 +118,7 @@ def test_validate_prints_and_reports_mm_um_and_kpa_and_writes_si(campaign, tmp_p
     assert "rms [µm]" in result.output and "e-06" not in result.output
     html = (tmp_path / "val" / "report.html").read_text(encoding="utf-8")
     assert "rms [µm]" in html and "kPa·mm" in html and "Pa*m" not in html
-    import pandas as pd
+
 
     metrics = pd.read_csv(tmp_path / "val" / "metrics.csv")
     assert metrics["rms"].max() < 1e-3  # metres
@@ -215,3 +216,15 @@ def test_a_record_has_one_name_in_every_table(vgt, campaign, tmp_path):
     assert names == set(result.to_pandas("statistics")["record"]) == {
         os.path.basename(record.source)}
     assert next(iter(names)).startswith("presliding.csv")  # (cropped: "... (0..0.8 s)")
+
+
+def test_the_campaign_plan_fits_80_columns_with_units_in_its_headers(tmp_path):
+    result = runner.invoke(app, ["campaign", "--plan", "--out", str(tmp_path / "plan")],
+                           terminal_width=80)
+    assert result.exit_code == 0, result.output
+    assert "…" not in result.output and "[kPa]" in result.output and "[mm/s]" in result.output
+    assert all(len(line) <= 80 for line in result.output.splitlines() if "│" in line
+               or "─" in line)
+    plan = pd.read_csv(tmp_path / "plan" / "plan.csv")
+    for test in plan["test"]:
+        assert f" {test} " in result.output

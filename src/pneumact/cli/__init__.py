@@ -85,6 +85,11 @@ app = typer.Typer(
 )
 
 
+#: said before the first compilation the disk cache cannot spare (a cold start)
+COMPILING = ("compiling the model (once on this machine, about a minute; later runs load "
+             "it in seconds)")
+
+
 def _version(value: bool) -> None:
     if value:
         out_console.print(f"pneumact {__version__}")
@@ -97,6 +102,10 @@ def main(
                                           help="Print the version and exit.")] = False,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
+    from pneumact.cli.common import err_console
+    from pneumact.core.compile_lock import on_first_compile
+
+    on_first_compile(lambda: err_console.print(COMPILING, style="yellow"))
 
 
 app.command()(simulate)
