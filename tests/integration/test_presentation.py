@@ -228,3 +228,16 @@ def test_the_campaign_plan_fits_80_columns_with_units_in_its_headers(tmp_path):
     plan = pd.read_csv(tmp_path / "plan" / "plan.csv")
     for test in plan["test"]:
         assert f" {test} " in result.output
+
+
+def test_control_tune_exits_non_zero_when_its_gains_miss_the_spec(tmp_path):
+    """The rig of test_tuning.py's command-line test, a spec it cannot meet: the files
+    are written, the feasibility line says so, and the exit code tells a script."""
+    rig = ["--plant", "rig", "--params", "canudas1995"]
+    result = runner.invoke(app, ["control", "tune", *rig, "--kp", "3", "--ki", "4",
+                                 "--spec", "settling=0.05,overshoot=0%,no-hunting",
+                                 "--n-global", "2", "--max-evaluations", "2", "--at", "0",
+                                 "--out", str(tmp_path / "tune")])
+    assert result.exit_code == 3, result.output
+    assert "Does NOT meet the specs" in result.output
+    assert (tmp_path / "tune" / "gains.toml").is_file()

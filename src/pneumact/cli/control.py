@@ -39,6 +39,11 @@ if TYPE_CHECKING:
     from pneumact.models import Actuator, FrictionRig
     from pneumact.models.controllers import Compensation
 
+#: Exit code of a tuning that ran but whose gains do not meet --spec on the asked share
+#: of the samples (the nominal plant alone without --uncertainty): the files are written
+#: and the feasibility line says what they hold
+EXIT_SPECS_NOT_MET = 3
+
 control_app = typer.Typer(help="Closed-loop position control: step, profile, hunting, tune, "
                                "compare.",
                           no_args_is_help=True)
@@ -525,6 +530,8 @@ def tune_command(
         out_console.print(result.feasibility())
         for path in written:
             out_console.print(f"wrote {path}")
+    if not result.meets_specs:  # written, said, and told by the exit code too
+        raise typer.Exit(EXIT_SPECS_NOT_MET)
 
 
 @control_app.command("compare")
