@@ -28,6 +28,7 @@ __all__ = [
     "DISPLAY_UNITS",
     "FRICTION_TEST_KINDS",
     "MAX_PANEL_COLUMNS",
+    "SMALL_LENGTH",
     "figure_writer",
     "label_log_axis",
     "panel_grid",
@@ -36,6 +37,7 @@ __all__ = [
     "plot_measured_and_model",
     "plot_time_series",
     "save_figure",
+    "shown_unit",
 ]
 
 #: SI unit -> (display unit, factor applied to SI values).
@@ -47,6 +49,21 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "s": ("s", 1.0),
     "1": ("1", 1.0),
 }
+#: lengths [m] all below this are shown in µm (a residual of 3 µm, not 0.003 mm)
+SMALL_LENGTH = 1e-4
+_SMALL: dict[str, tuple[str, float]] = {"m": ("µm", 1e6), "m/s": ("µm/s", 1e6)}
+
+
+def shown_unit(si: str, values: Any = ()) -> tuple[str, float]:
+    """(display unit, factor from SI) of a simple SI unit (``DISPLAY_UNITS``); lengths
+    whose magnitudes are all below ``SMALL_LENGTH`` in µm. Unknown units as they are."""
+    finite = np.abs(np.asarray(values, dtype=float).ravel())
+    finite = finite[np.isfinite(finite) & (finite > 0)]
+    if si in _SMALL and finite.size and finite.max() < SMALL_LENGTH:
+        return _SMALL[si]
+    return DISPLAY_UNITS.get(si, (si, 1.0))
+
+
 #: Signals shown in finer units than their SI unit suggests.
 _SIGNAL_DISPLAY: dict[str, tuple[str, float]] = {
     "bristle": ("µm", 1e6),
@@ -365,16 +382,18 @@ def plot_measured_and_model(entries: Sequence[tuple], signals: Sequence[str],
             a.sharex(axes[0])
         for j, s in enumerate(signals):
             unit, factor = DISPLAY_UNITS.get(units.get(s, ""), ("", 1.0))
+            residual = measured[s] - model[s]
+            unit_r, factor_r = shown_unit(units.get(s, ""), residual)
             ax, axr = axes[2 * j], axes[2 * j + 1]
             ax.plot(time, measured[s] * factor, "k.", ms=1.5, label="measured")
             ax.plot(time, model[s] * factor, "C0-", lw=1, label=model_label)
-            axr.plot(time, (measured[s] - model[s]) * factor, "C3-", lw=0.8)
+            axr.plot(time, residual * factor_r, "C3-", lw=0.8)
             if window is not None:
                 for a in (ax, axr):
                     a.axvspan(max(window[0], time[0]), min(window[1], time[-1]), color="C2",
                               alpha=0.08, label="fitted window" if a is ax else None)
             ax.set_ylabel(f"{s} [{unit}]")
-            axr.set_ylabel(f"measured − model [{unit}]")
+            axr.set_ylabel(f"measured − model [{unit_r}]")
             ax.set_title(title, fontsize=9)
             for a in (ax, axr):
                 a.grid(True, alpha=0.3)

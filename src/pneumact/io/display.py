@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..plotting import DISPLAY_UNITS
+from ..plotting import DISPLAY_UNITS, SMALL_LENGTH, shown_unit
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -24,8 +24,6 @@ if TYPE_CHECKING:
 __all__ = ["SMALL_LENGTH", "display_frame", "display_unit", "display_value", "pretty_unit",
            "signal_summary"]
 
-#: lengths [m] all below this are shown in µm (a residual of 3 µm, not 0.003 mm)
-SMALL_LENGTH = 1e-4
 #: SI units (as pneumact writes them) -> the unit shown; simple units from the figures'
 #: table (``plotting.DISPLAY_UNITS``), products of them here
 _SHOWN: dict[str, str] = {
@@ -34,8 +32,7 @@ _SHOWN: dict[str, str] = {
     "Pa^2*s": "kPa^2*s", "Pa*s": "kPa*s", "Pa/s": "kPa/s", "m/s^2": "mm/s^2",
 }  # parameters (N/m, N*s/m, m^2) stay as the sets and the paper write them
 #: the same with µm for small lengths
-_SHOWN_SMALL: dict[str, str] = {"m": "µm", "m*s": "µm*s",
-                                "m/s": "µm/s"}
+_SHOWN_SMALL: dict[str, str] = {"m*s": "µm*s"}
 #: the columns of a long table (a ``unit`` column) that carry a value in that unit
 VALUE_COLUMNS = ("value", "measured", "model", "difference", "rms", "min", "max", "first",
                  "last", "estimate", "stderr", "nominal", "low", "high", "lower", "upper", "truth")
@@ -53,9 +50,11 @@ def _factor(si: str, shown: str) -> float:
 
 def display_unit(si: str, values: Iterable[float] | float = ()) -> tuple[str, float]:
     """(unit shown, factor from SI) for values in ``si``; lengths whose magnitudes are all
-    below ``SMALL_LENGTH`` (``values``, when given) in µm. A unit without a display
-    choice is shown as it is (factor 1)."""
+    below ``SMALL_LENGTH`` (``values``, when given) in µm (the figures' choice,
+    ``plotting.shown_unit``). A unit without a display choice is shown as it is."""
     si = str(si).strip()
+    if si in DISPLAY_UNITS:
+        return shown_unit(si, values)
     shown = _SHOWN.get(si)
     if shown is None:
         return si, 1.0
@@ -63,7 +62,7 @@ def display_unit(si: str, values: Iterable[float] | float = ()) -> tuple[str, fl
     finite = finite[np.isfinite(finite) & (finite > 0)]
     if si in _SHOWN_SMALL and finite.size and finite.max() < SMALL_LENGTH:
         shown = _SHOWN_SMALL[si]
-    return shown, (1.0 if shown == si else _factor(si, shown))
+    return shown, _factor(si, shown)
 
 
 def pretty_unit(unit: str) -> str:

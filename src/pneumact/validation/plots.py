@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..io.display import display_frame
+from ..io.display import display_frame, display_unit
 from ..plotting import DISPLAY_UNITS, panel_grid
 from .metrics import metrics_for_reading
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
 
 
-def _display(rv, signal: str) -> tuple[str, float]:
-    return DISPLAY_UNITS.get(rv.record.units.get(signal, ""), ("", 1.0))
+def _display(rv, signal: str, values=()) -> tuple[str, float]:
+    """(unit shown, factor) of ``signal``: µm for residuals of some micrometres."""
+    si = rv.record.units.get(signal, "")
+    return display_unit(si, values) if si else DISPLAY_UNITS.get(si, ("", 1.0))
 
 
 def plot_loops(validation):
@@ -52,8 +54,8 @@ def plot_residuals(validation):
     signal = validation.signals[0]
     fig, panels = panel_grid(len(validation.records), rows_per=2, height=3.0)
     for (ax_res, ax_acf), rv in zip(panels, validation.records, strict=True):
-        unit, factor = _display(rv, signal)
         residual = rv.residual(signal)
+        unit, factor = _display(rv, signal, residual)
         if "pressure" in rv.record:
             ax_res.plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
             ax_res.set_xlabel("pressure [kPa abs]")
