@@ -58,8 +58,9 @@ class _Commands(TyperGroup):
                      if typo and typo != name and typo in name.split("-")]
             message = getattr(error, "message", None)
             if words and isinstance(message, str) and "Did you mean" not in message:
-                error.message = (f"{message.rstrip('.')}. Did you mean "
-                                 f"{', '.join(repr(name) for name in words)}?")
+                error.message = (  # type: ignore[attr-defined]
+                    f"{message.rstrip('.')}. Did you mean "
+                    f"{', '.join(repr(name) for name in words)}?")
             raise
 
 
