@@ -522,9 +522,12 @@ def fit_command(
         writers = result.writers(the_call(ctx))
         written = write_outputs(out, writers)
         out_console.print(_estimates_table("fitted parameters", result.to_pandas()))
+        from pneumact.io.display import display_value
+
         for _, row in result.statistics.iterrows():
+            rms, unit = display_value(row["rms"], row["unit"])
             out_console.print(f"{Path(row['record']).name} {row['signal']}: fit "
-                              f"{row['fit_percent']:.2f} %, RMS {row['rms']:.4g} {row['unit']}")
+                              f"{row['fit_percent']:.2f} %, RMS {rms:.4g} {unit}")
         for name, prof in result.profiles.items():
             out_console.print(f"profile of {name}: {prof.verdict}")
         out_console.print(f"{result.simulations} simulations in {result.wall_time:.2f} s")
