@@ -241,3 +241,24 @@ def test_control_tune_exits_non_zero_when_its_gains_miss_the_spec(tmp_path):
     assert result.exit_code == 3, result.output
     assert "Does NOT meet the specs" in result.output
     assert (tmp_path / "tune" / "gains.toml").is_file()
+
+
+def test_a_batch_of_many_varied_parameters_wraps_its_panels():
+    """Eight varied inputs, two features: 16 panels, at most 4 side by side."""
+    import matplotlib.pyplot as plt
+
+    from pneumact.simulation.batch import BatchResult
+
+    rng = np.random.default_rng(0)
+    names = [f"p{i}" for i in range(8)]
+    table = pd.DataFrame({**{n: rng.uniform(1.0, 2.0, 5) for n in names},
+                          "loop_width_pressure": rng.uniform(1e3, 2e3, 5),
+                          "stroke": rng.uniform(0.01, 0.02, 5),
+                          "status": ["ok"] * 5, "error": [""] * 5})
+    fig = BatchResult(table, units=dict.fromkeys(names, "1")).plot()
+    fig.canvas.draw()
+    scale = plotting.PNG_DPI / fig.dpi
+    assert fig.get_figwidth() * plotting.PNG_DPI <= ref.MAX_FIGURE_WIDTH_PX
+    widths = [ax.get_window_extent().width * scale for ax in fig.axes if ax.get_visible()]
+    assert len(widths) == 16 and min(widths) >= ref.MIN_PANEL_WIDTH_PX
+    plt.close(fig)
