@@ -262,3 +262,24 @@ def test_a_batch_of_many_varied_parameters_wraps_its_panels():
     widths = [ax.get_window_extent().width * scale for ax in fig.axes if ax.get_visible()]
     assert len(widths) == 16 and min(widths) >= ref.MIN_PANEL_WIDTH_PX
     plt.close(fig)
+
+
+def test_sensitivity_oat_writes_its_loops_with_zooms(tmp_path, drawn, monkeypatch):
+    """At full scale the loops of ±variations lie on one another: loops.png shows each
+    parameter's whole loop, its break-away and its reversal (issue #42)."""
+    from matplotlib.figure import Figure
+
+    titles: list[str] = []
+    savefig = Figure.savefig  # the spy of ``drawn``: keep it, note the panel titles
+
+    def with_titles(fig, target, *args, **kw):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        return savefig(fig, target, *args, **kw)
+
+    monkeypatch.setattr(Figure, "savefig", with_titles)
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["sensitivity", "oat", "--out", "oat"])
+    assert result.exit_code == 0, result.output
+    assert any("at break-away" in t for t in titles) and any("whole loop" in t
+                                                              for t in titles)
+    assert_scaled(drawn, tmp_path / "oat")
