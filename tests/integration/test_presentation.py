@@ -4,6 +4,7 @@ one long row; log axes are labelled with numbers. Units a person reads: mm or µ
 
 from __future__ import annotations
 
+import io
 import os
 
 import numpy as np
@@ -134,6 +135,12 @@ def test_control_step_prints_its_errors_in_um_or_mm(tmp_path):
             for line in result.output.splitlines() if line.count("│") == 4}
     assert rows["steady_state_error"] in ("µm", "mm") and rows["start"] == "mm"
     assert rows["iae"] in ("µm·s", "mm·s")
+    html = (tmp_path / "step" / "report.html").read_text(encoding="utf-8")
+    table = next(t for t in pd.read_html(io.StringIO(html)) if "metric" in t.columns)
+    units = dict(zip(table["metric"], table["unit"], strict=True))
+    assert units["steady_state_error"] in ("µm", "mm") and units["start"] == "mm"
+    metrics = pd.read_csv(tmp_path / "step" / "metrics.csv")
+    assert dict(zip(metrics["metric"], metrics["unit"], strict=True))["start"] == "m"
 
 
 def test_validate_does_not_compare_a_record_with_its_own_input(vgt, campaign):

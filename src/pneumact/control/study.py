@@ -100,6 +100,7 @@ class LoopStudy(NotebookDisplay):
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:
         """signals.csv, metrics.csv, loop.png and report.html: all or nothing."""
+        from ..io.display import display_frame
         from ..io.report import Report, figure_png
         from ..io.tables import write_files
         from ..plotting import PNG_DPI
@@ -110,7 +111,8 @@ class LoopStudy(NotebookDisplay):
         report.text(f"Model: {self.loop.describe()}. Experiment: {self.experiment.name}, "
                     f"{self.experiment.t_start:g} to {self.experiment.t_end:g} s. "
                     f"Controller: {self.loop.controller!r}.")
-        report.table(metrics, "Loop metrics (SI)", index=False)
+        report.table(display_frame(metrics), "Loop metrics (mm or µm, kPa; metrics.csv "
+                     "is SI)", index=False)
         report.image(png, "Set-point and position, command, friction and velocity")
         report.table(self.controller_table(), "Controller settings (SI, zeros omitted)",
                      index=False)
