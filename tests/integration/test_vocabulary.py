@@ -419,3 +419,9 @@ def test_a_record_and_sensitivities_are_short_and_labelled():
     assert list(frame.columns) == ["Fc"] and frame.index.name == "time"
     np.testing.assert_array_equal(frame.to_numpy(), sens["position"])
     assert frame.attrs["units"] == {"Fc": "m/(N)"}
+
+
+def test_train_test_reports_its_metrics_with_units_in_the_headers(tmp_path):
+    _train_test().write(tmp_path / "tt")
+    html = (tmp_path / "tt" / "report.html").read_text(encoding="utf-8")
+    assert "rms [µm]" in html or "rms [mm]" in html

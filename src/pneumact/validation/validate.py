@@ -427,7 +427,11 @@ class TrainTest(NotebookDisplay):
         report.heading("Fitted parameters")
         report.table(self.fit.to_pandas(), "Estimates with standard errors (training records)")
         report.heading("Training against test")
-        report.table(self.metrics(), "Error metrics per record and pooled", index=False)
+        from .metrics import metrics_for_reading
+
+        for signal, shown in metrics_for_reading(self.metrics()).items():
+            report.table(shown, f"Error metrics of the {signal}, per record and pooled",
+                         index=False)
         train_figures, test_figures = self.train.figure_pngs(), self.test.figure_pngs()
         self.train.add_to(report, "Training records", train_figures)
         self.test.add_to(report, "Test records", test_figures)
