@@ -579,3 +579,7 @@ MISFIT_NOISE_RATIO = 1.5
 #: variance (its sampling error over that many draws is √(2/draws) ≈ 3 %)
 QUANTISATION_TEST_DRAWS = 2000
 QUANTISATION_TEST_RTOL = 0.12
+# --------------------------------------------------------------------------- figures
+MAX_FIGURE_WIDTH_PX = 3000  # a written PNG: a report page shows it scaled, not scrolled
+MIN_PANEL_WIDTH_PX = 300  # each panel of a multi-record figure: readable in the report
+MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact campaign`)

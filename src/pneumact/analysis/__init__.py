@@ -3,6 +3,7 @@
 The features are computed by ``core.features`` (compiled, below the simulation, so the
 batch engine runs them inside its loop); this package is where users find them."""
 
+from pneumact.analysis.motion import SlidingMotion, sliding_motion
 from pneumact.core.features import (
     FEATURE_UNITS,
     FEATURES,
@@ -23,6 +24,7 @@ from pneumact.core.features import (
 __all__ = [
     "FEATURES",
     "FEATURE_UNITS",
+    "SlidingMotion",
     "breakaway_pressure",
     "hysteresis_summary",
     "loop_area",
@@ -33,6 +35,7 @@ __all__ = [
     "motion_onset_pressure",
     "presliding_travel",
     "rms_error",
+    "sliding_motion",
     "sliding_speed",
     "stroke",
 ]

@@ -559,11 +559,10 @@ class FitResult(ResultVocabulary):
         return fig
 
     def plot_profiles(self):
-        import matplotlib.pyplot as plt
+        from ..plotting import label_log_axis, panel_grid
 
-        n = max(1, len(self.profiles))
-        fig, axes = plt.subplots(1, n, squeeze=False, figsize=(4.2 * n, 3.4))
-        for ax, prof in zip(axes[0], self.profiles.values(), strict=False):
+        fig, panels = panel_grid(len(self.profiles), width=4.2)
+        for (ax,), prof in zip(panels, self.profiles.values(), strict=False):
             ax.plot(prof.grid, prof.delta, "o-")
             ax.axhline(prof.threshold, color="k", ls="--", lw=0.8, label="95 % threshold")
             ax.axvline(prof.estimate, color="C3", lw=0.8)
@@ -573,6 +572,7 @@ class FitResult(ResultVocabulary):
             ax.grid(True, alpha=0.3)
             if prof.grid.min() > 0 and prof.grid.max() / prof.grid.min() > 20:
                 ax.set_xscale("log")
+                label_log_axis(ax)
         fig.tight_layout()
         return fig
 
@@ -642,7 +642,8 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
             e = sim[s] - rec[s]
             y = rec[s]
             nrmse = float(np.linalg.norm(e) / max(float(np.linalg.norm(y - y.mean())), 1e-300))
-            rows.append({"record": rec.source, "signal": s, "unit": rec.units.get(s, ""),
+            rows.append({"record": os.path.basename(rec.source), "signal": s,
+                         "unit": rec.units.get(s, ""),
                          "samples": e.size, "rms": float(np.sqrt(np.mean(e**2))),
                          "max_abs": float(np.max(np.abs(e))), "nrmse": nrmse,
                          "fit_percent": 100 * (1 - nrmse)})

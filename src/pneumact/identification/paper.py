@@ -366,7 +366,7 @@ class PaperIdentification(ResultVocabulary):
         chosen = next((r for r in self.records if Path(r.source).name == record),
                       sweeps[0] if sweeps else self.records[0])
         band = self.band(chosen)
-        fig, (ax_loop, ax_time) = plt.subplots(1, 2, figsize=(11, 4.2))
+        fig, (ax_loop, ax_time, ax_zoom) = plt.subplots(1, 3, figsize=(15.5, 4.2))
         for run_p, run_x in zip(band.samples["pressure"], band.samples["position"],
                                 strict=True):
             ax_loop.plot(run_p * 1e-3, run_x * 1e3, color="C0", alpha=0.05, lw=0.8)
@@ -390,7 +390,20 @@ class PaperIdentification(ResultVocabulary):
         ax_time.set_xlabel("time [s]")
         ax_time.set_ylabel("position [mm]")
         ax_time.legend(fontsize=8, loc="upper right")
-        for a in (ax_loop, ax_time):
+        # the band is some µm on a stroke of mm: drawn about the model, in µm, it shows
+        nominal = band.nominal["position"]
+        measured = np.interp(band.time, chosen.time, chosen["position"])
+        ax_zoom.fill_between(band.time, (band.lower["position"] - nominal) * 1e6,
+                             (band.upper["position"] - nominal) * 1e6, color="C0",
+                             alpha=0.35, label=f"{100 * band.level:.0f} % band")
+        ax_zoom.plot(band.time, (measured - nominal) * 1e6, "k.", ms=1,
+                     label="measured − model")
+        ax_zoom.axhline(0.0, color="C3", lw=0.8)
+        ax_zoom.set_xlabel("time [s]")
+        ax_zoom.set_ylabel("position − identified model [µm]")
+        ax_zoom.set_title("the band about the model (zoom)", fontsize=9)
+        ax_zoom.legend(fontsize=8, loc="upper right")
+        for a in (ax_loop, ax_time, ax_zoom):
             a.grid(True, alpha=0.3)
         fig.tight_layout()
         return fig
@@ -827,7 +840,7 @@ def _staged_checks(records, staged, friction, chamber, workers: int) -> pd.DataF
 
     ratios = map_on_threads(workers, lambda r: prediction_ratio(
         r, record_kind(r), staged, friction, chamber), records)
-    return pd.DataFrame([{"record": r.source, "signal": "position", "ratio": ratio,
+    return pd.DataFrame([{"record": Path(r.source).name, "signal": "position", "ratio": ratio,
                           "fits": bool(ratio <= MISFIT_RATIO)}
                          for r, ratio in zip(records, ratios, strict=True)],
                         columns=["record", "signal", "ratio", "fits"])
@@ -873,7 +886,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
         return judged
     used = set(residuals["record"]) if len(residuals) else set()
     slow = [(r, v) for r, v in ramps if v < vs]
-    if not slow or any(r.source in used for r, _ in slow):
+    if not slow or any(Path(r.source).name in used for r, _ in slow):
         return judged
     names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
