@@ -583,3 +583,7 @@ QUANTISATION_TEST_RTOL = 0.12
 MAX_FIGURE_WIDTH_PX = 3000  # a written PNG: a report page shows it scaled, not scrolled
 MIN_PANEL_WIDTH_PX = 300  # each panel of a multi-record figure: readable in the report
 MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact campaign`)
+#: stage (c)'s restarts: a Stribeck velocity [m/s] and a prior that guesses it this many
+#: times it (a hundred times too low)
+STRIBECK_RESTART_VS = 5e-5
+STRIBECK_RESTART_PRIOR_FACTOR = 0.01

@@ -209,3 +209,30 @@ def test_identification_runs_blas_on_one_thread_and_restores_it():
             outer()
         assert seen and all(n == 1 for values in seen for n in values), seen
         assert blas_threads() == original
+
+
+def test_stage_c_starts_again_when_the_prior_sends_vs_astray():
+    """A Stribeck dip at vs = 0.05 mm/s and a prior that guesses 0.5 µm/s: from the prior's
+    vs alone the fit of eq. 12 stops at 1-2 % of the true vs; with spread starts it
+    finds the dip (issue 38, item 5)."""
+    import pandas as pd
+
+    from pneumact.identification.stages import sliding_and_stribeck
+
+    drawn = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    truth = drawn.replace(vs=ref.STRIBECK_RESTART_VS, Fs=1.8 * drawn["Fc"])
+    fc, fs, vs, s2, delta = (truth[n] for n in ("Fc", "Fs", "vs", "sigma2", "delta"))
+    rng = np.random.default_rng(0)
+    rows = []
+    for sign in (1.0, -1.0):
+        for v in np.geomspace(vs / 5, 400 * vs, 30):
+            friction = sign * (fc + (fs - fc) * np.exp(-((v / vs) ** delta))) + s2 * sign * v
+            rows.append({"record": "ramp", "t_start": 0.0, "t_end": 1.0,
+                         "velocity": sign * v, "samples": 100,
+                         "position": rng.uniform(2e-3, 8e-3),
+                         "friction": friction + rng.normal(0, 1e-3 * fc)})
+    prior = truth.replace(vs=vs * ref.STRIBECK_RESTART_PRIOR_FACTOR)
+    sliding, stribeck, notes = sliding_and_stribeck(pd.DataFrame(rows), prior)
+    assert stribeck is not None and not stribeck.extra["at_bound"], notes
+    assert stribeck.estimates["vs"] == pytest.approx(vs, rel=0.05)
+    assert sliding is not None and sliding.estimates["Fc"] == pytest.approx(fc, rel=0.01)
