@@ -553,3 +553,10 @@ PLAN_SETPOINT_ATOL = 1e-6
 #: The position-sensor lag [s] under which the staged values fit their force balances
 #: and miss the motion (issue 38's --staged-only finding: σ2 +966 % "identified").
 STAGED_LAG = 3e-3
+
+# Issue #40, Fig. 5a read as written: the loop change (share of the loop's width) on the
+# 20 s command cycle at σ0 × factor (the referee's hand numbers), its tolerance, and the
+# range of the stiffer factors ×2 … ×10 (1.8–3.4 % measured).
+SIGMA0_LOOP_CHANGE_COMMAND_20S = {0.1: 0.170, 0.2: 0.101, 0.5: 0.032}
+LOOP_CHANGE_ATOL = 0.005
+SIGMA0_STIFFER_CHANGE = (0.012, 0.04)
