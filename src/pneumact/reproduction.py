@@ -63,7 +63,7 @@ FIG3_PERIOD = 2.0
 #: The lowest speed of the identification's sliding stage, in units of vs (5 mm/s).
 STAGE_B_LOWEST_VS = 10.0
 #: the sections ``reproduce`` reports progress on, in order
-SECTIONS = ("Table I", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
+SECTIONS = ("Table I", "pneumatics", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
             "identification", "Fig. 6", "sensitivity", "statements", "writing")
 
 
@@ -221,6 +221,8 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     _introduction(report, params, sizes, quick)
     step("Table I")
     _table_one(parts, params, [text for text in passivity if text])
+    step("pneumatics")
+    _pneumatics(parts, params)
     step("Figs. 2 and 3")
     effects, friction_floor = _friction_figures(parts, params, sizes)
     step("Fig. 5")
@@ -510,6 +512,162 @@ def _statements(parts: _Parts, across, global_study, effects, bias, loop_floor,
     parts.table("statement_conditions", per_condition, "Every statement at every condition: "
                 "what was measured, the margin (positive: it holds), the noise floor and the "
                 "verdict")
+
+
+#: The model's choices where the paper leaves it open (docs/model.md, "Open choices"):
+#: (choice, what the model does, source).
+MODEL_CHOICES = (
+    ("one viscous coefficient", "b_d = σ2, counted once as σ2·v in the friction law",
+     "Table I lists 'damping constant b_d, σ2' as one; eq. 9 has one σ2·v term"),
+    ("Stribeck exponent δ", "δ = 1 (exp(−|v|/vs))", "eq. 8 as printed (the LuGre "
+     "literature mostly uses δ = 2)"),
+    ("chamber volume", "V(x) = V0 − A_d·x", "assumed: the paper gives V0 and A_d, no "
+     "volume law"),
+    ("chamber gas law", "isothermal, n = 1: dp/dt = n/V·(R·T·ṁ + p·A_d·v)", "assumed: "
+     "eqs. 2–5 give the flows, no pressure equation (adiabatic: n = γ)"),
+    ("choked flow", "ṁ = A·p_up·sqrt(γ/(R·T))·Φ*: ∝ p_up", "eqs. 2–4 as printed; the "
+     "text's 'becomes constant' holds for Φ only"),
+    ("laminar branch", "Φ linear on r ∈ [0.999, 1]", "numerical: a finite Jacobian at "
+     "r → 1"),
+    ("valves", "ideal pressure source; command valve with linear area maps u·A_res, "
+     "(1 − u)·A_atm; a PI regulator driving it", "Figs. 5–6 use the applied pressure; "
+     "the EPC's maps are not given"),
+    ("assumed values", "x_max 20 mm, γ 1.4, R 287 J/(kg·K), T 293.15 K, p_res 10 kPa, "
+     "A_res = A_atm = 1.5 mm²", "not in the paper; each value's note in the set says why"),
+)
+#: The chamber step: the command valve opened (u 0 → 1) and closed again at these times [s].
+STEP_TIMES = (0.05, 1.5, 3.0)
+
+
+def _pneumatics(parts: _Parts, params) -> None:
+    from .analysis import chamber_time_constant, choked_limit, natural_frequencies
+
+    ratio, phi = choked_limit(params["gamma"])
+    step = _chamber_step(params)
+    parts.report.heading("The pneumatic half: flows, chamber and natural frequencies")
+    parts.report.text(
+        f"Eqs. 2–5 with the set's gas: the flow is choked below r_c = {ratio:.4f}, where Φ "
+        f"takes its largest value Φ* = {phi:.4f}. The mass flow A·p_up·sqrt(γ/(R·T))·Φ* then "
+        "stays proportional to the upstream pressure: the paper's 'air mass flow becomes "
+        "constant' holds for Φ, not for the flow. Emptying the chamber through the choked "
+        "reservoir orifice is therefore a first-order decay whose time constant "
+        "τ = V(x)/(n·A_res·Φ*·sqrt(γ·R·T)) falls with the chamber volume along the stroke "
+        f"(V0 = {1e6 * params['V0']:g} cm³ at rest).")
+    parts.report.note("The paper (section II.A): 'air mass flow becomes constant' when "
+                      "choked. Corrected here: Φ becomes constant; the flow stays ∝ p_up.")
+    parts.figure("pneumatics_flow", lambda: _flow_figure(params),
+                 "Φ(r) (eq. 4) with its choked limit; the mass flow from the chamber to the "
+                 "reservoir through A_res against the chamber pressure (choked: a straight "
+                 "line through zero, not a constant); the chamber's time constant along the "
+                 "stroke")
+    parts.figure("chamber_step", lambda: _step_figure(params, step),
+                 f"The chamber's step response through the command valve: u 0 → 1 at "
+                 f"{STEP_TIMES[0]:g} s, back to 0 at {STEP_TIMES[1]:g} s; dashed: the "
+                 "diaphragm held at rest, whose pressure decays as exp(−t/τ(0)) while choked")
+    x = np.unique(np.r_[np.linspace(0.0, params["x_max"], 5), step["x_top"]])
+    volume = params["V0"] - params["A_d"] * x
+    parts.table("chamber_time_constant", pd.DataFrame({
+        "position [mm]": 1e3 * x, "volume [cm³]": 1e6 * volume,
+        "τ isothermal [ms]": 1e3 * chamber_time_constant(params, x),
+        "τ adiabatic [ms]": 1e3 * chamber_time_constant(params, x,
+                                                         exponent=params["gamma"])}),
+        f"The chamber's time constant along the stroke (valve fully open to the reservoir, "
+        f"choked, diaphragm standing); {1e3 * step['x_top']:.3g} mm: the top of the step "
+        "response above")
+    frequencies = natural_frequencies(params)
+    parts.table("natural_frequencies", pd.DataFrame([
+        {"case": case, "stiffness [N/m]": v["stiffness"], "frequency [Hz]": v["frequency"],
+         "damping ratio": v["damping_ratio"]} for case, v in frequencies.items()]),
+        "Natural frequencies of the diaphragm (m = Table I's m_d): free on the spring, "
+        "stuck on the bristles (k + σ0, damped by σ1 + σ2), and free with the gas spring "
+        "n·p·A_d²/V of a closed chamber at rest")
+    parts.table("modelling_choices", pd.DataFrame(MODEL_CHOICES,
+                                                  columns=["choice", "model", "source"]),
+                "Every modelling choice the paper leaves open, and its source "
+                "(docs/model.md, 'Open choices')")
+
+
+def _chamber_step(params) -> dict:
+    """The command valve's step response: the free diaphragm and one held at rest (a
+    preload the pressure cannot overcome)."""
+    from .experiments import Experiment, PiecewiseLinear
+    from .models import Actuator, CommandValve
+    from .simulation import simulate
+
+    start, close, end = STEP_TIMES
+    drive = PiecewiseLinear([0.0, start, start, close, close, end], [0, 0, 1, 1, 0, 0])
+    experiment = Experiment(drive, "command", end, n_points=1501, name="chamber step")
+    model = Actuator(params, valve=CommandValve())
+    free = simulate(model, experiment)
+    held = simulate(model, experiment, values={"F0": 10 * params["p_atm"] * params["A_d"]})
+    return {"time": free.time, "free": free, "held": held,
+            "x_top": float(np.max(free["position"]))}
+
+
+def _flow_figure(params):
+    import matplotlib.pyplot as plt
+
+    from .analysis import chamber_time_constant, choked_limit
+    from .models.pneumatics import flow_function_values, orifice_mass_flow
+
+    ratio, phi = choked_limit(params["gamma"])
+    fig, axes = plt.subplots(1, 3, figsize=(12.0, 3.6))
+    r = np.linspace(0.0, 1.0, 501)
+    axes[0].plot(r, flow_function_values(r, params["gamma"]), "C0-", lw=1.4)
+    axes[0].axvline(ratio, color="k", ls=":", lw=0.8)
+    axes[0].axhline(phi, color="k", ls="--", lw=0.8)
+    axes[0].annotate(f"r_c = {ratio:.4f}\nΦ* = {phi:.4f}", (ratio, phi), (0.05, 0.25),
+                     fontsize=8)
+    axes[0].set_xlabel("pressure ratio r = p_down / p_up [1]")
+    axes[0].set_ylabel("Φ(r) [1]")
+    pressure = np.linspace(params["p_res"], params["p_atm"], 401)
+    flow = orifice_mass_flow(pressure, params["p_res"], params["A_res"], params)
+    axes[1].plot(1e-3 * pressure, 1e6 * flow, "C1-", lw=1.4, label="eqs. 2, 4")
+    axes[1].axvline(1e-3 * params["p_res"] / ratio, color="k", ls=":", lw=0.8,
+                    label="choked above p_res / r_c")
+    axes[1].set_xlabel("chamber pressure p_up [kPa abs]")
+    axes[1].set_ylabel("mass flow to the reservoir [mg/s]")
+    axes[1].legend(fontsize=7)
+    x = np.linspace(0.0, params["x_max"], 201)
+    axes[2].plot(1e3 * x, 1e3 * chamber_time_constant(params, x), "C2-", lw=1.4,
+                 label="isothermal (model)")
+    axes[2].plot(1e3 * x, 1e3 * chamber_time_constant(params, x, exponent=params["gamma"]),
+                 "C2--", lw=1.0, label="adiabatic")
+    axes[2].set_yscale("log")
+    axes[2].set_xlabel("diaphragm position x [mm]")
+    axes[2].set_ylabel("chamber time constant τ [ms]")
+    axes[2].legend(fontsize=7)
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _step_figure(params, step: dict):
+    import matplotlib.pyplot as plt
+
+    from .analysis import chamber_time_constant, choked_limit
+
+    time, free, held = step["time"], step["free"], step["held"]
+    tau = float(chamber_time_constant(params, 0.0))
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 3.6))
+    axes[0].plot(time, 1e-3 * free["pressure"], "C0-", lw=1.4, label="free diaphragm")
+    axes[0].plot(time, 1e-3 * held["pressure"], "C3--", lw=1.0, label="held at rest")
+    decay = time[(time >= STEP_TIMES[0]) & (time <= STEP_TIMES[1])]
+    exponential = params["p_atm"] * np.exp(-(decay - STEP_TIMES[0]) / tau)
+    choked = exponential >= params["p_res"] / choked_limit(params["gamma"])[0]
+    axes[0].plot(decay[choked], 1e-3 * exponential[choked], "k:", lw=1.2,
+                 label=f"p_atm·exp(−t/τ) while choked, τ = {1e3 * tau:.3g} ms")
+    axes[0].set_xlabel("time [s]")
+    axes[0].set_ylabel("chamber pressure [kPa abs]")
+    axes[0].legend(fontsize=7)
+    axes[1].plot(time, 1e3 * free["position"], "C0-", lw=1.4)
+    axes[1].set_xlabel("time [s]")
+    axes[1].set_ylabel("diaphragm position [mm]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
 
 
 def _table_one(parts: _Parts, params, passivity: list[str]) -> None:

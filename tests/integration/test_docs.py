@@ -150,3 +150,6 @@ def test_the_repository_stands_alone_and_the_sets_cite_the_model_page():
     assert cited
     for number in cited:
         assert re.search(rf"^{number}\. \*\*", model, re.M), number
+    from pneumact.reproduction import MODEL_CHOICES  # the report lists the same choices
+
+    assert len(re.findall(r"^\d+\. \*\*", model, re.M)) == len(MODEL_CHOICES)

@@ -21,8 +21,10 @@ from pneumact.statements import STATEMENTS
 FIGURES = ("fig2_friction_velocity", "fig3_friction_variations", "fig5_loops",
            "fig5_changes_by_speed", "fig6_validation", "identification_spring",
            "identification_sliding", "identification_stribeck", "identification_presliding",
-           "sobol_loop_width_pressure", "sobol_breakaway_pressure", "src_by_speed")
-TABLES = ("table_1", "fig3_effects", "oat_runs", "conditions", "fig5_changes",
+           "sobol_loop_width_pressure", "sobol_breakaway_pressure", "src_by_speed",
+           "pneumatics_flow", "chamber_step")
+TABLES = ("table_1", "chamber_time_constant", "natural_frequencies", "modelling_choices",
+          "fig3_effects", "oat_runs", "conditions", "fig5_changes",
           "identification", "eq13", "validation_verdicts", "validation_metrics",
           "validation_loops", "sensitivity_ranking", "oat_ranking", "global_by_condition",
           "fig5a_sigma0_factors", "statement_texts", "paper_statements",
@@ -181,6 +183,23 @@ def test_fs_and_fc_matter_most_only_below_the_stribeck_velocity(quick):
     # a ranking groups what its intervals cannot order: the five below Fc are one group
     below = ranking[(ranking["method"] == "SRC²") & (ranking["parameter"] != "Fc")]
     assert (below["group"] == 2).all()
+
+
+def test_the_pneumatic_half_is_reported(quick):
+    """Issue #40, item 5: Φ(r)'s choked limit with the paper's 'constant' corrected, the
+    time constant along the stroke, the natural frequencies and every modelling choice."""
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    assert "Φ* = 0.5787" in html and "r_c = 0.5283" in html
+    assert "the flow stays ∝ p_up" in html
+    tau = quick.tables["chamber_time_constant"]
+    ms = tau["τ isothermal [ms]"].to_numpy()
+    assert ms[0] == pytest.approx(201, rel=ref.HAND_VALUE_RTOL) and (np.diff(ms) < 0).all()
+    frequencies = quick.tables["natural_frequencies"].set_index("case")["frequency [Hz]"]
+    assert frequencies["free"] == pytest.approx(ref.FREE_FREQUENCY_HZ, rel=ref.HAND_VALUE_RTOL)
+    assert frequencies["stuck on the bristles"] == pytest.approx(ref.STUCK_FREQUENCY_HZ,
+                                                                 rel=ref.HAND_VALUE_RTOL)
+    choices = quick.tables["modelling_choices"]
+    assert choices["source"].str.len().gt(10).all()
 
 
 @needs_browser
