@@ -568,11 +568,11 @@ def _richer_figure(results: dict):
         top.set_xlabel("pressure [kPa abs]")
         bottom.plot(record.record.time, 1e6 * record.residual("position"), "C1-", lw=0.6)
         bottom.set_xlabel("time [s]")
+        top.set_ylabel("position [mm]")
+        bottom.set_ylabel("position residual [µm]")
         for ax in (top, bottom):
             ax.grid(True, alpha=0.3)
             ax.tick_params(labelsize=7)
-    axes[0, 0].set_ylabel("position [mm]")
-    axes[1, 0].set_ylabel("position residual [µm]")
     fig.tight_layout()
     return fig
 
@@ -624,9 +624,13 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
         f"the same ranges) at cycle periods {', '.join(f'{p:g}' for p in sizes.periods)} s "
         "of the command valve. Below v ≈ vs static friction takes over from Coulomb "
         "friction.")
-    parts.figure("src_by_speed", lambda: across.plot("loop_width_pressure"),
-                 "SRC² of the loop width against the sliding speed in units of vs")
-    table = across.indices[["condition", "speed_vs", "parameter", "SRC2", "R2"]]
+    parts.figure("src_by_speed", lambda: _labelled(across.plot("loop_width_pressure"),
+                                                   "sliding speed v / vs [1] (nominal run)",
+                                                   "SRC² of the loop width [1]"),
+                 "SRC² of the loop width against the sliding speed in units of vs, per "
+                 "valve, with its bootstrap 95 % band")
+    table = across.indices[["condition", "speed_vs", "parameter", "SRC2", "SRC2_conf",
+                            "R2"]]
     parts.table("global_by_condition", table, "SRC² of the loop width per condition, with "
                                               "the regression's R²")
     return across
@@ -881,6 +885,15 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
     for name, stage in identified.stages.items():
         parts.figure(f"identification_{name}", stage.plot, stage.title)
     return identified
+
+
+def _labelled(fig, xlabel: str, ylabel: str):
+    """``fig`` with every panel's axes labelled (units in brackets)."""
+    for ax in fig.axes:
+        if ax.get_visible():
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+    return fig
 
 
 def rank_groups(values: pd.Series, conf: pd.Series) -> pd.Series:

@@ -76,22 +76,49 @@ def _find(tables, frame: pd.DataFrame):
     raise AssertionError(f"no table with columns {header} and {len(frame)} rows")
 
 
+#: Per figure the reproduction draws: (x label, y label) of each panel with data, a
+#: panel's empty label replaced by that of a panel it shares the axis with.
+FIGURE_AXES: list[list[tuple[str, str]]] = []
+
+
+def _axis_labels(fig) -> list[tuple[str, str]]:
+    out = []
+    for ax in fig.axes:
+        if not ax.get_visible() or not (ax.lines or ax.collections or ax.patches):
+            continue
+        x = ax.get_xlabel() or next((o.get_xlabel() for o in
+                                     ax.get_shared_x_axes().get_siblings(ax)
+                                     if o.get_xlabel()), "")
+        y = ax.get_ylabel() or next((o.get_ylabel() for o in
+                                     ax.get_shared_y_axes().get_siblings(ax)
+                                     if o.get_ylabel()), "")
+        out.append((x, y))
+    return out
+
+
 @pytest.fixture(scope="module")
 def quick_cli(tmp_path_factory):
     """One quick reproduction, run from the command line as a user runs it: (the CLI's
     result, the ``Reproduction`` the API returned to it, the folder). One run serves the
     command line's tests and the API's (it takes ~10 s)."""
+    import pneumact.io.report as report
     import pneumact.reproduction as reproduction
 
     folder = tmp_path_factory.mktemp("cli")
     returned = []
+    drawn = report.figure_png
 
     def keep(*args, **kwargs):
         returned.append(reproduce(*args, **kwargs))
         return returned[-1]
 
+    def labels_then_png(fig, *args, **kwargs):
+        FIGURE_AXES.append(_axis_labels(fig))
+        return drawn(fig, *args, **kwargs)
+
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(reproduction, "reproduce", keep)
+        patch.setattr(report, "figure_png", labels_then_png)
         patch.chdir(folder)
         result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", "paper"])
     assert result.exit_code == 0, result.output
@@ -185,6 +212,17 @@ def test_fs_and_fc_matter_most_only_below_the_stribeck_velocity(quick):
     # a ranking groups what its intervals cannot order: the five below Fc are one group
     below = ranking[(ranking["method"] == "SRC²") & (ranking["parameter"] != "Fc")]
     assert (below["group"] == 2).all()
+
+
+def test_every_figure_has_axis_labels_with_units(quick):
+    """Issue #40, item 6: every panel of every figure names its axes with a unit in
+    brackets ([1] for a ratio), a categorical 'parameter' axis excepted."""
+    assert len(FIGURE_AXES) >= len(FIGURES)
+    for labels in FIGURE_AXES:
+        assert labels
+        for x, y in labels:
+            assert "[" in y and "]" in y, (x, y)
+            assert ("[" in x and "]" in x) or x == "parameter", (x, y)
 
 
 def test_the_pneumatic_half_is_reported(quick):

@@ -153,6 +153,9 @@ class StudyResult(ResultVocabulary):
         ax.set_xticks(x + 0.4 - width / 2, table.index)
         ax.axhline(0, color="k", lw=0.6)
         ax.set_title(f"{self.method}: {output}", fontsize=10)
+        ax.set_xlabel("parameter")
+        unit = "[output unit]" if self.method in ("morris", "dgsm") else "[1]"
+        ax.set_ylabel(f"{', '.join(keys)} {unit}")
         ax.legend(fontsize=8)
         ax.grid(True, axis="y", alpha=0.3)
         fig.tight_layout()
