@@ -331,7 +331,8 @@ def _loops_figure(parts: _Parts, params):
         "visibly; the zoomed panels show the corners where σ0, σ1 and vs act.")
     parts.figure("fig5_loops", lambda: oat.plot_loops(zoom=True),
                  "Fig. 5: one row per parameter, varied by the paper's amounts (σ0 50 %, "
-                 "σ1 68 %, σ2 90 %, Fs 16 %, Fc 15.36 %, vs 50 %), command valve, "
+                 "σ1 68 %, σ2 90 %, Fs 16 %, Fc 15.36 %; vs 50 %, ours: the paper gives "
+                 "none), command valve, "
                  f"{CYCLE_PERIOD:g} s cycle: the whole loop, at the break-away (where the "
                  "diaphragm leaves rest) and at the low-pressure reversal")
     parts.table("oat_runs", oat.runs, "One at a time (eq. 15): features of every run and "
@@ -346,6 +347,7 @@ def _loops_across_conditions(parts: _Parts, params, sizes: Sizes):
     from .statements import (
         SIGMA0_FACTORS,
         VISIBLE,
+        law_changes,
         loop_changes,
         loop_noise,
         plot_loop_changes,
@@ -395,6 +397,11 @@ def _loops_across_conditions(parts: _Parts, params, sizes: Sizes):
                 "Fig. 5a as the paper words it (σ0 matters when changed by more than 50 %): "
                 f"the loop change at σ0 × {', '.join(f'{f:g}' for f in SIGMA0_FACTORS)} "
                 "(and ×1.5, the paper's +50 %) per condition (share of the loop's width)")
+    laws = law_changes(model, [c for c in conditions if c.valve == "source"], floor)
+    parts.table("law_changes", laws,
+                "The friction law itself under the applied pressure: the loop change when "
+                "LuGre is replaced by Dahl (the paper: 'similar results') and δ = 1 by "
+                f"δ = 2, against the {100 * VISIBLE:g} % visibility line and the noise floor")
     return study, floor
 
 
@@ -631,6 +638,15 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
                  "valve, with its bootstrap 95 % band")
     table = across.indices[["condition", "speed_vs", "parameter", "SRC2", "SRC2_conf",
                             "R2"]]
+    above = table[table["SRC2"] > 1.0]
+    if len(above):
+        where = ", ".join(f"{r.parameter} {r.SRC2:.4g} at {r.condition}"
+                          for r in above.itertuples())
+        parts.report.note(
+            f"SRC² above 1 ({where}): SRC² is a share of variance only for uncorrelated "
+            "inputs and a linear response; above 1 (within its interval of 1), one "
+            "parameter explains all of it and the sample's chance correlations between "
+            "the inputs push the square past 1.")
     parts.table("global_by_condition", table, "SRC² of the loop width per condition, with "
                                               "the regression's R²")
     return across

@@ -45,10 +45,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-__all__ = ["COMPARISONS", "EQ13_FC_RTOL", "HEADLINE_VALVE", "LUGRE", "MEASURES",
+__all__ = ["COMPARISONS", "EQ13_FC_RTOL", "HEADLINE_VALVE", "LAW_CLAIMS", "LUGRE", "MEASURES",
            "SIGMA0_FACTORS",
            "STATEMENTS", "VISIBLE", "Statement", "eq13_bias", "evaluate_statements",
-           "friction_effects", "friction_noise", "loop_changes", "loop_noise",
+           "friction_effects", "friction_noise", "law_changes", "loop_changes", "loop_noise",
            "plot_loop_changes", "run_changes", "statement_texts", "summarise",
            "variations_for"]
 
@@ -161,7 +161,8 @@ class Statement:
         if self.measure in ("index", "eq13"):
             return "–"
         if not self.factors:
-            return f"±{100 * _paper_amount(self.parameter):g} % (paper)"
+            whose = "ours: the paper names none" if self.parameter == "vs" else "paper"
+            return f"±{100 * _paper_amount(self.parameter):g} % ({whose})"
         return ", ".join(f"×{f:g}" for f in self.factors)
 
     @property
@@ -342,6 +343,52 @@ def loop_noise(model, conditions, *, tight_rtol: float = 1e-8) -> pd.DataFrame:
                      for r in reruns) / width_x
         rows.append({"condition": condition.label, "sliding": sliding, "corner": corner,
                      "change": max(sliding, corner)})
+    return pd.DataFrame(rows)
+
+
+#: The paper's words on the friction law itself (section III.1, eq. 8), and the model
+#: each is checked against: LuGre with δ = 1 replaced by Dahl, or by δ = 2.
+LAW_CLAIMS = {
+    "Dahl": "LuGre and Dahl model studied here shows similar results for simulation.",
+    "δ = 2": "Eq. 8 prints exp(−|v|/vs) (δ = 1); the LuGre literature uses δ = 2.",
+}
+
+
+def law_changes(model, conditions, floor: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Per condition, the loop change (``run_changes``' measure) when the friction law is
+    replaced: Dahl for LuGre ("similar results", section III.1) and δ = 2 for δ = 1;
+    with the noise floor (``loop_noise``) and a verdict: similar (below ``VISIBLE``),
+    differs, or within noise."""
+    import dataclasses
+
+    from .models import Dahl
+    from .simulation import simulate
+
+    alternatives = {"Dahl": lambda m: dataclasses.replace(m, friction=Dahl()),
+                    "δ = 2": lambda m: dataclasses.replace(
+                        m, params=m.params.replace(delta=2.0))}
+    noise = floor.set_index("condition")["change"] if floor is not None else None
+    rows = []
+    for condition in conditions:
+        actuator = condition.model(model)
+        experiment = condition.experiment(model.params)
+        nominal = simulate(actuator, experiment).summary()
+        for name, swap in alternatives.items():
+            other = simulate(swap(actuator), experiment).summary()
+            sliding = max(abs(other[k] - nominal[k]) for k in ("loop_width_pressure",
+                                                                "breakaway_pressure"))
+            sliding /= abs(nominal["loop_width_pressure"])
+            corner = abs(other["presliding_travel"] - nominal["presliding_travel"]) / abs(
+                nominal["loop_width_position"])
+            change = max(sliding, corner)
+            floor_here = float(noise.get(condition.label, np.nan)) if noise is not None \
+                else np.nan
+            verdict = _verdict(VISIBLE - change, floor_here)
+            rows.append({"law": name, "paper": LAW_CLAIMS[name], "condition": condition.label,
+                         "speed_vs": nominal["sliding_speed"] / model.params["vs"],
+                         "loop change": change, "noise floor": floor_here,
+                         "verdict": {"holds": "similar", "does not hold": "differs"}.get(
+                             verdict, verdict)})
     return pd.DataFrame(rows)
 
 
