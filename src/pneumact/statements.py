@@ -576,8 +576,9 @@ def _verdict(margin: float, noise: float) -> str:
     return "holds" if margin >= 0 else "does not hold"
 
 
-def evaluate_statements(oat_study, global_study, effects: pd.DataFrame, bias: pd.DataFrame,
-                        *, statements: Sequence[Statement] = STATEMENTS,
+def evaluate_statements(oat_study, global_study=None, effects: pd.DataFrame | None = None,
+                        bias: pd.DataFrame | None = None, *,
+                        statements: Sequence[Statement] = STATEMENTS,
                         loop_floor: pd.DataFrame | None = None,
                         friction_floor: pd.DataFrame | None = None,
                         index: str = "SRC2", fig3_period: float = 2.0) -> pd.DataFrame:
@@ -585,7 +586,18 @@ def evaluate_statements(oat_study, global_study, effects: pd.DataFrame, bias: pd
     valve, axis, x (the condition on the axis), value (what was measured), margin
     (positive: it holds), noise (the measure's floor there: ``loop_noise``,
     ``friction_noise``, the index's bootstrap interval), verdict (holds, does not hold,
-    within noise) and holds (margin ≥ 0)."""
+    within noise) and holds (margin ≥ 0). ``oat_study``: the one-at-a-time
+    ``across_conditions`` study run with ``variations_for``'s variations; the global
+    study (SRC across conditions), Fig. 3's ``friction_effects`` and eq. 13's
+    ``eq13_bias`` are needed only by the statements that measure them."""
+    from .errors import ArgumentError
+
+    given = {"loop": oat_study, "loop sliding": oat_study, "index": global_study,
+             "friction dynamics": effects, "friction steady": effects, "eq13": bias}
+    missing = sorted({s.key for s in statements if given[s.measure] is None})
+    if missing:
+        raise ArgumentError(f"evaluate_statements: {', '.join(missing)} need a study that "
+                            "was not given (global_study, effects or bias)")
     measures = {
         "loop": lambda: _loop_measure(oat_study, loop_floor, "change"),
         "loop sliding": lambda: _loop_measure(oat_study, loop_floor, "sliding"),

@@ -69,10 +69,7 @@ def _paper(change: float, **own: float) -> dict[str, dict[float, float]]:
 
 
 def _evaluate(study, statements, floor=None):
-    empty = pd.DataFrame(columns=["amplitude_vs", "parameter", "dynamic", "steady"])
-    return evaluate_statements(study, None, empty, pd.DataFrame(
-        {"lowest_vs": [], "Fc_error": [], "sigma2_error": []}), statements=statements,
-        loop_floor=floor)
+    return evaluate_statements(study, statements=statements, loop_floor=floor)
 
 
 def test_every_statement_is_about_one_parameter_and_fig3_is_split():
@@ -167,6 +164,9 @@ def test_a_user_adds_a_statement():
     study = _study({1.0: {**_paper(0.01), "Fc": {0.8464: 0.1, 1.1536: 0.1, 2.0: 0.6}}})
     per = _evaluate(study, [mine])
     assert per["margin"].iloc[0] == pytest.approx(0.6 - VISIBLE)
+    with pytest.raises(ArgumentError, match="3_steady_Fc need a study"):
+        evaluate_statements(study, statements=[s for s in STATEMENTS
+                                               if s.key == "3_steady_Fc"])
     with pytest.raises(ArgumentError, match="parameter = 'k'"):
         Statement("bad", "x", "y", "k")
     with pytest.raises(ArgumentError, match="comparison"):
