@@ -3,23 +3,26 @@
 ``reproduce()`` runs, on the built-in ``vgt-paper`` set (the paper's Table I):
 
 1. Table I as loaded, with the values the paper does not give marked as assumed;
-2. Fig. 2: LuGre friction against velocity, with the steady-state (Stribeck) curve;
-3. Fig. 3: friction against velocity under each of the paper's parameter variations,
-   whole and zoomed (low speeds, the sliding level), and how far its statement holds
-   across velocity amplitudes;
-4. Fig. 5 a–f: pressure–position loops under the same variations, whole and zoomed at
-   the break-away and the reversal, the one-at-a-time table, and the same study across
-   operating conditions (cycle period and valve, read as the sliding speed in units of vs);
-5. the identification procedure of section III.2 on a synthetic bench campaign generated
+2. the pneumatic half (eqs. 2–5): Φ(r) and its choked limit (the flow stays ∝ p_up), the
+   chamber's step response through the valve, its time constant along the stroke, the
+   natural frequencies free and stuck on the bristles, and every modelling choice with
+   its source (``MODEL_CHOICES``, docs/model.md);
+3. Fig. 2: LuGre friction against velocity, with the steady-state (Stribeck) curve;
+4. Fig. 3: friction against velocity under each of the paper's parameter variations,
+   whole and zoomed, and its effects across velocity amplitudes with their noise floor;
+5. Fig. 5 a–f: pressure–position loops under the same variations, whole and zoomed, and
+   the same study across operating conditions (the applied pressure first, then the
+   command valve and the regulator, read as the sliding speed in units of vs), with σ0
+   at ×0.1 … ×10, the noise floor of the loop change, and LuGre against Dahl and δ = 2;
+6. the identification procedure of section III.2 on a synthetic bench campaign generated
    from Table I with measurement noise (the paper's bench data is not public), and the
    condition under which eq. 13 gives Fc and σ2;
-6. Fig. 6: the identified model against a held-back synthetic record, with its metrics
-   and verdict;
-7. the sensitivity ranking (one at a time, SRC, Sobol) at the reproduction's cycle and a
-   global index across conditions;
-8. every statement of the paper (the six of Fig. 5, Fig. 3's, the identification's and
-   the conclusion's) with the range of conditions in which it holds and where it stops
-   (``pneumact.statements``), instead of a bare agree/disagree.
+7. Fig. 6: the identified model against a held-back record, labelled self-consistent,
+   and against records made by richer models (``RICHER_CASES``);
+8. the sensitivity ranking (SRC² and Sobol with their intervals, rank groups; one at a
+   time at the paper's unequal amounts in its own table) and SRC² across conditions;
+9. every statement of the paper, one parameter at a time (``pneumact.statements``), with
+   the range of conditions in which it holds, where it stops, and its noise floor.
 
 ``quick=True`` shrinks the campaign, the conditions and the samples for the test suite;
 every figure and table is still produced.
@@ -95,7 +98,7 @@ class Sizes:
 
     @classmethod
     def quick(cls) -> Sizes:
-        return cls((2e-4, 1e-3, 5e-3, 2e-2), 30.0, 64, 32, (20.0, 80.0, 320.0),
+        return cls((2e-4, 1e-3, 5e-3, 2e-2), 30.0, 64, 32, (20.0, 320.0),
                    ("source", "command"), 32, (2.0, 10.0, 100.0),
                    fast_source_periods=(1.0,),
                    richer_cases=("self-consistent", "δ = 2", "5 µm steps, 5 ms lag"))

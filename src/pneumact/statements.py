@@ -667,6 +667,11 @@ def summarise(per_condition: pd.DataFrame, statements: Sequence[Statement] = STA
     return pd.DataFrame(rows)
 
 
+def _num(value: float) -> str:
+    """A condition on its axis, two significant digits (plain up to 9999)."""
+    return f"{value:.0f}" if 100 <= abs(value) < 1e4 else f"{value:.2g}"
+
+
 def _sorted(sub: pd.DataFrame) -> pd.DataFrame:
     return sub.sort_values("x", kind="stable")
 
@@ -677,10 +682,10 @@ def _holds_text(sub: pd.DataFrame, axis: str, with_stops: bool = False) -> str:
     if sub.empty:
         return "not studied"
     sub = _sorted(sub)
-    span = f"{sub['x'].min():.2g}–{sub['x'].max():.2g}"
+    span = f"{_num(sub['x'].min())}–{_num(sub['x'].max())}"
     ranges = where(sub["x"], sub["margin"])
     unclear = sub.loc[sub["verdict"] == "within noise", "x"]
-    tail = (f"; within noise at {', '.join(f'{x:.2g}' for x in unclear)}"
+    tail = (f"; within noise at {', '.join(_num(x) for x in unclear)}"
             if len(unclear) else "")
     if ranges.empty:
         text = f"nowhere in {axis} {span}"
@@ -688,7 +693,7 @@ def _holds_text(sub: pd.DataFrame, axis: str, with_stops: bool = False) -> str:
             np.isnan(ranges["upper"].iloc[0]):
         text = f"all of {axis} {span} studied"
     else:
-        parts = [f"{r.x_from:.2g}" if r.x_from == r.x_to else f"{r.x_from:.2g}–{r.x_to:.2g}"
+        parts = [_num(r.x_from) if r.x_from == r.x_to else f"{_num(r.x_from)}–{_num(r.x_to)}"
                  for r in ranges.itertuples()]
         text = f"{axis} {' and '.join(parts)} (of {span})"
         if with_stops:
@@ -711,9 +716,9 @@ def _stops_text(sub: pd.DataFrame) -> str:
         side = "above" if m[i] >= 0 else "below"
         clear = all(abs(m[j]) > (n[j] if np.isfinite(n[j]) else 0.0) for j in (i, i + 1))
         if clear:
-            stops.append(f"{side} ≈ {_crossing(x[i], x[i + 1], m[i], m[i + 1]):.2g}")
+            stops.append(f"{side} ≈ {_num(_crossing(x[i], x[i + 1], m[i], m[i + 1]))}")
         else:
-            stops.append(f"{side} somewhere in {x[i]:.2g}–{x[i + 1]:.2g} (margin within "
+            stops.append(f"{side} somewhere in {_num(x[i])}–{_num(x[i + 1])} (margin within "
                          "noise)")
     return ", ".join(stops) or "no boundary in the range studied"
 
