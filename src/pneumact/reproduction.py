@@ -229,6 +229,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
                     parameters=params)
     parts = _Parts(report)
     _introduction(report, params, sizes, quick)
+    headline_at = len(report.blocks)  # the statements' verdicts lead: filled in at the end
     step("Table I")
     _table_one(parts, params, [text for text in passivity if text])
     step("pneumatics")
@@ -247,7 +248,9 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     step("sensitivity")
     global_study = _sensitivity(parts, params, oat, sizes, seed)
     step("statements")
-    _statements(parts, across, global_study, effects, bias, loop_floor, friction_floor)
+    summary = _statements(parts, across, global_study, effects, bias, loop_floor,
+                          friction_floor)
+    _lead_with(report, headline_at, summary)
     step("writing")
     parts.writers["index.html"] = report.write
     files = write_files(out_dir, parts.writers)
@@ -655,8 +658,30 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
     return across
 
 
+def _lead_with(report, position: int, summary: pd.DataFrame) -> None:
+    """The statements' verdicts in one paragraph, placed after the introduction: which
+    hold throughout, nowhere, or in part of the conditions (and where)."""
+    from .io.report import Block
+
+    groups: dict[str, list[str]] = {"throughout": [], "nowhere": [], "in part": []}
+    for _, row in summary.iterrows():
+        held = str(row["holds for"])
+        if held.startswith("all of"):
+            groups["throughout"].append(row["statement"])
+        elif held.startswith("nowhere"):
+            groups["nowhere"].append(row["statement"])
+        else:
+            groups["in part"].append(f"{row['statement']} ({held.split(' (of')[0]})")
+    text = ("The paper's statements at a glance (applied pressure across cycle speeds; Fig. "
+            "3 and eq. 13 on their own axes; details in the last section). Hold throughout "
+            f"the conditions studied: {', '.join(groups['throughout']) or 'none'}. Hold "
+            f"nowhere: {', '.join(groups['nowhere']) or 'none'}. Hold in part: "
+            f"{'; '.join(groups['in part']) or 'none'}.")
+    report.blocks.insert(position, Block("note", text))
+
+
 def _statements(parts: _Parts, across, global_study, effects, bias, loop_floor,
-                friction_floor) -> None:
+                friction_floor) -> pd.DataFrame:
     from .statements import HEADLINE_VALVE, evaluate_statements, statement_texts, summarise
 
     per_condition = evaluate_statements(across, global_study, effects, bias,
@@ -686,6 +711,7 @@ def _statements(parts: _Parts, across, global_study, effects, bias, loop_floor,
     parts.table("statement_conditions", per_condition, "Every statement at every condition: "
                 "what was measured, the margin (positive: it holds), the noise floor and the "
                 "verdict")
+    return summary
 
 
 #: The model's choices where the paper leaves it open (docs/model.md, "Open choices"):

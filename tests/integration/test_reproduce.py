@@ -174,6 +174,17 @@ def test_every_statement_is_shown_with_the_conditions_where_it_holds(quick):
     assert quick.tables["table_1"]["assumed"].any()  # the values the paper lacks
 
 
+def test_the_verdicts_lead_the_report(quick):
+    """Issue #40, item 2: the statements' verdicts come first, right after the
+    introduction, before Table I."""
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    glance = html.index("The paper's statements at a glance")
+    assert glance < html.index("values from the paper; ")  # Table I's section
+    summary = quick.tables["paper_statements"]
+    for key in summary.loc[summary["holds for"].str.startswith("nowhere"), "statement"]:
+        assert key in html[glance:glance + 4000]
+
+
 def test_the_sigma0_claim_read_as_written(quick):
     """Fig. 5a beyond ±50 %: on the 20 s command cycle the loop moves 17 % at σ0 ×0.1,
     10 % at ×0.2, 3 % at ×0.5 and 1.8–3.4 % at ×2 … ×10 (the referee's numbers, issue
