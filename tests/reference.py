@@ -573,3 +573,33 @@ FREE_FREQUENCY_HZ = 22.7
 STUCK_FREQUENCY_HZ = 67.4
 HAND_VALUE_RTOL = 3e-3  # hand values quoted to 3 significant digits
 EXPONENTIAL_DECAY_RTOL = 5e-3  # held chamber against p_atm·exp(−t/τ): integrator + grid
+
+# --- the bench in the model (issue 38, item 1) -----------------------------------------------
+#: the drawn actuator of the bench-fault tests (index into the family's draw)
+BENCH_ACTUATOR = 0
+#: a pressure-sensor offset [Pa], a position resolution [m] and
+#: a regulator whose valve time constant is this many times the model's
+BENCH_PRESSURE_OFFSET = 1000.0
+BENCH_RESOLUTION = 10e-6
+BENCH_REGULATOR_SLOWER = 4.0
+#: a named fault's size within this of the one put in
+BENCH_SIZE_RTOL = 0.05
+#: intervals of one run that may miss the truth (see the test)
+BENCH_MAX_MISSES = 1
+#: the sensor-model unit tests: a lag [s], the exactness of the filter on a ramp [m] and
+#: of its τ-derivative against central differences (relative)
+SENSOR_TEST_LAG = 4e-3
+SENSOR_LAG_ATOL = 1e-12
+SENSOR_DERIVATIVE_RTOL = 1e-5
+#: the lag [s] a fit frees, and the largest RMS residual of the fitted position against
+#: the position noise (the model seen through the lag fits to the noise)
+SENSOR_FIT_LAG = 5e-3
+MISFIT_NOISE_RATIO = 1.5
+#: draws of the quantisation's phase in its known-answer test, and the tolerance on the
+#: variance (its sampling error over that many draws is √(2/draws) ≈ 3 %)
+QUANTISATION_TEST_DRAWS = 2000
+QUANTISATION_TEST_RTOL = 0.12
+# --------------------------------------------------------------------------- figures
+MAX_FIGURE_WIDTH_PX = 3000  # a written PNG: a report page shows it scaled, not scrolled
+MIN_PANEL_WIDTH_PX = 300  # each panel of a multi-record figure: readable in the report
+MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact campaign`)

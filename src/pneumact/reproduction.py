@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from .io.report import NotebookDisplay
 from .progress import ProgressCallback, check_progress, notify
 
 if TYPE_CHECKING:
@@ -105,7 +106,7 @@ class Sizes:
 
 
 @dataclass(eq=False)
-class Reproduction:
+class Reproduction(NotebookDisplay):
     """What ``reproduce`` computed (tables in SI) and the files it wrote.
 
     ``to_pandas(name)``: a table by name (default "paper_statements": where each of the

@@ -4,6 +4,7 @@ pneumatic half in numbers (choked limit, chamber time constant, natural frequenc
 The features are computed by ``core.features`` (compiled, below the simulation, so the
 batch engine runs them inside its loop); this package is where users find them."""
 
+from pneumact.analysis.motion import SlidingMotion, sliding_motion
 from pneumact.core.features import (
     FEATURE_UNITS,
     FEATURES,
@@ -31,6 +32,7 @@ from .pneumatics import (
 __all__ = [
     "FEATURES",
     "FEATURE_UNITS",
+    "SlidingMotion",
     "breakaway_pressure",
     "chamber_time_constant",
     "chamber_volume",
@@ -45,6 +47,7 @@ __all__ = [
     "natural_frequencies",
     "presliding_travel",
     "rms_error",
+    "sliding_motion",
     "sliding_speed",
     "stroke",
 ]

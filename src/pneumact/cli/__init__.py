@@ -27,6 +27,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
+from typer.core import TyperGroup, TyperOption
 
 from pneumact.cli.common import out_console
 from pneumact.cli.compare import compare_command
@@ -42,13 +43,52 @@ from pneumact.cli.simulate_batch import simulate_batch
 from pneumact.cli.validate import validate_command
 from pneumact.version import __version__
 
+
+class _Commands(TyperGroup):
+    """The command group: a mistyped command is answered with the commands whose name
+    holds it as a word too (``batch`` -> ``simulate-batch``), beside typer's close
+    matches."""
+
+    def resolve_command(self, ctx, args):
+        try:
+            return super().resolve_command(ctx, args)
+        except Exception as error:  # typer's own click's UsageError (not click's)
+            typo = args[0] if args else ""
+            words = [name for name in self.commands
+                     if typo and typo != name and typo in name.split("-")]
+            message = getattr(error, "message", None)
+            if words and isinstance(message, str) and "Did you mean" not in message:
+                error.message = (  # type: ignore[attr-defined]
+                    f"{message.rstrip('.')}. Did you mean "
+                    f"{', '.join(repr(name) for name in words)}?")
+            raise
+
+
+def _flags_show_no_type(show_type):
+    """A flag takes no value: typer's help shows bool flags as ``<bool>``; show none."""
+
+    def display_type_rich(self, ctx):
+        return None if getattr(self, "is_flag", False) else show_type(self, ctx)
+
+    return display_type_rich
+
+
+TyperOption.display_type_rich = _flags_show_no_type(  # type: ignore[method-assign]
+    TyperOption.display_type_rich)
+
 app = typer.Typer(
     name="pneumact",
+    cls=_Commands,
     help="Pneumatic diaphragm actuators with LuGre friction: simulate, test, inspect.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+
+
+#: said before the first compilation the disk cache cannot spare (a cold start)
+COMPILING = ("compiling the model (once on this machine, about a minute; later runs load "
+             "it in seconds)")
 
 
 def _version(value: bool) -> None:
@@ -63,6 +103,10 @@ def main(
                                           help="Print the version and exit.")] = False,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
+    from pneumact.cli.common import err_console
+    from pneumact.core.compile_lock import on_first_compile
+
+    on_first_compile(lambda: err_console.print(COMPILING, style="yellow"))
 
 
 app.command()(simulate)

@@ -20,6 +20,7 @@ a diagnostic names the speed they need and eq. 12 is fitted over all segments at
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -178,7 +179,7 @@ def stage_spring(sweeps: Sequence[Record], params) -> StageResult:
                                        ["F0", "k", "friction_level"], ["N", "N/m", "N"],
                                        "stage (a) spring", correlated=True)
     data = pd.DataFrame({"x": x * 1e3, "measured": f, "fitted": f - res, "branch": s})
-    return StageResult("spring", est, tuple(r.source for r in sweeps), data,
+    return StageResult("spring", est, tuple(os.path.basename(r.source) for r in sweeps), data,
                        "position [mm]", "drive force (p_atm − p)·A_d − m·a [N]")
 
 
@@ -417,5 +418,5 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     rec, sim = records[0], result.simulated[0]
     data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
                          "fitted": sim["position"] * 1e3})
-    return StageResult("presliding", sub, tuple(r.source for r in records), data,
+    return StageResult("presliding", sub, tuple(os.path.basename(r.source) for r in records), data,
                        "time [s]", "position [mm]", {"fit": result})
