@@ -554,6 +554,26 @@ PLAN_SETPOINT_ATOL = 1e-6
 #: and miss the motion (issue 38's --staged-only finding: σ2 +966 % "identified").
 STAGED_LAG = 3e-3
 
+# Issue #40, Fig. 5a read as written: the loop change (share of the loop's width) on the
+# 20 s command cycle at σ0 × factor (the referee's hand numbers), its tolerance, and the
+# range of the stiffer factors ×2 … ×10 (1.8–3.4 % measured).
+SIGMA0_LOOP_CHANGE_COMMAND_20S = {0.1: 0.170, 0.2: 0.101, 0.5: 0.032}
+LOOP_CHANGE_ATOL = 0.005
+SIGMA0_STIFFER_CHANGE = (0.012, 0.04)
+
+# Issue #40, the pneumatic half of vgt-paper (hand values): Φ* and r_c to 4 digits, the
+# chamber at the top of the 20 s command stroke (17.7 mm: V = 8.3 cm³) and at x_max
+# (1.55 cm³), natural frequencies free (sqrt(k/m)) and stuck (sqrt((k + σ0)/m)).
+CHOKED_PHI_4_DIGITS = 0.5787
+CRITICAL_RATIO_4_DIGITS = 0.5283
+COMMAND_STROKE_TOP = 0.0177  # m
+TIME_CONSTANT_RATIO_ALONG_STROKE = 7.2  # τ(0)/τ(17.7 mm) = 60/8.3 cm³
+VOLUME_AT_X_MAX = 1.55e-6  # m³
+FREE_FREQUENCY_HZ = 22.7
+STUCK_FREQUENCY_HZ = 67.4
+HAND_VALUE_RTOL = 3e-3  # hand values quoted to 3 significant digits
+EXPONENTIAL_DECAY_RTOL = 5e-3  # held chamber against p_atm·exp(−t/τ): integrator + grid
+
 # --- the bench in the model (issue 38, item 1) -----------------------------------------------
 #: the drawn actuator of the bench-fault tests (index into the family's draw)
 BENCH_ACTUATOR = 0
