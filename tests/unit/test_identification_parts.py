@@ -236,3 +236,21 @@ def test_stage_c_starts_again_when_the_prior_sends_vs_astray():
     assert stribeck is not None and not stribeck.extra["at_bound"], notes
     assert stribeck.estimates["vs"] == pytest.approx(vs, rel=0.05)
     assert sliding is not None and sliding.estimates["Fc"] == pytest.approx(fc, rel=0.01)
+
+
+def test_the_presliding_window_starts_after_a_stick_slipping_approach():
+    """An approach in slides of 2, 1.5, 1 and 0.5 mm (the first the longest), a hold, then
+    steps of a few µm: the window starts after the last slide, not the longest."""
+    from pneumact.identification.stages import presliding_window
+
+    params = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    time = np.arange(0.0, 3.0, 1e-3)
+    slides = [(0.1, 0.3, 2e-3), (0.5, 0.6, 1.5e-3), (0.75, 0.8, 1e-3), (0.9, 0.92, 0.5e-3)]
+    x = np.zeros_like(time)
+    for t0, t1, size in slides:
+        x += size * np.clip((time - t0) / (t1 - t0), 0.0, 1.0)
+    x += 3e-6 * (np.floor(np.clip(time - 1.5, 0.0, None) / 0.3) % 2)  # presliding steps
+    x += np.random.default_rng(0).normal(0.0, 1e-7, x.size)
+    record = Record.from_arrays(time, {"position": x, "pressure": np.full(x.size, 9e4)},
+                                source="presliding")
+    assert presliding_window(record, params) > slides[-1][1]

@@ -76,6 +76,11 @@ PRIOR_FACTOR = 10.0
 #: A presliding record's "approach" is its longest run faster than this fraction of its
 #: fastest motion (scale-free: whatever the actuator's speed).
 APPROACH_FRACTION = 0.1
+#: ... and it is over only once the position stays within this fraction of the record's
+#: travel of where it rests at the end: an approach that stick-slips is a train of
+#: slides, and its longest one need not be its last (issue 38: a window that began
+#: inside such an approach reported 2 050 µm of presliding motion, really 45 µm).
+APPROACH_SETTLED = 0.1
 
 
 @dataclass(eq=False)
@@ -392,7 +397,8 @@ def stuck_period(params) -> float:
 def presliding_window(record: Record, params) -> float:
     """Start [s] of the presliding part of ``record``: ``SETTLE_PERIODS`` stuck-mode
     periods after its approach (its longest run faster than ``APPROACH_FRACTION`` of
-    its fastest motion)."""
+    its fastest motion, and not before the position settles within ``APPROACH_SETTLED``
+    of the travel of where it ends)."""
     kin = kinematics(record)
     speed = np.abs(kin.velocity)
     moving = speed > APPROACH_FRACTION * speed.max()
@@ -401,6 +407,11 @@ def presliding_window(record: Record, params) -> float:
         return float(record.time[0])
     runs = list(zip(edges[::2], edges[1::2], strict=True))
     _i0, i1 = max(runs, key=lambda r: r[1] - r[0])
+    x = kin.measured_position
+    rest = float(np.median(x[-max(1, x.size // 10):]))
+    away = np.flatnonzero(np.abs(x - rest) > APPROACH_SETTLED * np.ptp(x))
+    if away.size:
+        i1 = max(i1, int(away[-1]) + 1)
     return float(kin.time[min(i1, kin.time.size - 1)] + SETTLE_PERIODS * stuck_period(params))
 
 
