@@ -1,6 +1,7 @@
 """Identification on a family of actuators: accuracy, verdicts, interval coverage, time.
 
 Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
+[--bench]
 
 Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
 0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
@@ -14,6 +15,12 @@ that prior (``identify_paper`` defaults), and prints:
   intervals;
 - overall: the identified share, the coverage of every reported interval, and the
   median and largest wall time.
+
+With ``--bench`` each campaign also gets what a real bench adds, drawn per campaign
+(``bench_faults``): a pressure-sensor offset (±0-2 kPa), a position-sensor lag (none in
+a third of the campaigns, else 0.5-20 ms log-uniform), a position resolution (none in a
+third, else 2-50 µm) and a sample rate (none in half, else 100 Hz-1 kHz, the records
+resampled); the table then adds whether each fault was named.
 
 The same study, smaller, is the validation test
 ``tests/validation/test_identification_family.py``.
@@ -49,13 +56,46 @@ def prior_of(truth, rng):
     return truth.replace(values)
 
 
+def bench_faults(rng) -> dict[str, float]:
+    """What one real bench adds (see the module docstring), drawn."""
+    def some(p_none, low, high):
+        return 0.0 if rng.uniform() < p_none else float(np.exp(rng.uniform(np.log(low),
+                                                                            np.log(high))))
+    return {"pressure_offset": float(rng.choice([-1, 1]) * rng.uniform(0, 2e3)),
+            "position_lag": some(1 / 3, 5e-4, 2e-2),
+            "position_resolution": some(1 / 3, 2e-6, 5e-5),
+            "sample_rate": some(1 / 2, 100.0, 1000.0)}
+
+
+def with_faults(records, faults):
+    """The campaign's records as the drawn bench sees them."""
+    from pneumact.identification import Noise
+    from pneumact.identification.campaign import add_noise
+    from pneumact.io.records import Record
+
+    out = []
+    for i, rec in enumerate(records):
+        rate = faults["sample_rate"]
+        if rate and rate < 1 / float(np.median(np.diff(rec.time))):
+            rec = rec.resample(1 / rate)
+        signals = {**rec.signals, "pressure": rec["pressure"] + faults["pressure_offset"]}
+        rec = Record.from_arrays(rec.time, signals, rec.units, rec.source, rec.meta)
+        out += add_noise([rec], Noise(0.0, 0.0, faults["position_resolution"],
+                                      faults["position_lag"]), seed=i)
+    return out
+
+
 def run_one(job):
-    index, seed, truth, family_seed = job
+    index, seed, truth, family_seed, bench = job
     rng = np.random.default_rng(family_seed * 1000 + index)
     prior = prior_of(truth, rng)
+    faults = bench_faults(np.random.default_rng([family_seed, index, seed])) if bench \
+        else None
     tic = time.perf_counter()
     records = synthetic_campaign(truth, design_campaign(prior, spread=SPREAD).tests,
                                  seed=seed)
+    if faults:
+        records = with_faults(records, faults)
     result = identify_paper(records, prior, seed=seed, executor=1)
     wall = time.perf_counter() - tic
     table = result.to_pandas(truth=truth)
@@ -67,8 +107,20 @@ def run_one(job):
                      "verdict": row["verdict"], "error_%": row["error_%"],
                      "reported": reported,
                      "covered": bool(row["truth_in_ci95"]) if reported else None,
-                     "wall_s": wall})
+                     "wall_s": wall, **named(faults, result)})
     return rows, result.summary()
+
+
+def named(faults, result) -> dict:
+    """Each drawn fault and whether the result named it (a bench diagnostic)."""
+    if not faults:
+        return {}
+    bench = " ".join(d.message for d in result.diagnostics if d.stage == "bench")
+    return {**faults,
+            "offset_named": "pressure sensor reads" in bench,
+            "lag_named": "position sensor lags" in bench,
+            "quantisation_named": "quantised at" in bench,
+            "rate_named": "sampled at" in bench}
 
 
 def main() -> None:
@@ -77,15 +129,17 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--seed", type=int, default=7, help="seed of the family")
     parser.add_argument("--csv", type=Path, default=None, help="write every row here")
+    parser.add_argument("--bench", action="store_true",
+                        help="add a drawn bench (offset, lag, resolution, rate) per campaign")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     family = ActuatorFamily().draw(args.actuators, seed=args.seed)
-    jobs = [(i, s, truth, args.seed) for i, truth in enumerate(family)
+    jobs = [(i, s, truth, args.seed, args.bench) for i, truth in enumerate(family)
             for s in range(args.seeds)]
     rows = []
     started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        for (_index, seed, truth, _), (result_rows, summary) in zip(
+        for (_index, seed, truth, _, _), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
             errors = " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows)
@@ -113,6 +167,17 @@ def main() -> None:
           f"{len(reported)}, coverage {100 * reported['covered'].mean():.1f} %; "
           f"wall per identification median {statistics.median(walls):.1f} s, "
           f"max {walls.max():.1f} s; total {total:.0f} s on {os.cpu_count()} cores")
+    if args.bench:
+        runs = table.drop_duplicates(["actuator", "seed"])
+        for fault, column, present in (
+                ("pressure offset above 0.5 kPa", "offset_named",
+                 runs["pressure_offset"].abs() > 500),
+                ("position lag", "lag_named", runs["position_lag"] > 0),
+                ("quantisation", "quantisation_named", runs["position_resolution"] > 0),
+                ("sample rate below 1 kHz", "rate_named", runs["sample_rate"] > 0)):
+            print(f"{fault}: in {int(present.sum())} campaigns, named in "
+                  f"{int(runs.loc[present, column].sum())}; named without it in "
+                  f"{int(runs.loc[~present, column].sum())}")
     if args.csv:
         table.to_csv(args.csv, index=False)
 
