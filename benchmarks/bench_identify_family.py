@@ -67,21 +67,24 @@ def bench_faults(rng) -> dict[str, float]:
             "sample_rate": some(1 / 2, 100.0, 1000.0)}
 
 
-def with_faults(records, faults):
-    """The campaign's records as the drawn bench sees them."""
+def with_faults(exact, faults, seed: int):
+    """The campaign's exact records as the drawn bench sees them: sampled at its rate,
+    the position through its lag, then the sensors' noise (the default ``Noise``) and
+    the resolution (at least the default's), the pressure with its offset."""
     from pneumact.identification import Noise
     from pneumact.identification.campaign import add_noise
     from pneumact.io.records import Record
 
+    noise = Noise(resolution=max(faults["position_resolution"], Noise().resolution),
+                  lag=faults["position_lag"])
     out = []
-    for i, rec in enumerate(records):
+    for i, rec in enumerate(exact):
         rate = faults["sample_rate"]
         if rate and rate < 1 / float(np.median(np.diff(rec.time))):
             rec = rec.resample(1 / rate)
         signals = {**rec.signals, "pressure": rec["pressure"] + faults["pressure_offset"]}
         rec = Record.from_arrays(rec.time, signals, rec.units, rec.source, rec.meta)
-        out += add_noise([rec], Noise(0.0, 0.0, faults["position_resolution"],
-                                      faults["position_lag"]), seed=i)
+        out += add_noise([rec], noise, seed=seed * 1000 + i)
     return out
 
 
@@ -92,10 +95,14 @@ def run_one(job):
     faults = bench_faults(np.random.default_rng([family_seed, index, seed])) if bench \
         else None
     tic = time.perf_counter()
-    records = synthetic_campaign(truth, design_campaign(prior, spread=SPREAD).tests,
-                                 seed=seed)
+    tests = design_campaign(prior, spread=SPREAD).tests
     if faults:
-        records = with_faults(records, faults)
+        from pneumact.identification import Noise
+
+        records = with_faults(synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0)),
+                              faults, seed)
+    else:
+        records = synthetic_campaign(truth, tests, seed=seed)
     result = identify_paper(records, prior, seed=seed, executor=1)
     wall = time.perf_counter() - tic
     table = result.to_pandas(truth=truth)
