@@ -37,7 +37,7 @@ from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
-from ..progress import ProgressCallback, notify
+from ..progress import ProgressCallback, notify, stop_threads
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
@@ -861,7 +861,7 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
         problem.simulations += sum(sol.simulations for sol in done)
         return done
     done = []
-    with ThreadPoolExecutor(max_workers=executor.threads) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=executor.threads)) as pool:
         futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
         for k, fut in enumerate(futures):
             done.append(fut.result())
@@ -887,7 +887,7 @@ def map_on_threads(workers: int, fn, items):
     items = list(items)
     if workers <= 1 or len(items) <= 1:
         return [fn(item) for item in items]
-    with ThreadPoolExecutor(max_workers=min(workers, len(items))) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=min(workers, len(items)))) as pool:
         return list(pool.map(fn, items))
 
 

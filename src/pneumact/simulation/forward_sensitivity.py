@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
+from ..progress import raise_if_stopped
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -147,6 +148,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     """
     from ..parameters import catalogue
 
+    raise_if_stopped()
     solver = Rodas4() if solver is None else solver
     if solver.kernel_function != "integrate_rodas4":
         raise ParameterError(f"sensitivities need the Rodas4 solver, got "
