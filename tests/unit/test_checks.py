@@ -12,7 +12,13 @@ import pytest
 
 from pneumact import checks
 from pneumact.errors import ArgumentError, ArgumentTypeError, DataError, PneumactError
-from pneumact.io.tables import RUN_LISTING, partial_folder, staged_folder, write_files
+from pneumact.io.tables import (
+    RUN_LISTING,
+    lock_file,
+    partial_folder,
+    staged_folder,
+    write_files,
+)
 
 
 # --------------------------------------------------------------------------- checks
@@ -230,3 +236,31 @@ def test_signal_extremes_see_both_sides_of_a_jump():
     low, high = (Sine(1.0, 1.0) + 2.0).extremes(0.0, 1.0)
     assert low == pytest.approx(1.0, abs=1e-6) and high == pytest.approx(3.0, abs=1e-6)
     assert np.isfinite(low)
+
+
+def test_a_folder_another_live_run_writes_is_refused_naming_that_run(tmp_path):
+    """Two runs into one folder (issue 42): the second is told which run holds it, not
+    advised to --overwrite (which would wipe the running one); the lock goes with the
+    run, and a stale lock (its process gone) is taken over."""
+    import socket
+    import subprocess
+    import sys
+
+    out = tmp_path / "batch"
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        lock_file(out).write_text(json.dumps({"pid": other.pid, "host": socket.gethostname(),
+                                              "started": "now"}), encoding="utf-8")
+        with pytest.raises(ArgumentError, match=f"another run \\(pid {other.pid}") as held:
+            with staged_folder(out, resumable=True):
+                pass
+        assert "--overwrite" not in held.value.for_cli() and "--out" in held.value.for_cli()
+        assert not out.exists() and not partial_folder(out).exists()
+    finally:
+        other.kill()
+        other.wait()
+    # the holder is gone: its lock is stale and taken over
+    with staged_folder(out, resumable=True) as stage:
+        assert json.loads(lock_file(out).read_text(encoding="utf-8"))["pid"] == os.getpid()
+        (stage / "chunk-0").write_text("done")
+    assert not lock_file(out).exists() and (out / "chunk-0").exists()
