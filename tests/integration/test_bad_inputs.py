@@ -670,3 +670,47 @@ def test_bad_files_corpus_is_complete():
     api_used = {p.name for p in BAD.glob("*.csv")} | {p.name for p in BAD.glob("*.toml")}
     for path in BAD.iterdir():
         assert path.name in used or path.name in api_used, path.name
+
+
+#: options that would do nothing where they are given (issue 42, finding 10), and a word
+#: each refusal must say besides the option: refused, not silently ignored
+USELESS_OPTIONS: dict[str, tuple[list[str], str]] = {
+    "fit --f-scale with the linear loss": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--f-scale", "2", "--out", "OUT"],
+        "--f-scale"),
+    "fit --seed without multistart": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--seed", "3", "--out", "OUT"],
+        "--seed"),
+    "fit --points without a profile": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--points", "5", "--out", "OUT"],
+        "--points"),
+    "fit --per-record with one record": (
+        ["fit", str(GOOD / "record.csv"), "--free", "sigma0", "--per-record", "sigma0",
+         "--out", "OUT"], "one record"),
+    "campaign --plan --seed": (["campaign", "--plan", "--seed", "3", "--out", "OUT"],
+                               "--seed"),
+    "campaign --plan --pressure-noise": (
+        ["campaign", "--plan", "--pressure-noise", "0.1", "--out", "OUT"],
+        "--pressure-noise"),
+    "validate --input setpoint --valve source": (
+        ["validate", str(GOOD / "record.csv"), "--input", "pressure", "--valve", "source",
+         "--out", "OUT"], "--valve"),
+    "validate --train the test record": (
+        ["validate", str(GOOD / "record.csv"), "--train", str(GOOD / "record.csv"),
+         "--free", "Fc", "--out", "OUT"], "training record"),
+    "control step --sample-time longer than the run": (
+        ["control", "step", "--sample-time", "10", "--out", "OUT"], "sample_time = 10 s"),
+    "control step without a step": (
+        ["control", "step", "--start", "4", "--stop", "4", "--out", "OUT"], "no step"),
+    "control step --u-min/--u-max in kPa": (
+        ["control", "step", "--u-min", "10", "--u-max", "100", "--out", "OUT"],
+        "looks like kPa"),
+}
+
+
+@pytest.mark.parametrize("case", list(USELESS_OPTIONS))
+def test_an_option_that_would_do_nothing_is_refused(workdir, case):
+    args, words = USELESS_OPTIONS[case]
+    result = _invoke(args, workdir)
+    assert_refused(result, words)
+    assert not any(workdir.iterdir()), "a refused command left files"

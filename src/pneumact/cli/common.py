@@ -495,3 +495,24 @@ def shown_path(path: Path, stage: Path, out: Path) -> Path:
         return out / Path(path).relative_to(stage)
     except ValueError:
         return Path(path)
+
+
+def given_options(ctx: typer.Context, *params: str) -> list[str]:
+    """The options among ``params`` (parameter names) given on the command line, as the
+    user typed them (``--f-scale``), in the order asked."""
+    flags = []
+    for name in params:
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name != "DEFAULT":
+            flags.append("--" + name.replace("_", "-"))
+    return flags
+
+
+def refuse_unused(ctx: typer.Context, params: tuple[str, ...] | str, why: str,
+                  fix: str = "leave it out") -> None:
+    """Refuse the options among ``params`` given on the command line where they would do
+    nothing (``why``: "with the linear loss"), one message naming them."""
+    flags = given_options(ctx, *((params,) if isinstance(params, str) else params))
+    if flags:
+        verb = "does" if len(flags) == 1 else "do"
+        raise ArgumentError(f"{', '.join(flags)} {verb} nothing {why}; {fix}")

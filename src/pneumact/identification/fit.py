@@ -547,6 +547,10 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
     if unknown:
         raise ParameterError(f"fit: per_record names {unknown} are not among the free "
                              f"parameters {list(free)}")
+    if per_record and n_records == 1:
+        raise ParameterError(f"fit: per_record = {', '.join(per_record)} with one record: one "
+                             "value per record is then the shared value; give several records, "
+                             "or leave per_record out")
     cols = []
     for name in free:
         if name in per_record:
