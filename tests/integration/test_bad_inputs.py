@@ -193,7 +193,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--max-evaluations": ["-1"],
     "--rounds": ["-1"],
     "--margin": ["1", "-0.1"],
-    "--gains-file": ["missing.toml"],
+    "--gains-file": ["missing.toml", *sorted(str(p) for p in (BAD / "gains").glob("*.toml"))],
     "--regime": ["gliding"],
     "--velocity": ["0", "-5"],
     "--tuned": ["missing.toml", str(BAD / "not_toml.toml")],

@@ -197,7 +197,8 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
     if gains is not None:
         from pneumact.control import load_gains
 
-        controller = load_gains(gains)
+        unit = ClosedLoop(model, build_controller(plant, params, options)).command_unit
+        controller = load_gains(gains, command_unit=unit)
     else:
         controller = build_controller(plant, params, options)
     loop = ClosedLoop(model, controller)
