@@ -647,19 +647,23 @@ def _gain_in_si(path: Path, name: str, value: object, unit: object,
         raise DataError(f"gains file {path}: [gains] {name} = {value!r}: must be a number")
     if unit is None:
         return float(value)
+    import re
+
     registry = unit_registry()
-    try:  # an expression: a command unit may carry the drive gain ("(Pa/2)/m")
-        quantity = float(value) * registry.parse_expression(str(unit))
+    # a number in a unit is the drive gain of the controller's command unit ("(N/35.3)/m"
+    # for the EMPS drive): gains are in command units, so only the unit's prefixes and
+    # units convert ("kPa/mm" -> 1e6 Pa/m)
+    plain = re.sub(r"(?<=[/(])\s*\d+(?:\.\d*)?(?:[eE][-+]?\d+)?", "1", str(unit))
+    try:
+        quantity = float(value) * registry.parse_expression(plain)
     except Exception:
         raise DataError(f"gains file {path}: [units] {name} = \"{unit}\" is not a unit "
                         "(e.g. \"kPa/mm\")") from None
-    if expected is None:
-        return float(quantity.to_base_units().magnitude)
-    want = registry.parse_expression(expected)
-    if quantity.dimensionality != want.dimensionality:
+    if expected is not None and quantity.dimensionality != registry.parse_expression(
+            expected).dimensionality:
         raise DataError(f"gains file {path}: [units] {name} = \"{unit}\" does not measure "
                         f"{name} (its SI unit is {expected})")
-    return float((quantity / want).to_base_units().magnitude)
+    return float(quantity.to_base_units().magnitude)
 
 
 # --------------------------------------------------------------------------- tuning
