@@ -618,7 +618,8 @@ def load_gains(path: str | os.PathLike, command_unit: str | None = None) -> Cont
     if bad:
         raise DataError(f"gains file {path}: [options] {', '.join(bad)} is not an option of "
                         f"a {name}; its options: {', '.join(allowed_options)}")
-    probe = kind(**options, **{n: 1.0 for n in made_with if n != "kd"})
+    # the controller's structure (a PID's filter_time only with a derivative term)
+    probe = kind(**options, **{n: 1.0 for n in made_with if n != "kd" or gains.get("kd")})
     known = list(dict.fromkeys([*made_with, *probe.parameters()]))
     bad = [k for k in gains if k not in known]
     if bad:
