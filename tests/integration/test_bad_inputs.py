@@ -207,7 +207,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "negative_pressure.csv", "huge_pressure.csv", "kpa_as_pa.csv", "negative_time.csv",
         "nan_cell.csv", "time_backwards.csv", "no_header.csv", "position_in_metres.csv",
         "text_cell.csv", "empty.csv", "one_row.csv", "no_unit.csv", "wrong_dimension.csv",
-        "not_utf8.csv", "missing.csv")],
+        "not_utf8.csv", "missing.csv", "epoch_time.csv")],
     "validate": [str(BAD / "position_in_metres.csv"), str(BAD / "negative_pressure.csv")],
     "params show": ["vgt-papr", str(BAD / "k_huge.toml")],
     "params check": [str(BAD / name) for name in (

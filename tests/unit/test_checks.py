@@ -264,3 +264,16 @@ def test_a_folder_another_live_run_writes_is_refused_naming_that_run(tmp_path):
         assert json.loads(lock_file(out).read_text(encoding="utf-8"))["pid"] == os.getpid()
         (stage / "chunk-0").write_text("done")
     assert not lock_file(out).exists() and (out / "chunk-0").exists()
+
+
+def test_an_output_folder_name_too_long_to_stage_beside_is_refused_naming_its_length(
+        tmp_path):
+    """A 250-character --out (issue 42, finding 9) is refused for its name, not with an
+    error about the hidden staging folder that would not fit beside it."""
+    with pytest.raises(ArgumentError, match="folder name is 250 characters") as refused:
+        checks.check_out_dir("--out", tmp_path / ("a" * 250))
+    assert "pneumact-stage" not in str(refused.value)
+    assert checks.check_out_dir("--out", tmp_path / ("a" * checks.MAX_OUT_NAME_BYTES))
+    written = write_files(tmp_path / ("b" * checks.MAX_OUT_NAME_BYTES),
+                          {"x.csv": lambda p: p.write_text("1")})
+    assert written[0].read_text() == "1"  # the longest allowed name stages and writes

@@ -305,10 +305,16 @@ def _rows(mask: np.ndarray) -> str:
     return f"{n} such row{'s' * (n != 1)}"
 
 
+#: the latest start of a record's time [s] (11.6 days): later is a clock or epoch
+#: timestamp (1.7e9 s), whose float spacing (2.4e-7 s) the solver's steps cannot resolve
+MAX_TIME_OFFSET = 1e6
+
+
 def check_physics(source, name: str, values: np.ndarray, label: str | None = None) -> None:
     """What the physics allows of a known signal in SI: an absolute pressure (or pressure
     set-point) > 0 and <= MAX_ABSOLUTE_PRESSURE, not all below 1 kPa (kPa read as Pa); a
-    valve command within [0, 1]; a time >= 0. One DataError naming the first bad row."""
+    valve command within [0, 1]; a time from 0 to ``MAX_TIME_OFFSET``. One DataError
+    naming the first bad row."""
     from pneumact.checks import MAX_ABSOLUTE_PRESSURE, pressure_hint
 
     label = label or f"column {name!r}"
@@ -317,6 +323,13 @@ def check_physics(source, name: str, values: np.ndarray, label: str | None = Non
     if name == "time" and values[0] < 0:
         raise DataError(f"{source}: {label} starts at {values[0]:.6g} s; times must be >= 0 "
                         "(shift the record's time axis so that it starts at 0)")
+    if name == "time" and values[0] > MAX_TIME_OFFSET:
+        spacing = float(np.spacing(values[0]))
+        raise DataError(
+            f"{source}: {label} starts at {values[0]:.6g} s ({values[0] / 86400:.3g} days: "
+            f"a clock or epoch timestamp?); at that offset time has a resolution of only "
+            f"{spacing:.2g} s, too coarse for the solver's steps: subtract the first time so "
+            "that the record starts at 0")
     if name in ("pressure", "setpoint"):
         bad = (values <= 0) | (values > MAX_ABSOLUTE_PRESSURE)
         if bad.any():
