@@ -714,3 +714,13 @@ def test_an_option_that_would_do_nothing_is_refused(workdir, case):
     result = _invoke(args, workdir)
     assert_refused(result, words)
     assert not any(workdir.iterdir()), "a refused command left files"
+
+
+def test_epoch_timestamps_are_refused_naming_the_offset(workdir):
+    """t = 1.7e9 s (issue 42, finding 9): a message about the time offset, not the
+    solver's "step size underflow"."""
+    result = _invoke(["fit", str(BAD / "epoch_time.csv"), "--free", "Fc", "--out", "OUT"],
+                     workdir)
+    assert_refused(result, "epoch_time.csv")
+    assert "timestamp" in result.stderr and "starts at 1.7e+09 s" in result.stderr
+    assert "underflow" not in result.stderr
