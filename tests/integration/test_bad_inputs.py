@@ -724,3 +724,14 @@ def test_epoch_timestamps_are_refused_naming_the_offset(workdir):
     assert_refused(result, "epoch_time.csv")
     assert "timestamp" in result.stderr and "starts at 1.7e+09 s" in result.stderr
     assert "underflow" not in result.stderr
+
+
+@pytest.mark.parametrize("args", [["simulate", "--t-end", "abc"], ["simulate", "--nope"],
+                                  ["batch"]])
+def test_usage_errors_end_in_the_one_error_prefix(workdir, args):
+    """The parser's mistakes speak like every command's refusals (issue 42): one
+    ``error:`` line after the usage, not a box titled "Error"."""
+    result = _invoke(args, workdir)
+    assert result.exit_code == EXIT_USER_ERROR
+    assert [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert "Error" not in result.output and "╭" not in result.output

@@ -28,7 +28,7 @@ from typing import Annotated
 
 import typer
 
-from pneumact.cli.common import out_console
+from pneumact.cli.common import err_console, out_console, print_error
 from pneumact.cli.compare import compare_command
 from pneumact.cli.control import control_app
 from pneumact.cli.export import export_app
@@ -42,7 +42,41 @@ from pneumact.cli.simulate_batch import simulate_batch
 from pneumact.cli.validate import validate_command
 from pneumact.version import __version__
 
+
+class OneErrorPrefix(typer.core.TyperGroup):
+    """The root command: the parser's usage errors (a mistyped option or value) end in
+    one ``error:`` line, as every command's own refusals do, instead of a box titled
+    "Error"; everything else as typer does it."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
+             **extra):
+        import sys
+
+        # click's exception base as typer uses it (typer may vendor its own click)
+        click_exception = next(c for c in typer.BadParameter.__mro__
+                               if c.__name__ == "ClickException")
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, False, **extra)
+        except click_exception as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # the help is already shown
+                sys.exit(exc.exit_code)
+            context = getattr(exc, "ctx", None)
+            if context is not None:
+                err_console.print(context.get_usage(), markup=False, highlight=False)
+                err_console.print(f"Try '{context.command_path} --help' for help.",
+                                  markup=False, highlight=False)
+            print_error(exc.format_message())
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            print_error("aborted")
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
 app = typer.Typer(
+    cls=OneErrorPrefix,
     name="pneumact",
     help="Pneumatic diaphragm actuators with LuGre friction: simulate, test, inspect.",
     no_args_is_help=True,
