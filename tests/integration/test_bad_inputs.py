@@ -735,3 +735,22 @@ def test_usage_errors_end_in_the_one_error_prefix(workdir, args):
     assert result.exit_code == EXIT_USER_ERROR
     assert [line for line in result.stderr.splitlines() if line.startswith("error:")]
     assert "Error" not in result.output and "╭" not in result.output
+
+
+def test_messages_carry_no_python_reprs(workdir, monkeypatch):
+    """numpy's reprs of numbers and a KeyError's quotes never reach a message."""
+    import importlib
+
+    import numpy as np
+
+    from pneumact.cli.common import plain_message
+
+    assert plain_message(f"Fc = {np.float64(np.nan)!r}, n = {np.int64(3)!r}") == "Fc = nan, n = 3"
+    command = importlib.import_module("pneumact.cli.simulate")
+
+    def broken(*args, **kwargs):
+        raise KeyError("position")
+
+    monkeypatch.setattr(command, "build_experiment", broken)
+    result = _invoke(["simulate", "--out", "OUT"], workdir)
+    assert "KeyError: position (" in result.stderr and "'position'" not in result.stderr

@@ -291,12 +291,21 @@ def build_experiment(options: ModelOptions, params):
 
 
 # --------------------------------------------------------------------------- plumbing
+def plain_message(message: str) -> str:
+    """A message as a person reads it: numpy's reprs of numbers (``np.float64(nan)``,
+    ``np.int64(3)``) written as the numbers."""
+    import re
+
+    return re.sub(r"np\.(?:float|int|uint|bool|complex)_?\d*\(([^()]*)\)", r"\1", message)
+
+
 def print_error(message: str, prefix: str = "error") -> None:
-    err_console.print(Text(f"{prefix}: {message}", style="red"), soft_wrap=True)
+    err_console.print(Text(f"{prefix}: {plain_message(message)}", style="red"),
+                      soft_wrap=True)
 
 
 def _print_warning(message: warnings.WarningMessage) -> None:
-    text = f"warning: {message.category.__name__}: {message.message}"
+    text = plain_message(f"warning: {message.category.__name__}: {message.message}")
     err_console.print(Text(text, style="yellow"), soft_wrap=True)
 
 
@@ -348,7 +357,8 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             _flush_warnings(caught)
             if os.environ.get("PNEUMACT_TRACEBACK"):
                 raise
-            print_error(f"{type(exc).__name__}: {exc} (this is a bug in pneumact, not a "
+            text = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc  # no quotes
+            print_error(f"{type(exc).__name__}: {text} (this is a bug in pneumact, not a "
                         "mistake of yours: please report it with the command; "
                         "PNEUMACT_TRACEBACK=1 shows where it happened)",
                         prefix="internal error")
