@@ -754,3 +754,17 @@ def test_messages_carry_no_python_reprs(workdir, monkeypatch):
     monkeypatch.setattr(command, "build_experiment", broken)
     result = _invoke(["simulate", "--out", "OUT"], workdir)
     assert "KeyError: position (" in result.stderr and "'position'" not in result.stderr
+
+
+def test_a_study_beyond_the_memory_limit_is_refused_before_any_run(workdir, monkeypatch):
+    """oat --times 10000000 (issue 42, finding 8): its estimate, the stated limit and how
+    to raise it, before the features run (not minutes later at 3.5 GB)."""
+    from pneumact.simulation import memory
+
+    monkeypatch.delenv(memory.MEMORY_LIMIT_ENV, raising=False)
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 << 40)  # any machine
+    result = _invoke(["sensitivity", "oat", "--signals", "position", "--times", "10000000",
+                      "--out", "OUT"], workdir)
+    assert_refused(result, "--times")
+    assert "GiB of memory, above the limit of 4 GiB" in result.stderr
+    assert "PNEUMACT_MEMORY_LIMIT" in result.stderr and "largest change" not in result.output

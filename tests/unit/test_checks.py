@@ -224,8 +224,34 @@ def test_memory_estimate_refuses_with_the_figure(monkeypatch):
 
     monkeypatch.setattr(memory, "available_memory", lambda: 1 << 30)  # 1 GiB
     memory.check_memory(memory.simulate_bytes(1000, 3, 10), "small")
-    with pytest.raises(ResourceError, match=r"about .* GiB of memory; 1 GiB are available"):
+    with pytest.raises(ResourceError, match=r"about .* GiB of memory, above the limit of "
+                                            r".*; 1 GiB are available"):
         memory.check_memory(memory.simulate_bytes(10**9, 3, 10), "a run of 1e9 points")
+
+
+def test_a_stated_memory_limit_refuses_above_it_and_can_be_raised(monkeypatch, caplog):
+    """Big work says its memory estimate first and is refused above a stated limit
+    (issue 42), whatever the machine has; PNEUMACT_MEMORY_LIMIT raises or lowers it."""
+    import logging
+
+    from pneumact.errors import ResourceError
+    from pneumact.simulation import memory
+
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 << 40)  # 1 TiB free
+    monkeypatch.delenv(memory.MEMORY_LIMIT_ENV, raising=False)
+    three_gib, six_gib = 3 * 1024**3, 6 * 1024**3
+    with caplog.at_level(logging.INFO, logger=memory.ESTIMATES.name):
+        memory.check_memory(three_gib, "oat: 7 runs x 10000000 times")
+    assert "about 3 GiB of memory (limit 4 GiB)" in caplog.text
+    with pytest.raises(ResourceError, match=r"6 GiB of memory, above the limit of 4 GiB "
+                                            r"\(the default; raise it") as refused:
+        memory.check_memory(six_gib, "oat: 14 runs x 10000000 times")
+    assert "PNEUMACT_MEMORY_LIMIT=16GiB" in refused.value.for_cli()
+    monkeypatch.setenv(memory.MEMORY_LIMIT_ENV, "8GiB")
+    memory.check_memory(six_gib, "oat: 14 runs x 10000000 times")  # raised: runs
+    monkeypatch.setenv(memory.MEMORY_LIMIT_ENV, "lots")
+    with pytest.raises(ResourceError, match="PNEUMACT_MEMORY_LIMIT = 'lots'"):
+        memory.check_memory(six_gib, "a run")
 
 
 def test_signal_extremes_see_both_sides_of_a_jump():

@@ -28,7 +28,7 @@ from typing import Annotated
 
 import typer
 
-from pneumact.cli.common import err_console, out_console, print_error
+from pneumact.cli.common import err_console, out_console, print_error, show_estimates
 from pneumact.cli.compare import compare_command
 from pneumact.cli.control import control_app
 from pneumact.cli.export import export_app
@@ -97,6 +97,7 @@ def main(
                                           help="Print the version and exit.")] = False,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
+    show_estimates()
 
 
 app.command()(simulate)

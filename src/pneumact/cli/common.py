@@ -12,6 +12,7 @@ module level: a command pays for what it uses.
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import os
 import warnings
@@ -526,3 +527,22 @@ def refuse_unused(ctx: typer.Context, params: tuple[str, ...] | str, why: str,
     if flags:
         verb = "does" if len(flags) == 1 else "do"
         raise ArgumentError(f"{', '.join(flags)} {verb} nothing {why}; {fix}")
+
+
+
+class _NoteHandler(logging.Handler):
+    """Prints the estimates big work logs before it starts (``pneumact.estimates``:
+    memory, time) as ``note:`` lines on stderr, as they come."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        err_console.print(Text(f"note: {plain_message(record.getMessage())}",
+                               style="yellow"), soft_wrap=True)
+
+
+def show_estimates() -> None:
+    """Let the estimates before big work reach the terminal (once per process)."""
+    logger = logging.getLogger("pneumact.estimates")
+    logger.setLevel(logging.INFO)
+    if not any(isinstance(h, _NoteHandler) for h in logger.handlers):
+        logger.addHandler(_NoteHandler())
+        logger.propagate = False

@@ -29,6 +29,7 @@ from ..progress import raise_if_stopped
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
+from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .simulate import Prepared, failure, prepare
 from .solvers import Rodas4
@@ -163,6 +164,9 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     assembly, kernel = prep.assembly, prep.kernel
     names = assembly.check_parameters(names, "sensitivities")
+    check_memory(simulate_bytes(prep.t_out.size, len(assembly.states), kernel.NOUT,
+                                len(names)),
+                 f"sensitivities to {len(names)} parameters on {prep.t_out.size} output points")
     w_ptr, w_idx, w_val = assembly.directions(prep.vector, names)
     needed = np.zeros(assembly.size, dtype=np.bool_)
     needed[w_idx] = True
