@@ -410,35 +410,44 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         TaskProgressColumn,
         TextColumn,
         TimeElapsedColumn,
-        TimeRemainingColumn,
     )
 
     columns: list[Any] = [SpinnerColumn(), TextColumn("{task.description}"), BarColumn()]
     if counts:
         columns += [MofNCompleteColumn(), TextColumn("failed {task.fields[failed]}"),
                     TextColumn("{task.fields[rate]} sims/s"), TimeElapsedColumn(),
-                    TextColumn("left"), TimeRemainingColumn()]
+                    TextColumn("left {task.fields[left]}")]
     else:
         columns += [TaskProgressColumn(), TimeElapsedColumn()]
     started = time.perf_counter()
     with Progress(*columns, console=err_console, transient=transient) as bar:
-        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-")
+        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-", left="-:--:--")
         tasks: dict[str, Any] = {}
         first: dict[str, float] = {}
+        estimated: set[str] = set()
 
         def update(report: ProgressReport) -> None:
             task = tasks.get(report.stage if bar_per_stage else "")
             if task is None:
                 task = waiting if not tasks else bar.add_task("", total=None, failed=0,
-                                                               rate="-")
+                                                               rate="-", left="-:--:--")
                 tasks[report.stage if bar_per_stage else ""] = task
             first.setdefault(report.stage, report.done)
             elapsed = time.perf_counter() - started
             rate = (report.done - first[report.stage]) / elapsed if elapsed > 0 else 0.0
             shown = (report.stage if not label else label
                      if report.stage in WHOLE_RUN_STAGES else f"{label}: {report.stage}")
+            # the time left at the rate measured in this session (reused chunks and a
+            # burst of finished chunks do not count as speed)
+            left = remaining_time(report.total - report.done, rate)
+            if counts and rate > 0 and report.stage not in estimated:
+                estimated.add(report.stage)
+                logging.getLogger("pneumact.estimates").info(
+                    "%s: %d of %d left; at the first chunk's rate (%.3g sims/s, compiling "
+                    "included) about %s", shown, report.total - report.done, report.total,
+                    rate, left)
             bar.update(task, description=shown, completed=report.done, total=report.total,
-                       failed=report.failed, rate=f"{rate:.0f}")
+                       failed=report.failed, rate=f"{rate:.0f}", left=left)
 
         yield update
 
@@ -546,3 +555,11 @@ def show_estimates() -> None:
     if not any(isinstance(h, _NoteHandler) for h in logger.handlers):
         logger.addHandler(_NoteHandler())
         logger.propagate = False
+
+
+def remaining_time(left: float, rate: float) -> str:
+    """``left`` items at ``rate`` per second as h:mm:ss ("-:--:--" without a rate)."""
+    if not rate > 0 or not math.isfinite(left / rate):
+        return "-:--:--"
+    seconds = round(max(left, 0.0) / rate)
+    return f"{seconds // 3600}:{seconds % 3600 // 60:02d}:{seconds % 60:02d}"
