@@ -94,3 +94,19 @@ def test_ctrl_c_stops_a_batch_and_keeps_its_chunks(tmp_path):
     assert "--resume" in stderr
     kept = partial_folder(tmp_path / "OUT")  # the finished chunks, for --resume
     assert kept.is_dir() and any(p.is_file() for p in kept.rglob("*"))
+
+
+def test_ctrl_c_stops_a_sensitivity_study_and_keeps_its_runs(tmp_path):
+    code, seconds, stderr = _interrupt("batch", [
+        "sensitivity", "sobol", "--n", "4096", "--t-end", "2", "--workers", "2",
+        "--chunk-size", "16", "--out", "STUDY"], tmp_path)
+    _assert_stopped(code, seconds, stderr)
+    kept = partial_folder(tmp_path / "STUDY")  # for --resume
+    assert kept.is_dir() and any(p.is_file() for p in kept.rglob("*"))
+
+
+def test_ctrl_c_stops_a_comparison_of_friction_laws(tmp_path):
+    code, seconds, stderr = _interrupt("compare", [
+        "compare", str(DATA / "record.csv"), "--workers", "2", "--out", "OUT"], tmp_path)
+    _assert_stopped(code, seconds, stderr)
+    assert not (tmp_path / "OUT").exists()
