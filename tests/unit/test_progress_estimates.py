@@ -24,6 +24,9 @@ def test_reused_items_are_not_speed_and_the_first_chunk_gives_an_estimate(caplog
     with caplog.at_level(logging.INFO, logger="pneumact.estimates"), \
             progress_display("batch", counts=True) as update:
         update(Progress("batch", 50_000, 100_000))  # resumed: half reused at once
-        update(Progress("batch", 50_010, 100_000))  # 10 sets computed in 2 s
-    # 10 sets in 2 s: 5 sims/s, 49 990 left: 2.8 h, not the seconds the reused half implies
+        update(Progress("batch", 50_001, 100_000))  # the first chunk (and compiling)
+        update(Progress("batch", 50_006, 100_000))  # a burst of chunks 1 s after it
+        assert not caplog.text  # not a rate yet
+        update(Progress("batch", 50_011, 100_000))  # 10 sets in the 2 s after it
+    # 5 sims/s, 49 989 left: 2.8 h, not the seconds the reused half implies
     assert "about 2:46:38" in caplog.text

@@ -425,6 +425,7 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         tasks: dict[str, Any] = {}
         first: dict[str, float] = {}
         estimated: set[str] = set()
+        first_chunk: dict[str, tuple[float, float]] = {}
 
         def update(report: ProgressReport) -> None:
             task = tasks.get(report.stage if bar_per_stage else "")
@@ -433,19 +434,26 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
                                                                rate="-", left="-:--:--")
                 tasks[report.stage if bar_per_stage else ""] = task
             first.setdefault(report.stage, report.done)
-            elapsed = time.perf_counter() - started
+            now = time.perf_counter()
+            elapsed = now - started
             rate = (report.done - first[report.stage]) / elapsed if elapsed > 0 else 0.0
+            # the steady rate: from the first finished chunk on (compiling excluded)
+            if report.stage not in first_chunk and report.done > first[report.stage]:
+                first_chunk[report.stage] = (now, report.done)
+            since, done_then = first_chunk.get(report.stage, (now, report.done))
+            steady = ((report.done - done_then) / (now - since)
+                      if now - since >= STEADY_WINDOW_S else 0.0)
             shown = (report.stage if not label else label
                      if report.stage in WHOLE_RUN_STAGES else f"{label}: {report.stage}")
             # the time left at the rate measured in this session (reused chunks and a
             # burst of finished chunks do not count as speed)
-            left = remaining_time(report.total - report.done, rate)
-            if counts and rate > 0 and report.stage not in estimated:
+            left = remaining_time(report.total - report.done, steady if steady > 0 else rate)
+            if counts and steady > 0 and report.stage not in estimated:
                 estimated.add(report.stage)
                 logging.getLogger("pneumact.estimates").info(
-                    "%s: %d of %d left; at the first chunk's rate (%.3g sims/s, compiling "
-                    "included) about %s", shown, report.total - report.done, report.total,
-                    rate, left)
+                    "%s: %d of %d left; at the rate after the first chunk (%.3g sims/s) "
+                    "about %s", shown, report.total - report.done, report.total, steady,
+                    left)
             bar.update(task, description=shown, completed=report.done, total=report.total,
                        failed=report.failed, rate=f"{rate:.0f}", left=left)
 
@@ -555,6 +563,11 @@ def show_estimates() -> None:
     if not any(isinstance(h, _NoteHandler) for h in logger.handlers):
         logger.addHandler(_NoteHandler())
         logger.propagate = False
+
+
+#: seconds after the first finished chunk before its rate counts (the threads' first
+#: chunks finish together: a burst, not a rate)
+STEADY_WINDOW_S = 2.0
 
 
 def remaining_time(left: float, rate: float) -> str:
