@@ -216,7 +216,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "bare_number.toml", "unknown_unit.toml", "not_toml.toml", "negative_volume.toml",
         "missing.toml", "params.json")] + [str(BAD)],  # a folder where a file is expected
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
-    "identify paper": [str(BAD / "kpa_as_pa.csv")],
+    "identify paper": [str(BAD / "kpa_as_pa.csv"), str(BAD / "position_in_percent.csv")],
     "identify signature": [str(BAD / "kpa_as_pa.csv")],
     "identify friction": [str(BAD / "missing.csv"), str(BAD / "no_motion.csv")],
     "sensitivity": ["sobbol"],
@@ -522,7 +522,10 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("validate(a record twice)", lambda: pa.validate(actuator, [record, record])),
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
-          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv")],
+          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv",
+                             "position_in_percent.csv")],
+        ("identify_paper(positions in %)", lambda: pa.identify_paper(
+            [pa.read_record(BAD / "position_in_percent.csv")], vgt)),
         ("inverse_friction(no motion)", lambda: inverse_friction(
             pa.read_record(BAD / "no_motion.csv"))),
         ("command record of 5", lambda: pa.read_record(BAD / "command_five.csv")),
@@ -768,3 +771,13 @@ def test_a_study_beyond_the_memory_limit_is_refused_before_any_run(workdir, monk
     assert_refused(result, "--times")
     assert "GiB of memory, above the limit of 4 GiB" in result.stderr
     assert "PNEUMACT_MEMORY_LIMIT" in result.stderr and "largest change" not in result.output
+
+
+def test_identify_paper_refuses_positions_beyond_the_stroke_as_validate_does(workdir):
+    """Positions in % labelled [mm] (54 'mm' on a 20 mm stroke; issue 42, finding 6):
+    the unit named, not "0 of 8 identified"."""
+    for command in (["identify", "paper"], ["validate"]):
+        result = _invoke([*command, str(BAD / "position_in_percent.csv"), "--out", "OUT"],
+                         workdir)
+        assert_refused(result, "position_in_percent.csv")
+        assert "position spans" in result.stderr and "position unit" in result.stderr
