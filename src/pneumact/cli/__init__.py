@@ -24,7 +24,8 @@ a successful run, atomically, and together. A user's mistake prints one red line
 
 from __future__ import annotations
 
-from typing import Annotated
+from collections.abc import Sequence
+from typing import Annotated, Any, cast
 
 import typer
 
@@ -48,27 +49,31 @@ class OneErrorPrefix(typer.core.TyperGroup):
     one ``error:`` line, as every command's own refusals do, instead of a box titled
     "Error"; everything else as typer does it."""
 
-    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
-             **extra):
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True,
+             windows_expand_args: bool = True, **extra: Any) -> Any:
         import sys
 
         # click's exception base as typer uses it (typer may vendor its own click)
-        click_exception = next(c for c in typer.BadParameter.__mro__
-                               if c.__name__ == "ClickException")
+        click_exception = cast("type[Exception]", next(
+            c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException"))
         if not standalone_mode:
-            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+            return super().main(args, prog_name, complete_var, standalone_mode,
+                                windows_expand_args, **extra)
         try:
-            code = super().main(args, prog_name, complete_var, False, **extra)
+            code = super().main(args, prog_name, complete_var, False, windows_expand_args,
+                                **extra)
         except click_exception as exc:
+            exit_code = int(getattr(exc, "exit_code", 2))
             if type(exc).__name__ == "NoArgsIsHelpError":  # the help is already shown
-                sys.exit(exc.exit_code)
+                sys.exit(exit_code)
             context = getattr(exc, "ctx", None)
             if context is not None:
                 err_console.print(context.get_usage(), markup=False, highlight=False)
                 err_console.print(f"Try '{context.command_path} --help' for help.",
                                   markup=False, highlight=False)
-            print_error(exc.format_message())
-            sys.exit(exc.exit_code)
+            print_error(getattr(exc, "format_message", exc.__str__)())
+            sys.exit(exit_code)
         except typer.Abort:
             print_error("aborted")
             sys.exit(1)
