@@ -448,12 +448,12 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
             # the time left at the rate measured in this session (reused chunks and a
             # burst of finished chunks do not count as speed)
             left = remaining_time(report.total - report.done, steady if steady > 0 else rate)
-            if counts and steady > 0 and report.stage not in estimated:
+            if (steady > 0 and report.total > 1 and report.done < report.total
+                    and report.stage not in estimated):  # sets, starts, points: not runs
                 estimated.add(report.stage)
                 logging.getLogger("pneumact.estimates").info(
-                    "%s: %d of %d left; at the rate after the first chunk (%.3g sims/s) "
-                    "about %s", shown, report.total - report.done, report.total, steady,
-                    left)
+                    "%s: %d of %d left; at the rate after the first (%.3g/s) about %s",
+                    shown, report.total - report.done, report.total, steady, left)
             bar.update(task, description=shown, completed=report.done, total=report.total,
                        failed=report.failed, rate=f"{rate:.0f}", left=left)
 
