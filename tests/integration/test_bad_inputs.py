@@ -523,7 +523,7 @@ def _api_cases(vgt, actuator, record, folder: Path):
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
           and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv",
-                             "position_in_percent.csv")],
+                             "position_in_percent.csv", "saturated_position.csv")],
         ("identify_paper(positions in %)", lambda: pa.identify_paper(
             [pa.read_record(BAD / "position_in_percent.csv")], vgt)),
         ("inverse_friction(no motion)", lambda: inverse_friction(
@@ -781,3 +781,14 @@ def test_identify_paper_refuses_positions_beyond_the_stroke_as_validate_does(wor
                          workdir)
         assert_refused(result, "position_in_percent.csv")
         assert "position spans" in result.stderr and "position unit" in result.stderr
+
+
+@pytest.mark.parametrize("command", [["fit", "--free", "Fc"], ["validate"]])
+def test_a_saturated_position_sensor_is_named(workdir, command):
+    """A position clipped at 6 mm while the pressure goes on (issue 42, finding 6): the
+    run names the saturated sensor, whatever it concludes."""
+    result = _invoke([command[0], str(BAD / "saturated_position.csv"), *command[1:],
+                      "--out", "OUT"], workdir)
+    assert "saturated position sensor" in result.stderr, result.output
+    assert "from t = 0.65 to 1.35 s" in result.stderr
+    assert "Traceback" not in result.output
