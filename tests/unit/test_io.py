@@ -503,3 +503,14 @@ def test_a_clipped_position_is_a_saturated_sensor_a_stick_at_the_turn_is_not():
     stuck = Record.from_arrays(t, {"pressure": pressure, "position": stick}, source="s")
     assert int(np.sum(stick == stick.max())) >= 30  # a long hold at the top
     assert stuck.saturation() is None
+
+
+def test_a_hold_on_the_end_stop_is_not_a_saturated_sensor():
+    from pneumact.io.records import Record
+
+    t = np.linspace(0.0, 2.0, 201)
+    pressure = 1e5 - 6e4 * (1.0 - np.abs(t - 1.0))
+    on_stop = np.minimum(0.011 * (1.0 - np.abs(t - 1.0)), 0.006)  # a 6 mm stroke's stop
+    record = Record.from_arrays(t, {"pressure": pressure, "position": on_stop}, source="s")
+    assert record.saturation() is not None  # without the stroke: looks clipped
+    assert record.saturation(x_max=0.006) is None

@@ -160,7 +160,7 @@ class Record(ResultVocabulary):
         a unit mistake (mm read as m) or another actuator's record."""
         if "position" not in self.signals:
             return
-        self.warn_if_saturated()
+        self.warn_if_saturated(x_max)
         x = self.signals["position"]
         low, high = float(np.min(x)), float(np.max(x))
         margin = 0.5 * x_max
@@ -170,17 +170,20 @@ class Record(ResultVocabulary):
                 f"which {use} compares with an actuator of stroke 0 to {x_max * 1e3:g} mm; "
                 "check the position unit in the header (e.g. 'position [mm]')")
 
-    def saturation(self) -> str | None:
+    def saturation(self, x_max: float | None = None) -> str | None:
         """Why the position looks clipped by a saturated sensor, or None: it holds
         exactly its highest value over a stretch (at least 10 samples and 5 % of the
         record) during which the input goes on beyond where the stretch began and comes
         back (by a tenth of its range each way): the actuator moved on, the sensor did
-        not. A stick at the input's turning point holds from the turn on, not across it."""
+        not. A stick at the input's turning point holds from the turn on, not across it;
+        a hold at the end of the stroke ``x_max`` (its stop) is the actuator's own."""
         drive = next((s for s in ("pressure", "setpoint", "command") if s in self.signals),
                      None)
         if "position" not in self.signals or drive is None:
             return None
         x, u = self.signals["position"], self.signals[drive]
+        if x_max is not None and x.max() >= x_max * (1.0 - 1e-3):
+            return None  # on the stop
         held = np.flatnonzero(np.diff(np.concatenate([[0], (x == x.max()).astype(np.int8),
                                                       [0]])))
         if held.size < 2:
@@ -202,13 +205,13 @@ class Record(ResultVocabulary):
                         "record, or give the sensor more range)")
         return None
 
-    def warn_if_saturated(self) -> None:
+    def warn_if_saturated(self, x_max: float | None = None) -> None:
         """A ``PlausibilityWarning`` naming a saturated position sensor (``saturation``)."""
         import warnings
 
         from pneumact.errors import PlausibilityWarning
 
-        reason = self.saturation()
+        reason = self.saturation(x_max)
         if reason is not None:
             warnings.warn(reason, PlausibilityWarning, stacklevel=2)
 
