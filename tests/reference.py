@@ -557,5 +557,6 @@ STAGED_LAG = 3e-3
 # ------------------------------------------------------------------------------ Ctrl-C
 # seconds from SIGINT to the process's exit: the 2 s, plus 1 s for the interpreter's
 # own exit on a loaded machine (fit --multistart 2000 measured 1.5 s with 4 jobs on 2 cores;
-# before the stop flag, all 2000 starts ran first: > 20 s, 267 s measured)
+# before the stop flag every start ran first: still running 20 s after Ctrl-C; the
+# study and comparison tests took 115 s and 10+ s)
 INTERRUPT_EXIT_S = 3.0
