@@ -560,3 +560,56 @@ STAGED_LAG = 3e-3
 # before the stop flag every start ran first: still running 20 s after Ctrl-C; the
 # study and comparison tests took 115 s and 10+ s)
 INTERRUPT_EXIT_S = 3.0
+# Issue #40, Fig. 5a read as written: the loop change (share of the loop's width) on the
+# 20 s command cycle at σ0 × factor (the referee's hand numbers), its tolerance, and the
+# range of the stiffer factors ×2 … ×10 (1.8–3.4 % measured).
+SIGMA0_LOOP_CHANGE_COMMAND_20S = {0.1: 0.170, 0.2: 0.101, 0.5: 0.032}
+LOOP_CHANGE_ATOL = 0.005
+SIGMA0_STIFFER_CHANGE = (0.012, 0.04)
+
+# Issue #40, the pneumatic half of vgt-paper (hand values): Φ* and r_c to 4 digits, the
+# chamber at the top of the 20 s command stroke (17.7 mm: V = 8.3 cm³) and at x_max
+# (1.55 cm³), natural frequencies free (sqrt(k/m)) and stuck (sqrt((k + σ0)/m)).
+CHOKED_PHI_4_DIGITS = 0.5787
+CRITICAL_RATIO_4_DIGITS = 0.5283
+COMMAND_STROKE_TOP = 0.0177  # m
+TIME_CONSTANT_RATIO_ALONG_STROKE = 7.2  # τ(0)/τ(17.7 mm) = 60/8.3 cm³
+VOLUME_AT_X_MAX = 1.55e-6  # m³
+FREE_FREQUENCY_HZ = 22.7
+STUCK_FREQUENCY_HZ = 67.4
+HAND_VALUE_RTOL = 3e-3  # hand values quoted to 3 significant digits
+EXPONENTIAL_DECAY_RTOL = 5e-3  # held chamber against p_atm·exp(−t/τ): integrator + grid
+
+# --- the bench in the model (issue 38, item 1) -----------------------------------------------
+#: the drawn actuator of the bench-fault tests (index into the family's draw)
+BENCH_ACTUATOR = 0
+#: a pressure-sensor offset [Pa], a position resolution [m] and
+#: a regulator whose valve time constant is this many times the model's
+BENCH_PRESSURE_OFFSET = 1000.0
+BENCH_RESOLUTION = 10e-6
+BENCH_REGULATOR_SLOWER = 4.0
+#: a named fault's size within this of the one put in
+BENCH_SIZE_RTOL = 0.05
+#: intervals of one run that may miss the truth (see the test)
+BENCH_MAX_MISSES = 1
+#: the sensor-model unit tests: a lag [s], the exactness of the filter on a ramp [m] and
+#: of its τ-derivative against central differences (relative)
+SENSOR_TEST_LAG = 4e-3
+SENSOR_LAG_ATOL = 1e-12
+SENSOR_DERIVATIVE_RTOL = 1e-5
+#: the lag [s] a fit frees, and the largest RMS residual of the fitted position against
+#: the position noise (the model seen through the lag fits to the noise)
+SENSOR_FIT_LAG = 5e-3
+MISFIT_NOISE_RATIO = 1.5
+#: draws of the quantisation's phase in its known-answer test, and the tolerance on the
+#: variance (its sampling error over that many draws is √(2/draws) ≈ 3 %)
+QUANTISATION_TEST_DRAWS = 2000
+QUANTISATION_TEST_RTOL = 0.12
+# --------------------------------------------------------------------------- figures
+MAX_FIGURE_WIDTH_PX = 3000  # a written PNG: a report page shows it scaled, not scrolled
+MIN_PANEL_WIDTH_PX = 300  # each panel of a multi-record figure: readable in the report
+MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact campaign`)
+#: stage (c)'s restarts: a Stribeck velocity [m/s] and a prior that guesses it this many
+#: times it (a hundred times too low)
+STRIBECK_RESTART_VS = 5e-5
+STRIBECK_RESTART_PRIOR_FACTOR = 0.01

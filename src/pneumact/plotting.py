@@ -27,12 +27,17 @@ if TYPE_CHECKING:
 __all__ = [
     "DISPLAY_UNITS",
     "FRICTION_TEST_KINDS",
+    "MAX_PANEL_COLUMNS",
+    "SMALL_LENGTH",
     "figure_writer",
+    "label_log_axis",
+    "panel_grid",
     "plot_friction_test",
     "plot_hysteresis",
     "plot_measured_and_model",
     "plot_time_series",
     "save_figure",
+    "shown_unit",
 ]
 
 #: SI unit -> (display unit, factor applied to SI values).
@@ -44,6 +49,21 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "s": ("s", 1.0),
     "1": ("1", 1.0),
 }
+#: lengths [m] all below this are shown in µm (a residual of 3 µm, not 0.003 mm)
+SMALL_LENGTH = 1e-4
+_SMALL: dict[str, tuple[str, float]] = {"m": ("µm", 1e6), "m/s": ("µm/s", 1e6)}
+
+
+def shown_unit(si: str, values: Any = ()) -> tuple[str, float]:
+    """(display unit, factor from SI) of a simple SI unit (``DISPLAY_UNITS``); lengths
+    whose magnitudes are all below ``SMALL_LENGTH`` in µm. Unknown units as they are."""
+    finite = np.abs(np.asarray(values, dtype=float).ravel())
+    finite = finite[np.isfinite(finite) & (finite > 0)]
+    if si in _SMALL and finite.size and finite.max() < SMALL_LENGTH:
+        return _SMALL[si]
+    return DISPLAY_UNITS.get(si, (si, 1.0))
+
+
 #: Signals shown in finer units than their SI unit suggests.
 _SIGNAL_DISPLAY: dict[str, tuple[str, float]] = {
     "bristle": ("µm", 1e6),
@@ -52,6 +72,10 @@ _DEFAULT_SIGNALS = ("pressure", "position", "velocity", "friction")
 FRICTION_TEST_KINDS = ("steady-state", "presliding", "frictional-lag", "break-away",
                        "stick-slip")
 PNG_DPI = 120
+#: at most this many panels side by side: more records wrap into rows (a taller figure),
+#: so that every panel stays readable (≈ 500 px wide at PNG_DPI) and a figure of any
+#: number of records stays under ≈ 2 300 px wide
+MAX_PANEL_COLUMNS = 4
 
 
 # --------------------------------------------------------------------------- access
@@ -127,6 +151,42 @@ def new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
     fig, axes = plt.subplots(nrows, 1, sharex=sharex, squeeze=False,
                              figsize=(7.0, max(height, 2.2 * nrows)))
     return fig, list(axes[:, 0])
+
+
+def panel_grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.4,
+               columns: int = MAX_PANEL_COLUMNS):
+    """A figure for ``n`` panels (a panel: ``rows_per`` axes stacked, e.g. a signal and
+    its residual), at most ``columns`` side by side, wrapping into rows; ``width`` and
+    ``height`` [in] of one axes. Returns (figure, panels): ``panels[i]`` the list of the
+    i-th panel's axes, top first; the grid's unused axes are hidden."""
+    import matplotlib.pyplot as plt
+
+    n = max(1, int(n))
+    cols = max(1, min(n, columns))
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows * rows_per, cols, squeeze=False,
+                             figsize=(width * cols, height * rows_per * rows))
+    panels = [[axes[(i // cols) * rows_per + j, i % cols] for j in range(rows_per)]
+              for i in range(n)]
+    for i in range(n, rows * cols):
+        for j in range(rows_per):
+            axes[(i // cols) * rows_per + j, i % cols].set_visible(False)
+    return fig, panels
+
+
+def label_log_axis(ax: Axes, axis: str = "x") -> None:
+    """Label a log axis with real numbers at 1, 2 and 5 of each decade (``%g``): a span
+    of less than a decade otherwise shows one label ("1") or none."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    target = ax.xaxis if axis == "x" else ax.yaxis
+    low, high = sorted(ax.get_xlim() if axis == "x" else ax.get_ylim())
+    decades = np.log10(high / low) if low > 0 else np.inf
+    subs = (1.0,) if decades > 4 else (1.0, 2.0, 5.0) if decades > 1.2 else \
+        (1.0, 2.0, 3.0, 5.0, 7.0)
+    target.set_major_locator(LogLocator(base=10.0, subs=subs))
+    target.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    target.set_minor_formatter(NullFormatter())
 
 
 # --------------------------------------------------------------------------- plots
@@ -309,33 +369,36 @@ def save_figure(fig: Figure | Axes, path: str | os.PathLike[str]) -> os.PathLike
 def plot_measured_and_model(entries: Sequence[tuple], signals: Sequence[str],
                             model_label: str = "model",
                             window: tuple[float, float] | None = None) -> Figure:
-    """Per record (a column) and signal: measured and model against time, with the
-    residual (measured − model) below, in display units. ``entries``: (title, time,
-    measured, model, units), ``measured``/``model`` mapping each signal to values on
-    ``time``, ``units`` each signal to its SI unit; ``window`` shades a time span."""
-    import matplotlib.pyplot as plt
-
-    n, k = len(entries), len(signals)
-    fig, axes = plt.subplots(2 * k, n, squeeze=False, sharex="col",
-                             figsize=(4.6 * n, 2.3 * 2 * k))
+    """Per record (a panel of the grid, ``panel_grid``) and signal: measured and model
+    against time, with the residual (measured − model) below, in display units.
+    ``entries``: (title, time, measured, model, units), ``measured``/``model`` mapping each
+    signal to values on ``time``, ``units`` each signal to its SI unit; ``window`` shades a
+    time span."""
+    k = len(signals)
+    fig, panels = panel_grid(len(entries), rows_per=2 * k, width=4.6, height=2.3)
     for i, (title, time, measured, model, units) in enumerate(entries):
+        axes = panels[i]
+        for a in axes[1:]:
+            a.sharex(axes[0])
         for j, s in enumerate(signals):
             unit, factor = DISPLAY_UNITS.get(units.get(s, ""), ("", 1.0))
-            ax, axr = axes[2 * j, i], axes[2 * j + 1, i]
+            residual = measured[s] - model[s]
+            unit_r, factor_r = shown_unit(units.get(s, ""), residual)
+            ax, axr = axes[2 * j], axes[2 * j + 1]
             ax.plot(time, measured[s] * factor, "k.", ms=1.5, label="measured")
             ax.plot(time, model[s] * factor, "C0-", lw=1, label=model_label)
-            axr.plot(time, (measured[s] - model[s]) * factor, "C3-", lw=0.8)
+            axr.plot(time, residual * factor_r, "C3-", lw=0.8)
             if window is not None:
                 for a in (ax, axr):
                     a.axvspan(max(window[0], time[0]), min(window[1], time[-1]), color="C2",
                               alpha=0.08, label="fitted window" if a is ax else None)
             ax.set_ylabel(f"{s} [{unit}]")
-            axr.set_ylabel(f"measured − model [{unit}]")
+            axr.set_ylabel(f"measured − model [{unit_r}]")
             ax.set_title(title, fontsize=9)
             for a in (ax, axr):
                 a.grid(True, alpha=0.3)
-        axes[-1, i].set_xlabel("time [s]")
-    axes[0, 0].legend(fontsize=8)
+        axes[-1].set_xlabel("time [s]")
+    panels[0][0].legend(fontsize=8)
     fig.tight_layout()
     return fig
 

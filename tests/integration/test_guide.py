@@ -42,3 +42,6 @@ def test_the_features_page_runs(tmp_path, monkeypatch, capsys):
     printed = capsys.readouterr().out
     assert "320 s cycle: v = 0.56·vs" in printed  # the numbers the page quotes
     assert "+0.7% on 2·Fc/A_d" in printed and "+11.8% on 2·Fc/A_d" in printed
+    # a user's statement: σ0 ×0.1 moves the loop visibly under the applied pressure
+    assert (namespace["verdicts"]["verdict"] == "holds").all()
+    assert "all of v/vs 0.23–3.6 studied" in printed

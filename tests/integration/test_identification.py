@@ -269,6 +269,7 @@ def test_cli_campaign_plan_simulate_identify_and_fit(tmp_path, monkeypatch):
                                  "--offsets", "position", "--out", "fit"])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "fit" / "fit.png").exists()
+    assert "RMS" in result.output and " µm" in result.output  # not 1e-06 m (issue #42)
 
 
 def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,

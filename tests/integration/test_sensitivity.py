@@ -203,3 +203,24 @@ def test_cli_sensitivity_across_conditions(tmp_path, monkeypatch):
         assert result.exit_code == EXIT_USER_ERROR, (bad, result.output)
         assert message in result.output, (bad, result.output)
         assert not (tmp_path / "bad").exists()
+
+
+def test_zoomed_figures_keep_coinciding_curves_flat_and_show_the_loop_width(vgt):
+    """Issue #40, item 6: Fig. 3's sliding-level zoom spans at least 10 % of the friction
+    level (σ0's curves coincide there: no 1e-4 N axis), and Fig. 5 has a mid-stroke zoom
+    whose position axis is a few loop widths, not the 17.7 mm stroke."""
+    import matplotlib
+
+    from pneumact.sensitivity import friction_velocity
+
+    matplotlib.use("Agg")
+    curves = friction_velocity(vgt, {"sigma0": 0.5}, amplitude=10 * vgt["vs"])
+    fastest = curves.plot(zoom=True).axes[2]
+    low, high = fastest.get_ylim()
+    assert high - low >= 0.1 * vgt["Fc"]
+    model = pa.Actuator(vgt, valve=pa.CommandValve())
+    study = one_at_a_time(model, pa.CommandCycle(period=20.0), {"sigma0": 0.5})
+    panels = {ax.get_title(): ax for ax in study.plot_loops(zoom=True).axes}
+    low, high = panels["sigma0: mid-stroke"].get_ylim()
+    width = 1e3 * study.runs["loop_width_position"].iloc[0]  # mm
+    assert width < high - low < 8 * width

@@ -374,7 +374,17 @@ def test_a_result_speaks_the_vocabulary(name, tmp_path, tmp_path_factory):
     assert (tmp_path / "out" / "report.html") in written
     assert all(path.is_file() for path in written)
     assert "<html" in (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
+    assert_shows_itself_in_a_notebook(name, result)
     plt.close("all")
+
+
+def assert_shows_itself_in_a_notebook(name: str, result) -> None:
+    """``_repr_html_`` (issue #42): a title, the summary table in display units and,
+    where drawing it is cheap, the figure inline."""
+    shown = result._repr_html_()
+    assert isinstance(shown, str) and "<table" in shown, name
+    if type(result).inline_figure:
+        assert "data:image/png;base64," in shown and "(no figure" not in shown, name
 
 
 def test_a_failed_write_keeps_the_previous_results(tmp_path):
@@ -398,3 +408,23 @@ def test_to_pandas_names_its_tables_and_refuses_others():
     assert list(fit.to_pandas("correlation").columns) == ["Fc", "k"]
     with pytest.raises(pa.ArgumentError, match="allowed: estimates, statistics"):
         fit.to_pandas("nonsense")
+
+
+def test_a_record_and_sensitivities_are_short_and_labelled():
+    record = _record("bench/sweep.csv")
+    assert repr(record) == ("Record('sweep', 41 samples over 0..2 s, signals: "
+                            "pressure [Pa], position [m])")
+    sens = _sensitivities()
+    frame = sens.to_pandas("position")
+    assert list(frame.columns) == ["Fc"] and frame.index.name == "time"
+    np.testing.assert_array_equal(frame.to_numpy(), sens["position"])
+    assert frame.attrs["units"] == {"Fc": "m/(N)"}
+
+
+def test_train_test_reports_its_metrics_with_units_in_the_headers(tmp_path):
+    _train_test().write(tmp_path / "tt")
+    import io
+
+    html = (tmp_path / "tt" / "report.html").read_text(encoding="utf-8")
+    headers = {str(c) for t in pd.read_html(io.StringIO(html)) for c in t.columns}
+    assert "rms" not in headers and ({"rms [µm]", "rms [mm]"} & headers), headers

@@ -209,3 +209,48 @@ def test_identification_runs_blas_on_one_thread_and_restores_it():
             outer()
         assert seen and all(n == 1 for values in seen for n in values), seen
         assert blas_threads() == original
+
+
+def test_stage_c_starts_again_when_the_prior_sends_vs_astray():
+    """A Stribeck dip at vs = 0.05 mm/s and a prior that guesses 0.5 µm/s: from the prior's
+    vs alone the fit of eq. 12 stops at 1-2 % of the true vs; with spread starts it
+    finds the dip (issue 38, item 5)."""
+    import pandas as pd
+
+    from pneumact.identification.stages import sliding_and_stribeck
+
+    drawn = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    truth = drawn.replace(vs=ref.STRIBECK_RESTART_VS, Fs=1.8 * drawn["Fc"])
+    fc, fs, vs, s2, delta = (truth[n] for n in ("Fc", "Fs", "vs", "sigma2", "delta"))
+    rng = np.random.default_rng(0)
+    rows = []
+    for sign in (1.0, -1.0):
+        for v in np.geomspace(vs / 5, 400 * vs, 30):
+            friction = sign * (fc + (fs - fc) * np.exp(-((v / vs) ** delta))) + s2 * sign * v
+            rows.append({"record": "ramp", "t_start": 0.0, "t_end": 1.0,
+                         "velocity": sign * v, "samples": 100,
+                         "position": rng.uniform(2e-3, 8e-3),
+                         "friction": friction + rng.normal(0, 1e-3 * fc)})
+    prior = truth.replace(vs=vs * ref.STRIBECK_RESTART_PRIOR_FACTOR)
+    sliding, stribeck, notes = sliding_and_stribeck(pd.DataFrame(rows), prior)
+    assert stribeck is not None and not stribeck.extra["at_bound"], notes
+    assert stribeck.estimates["vs"] == pytest.approx(vs, rel=0.05)
+    assert sliding is not None and sliding.estimates["Fc"] == pytest.approx(fc, rel=0.01)
+
+
+def test_the_presliding_window_starts_after_a_stick_slipping_approach():
+    """An approach in slides of 2, 1.5, 1 and 0.5 mm (the first the longest), a hold, then
+    steps of a few µm: the window starts after the last slide, not the longest."""
+    from pneumact.identification.stages import presliding_window
+
+    params = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    time = np.arange(0.0, 3.0, 1e-3)
+    slides = [(0.1, 0.3, 2e-3), (0.5, 0.6, 1.5e-3), (0.75, 0.8, 1e-3), (0.9, 0.92, 0.5e-3)]
+    x = np.zeros_like(time)
+    for t0, t1, size in slides:
+        x += size * np.clip((time - t0) / (t1 - t0), 0.0, 1.0)
+    x += 3e-6 * (np.floor(np.clip(time - 1.5, 0.0, None) / 0.3) % 2)  # presliding steps
+    x += np.random.default_rng(0).normal(0.0, 1e-7, x.size)
+    record = Record.from_arrays(time, {"position": x, "pressure": np.full(x.size, 9e4)},
+                                source="presliding")
+    assert presliding_window(record, params) > slides[-1][1]

@@ -194,3 +194,18 @@ def test_conditions_refuse_impossible_cycles():
         with pytest.raises(ParameterError, match=message):
             Condition(**kwargs)
     assert Condition(80.0, 0.5, "source").label == "source, 80 s, amplitude 0.5"
+
+
+def test_src_intervals_are_nil_for_an_exact_line_and_cover_the_noise_otherwise():
+    """Issue #40: SRC² carries a bootstrap 95 % half-width. On an exact line every
+    resample gives the same SRC²; with noise equal in variance to the signal of a weak
+    input, its interval covers zero while the strong input's stays clear of it."""
+    problem = Problem((Factor("strong", 0, 1, 0.5), Factor("weak", 0, 1, 0.5)))
+    exact = src(problem, lambda x: pd.DataFrame({"y": x @ [2.0, 0.0]}), n=200)
+    assert exact.to_pandas(output="y")["SRC2_conf"].max() < 1e-9
+    rng = np.random.default_rng(3)
+    noisy = src(problem, lambda x: pd.DataFrame(
+        {"y": x @ [2.0, 0.02] + 0.3 * rng.standard_normal(len(x))}), n=200)
+    table = noisy.to_pandas(output="y")
+    assert table.loc["weak", "SRC2"] < table.loc["weak", "SRC2_conf"]
+    assert table.loc["strong", "SRC2"] - table.loc["strong", "SRC2_conf"] > 0.5

@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from typing import Annotated, Any, cast
 
 import typer
+from typer.core import TyperGroup, TyperOption
 
 from pneumact.cli.common import err_console, out_console, print_error, show_estimates
 from pneumact.cli.compare import compare_command
@@ -44,7 +45,40 @@ from pneumact.cli.validate import validate_command
 from pneumact.version import __version__
 
 
-class OneErrorPrefix(typer.core.TyperGroup):
+class _Commands(TyperGroup):
+    """The command group: a mistyped command is answered with the commands whose name
+    holds it as a word too (``batch`` -> ``simulate-batch``), beside typer's close
+    matches."""
+
+    def resolve_command(self, ctx, args):
+        try:
+            return super().resolve_command(ctx, args)
+        except Exception as error:  # typer's own click's UsageError (not click's)
+            typo = args[0] if args else ""
+            words = [name for name in self.commands
+                     if typo and typo != name and typo in name.split("-")]
+            message = getattr(error, "message", None)
+            if words and isinstance(message, str) and "Did you mean" not in message:
+                error.message = (  # type: ignore[attr-defined]
+                    f"{message.rstrip('.')}. Did you mean "
+                    f"{', '.join(repr(name) for name in words)}?")
+            raise
+
+
+def _flags_show_no_type(show_type):
+    """A flag takes no value: typer's help shows bool flags as ``<bool>``; show none."""
+
+    def display_type_rich(self, ctx):
+        return None if getattr(self, "is_flag", False) else show_type(self, ctx)
+
+    return display_type_rich
+
+
+TyperOption.display_type_rich = _flags_show_no_type(  # type: ignore[method-assign]
+    TyperOption.display_type_rich)
+
+
+class OneErrorPrefix(_Commands):
     """The root command: the parser's usage errors (a mistyped option or value) end in
     one ``error:`` line, as every command's own refusals do, instead of a box titled
     "Error"; everything else as typer does it."""
@@ -90,6 +124,11 @@ app = typer.Typer(
 )
 
 
+#: said before the first compilation the disk cache cannot spare (a cold start)
+COMPILING = ("compiling the model (once on this machine, about a minute; later runs load "
+             "it in seconds)")
+
+
 def _version(value: bool) -> None:
     if value:
         out_console.print(f"pneumact {__version__}")
@@ -102,7 +141,10 @@ def main(
                                           help="Print the version and exit.")] = False,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
+    from pneumact.core.compile_lock import on_first_compile
+
     show_estimates()
+    on_first_compile(lambda: err_console.print(COMPILING, style="yellow"))
 
 
 app.command()(simulate)

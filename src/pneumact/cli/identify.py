@@ -90,19 +90,35 @@ def _write_breakpoints(designed: CampaignPlan, test: str, path: Path) -> None:
 
 
 def _plan_table(plan) -> Table:
+    """The plan as a technician reads it, whole in 80 columns: every header with its
+    unit (two lines), no vertical rules, names never cut."""
+    from rich import box
+    from rich.markup import escape
+
     frame = plan.to_pandas()
     table = Table(title=f"bench plan for {plan.prior.name} (prior within ±"
-                        f"{100 * plan.spread:.0f} %)")
-    columns = {"kind": "kind", "valve": "driven by", "lowest [kPa abs]": "lowest kPa",
-               "ramp rate [kPa/s]": "kPa/s", "expected speed [mm/s]": "mm/s",
-               "duration [s]": "s", "sample rate [Hz]": "Hz"}
-    table.add_column("test")
-    for label in columns.values():
-        table.add_column(label, justify="right")
+                        f"{100 * plan.spread:.0f} %; pressures absolute)",
+                  box=box.SIMPLE_HEAD, pad_edge=False)
+    # the kind is the test's name (sweep, ramp_..., presliding): in plan.csv, not here
+    columns = {"valve": "driven by", "lowest [kPa abs]": "lowest\n[kPa]",
+               "ramp rate [kPa/s]": "rate\n[kPa/s]",
+               "expected speed [mm/s]": "speed\n[mm/s]", "duration [s]": "duration\n[s]",
+               "sample rate [Hz]": "sampling\n[Hz]"}
+    table.add_column("test", no_wrap=True)
+    for column, label in columns.items():
+        table.add_column(escape(label), justify="left" if column == "valve" else "right",
+                         no_wrap=True)
     for name, row in frame.iterrows():
-        table.add_row(str(name), *(fmt(row[c], 3) if isinstance(row[c], float) else
-                                   str(row[c]) for c in columns))
+        table.add_row(str(name), *(_plan_cell(row[c]) for c in columns))
     return table
+
+
+def _plan_cell(value) -> str:
+    if not isinstance(value, float):
+        return str(value)
+    if value != value:  # NaN: not set for this test
+        return "–"
+    return f"{value:.0f}" if value >= 100 else fmt(value, 3)
 
 
 def campaign(
@@ -521,9 +537,12 @@ def fit_command(
         writers = result.writers(the_call(ctx))
         written = write_outputs(out, writers)
         out_console.print(_estimates_table("fitted parameters", result.to_pandas()))
+        from pneumact.io.display import display_value
+
         for _, row in result.statistics.iterrows():
+            rms, unit = display_value(row["rms"], row["unit"])
             out_console.print(f"{Path(row['record']).name} {row['signal']}: fit "
-                              f"{row['fit_percent']:.2f} %, RMS {row['rms']:.4g} {row['unit']}")
+                              f"{row['fit_percent']:.2f} %, RMS {rms:.4g} {unit}")
         for name, prof in result.profiles.items():
             out_console.print(f"profile of {name}: {prof.verdict}")
         out_console.print(f"{result.simulations} simulations in {result.wall_time:.2f} s")

@@ -42,13 +42,12 @@ def reproduce_command(
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,
                                call=the_call(ctx), progress=progress)
     statements = result.tables["paper_statements"]
-    styles = {"holds": "green", "does not hold": "red"}
     for _, row in statements.iterrows():
-        at = row["at our cycle"]
-        valve = "" if row["valve"] == "–" else f", {row['valve']} valve"
-        line = Text(f"{row['source']} ({row['statement']}{valve}): holds: "
-                    f"{row['holds for']}; stops: {row['stops']}; at our cycle: ")
-        line.append(at, style=styles.get(at, "white"))
+        held = row["holds for"]
+        style = "red" if held.startswith("nowhere") else "green"
+        line = Text(f"{row['source']} ({row['statement']}): holds for ")
+        line.append(held, style=style)
+        line.append(f"; stops: {row['stops']}; noise floor {row['noise floor']}")
         out_console.print(line, soft_wrap=True)
     out_console.print(f"wrote {len(result.files)} files to {out} in {result.wall_time:.1f} s; "
                       f"open {result.report}")

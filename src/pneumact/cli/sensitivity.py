@@ -297,7 +297,7 @@ class Study:
             curves = sa.friction_velocity(self.parameter_set, _variations(self.variations))
             _print_oat(study, feature_names)
             return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
-                    "loops.png": figure_writer(study.plot_loops),
+                    "loops.png": figure_writer(lambda: study.plot_loops(zoom=True)),
                     "friction_velocity.png": figure_writer(curves.plot)}
         problem = self.problem()
         with batch_progress(f"{self.method.value}: features") as progress:

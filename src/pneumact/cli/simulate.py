@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.table import Table
 
@@ -86,6 +87,25 @@ def simulate(
         _print_summary(summary, result, parameter_set["p_atm"], written)
 
 
+def _motion_rows(result) -> list[tuple[str, str, str]]:
+    """How the run slides: stick-slip (it stops and jumps) or steadily, with the
+    velocity's range over 20-80 % of the stroke."""
+    from pneumact.analysis import sliding_motion
+
+    if "velocity" not in result.signals:
+        return []
+    motion = sliding_motion(result["position"], result["velocity"])
+    if not np.isfinite(motion.max_speed):
+        return []
+    how = (f"stick-slip ({motion.stops} stops)" if motion.stick_slip else
+           "steady sliding")
+    slowest = "0" if motion.min_speed < 1e-3 * motion.max_speed else \
+        fmt(motion.min_speed * 1e3)
+    return [("motion (20-80 % of stroke)", how, ""),
+            ("speed range (20-80 % of stroke)", f"{slowest}–{fmt(motion.max_speed * 1e3)}",
+             "mm/s")]
+
+
 def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> None:
     table = Table(title="pneumact simulate", show_header=True)
     table.add_column("quantity")
@@ -99,6 +119,7 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
         ("break-away (sliding line at rest)", fmt(start * 1e-3), "kPa abs"),
         ("break-away (sliding line at rest)", fmt((p_atm - start) * 1e-3), "kPa of vacuum"),
         ("sliding speed (20-80 % of stroke)", fmt(summary["sliding_speed"] * 1e3), "mm/s"),
+        *_motion_rows(result),
         ("solver steps", str(result.meta.get("steps", "n/a")), ""),
         ("wall time", fmt(result.meta.get("wall_time_s", float("nan")), 3), "s"),
     ]

@@ -136,13 +136,16 @@ def _print_verdicts(frame) -> None:
 
 
 def _print_metrics(frame) -> None:
-    table = Table(title="validation")
-    columns = [c for c in ("set", "record", "signal", "rms", "max", "fit_percent", "r2")
-               if c in frame]
-    for column in columns:
-        table.add_column(column, justify="left" if column in ("set", "record", "signal")
-                         else "right")
-    for _, row in frame.iterrows():
-        table.add_row(*(str(row[c]) if c in ("set", "record", "signal") else fmt(row[c], 4)
-                        for c in columns))
-    out_console.print(table)
+    """The metrics per signal, in display units with the unit in each header."""
+    from pneumact.validation.metrics import metrics_for_reading
+
+    for signal, shown in metrics_for_reading(frame).items():
+        table = Table(title=f"validation: {signal}")
+        columns = [c for c in shown.columns if c not in ("n", "verdict")]
+        for column in columns:
+            table.add_column(column, justify="left" if column in ("set", "record")
+                             else "right")
+        for _, row in shown.iterrows():
+            table.add_row(*(str(row[c]) if c in ("set", "record") else fmt(row[c], 4)
+                            for c in columns))
+        out_console.print(table)

@@ -82,6 +82,8 @@ class DesignComparison(ResultVocabulary):
     ``LinearDesign`` the designs came from), its gains, its linear predictions and its
     Bode plot join the tables, the figures and ``write``'s ``linear_gains.toml``."""
 
+    inline_figure = False  # plot() simulates every move: not for a display
+
     report_title = "Designs on the nonlinear loop"
     figure_name = "designs"
 
@@ -136,13 +138,11 @@ class DesignComparison(ResultVocabulary):
         return text if self.linear is None else f"{text} {self.linear.report_text()}"
 
     def plot(self) -> Figure:
-        import matplotlib.pyplot as plt
-
+        from ..plotting import panel_grid
         from ..simulation import simulate
 
-        fig, axes = plt.subplots(1, len(self.moves), figsize=(3.8 * len(self.moves), 3.6),
-                                 squeeze=False)
-        for ax, move in zip(axes[0], self.moves, strict=True):
+        fig, panels = panel_grid(len(self.moves), width=3.8, height=3.6)
+        for (ax,), move in zip(panels, self.moves, strict=True):
             experiment = move.experiment()
             run = None
             for k, (name, loop) in enumerate(self.loops.items()):
@@ -153,9 +153,9 @@ class DesignComparison(ResultVocabulary):
                     label="set-point")
             ax.set_title(move.label, fontsize=9)
             ax.set_xlabel("time [s]")
+            ax.set_ylabel("position [mm]")
             ax.grid(True, alpha=0.3)
-        axes[0, 0].set_ylabel("position [mm]")
-        axes[0, -1].legend(fontsize=7, loc="best")
+        panels[-1][0].legend(fontsize=7, loc="best")
         fig.tight_layout()
         return fig
 

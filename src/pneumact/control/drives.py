@@ -67,6 +67,7 @@ import pandas as pd
 
 from ..errors import DataError, ParameterError
 from ..io.records import Record
+from ..io.report import NotebookDisplay
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -93,7 +94,7 @@ def _relative(measured: np.ndarray, simulated: np.ndarray) -> float:
 
 
 @dataclass(eq=False)
-class DriveReplay:
+class DriveReplay(NotebookDisplay):
     """One record replayed in closed loop.
 
     ``frame``: time, reference, position/velocity/force measured and simulated (SI)

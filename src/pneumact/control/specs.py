@@ -26,6 +26,10 @@ __all__ = ["Move", "Specs", "default_moves"]
 #: the unit each specification is given in (after "=" on the command line)
 SPEC_UNITS = {"settling": "s", "rise": "s", "overshoot": "%", "error": "m",
               "effort": "", "variation": "", "band": ""}
+#: the position resolution a loop with friction holds, as a fraction of the stroke: the
+#: smallest default move and, without an error spec, the narrowest settling band
+#: (20 µm on a 20 mm stroke, the default error spec)
+RESOLUTION = 1e-3
 #: time before a move starts: the loop rests at its start
 T_BEFORE = 0.05
 #: output points per second of a move (the metrics' time resolution: 2 ms)
@@ -154,13 +158,17 @@ class Specs:
 class Move:
     """A reference move: a set-point step or ramp from ``start`` to ``stop`` [m] at
     ``T_BEFORE``, held until ``t_end``; a ramp lasts ``duration`` [s]. Step metrics
-    count from the step (a ramp: from its end)."""
+    count from the step (a ramp: from its end). ``floor`` [m]: the narrowest settling
+    band the plant can hold (its friction's resolution), used where no ``error`` is
+    specified: without it a looser spec (no error limit) would ask a small step to settle
+    into 2 % of itself, tighter than the stricter spec's band."""
 
     label: str
     start: float
     stop: float
     t_end: float
     duration: float = 0.0
+    floor: float = 0.0
 
     def __post_init__(self):
         if self.stop == self.start:
@@ -189,8 +197,10 @@ class Move:
         return SetpointStep(self.start, self.stop, T_BEFORE, self.t_end, n_points=n)
 
     def tolerance(self, specs: Specs) -> float:
-        """The settling band [m]: band·|step|, at least the error specification."""
-        return max(specs.band * abs(self.size), specs.error or 0.0)
+        """The settling band [m]: band·|step|, at least the error specification (without
+        one: at least the move's ``floor``)."""
+        least = specs.error if specs.error is not None else self.floor
+        return max(specs.band * abs(self.size), least)
 
     def window(self) -> float:
         """The evaluation window at the end: the last quarter of the time after the move."""
@@ -202,7 +212,8 @@ def default_moves(loop: ClosedLoop, specs: Specs, at: float | None = None
     """Four moves around ``at`` (default mid-stroke; a rig: 0): a small step near the
     presliding range (½·Fs/σ0, at least 2× the error spec), steps of 20 % of the stroke
     up and down that cross break-away, and a ramp over that distance. They last 2.5×
-    the settling spec after the move (at least 0.5 s)."""
+    the settling spec after the move (at least 0.5 s). Without an error spec, each
+    settles into a band of at least ``RESOLUTION`` of the stroke (``Move.floor``)."""
     params = loop.params
     stroke = loop.stroke
     scale = float(stroke) if stroke else 1.0
@@ -210,15 +221,17 @@ def default_moves(loop: ClosedLoop, specs: Specs, at: float | None = None
     presliding = 0.0
     if "sigma0" in loop.gains or _has(params, "sigma0"):
         presliding = 0.5 * float(params["Fs"]) / float(params["sigma0"])
-    small = max(presliding, 2.0 * (specs.error or 0.0), 1e-3 * scale)
+    floor = RESOLUTION * scale
+    small = max(presliding, 2.0 * (specs.error or 0.0), floor)
     big = 0.2 * scale
     settle = specs.settling or 0.4
     t_end = T_BEFORE + max(2.5 * settle, 0.5)
     ramp = max(settle, 0.2)
-    return (Move("small step", at, at + small, t_end),
-            Move("step up", at, at + big, t_end),
-            Move("step down", at + big, at, t_end),
-            Move("ramp", at, at + big, T_BEFORE + ramp + max(2.5 * settle, 0.5), ramp))
+    return (Move("small step", at, at + small, t_end, floor=floor),
+            Move("step up", at, at + big, t_end, floor=floor),
+            Move("step down", at + big, at, t_end, floor=floor),
+            Move("ramp", at, at + big, T_BEFORE + ramp + max(2.5 * settle, 0.5), ramp,
+                 floor=floor))
 
 
 def _has(params, name: str) -> bool:

@@ -18,6 +18,7 @@ import pandas as pd
 from ..core.signals import Constant
 from ..errors import ArgumentError
 from ..experiments.actuator import Experiment
+from ..io.report import NotebookDisplay
 from ..models.controllers import PID
 from ..progress import ProgressCallback
 from .loop import ClosedLoop
@@ -37,7 +38,7 @@ TRACKING_METRICS = ("iae", "ise", "control_effort", "command_variation", "stick_
 
 
 @dataclass(eq=False)
-class LoopStudy:
+class LoopStudy(NotebookDisplay):
     """A closed-loop run: the loop, its experiment, the result and its metrics.
 
     ``to_pandas()``: the signals (``"metrics"``: the loop metrics, ``"controller"``: its
@@ -99,6 +100,7 @@ class LoopStudy:
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:
         """signals.csv, metrics.csv, loop.png and report.html: all or nothing."""
+        from ..io.display import display_frame
         from ..io.report import Report, figure_png
         from ..io.tables import write_files
         from ..plotting import PNG_DPI
@@ -109,7 +111,8 @@ class LoopStudy:
         report.text(f"Model: {self.loop.describe()}. Experiment: {self.experiment.name}, "
                     f"{self.experiment.t_start:g} to {self.experiment.t_end:g} s. "
                     f"Controller: {self.loop.controller!r}.")
-        report.table(metrics, "Loop metrics (SI)", index=False)
+        report.table(display_frame(metrics), "Loop metrics (mm or µm, kPa; metrics.csv "
+                     "is SI)", index=False)
         report.image(png, "Set-point and position, command, friction and velocity")
         report.table(self.controller_table(), "Controller settings (SI, zeros omitted)",
                      index=False)

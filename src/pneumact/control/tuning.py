@@ -269,6 +269,8 @@ class TuningResult(ResultVocabulary):
     bold). ``write(folder)``: the tables, the figure, report.html and ``gains.toml``
     (``pneumact control step --gains-file``)."""
 
+    inline_figure = False  # plot() simulates every move: not for a display
+
     report_title = "Controller tuning"
     figure_name = "tuning"
 
@@ -434,13 +436,11 @@ class TuningResult(ResultVocabulary):
 
     def plot(self) -> Figure:
         """Each move: the nominal response, every sample's (thin) and the worst (bold)."""
-        import matplotlib.pyplot as plt
-
+        from ..plotting import panel_grid
         from ..simulation import simulate
 
-        fig, axes = plt.subplots(1, len(self.moves), figsize=(3.6 * len(self.moves), 3.4),
-                                 squeeze=False)
-        for ax, (m, move) in zip(axes[0], enumerate(self.moves), strict=True):
+        fig, panels = panel_grid(len(self.moves), width=3.6, height=3.4)
+        for (ax,), (m, move) in zip(panels, enumerate(self.moves), strict=True):
             experiment = move.experiment()
             for s in _drawn(len(self.samples), self.worst):
                 values = {**self.samples.iloc[s].to_dict(), "bias": self.biases[s, m]}
@@ -453,9 +453,9 @@ class TuningResult(ResultVocabulary):
             ax.plot(run.time, 1e3 * run["position_setpoint"], "k--", lw=0.8, label="set-point")
             ax.set_title(move.label, fontsize=9)
             ax.set_xlabel("time [s]")
+            ax.set_ylabel("position [mm]")
             ax.grid(True, alpha=0.3)
-        axes[0, 0].set_ylabel("position [mm]")
-        axes[0, 0].legend(fontsize=7, loc="lower right")
+        panels[0][0].legend(fontsize=7, loc="lower right")
         fig.tight_layout()
         return fig
 

@@ -29,10 +29,39 @@ try:
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["compile_one_process_at_a_time"]
+__all__ = ["compile_one_process_at_a_time", "on_first_compile"]
 
 #: lock file -> (descriptor, depth) of the locks this process holds
 _HELD: dict[Path, tuple[int, int]] = {}
+#: called once, before the first compilation this process makes that the disk cache
+#: cannot spare it (``on_first_compile``)
+_NOTICE: list[Callable[[], None]] = []
+
+
+def on_first_compile(notice: Callable[[], None] | None) -> None:
+    """Call ``notice()`` once, before this process first compiles a kernel function the
+    disk cache does not hold (a cold start takes a minute: the command line says so
+    first); None removes it."""
+    _NOTICE.clear()
+    if notice is not None:
+        _NOTICE.append(notice)
+
+
+def _in_disk_cache(dispatcher: Any, sig: Any) -> bool:
+    """Whether numba's disk cache holds ``dispatcher`` compiled for ``sig`` (True when
+    that cannot be told: no notice rather than a wrong one)."""
+    try:
+        cache = dispatcher._cache
+        key = cache._index_key(sig, dispatcher.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:
+        return True
+
+
+def _notice_cold(dispatcher: Any, sig: Any) -> None:
+    if _NOTICE and not _in_disk_cache(dispatcher, sig):
+        notice = _NOTICE.pop()
+        notice()
 
 
 @contextlib.contextmanager
@@ -75,6 +104,7 @@ def compile_one_process_at_a_time(dispatcher: Any, lock_path: Path | Callable[[]
     def compile(sig):
         path = lock_path() if callable(lock_path) else lock_path
         with global_compiler_lock, _file_lock(path):
+            _notice_cold(dispatcher, sig)
             return compile_unlocked(sig)
 
     dispatcher.compile = compile

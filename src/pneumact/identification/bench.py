@@ -15,6 +15,7 @@ explained where it is defined.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -204,7 +205,8 @@ def steady_segments(record: Record, params, *, presliding_range: float = 0.0,
             f = force[sel] - inertia
             if np.mean(f) * sign <= 0:
                 continue  # friction that does not oppose the motion: a transient
-            rows.append({"record": record.source, "t_start": kin.time[sel][0],
+            rows.append({"record": os.path.basename(record.source),
+                         "t_start": kin.time[sel][0],
                          "t_end": kin.time[sel][-1], "velocity": slope,
                          "friction": float(np.mean(f)), "samples": int(sel.sum()),
                          "position": float(np.mean(kin.position[sel]))})

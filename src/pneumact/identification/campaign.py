@@ -40,6 +40,7 @@ from ..errors import ExperimentError
 from ..experiments import Experiment, PiecewiseLinear
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.sensors import first_order_lag
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -81,25 +82,12 @@ class Noise:
         if self.lag > 0:
             if time is None:
                 raise ExperimentError("Noise.apply: a sensor lag needs the sample times")
-            position = _first_order_lag(time, position, self.lag)
+            position = first_order_lag(time, position, self.lag)
         pressure = pressure + rng.normal(0.0, self.pressure, pressure.shape)
         position = position + rng.normal(0.0, self.position, position.shape)
         if self.resolution > 0:
             position = np.round(position / self.resolution) * self.resolution
         return pressure, position
-
-
-def _first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndarray:
-    """``values`` seen through a first-order sensor of time constant ``tau`` (exact for
-    a signal linear between samples)."""
-    out = np.empty_like(values)
-    out[0] = values[0]
-    for i in range(1, values.size):
-        h = time[i] - time[i - 1]
-        a = np.exp(-h / tau)
-        slope = (values[i] - values[i - 1]) / h
-        out[i] = values[i] - tau * slope + a * (out[i - 1] - values[i - 1] + tau * slope)
-    return out
 
 
 def _piecewise(points: Sequence[tuple[float, float]], rate: float) -> PiecewiseLinear:

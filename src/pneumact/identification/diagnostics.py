@@ -175,7 +175,7 @@ def residual_checks(fit, input_moves: dict | None = None, signal: str = "positio
         lag1 = float(centred[1:] @ centred[:-1] / denominator) if denominator > 0 else 0.0
         ratio = rms / np.hypot(noise, input_part) if noise > 0 else np.inf
         structure = smooth / expected if expected > 0 else np.inf
-        rows.append({"record": record.source, "signal": signal, "residual_rms": rms,
+        rows.append({"record": Path(record.source).name, "signal": signal, "residual_rms": rms,
                      "sensor_noise": noise, "ratio": ratio, "structure": structure,
                      "lag1_autocorrelation": lag1,
                      "fits": bool(ratio <= MISFIT_RATIO and structure <= MISFIT_STRUCTURE)})

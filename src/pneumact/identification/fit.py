@@ -36,6 +36,7 @@ from scipy.optimize import least_squares
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.sensors import Sensors, first_order_lag, lag_derivative
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
 from ..progress import ProgressCallback, notify, stop_threads
 from .arguments import check_fit_arguments, check_window, fit_records
@@ -49,6 +50,9 @@ if TYPE_CHECKING:
 
 __all__ = ["FitResult", "ProfileLikelihood", "fit"]
 
+#: the sensor lags a fit can free, and the signal each delays
+SENSOR_LAGS = {"position_lag": "position", "pressure_lag": "pressure"}
+
 CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood threshold
 
 
@@ -58,6 +62,12 @@ class _Column:
     name: str  # a model parameter, or the signal of an offset
     record: int | None  # None: shared by all records
     offset: bool = False  # an additive sensor offset of signal ``name``, not a parameter
+    lag: bool = False  # the first-order lag of signal ``name``'s sensor (``label``)
+
+    @property
+    def parameter(self) -> bool:
+        """A parameter of the model (not a sensor's offset or lag)."""
+        return not (self.offset or self.lag)
 
 
 class _Problem:
@@ -80,6 +90,8 @@ class _Problem:
         self.base = dict(base_values)
         #: the parameters each record's model reads (a joint fit mixes valves)
         self.model_parameters = [_parameter_names(m) for m in self.models]
+        #: the sensors each record's model states (lags held unless fitted)
+        self.sensors = [Sensors.from_params(getattr(m, "params", None)) for m in self.models]
         self.experiments = [experiment_for(m, r, smooth_input)
                             for m, r in zip(self.models, self.records, strict=True)]
         self.masks = []
@@ -119,7 +131,7 @@ class _Problem:
         own = self.model_parameters[i]
         values = {n: v for n, v in self.base.items() if n in own}
         for col, value in zip(self.columns, theta, strict=True):
-            if not col.offset and col.record in (None, i) and col.name in own:
+            if col.parameter and col.record in (None, i) and col.name in own:
                 values[col.name] = float(value)
         return values
 
@@ -127,11 +139,24 @@ class _Problem:
         """The free parameters record ``i``'s model reads, in column order."""
         own = self.model_parameters[i]
         return [c.name for c in self.columns
-                if not c.offset and c.record in (None, i) and c.name in own]
+                if c.parameter and c.record in (None, i) and c.name in own]
 
     def offset_of(self, theta: np.ndarray, i: int, signal: str) -> float:
         return sum(float(v) for c, v in zip(self.columns, theta, strict=True)
                    if c.offset and c.record == i and c.name == signal)
+
+    def lag_of(self, theta: np.ndarray, i: int, signal: str) -> float:
+        """The lag [s] of ``signal``'s sensor for record ``i``: fitted, or as stated."""
+        for c, v in zip(self.columns, theta, strict=True):
+            if c.lag and c.name == signal:
+                return max(float(v), 0.0)
+        return self.sensors[i].lag(signal)
+
+    def measured(self, theta: np.ndarray, i: int, signal: str, values: np.ndarray
+                 ) -> np.ndarray:
+        """``values`` of ``signal`` (samples at record ``i``'s times, along the first
+        axis) seen through its sensor's lag."""
+        return first_order_lag(self.records[i].time, values, self.lag_of(theta, i, signal))
 
     # -- evaluation
     def evaluate(self, theta: np.ndarray, with_jacobian: bool):
@@ -149,11 +174,11 @@ class _Problem:
             results.append(result)
             mask = self.masks[i]
             rows.append(np.concatenate([
-                self.weight(i, s) * (result[s] + self.offset_of(theta, i, s)
-                                     - self.records[i][s])[mask]
+                self.weight(i, s) * (self.measured(theta, i, s, result[s])
+                                     + self.offset_of(theta, i, s) - self.records[i][s])[mask]
                 for s in self.signals]))
             if with_jacobian:
-                blocks.append(self._block(i, sens, mask))
+                blocks.append(self._block(theta, i, result, sens, mask))
         out = (np.concatenate(rows), np.vstack(blocks) if with_jacobian else None, results)
         if len(self._cache) > 8:
             self._cache.clear()
@@ -180,20 +205,29 @@ class _Problem:
             raise SolverError(f"fit: the simulation of {record.source} failed at {shown}: "
                               f"{exc}") from exc
 
-    def _block(self, i, sens, mask) -> np.ndarray:
-        """Rows of record ``i`` in the Jacobian (θ-space)."""
+    def _block(self, theta, i, result, sens, mask) -> np.ndarray:
+        """Rows of record ``i`` in the Jacobian (θ-space): the forward sensitivities seen
+        through the sensors' lags (a linear filter), an offset's ones, and a lag's
+        derivative of the filter."""
         n = int(mask.sum())
         block = np.zeros((n * len(self.signals), len(self.columns)))
         own = self.model_parameters[i]
+        seen = {s: self.measured(theta, i, s, sens[s]) for s in self.signals} \
+            if sens is not None else {}
         k = 0
         for j, col in enumerate(self.columns):
-            if col.record not in (None, i) or (not col.offset and col.name not in own):
+            if col.record not in (None, i) or (col.parameter and col.name not in own):
                 continue
-            if col.offset:
+            if col.offset or col.lag:
+                if col.name not in self.signals:
+                    continue
                 q = self.signals.index(col.name)
-                block[q * n:(q + 1) * n, j] = self.weight(i, col.name)
+                block[q * n:(q + 1) * n, j] = self.weight(i, col.name) * (
+                    1.0 if col.offset else lag_derivative(
+                        self.records[i].time, result[col.name],
+                        self.lag_of(theta, i, col.name))[mask])
                 continue
-            block[:, j] = np.concatenate([self.weight(i, s) * sens[s][mask, k]
+            block[:, j] = np.concatenate([self.weight(i, s) * seen[s][mask, k]
                                           for s in self.signals])
             k += 1
         return block
@@ -379,6 +413,8 @@ class FitResult(ResultVocabulary):
     bounds: tuple[np.ndarray, np.ndarray] = (np.empty(0), np.empty(0))
     #: the weight of each record's residuals (times the signal's ``weights``)
     record_weights: np.ndarray = field(default_factory=lambda: np.ones(0))
+    #: per record, the lag [s] of each fitted signal's sensor (fitted or as stated)
+    sensor_lags: list = field(default_factory=list)
 
     def weight(self, i: int, signal: str) -> float:
         """Weight of record ``i``'s residuals of ``signal`` in the fit."""
@@ -390,7 +426,9 @@ class FitResult(ResultVocabulary):
         record's sensor offset if one was fitted."""
         offset = sum(float(v) for n, v in self.values.items()
                      if n == f"offset_{signal}[{i}]")
-        return self.simulated[i][signal] + offset
+        lag = self.sensor_lags[i].get(signal, 0.0) if self.sensor_lags else 0.0
+        return first_order_lag(self.records[i].time, self.simulated[i][signal],
+                               lag) + offset
 
     def masks(self) -> list[np.ndarray]:
         """Per record, the samples whose residuals the fit used (its window)."""
@@ -521,11 +559,10 @@ class FitResult(ResultVocabulary):
         return fig
 
     def plot_profiles(self):
-        import matplotlib.pyplot as plt
+        from ..plotting import label_log_axis, panel_grid
 
-        n = max(1, len(self.profiles))
-        fig, axes = plt.subplots(1, n, squeeze=False, figsize=(4.2 * n, 3.4))
-        for ax, prof in zip(axes[0], self.profiles.values(), strict=False):
+        fig, panels = panel_grid(len(self.profiles), width=4.2)
+        for (ax,), prof in zip(panels, self.profiles.values(), strict=False):
             ax.plot(prof.grid, prof.delta, "o-")
             ax.axhline(prof.threshold, color="k", ls="--", lw=0.8, label="95 % threshold")
             ax.axvline(prof.estimate, color="C3", lw=0.8)
@@ -535,6 +572,7 @@ class FitResult(ResultVocabulary):
             ax.grid(True, alpha=0.3)
             if prof.grid.min() > 0 and prof.grid.max() / prof.grid.min() > 20:
                 ax.set_xscale("log")
+                label_log_axis(ax)
         fig.tight_layout()
         return fig
 
@@ -553,7 +591,12 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
                              "or leave per_record out")
     cols = []
     for name in free:
-        if name in per_record:
+        if name in SENSOR_LAGS:
+            if name in per_record:
+                raise ParameterError(f"fit: per_record = [{name!r}]: a sensor's lag is "
+                                     "one for every record")
+            cols.append(_Column(name, SENSOR_LAGS[name], None, lag=True))
+        elif name in per_record:
             cols += [_Column(f"{name}[{i}]", name, i) for i in range(n_records)]
         else:
             cols.append(_Column(name, name, None))
@@ -576,8 +619,8 @@ def _bounds(columns, start, bounds, log):
         if col.offset:
             lo[j], hi[j] = -np.inf, np.inf
             continue
-        spec = specs[col.name]
-        given = (bounds or {}).get(col.name)
+        spec = specs[col.label if col.lag else col.name]
+        given = (bounds or {}).get(col.label if col.lag else col.name)
         if given is not None:
             lo[j], hi[j] = map(float, given)
         else:
@@ -603,7 +646,8 @@ def _statistics(records, simulated, signals, n_par, weighted_residuals):
             e = sim[s] - rec[s]
             y = rec[s]
             nrmse = float(np.linalg.norm(e) / max(float(np.linalg.norm(y - y.mean())), 1e-300))
-            rows.append({"record": rec.source, "signal": s, "unit": rec.units.get(s, ""),
+            rows.append({"record": os.path.basename(rec.source), "signal": s,
+                         "unit": rec.units.get(s, ""),
                          "samples": e.size, "rms": float(np.sqrt(np.mean(e**2))),
                          "max_abs": float(np.max(np.abs(e))), "nrmse": nrmse,
                          "fit_percent": 100 * (1 - nrmse)})
@@ -758,6 +802,9 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     base: dict[str, float] = {}
     for assembly in assemblies:
         base.update(assembly.values(assembly.pack()))
+    lags = [n for n in free if n in SENSOR_LAGS]
+    stated = Sensors.from_params(getattr(models[0], "params", None))
+    base.update({n: stated.lag(SENSOR_LAGS[n]) for n in lags})
     for names_, what in ((free, "fit"), (list(start or {}), "fit start")):
         unknown = [n for n in names_ if n not in base]
         if unknown:
@@ -766,8 +813,13 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     if bad:
         raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
                              f"({', '.join(signals)})")
+    bad = [n for n in lags if SENSOR_LAGS[n] not in signals]
+    if bad:
+        raise ParameterError(f"fit: free = {bad}, the lag of a sensor whose signal is not "
+                             f"fitted ({', '.join(signals)}); fit its signal too")
     columns = _columns(free, per_record, len(records), offsets.signals, offsets.records)
-    theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.name, base[c.name]))
+    theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.label, base[c.label]))
+                       if c.lag else float((start or {}).get(c.name, base[c.name]))
                        for c in columns])
     names_log = bounds.log_names(free)
     log_mask = np.array([c.name in names_log and theta0[j] > 0
@@ -823,7 +875,8 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
                                         correlated=covariance == "hac")
     from ..parameters import catalogue
 
-    units = tuple(records[0].units.get(c.name, "") if c.offset else catalogue()[c.name].unit
+    units = tuple(records[0].units.get(c.name, "") if c.offset else
+                  catalogue()[c.label if c.lag else c.name].unit
                   for c in columns)
     est = Estimates(tuple(c.label for c in columns), theta, np.sqrt(np.diag(cov)), cov, dof,
                     units)
@@ -838,7 +891,9 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
                        problem.simulations, 0.0, signals, jac, start_table, {}, base,
                        models[0], next((w for w in windows if w is not None), None),
                        dict(signal_weights), models, windows, (lo, hi),
-                       problem.record_weights.copy())
+                       problem.record_weights.copy(),
+                       [{s: problem.lag_of(theta, i, s) for s in signals}
+                        for i in range(len(records))])
     for name in profile.names:
         result.profiles[name] = _profile(problem, result, name, plo, phi_, optimizer,
                                          profile.points, progress)

@@ -30,11 +30,12 @@ import numpy as np
 
 from ..errors import DataError, SolverError
 from ..io.records import Record
+from ..models.sensors import Sensors
 from ..options import Executor, Offsets, Optimizer, Weights
 from ..progress import ProgressCallback, notify
 from .bench import typical_speed
-from .fit import FitResult, fit
-from .stages import presliding_window, prior_bounds, within
+from .fit import SENSOR_LAGS, FitResult, fit
+from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
            "SPRING_AND_FRICTION", "amplification", "bench_model", "feasible",
@@ -195,7 +196,8 @@ def prediction_ratio(record: Record, kind: str, params, friction=None, chamber=N
                      solver=None) -> float:
     """RMS of the position error of the model at ``params`` on ``record`` (a presliding
     test after its approach, less its mean: its sensor offset is fitted) against the
-    noise the record shows (``inputs.sensor_noise``)."""
+    noise the record shows (``inputs.sensor_noise``); the position as its sensor sees it
+    (the ``position_lag`` and ``position_offset`` ``params`` state, if any)."""
     from ..simulation import Rodas4, simulate
     from .fit import experiment_for
     from .inputs import sensor_noise
@@ -207,7 +209,9 @@ def prediction_ratio(record: Record, kind: str, params, friction=None, chamber=N
                           t_eval=record.time)
     except SolverError:
         return np.inf
-    error = result["position"] - record["position"]
+    seen = Sensors.from_params(params).measure(record.time, "position", result["position"],
+                                                 quantise=False)
+    error = seen - record["position"]
     if kind == "presliding" and "setpoint" not in record:
         error = error[record.time >= presliding_window(record, params)]
         error = error - error.mean()
@@ -259,7 +263,10 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
                                     solver=solver, workers=workers)
         weights.update({records[i].source: w for i, w in zip(new, found, strict=True)})
     record_weights = [weights[r.source] for r in records]
-    bounds = prior_bounds(params if prior is None else prior, free)
+    bounds = prior_bounds(params if prior is None else prior,
+                          [n for n in free if n not in SENSOR_LAGS])
+    bounds.update({n: (params[n] / PRIOR_FACTOR, params[n] * PRIOR_FACTOR)
+                   for n in free if n in SENSOR_LAGS})
     return fit(models, list(records), list(free), window=windows,
                offsets=Offsets(["position"] if offset_records else (), offset_records),
                solver=solver, weights=Weights(records=record_weights),

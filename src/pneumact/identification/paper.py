@@ -35,6 +35,7 @@ import pandas as pd
 from ..errors import DataError, ParameterError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
@@ -52,6 +53,15 @@ from .diagnostics import (
     verdicts,
 )
 from .estimates import Estimates
+from .faults import (
+    LAG_GAIN,
+    lag_search,
+    pressure_side,
+    quantisation_covariance,
+    quantised_records,
+    regulator_check,
+    sensor_notes,
+)
 from .fit import FitResult, one_blas_thread
 from .joint import (
     JOINT_RTOL,
@@ -119,7 +129,8 @@ def with_estimates(params, estimates: Estimates, sources: dict[str, str], name: 
     info = dict(params.info)
     chosen = feasible(estimates.as_dict(), params)  # Fs never below Fc in a parameter set
     for j, pname in enumerate(estimates.names):
-        if pname not in params or (keep is not None and pname not in keep):
+        if (pname not in params and pname not in SENSOR_PARAMETERS) or \
+                (keep is not None and pname not in keep):
             continue
         value = float(chosen.get(pname, estimates.values[j]))
         values[pname] = value
@@ -229,7 +240,8 @@ class PaperIdentification(ResultVocabulary):
     # -- tables ------------------------------------------------------------------------
     def tables(self) -> dict[str, pd.DataFrame]:
         return {"estimates": self.to_pandas(), "verdicts": self.verdicts_table(),
-                "diagnostics": self.diagnostics_table(), "residuals": self.residuals}
+                "diagnostics": self.diagnostics_table(), "residuals": self.residuals,
+                "bench": self.bench_table()}
 
     def plot(self) -> Figure:
         """Measured and fitted position of the joint refinement (of the first stage when
@@ -264,14 +276,15 @@ class PaperIdentification(ResultVocabulary):
                    "value": self.estimates.values[j],
                    "stderr": self.estimates.stderr[j] if name in shown else np.nan,
                    "ci95_low": ci[j, 0], "ci95_high": ci[j, 1],
-                   "initial": self.initial[name], "verdict": verdict.verdict,
+                   "initial": _value_in(self.initial, name), "verdict": verdict.verdict,
                    "reason": verdict.reason}
             if truth is not None:
-                row["truth"] = truth[name]
-                row["staged_error_%"] = 100 * (s_value - truth[name]) / truth[name]
-                row["error_%"] = 100 * (row["value"] - truth[name]) / truth[name]
-                row["truth_in_ci95"] = (bool(ci[j, 0] <= truth[name] <= ci[j, 1])
-                                        if name in shown else None)
+                true = _value_in(truth, name)
+                row["truth"] = true
+                row["staged_error_%"] = 100 * (s_value - true) / true
+                row["error_%"] = 100 * (row["value"] - true) / true
+                row["truth_in_ci95"] = (bool(ci[j, 0] <= true <= ci[j, 1])
+                                        if name in shown and np.isfinite(true) else None)
             rows.append(row)
         return pd.DataFrame(rows).set_index("parameter")
 
@@ -291,8 +304,46 @@ class PaperIdentification(ResultVocabulary):
         return out
 
     def extra_tables(self) -> dict[str, pd.DataFrame]:
-        """Tables a kind of identification adds to its report, by caption (none here)."""
-        return {}
+        """Tables a kind of identification adds to its report, by caption: the bench."""
+        bench = self.bench_table()
+        return {"The bench: what the records say about the sensors and the regulator":
+                bench} if len(bench) else {}
+
+    def bench_table(self) -> pd.DataFrame:
+        """The bench's parameters as the records tell them (``models.sensors``): the
+        pressure sensor's offset (from the set-point/pressure pairs), the position
+        sensor's lag (fitted, when the records needed it), its resolution and the sample
+        rates (read from the records), each with how it was found."""
+        rows = []
+        side = self.extra.get("pressure_side")
+        if side is not None and len(side.table):
+            rows.append({"parameter": "pressure_offset", "value": side.offset,
+                         "ci95_low": side.offset - 1.96 * side.offset_stderr,
+                         "ci95_high": side.offset + 1.96 * side.offset_stderr, "unit": "Pa",
+                         "how": "set-point/pressure pairs, median of "
+                                f"{len(side.table)} records; "
+                                + ("taken off the records" if side.applied else
+                                   "not significant: left on")})
+        if "position_lag" in self.estimates.names:
+            j = self.estimates.names.index("position_lag")
+            low, high = self.estimates.interval(0.95)[j]
+            rows.append({"parameter": "position_lag", "value": self.estimates.values[j],
+                         "ci95_low": low, "ci95_high": high, "unit": "s",
+                         "how": "fitted with the spring and friction (joint)"})
+        sensors = self.extra.get("sensors")
+        if sensors is not None and len(sensors):
+            step = float(sensors["position_resolution"].max())
+            rows.append({"parameter": "position_resolution", "value": step,
+                         "ci95_low": np.nan, "ci95_high": np.nan, "unit": "m",
+                         "how": "read from the records (the smallest step)" if step else
+                                "no quantisation seen in the records"})
+            rates = sensors["sample_rate"]
+            rows.append({"parameter": "sample_rate", "value": float(rates.min()),
+                         "ci95_low": np.nan, "ci95_high": np.nan, "unit": "Hz",
+                         "how": f"read from the records ({rates.min():.4g}–"
+                                f"{rates.max():.4g} Hz)"})
+        return pd.DataFrame(rows, columns=["parameter", "value", "ci95_low", "ci95_high",
+                                           "unit", "how"])
 
     def diagnostics_table(self) -> pd.DataFrame:
         return pd.DataFrame([{"severity": d.severity, "stage": d.stage,
@@ -315,7 +366,7 @@ class PaperIdentification(ResultVocabulary):
         chosen = next((r for r in self.records if Path(r.source).name == record),
                       sweeps[0] if sweeps else self.records[0])
         band = self.band(chosen)
-        fig, (ax_loop, ax_time) = plt.subplots(1, 2, figsize=(11, 4.2))
+        fig, (ax_loop, ax_time, ax_zoom) = plt.subplots(1, 3, figsize=(15.5, 4.2))
         for run_p, run_x in zip(band.samples["pressure"], band.samples["position"],
                                 strict=True):
             ax_loop.plot(run_p * 1e-3, run_x * 1e3, color="C0", alpha=0.05, lw=0.8)
@@ -339,14 +390,28 @@ class PaperIdentification(ResultVocabulary):
         ax_time.set_xlabel("time [s]")
         ax_time.set_ylabel("position [mm]")
         ax_time.legend(fontsize=8, loc="upper right")
-        for a in (ax_loop, ax_time):
+        # the band is some µm on a stroke of mm: drawn about the model, in µm, it shows
+        nominal = band.nominal["position"]
+        measured = np.interp(band.time, chosen.time, chosen["position"])
+        ax_zoom.fill_between(band.time, (band.lower["position"] - nominal) * 1e6,
+                             (band.upper["position"] - nominal) * 1e6, color="C0",
+                             alpha=0.35, label=f"{100 * band.level:.0f} % band")
+        ax_zoom.plot(band.time, (measured - nominal) * 1e6, "k.", ms=1,
+                     label="measured − model")
+        ax_zoom.axhline(0.0, color="C3", lw=0.8)
+        ax_zoom.set_xlabel("time [s]")
+        ax_zoom.set_ylabel("position − identified model [µm]")
+        ax_zoom.set_title("the band about the model (zoom)", fontsize=9)
+        ax_zoom.legend(fontsize=8, loc="upper right")
+        for a in (ax_loop, ax_time, ax_zoom):
             a.grid(True, alpha=0.3)
         fig.tight_layout()
         return fig
 
     def band(self, record: Record, draws: int = 60):
-        """``uncertainty.prediction_band`` of the identified model on ``record``, drawn
-        from the parameters with an interval; refused where no interval holds (the model
+        """``uncertainty.prediction_band`` of the identified model on ``record`` (the
+        actuator's signals, before its sensors), drawn from the parameters with an
+        interval; refused where no interval holds (the model
         does not fit the records) or none has one."""
         from ..simulation import Rodas4
         from .fit import experiment_for
@@ -362,8 +427,8 @@ class PaperIdentification(ResultVocabulary):
         model = bench_model(record, self.parameters_unchecked, self.extra.get("friction"),
                             self.extra.get("chamber"))
         experiment = experiment_for(model, record, smooth=True)
-        names = [n for j, n in enumerate(self.estimates.names)
-                 if "[" not in n and np.isfinite(self.estimates.stderr[j])]
+        names = [n for j, n in enumerate(self.estimates.names) if "[" not in n and
+                 n not in SENSOR_PARAMETERS and np.isfinite(self.estimates.stderr[j])]
         idx = [self.estimates.names.index(n) for n in names]
         est = Estimates(tuple(names), self.estimates.values[idx], self.estimates.stderr[idx],
                         self.estimates.covariance[np.ix_(idx, idx)], self.estimates.dof,
@@ -374,10 +439,10 @@ class PaperIdentification(ResultVocabulary):
     # -- output ------------------------------------------------------------------------
     def writers(self, truth=None, call: str = "", partial: bool = True) -> dict:
         """File name -> writer: estimates.csv, verdicts.csv, diagnostics.csv,
-        residuals.csv, stage_*.png, joint_fit.png, band.png, report.md, report.html, and
-        identified.toml: the identified values, the prior's for the others, each marked
-        in its source (``parameter_set(partial=True)``; ``partial=False``: only when
-        every parameter is identified)."""
+        residuals.csv, bench.csv (``bench_table``), stage_*.png, joint_fit.png, band.png,
+        report.md, report.html, and identified.toml: the identified values, the prior's
+        for the others, each marked in its source (``parameter_set(partial=True)``;
+        ``partial=False``: only when every parameter is identified)."""
         from ..parameters import write_params
 
         rendered: dict[str, bytes] = {}
@@ -395,6 +460,8 @@ class PaperIdentification(ResultVocabulary):
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
         writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
+        if len(self.bench_table()):
+            writers["bench.csv"] = lambda p: self.bench_table().to_csv(p, index=False)
         for name in self.figures():
             writers[f"{name}.png"] = lambda p, name=name: Path(p).write_bytes(pngs()[name])
         writers["report.md"] = lambda p: Path(p).write_text(self.markdown(truth),
@@ -434,7 +501,10 @@ class PaperIdentification(ResultVocabulary):
         params = self.parameters_unchecked
         values, info = dict(params.values), dict(params.info)
         for v in self.verdicts:
-            if not v.identified:
+            if not v.identified and v.parameter not in self.initial:
+                values.pop(v.parameter, None)  # a bench parameter: the ideal sensor
+                info.pop(v.parameter, None)
+            elif not v.identified:
                 values[v.parameter], source = self._fallback(v.parameter, values)
                 info[v.parameter] = ParameterInfo(
                     number_text(v.parameter, values[v.parameter]), source,
@@ -526,6 +596,11 @@ SUMMARY_ERRORS = 5
 SUMMARY_REMEDIES = 8
 #: ... each cut to this many characters.
 SUMMARY_WIDTH = 160
+
+
+def _value_in(params, name: str) -> float:
+    """``params[name]``, or NaN for a bench parameter the set does not state."""
+    return float(params[name]) if name in params else float("nan")
 
 
 def _shorten(text: str) -> str:
@@ -671,6 +746,9 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     fidelity = np.diag((MODEL_FIDELITY * joint.estimates.values) ** 2)
     fidelity[[j for j, n in enumerate(joint.estimates.names) if "[" in n]] = 0.0
     covariance = joint.estimates.covariance + noise.covariance + fidelity
+    steps = quantised_records(joint)
+    if steps:
+        covariance = covariance + quantisation_covariance(joint, steps, seed=seed + 2)
     if held:
         covariance = covariance + nuisance_covariance(joint, held, Rodas4(rtol=JOINT_RTOL),
                                                       workers)
@@ -687,6 +765,60 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
                 f"{r.sensor_noise:.3g}) and its slow part {r.structure:.3g}× what noise "
                 "leaves", MISFIT_REMEDY + "; or the fit stopped in a local optimum"))
     return joint, noise, estimates, checks, diagnostics
+
+
+def _attempt(records, kinds, staged, free, options) -> tuple[tuple | None, list[Diagnostic]]:
+    """The joint refinement (``_refine``) as (joint fit, input noise, estimates, residual
+    checks) and its diagnostics, or None and the reason it could not run."""
+    try:
+        joint, noise, final, residuals, found = _refine(records, kinds, staged, free=free,
+                                                        **options)
+    except DataError as exc:
+        return None, [Diagnostic("error", "joint", str(exc), "ramps at speeds where the "
+                                 "diaphragm slides steadily")]
+    return (joint, noise, final, residuals), found
+
+
+def _misfits(outcome) -> float:
+    """How many records the joint fit does not fit (inf when it could not run)."""
+    if outcome is None:
+        return np.inf
+    return float((~outcome[3]["fits"]).sum()) + (0.0 if outcome[0].success else 0.5)
+
+
+def _lag_hypothesis(records, kinds, staged, free, first, options, restage):
+    """Where the model does not fit: does a position-sensor lag explain it? The lag that
+    predicts the records best (``faults.lag_search``) starts a joint fit that frees it
+    (``position_lag``) from the stages run again on the records with that lag undone
+    (``restage``); kept only when the model with it fits every record. Returns
+    (outcome, its diagnostics, the staged values it started from, the free names,
+    notes)."""
+    outcome, found = first
+    tau, lagged, error_with, error_without = lag_search(
+        records, kinds, staged, restage, options["friction"], options["chamber"],
+        options["workers"])
+    if not (tau > 0 and error_with <= LAG_GAIN * error_without):
+        return outcome, found, staged, free, []
+    lagged = lagged.with_values({n: staged[n] for n in options["held"]})
+    with_lag = [*free, "position_lag"]
+    again, found_again = _attempt(records, kinds, lagged, with_lag, options)
+    if _misfits(again) > 0:
+        return outcome, found, staged, free, [Diagnostic(
+            "note", "bench", f"a position-sensor lag of {tau * 1e3:.3g} ms predicts the "
+            "records better than none, but the joint fit with it does not fit them all: "
+            "not taken for the cause")]
+    assert again is not None  # it fits more records than the first attempt
+    estimates = again[2]
+    j = estimates.names.index("position_lag")
+    low, high = estimates.interval(0.95)[j]
+    note = Diagnostic(
+        "warning", "bench", f"the position sensor lags: a first-order lag of "
+        f"{estimates.values[j] * 1e3:.4g} ms [{low * 1e3:.4g}, {high * 1e3:.4g}] makes the "
+        f"model fit records it did not without it; it is fitted with the other parameters "
+        f"(position_lag), started from the stages on the records with the lag "
+        "undone (stage (c) takes k·τ of a lag for viscous friction)",
+        "a faster position sensor, or state its time constant as position_lag in the prior")
+    return again, found_again, lagged, with_lag, [note]
 
 
 def _named(names: Sequence[str], shown: int = 3) -> str:
@@ -708,7 +840,7 @@ def _staged_checks(records, staged, friction, chamber, workers: int) -> pd.DataF
 
     ratios = map_on_threads(workers, lambda r: prediction_ratio(
         r, record_kind(r), staged, friction, chamber), records)
-    return pd.DataFrame([{"record": r.source, "signal": "position", "ratio": ratio,
+    return pd.DataFrame([{"record": Path(r.source).name, "signal": "position", "ratio": ratio,
                           "fits": bool(ratio <= MISFIT_RATIO)}
                          for r, ratio in zip(records, ratios, strict=True)],
                         columns=["record", "signal", "ratio", "fits"])
@@ -754,7 +886,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
         return judged
     used = set(residuals["record"]) if len(residuals) else set()
     slow = [(r, v) for r, v in ramps if v < vs]
-    if not slow or any(r.source in used for r, _ in slow):
+    if not slow or any(Path(r.source).name in used for r, _ in slow):
         return judged
     names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
@@ -814,9 +946,14 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             any(record_kind(r) == "sweep" for r in records):
         return identify_signature(records, params, prior_spread=prior_spread, name=name,
                                   progress=progress)
+    side = pressure_side(records, params, friction, chamber, pool.threads)
+    records = side.records
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)
+    diagnostics = side.diagnostics + diagnostics
+    notes, sensors = sensor_notes(records, [record_kind(r) for r in records], params)
+    diagnostics += notes
     free = list(SPRING_AND_FRICTION) + (["delta"] if fit_delta else [])
     presliding_ok, why_not = _presliding_identifiable(kinds, staged)
     held: dict[str, float] = {}
@@ -830,19 +967,32 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             f"{100 * prior_spread:.0f} %) is carried into the other parameters' intervals",
             "a position sensor with less noise and a finer resolution, or larger presliding "
             "steps if the friction allows"))
-    joint = input_noise = None
+    joint = input_noise = regulator = None
     if refine:
-        try:
-            joint, input_noise, final_values, residuals, found = _refine(
-                records, [record_kind(r) for r in records], staged, friction=friction,
-                chamber=chamber, free=free, replicates=replicates, seed=seed,
-                workers=workers, step=step, prior=params, held=held,
-                max_evaluations=max_evaluations)
-            diagnostics += found
-        except DataError as exc:  # nothing left that output error can follow
-            diagnostics.append(Diagnostic("error", "joint", str(exc), "ramps at speeds "
-                                          "where the diaphragm slides steadily"))
+        options = dict(friction=friction, chamber=chamber, replicates=replicates, seed=seed,
+                       workers=workers, step=step, prior=params, held=held,
+                       max_evaluations=max_evaluations)
+        kind_list = [record_kind(r) for r in records]
+        outcome, found = _attempt(records, kind_list, staged, free, options)
+        if _misfits(outcome) and "position_lag" not in params:
+            def restage(undone):
+                return _staged(_kinds(undone), params, friction, fit_delta, sliding_speed,
+                               prior_spread, lambda *_: None)[1]
+
+            outcome, found, staged, free, note = _lag_hypothesis(
+                records, kind_list, staged, free, (outcome, found), options, restage)
+            diagnostics += note
+        diagnostics += found
+        if outcome is None:  # nothing left that output error can follow
             refine = False
+        else:
+            joint, input_noise, final_values, residuals = outcome
+        if _misfits(outcome):  # is it the regulator? asked at the best values there are
+            best = staged if outcome is None else staged.with_values(
+                feasible(outcome[2].as_dict(), staged))
+            regulator, found = regulator_check(records, best, friction, chamber,
+                                               pool.threads)
+            diagnostics += found
     joint_failed = False
     converged = False
     if refine:
@@ -922,12 +1072,38 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         sources, name or f"{params.name}-identified",
         {"identified": f"pneumact {__version__} identify_paper, {when}",
          "records": ", ".join(Path(r.source).name for r in records)})
+    identified = _with_bench(identified, side, sensors)
     step("done", 1.0)
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
                                 "trusted": trusted,
-                                "joint_failed": joint_failed})
+                                "joint_failed": joint_failed,
+                                "pressure_side": side, "sensors": sensors,
+                                "regulator": regulator})
+
+
+def _with_bench(identified, side, sensors: pd.DataFrame):
+    """The identified set with what the records say of the bench: the pressure sensor's
+    offset where it was taken off, the position resolution where the records show one."""
+    from ..parameters import ParameterSet
+    from ..parameters.parameter_set import ParameterInfo, number_text
+
+    found: dict[str, tuple[float, str, str]] = {}
+    if side.applied:
+        found["pressure_offset"] = (side.offset, "bench: set-point/pressure pairs",
+                                    f"± {side.offset_stderr:.3g} (standard error)")
+    step = float(sensors["position_resolution"].max()) if len(sensors) else 0.0
+    if step > 0:
+        found["position_resolution"] = (step, "bench: read from the records", "")
+    if not found:
+        return identified
+    values, info = dict(identified.values), dict(identified.info)
+    for name, (value, source, note) in found.items():
+        values[name] = value
+        info[name] = ParameterInfo(number_text(name, value), source, note)
+    return ParameterSet(values, name=identified.name, description=identified.description,
+                        provenance=identified.provenance, info=info)
 
 
 def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:

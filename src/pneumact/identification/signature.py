@@ -190,7 +190,7 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
             "a faster sweep, or ramps well above vs"))
     data = pd.DataFrame({"x": x * 1e3, "measured": f, "fitted": f - residual,
                          "branch": sign})
-    stage = StageResult("signature", estimates, tuple(r.source for r in sweeps), data,
+    stage = StageResult("signature", estimates, tuple(Path(r.source).name for r in sweeps), data,
                         "position [mm]", "drive force (p_atm − p)·A_d − m·a [N]",
                         extra={"speed": mean_speed, "slowest": slowest})
     return SignatureFit(estimates, float(level), level_se, mean_speed, bound,

@@ -279,6 +279,18 @@ class Record(ResultVocabulary):
     def __contains__(self, name: object) -> bool:
         return name == "time" or name in self.signals
 
+    def __repr__(self) -> str:
+        """Short: the name, the samples and time span, the signals; never the arrays."""
+        return (f"Record({self.name or self.source!r}, {len(self.time)} samples over "
+                f"{self.time[0]:g}..{self.time[-1]:g} s, signals: "
+                f"{', '.join(f'{n} [{u}]' if u else n for n, u in self.units.items())})")
+
+    def notebook_table(self) -> pd.DataFrame:
+        """Each signal's first, smallest, largest and last value (a notebook's display)."""
+        from pneumact.io.display import signal_summary
+
+        return signal_summary(self.signals, self.units)
+
     def __len__(self) -> int:
         """Number of samples."""
         return len(self.time)

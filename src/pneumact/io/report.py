@@ -11,6 +11,7 @@ from __future__ import annotations
 import base64
 import datetime as _dt
 import functools
+import html
 import io
 import platform
 from collections.abc import Callable
@@ -21,16 +22,20 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 from ..errors import ArgumentError
 from ..files import PathLike, atomic_write
 from ..plotting import PNG_DPI, write_png
+from .display import display_frame
 
 if TYPE_CHECKING:  # pandas is imported on use: a result class costs nothing to import
     import pandas as pd
     from matplotlib.figure import Figure
 
-__all__ = ["Block", "ParameterTable", "Report", "ResultVocabulary", "figure_png",
-           "table_writer"]
+__all__ = ["Block", "NotebookDisplay", "ParameterTable", "Report", "ResultVocabulary",
+           "figure_png", "notebook_html", "table_writer"]
 
 #: a table longer than this is cut in a report (its CSV file has every row)
 REPORT_ROWS = 40
+#: rows of the table a notebook shows, and the dpi of its inline figure
+NOTEBOOK_ROWS = 12
+NOTEBOOK_DPI = 80
 
 
 @dataclass(frozen=True)
@@ -168,7 +173,58 @@ def _plain_index(frame: pd.DataFrame) -> bool:
     return frame.index.name is None and isinstance(frame.index, pd.RangeIndex)
 
 
-class ResultVocabulary:
+def notebook_html(title: str, text: str = "", table: pd.DataFrame | None = None,
+                  figure: Callable[[], Figure] | None = None) -> str:
+    """The HTML a notebook shows for a result: its title and text, the first
+    ``NOTEBOOK_ROWS`` rows of ``table`` in display units, and the figure ``figure()``
+    draws as an inline PNG (left out, with its error, when drawing fails)."""
+    parts = [f"<div class='pneumact'><strong>{html.escape(title)}</strong>"]
+    if text:
+        parts.append(f"<p>{html.escape(text)}</p>")
+    if table is not None:
+        shown = display_frame(table.head(NOTEBOOK_ROWS))
+        parts.append(shown.to_html(index=not _plain_index(shown), border=0, na_rep="–",
+                                   float_format=lambda v: f"{v:.4g}"))
+        if len(table) > NOTEBOOK_ROWS:
+            parts.append(f"<p>first {NOTEBOOK_ROWS} of {len(table)} rows "
+                         "(<code>to_pandas()</code> has all, in SI)</p>")
+    if figure is not None:
+        try:
+            png = figure_png(figure(), dpi=NOTEBOOK_DPI)
+        except Exception as exc:  # a display must not raise: say why there is no figure
+            parts.append(f"<p>(no figure: {html.escape(str(exc))})</p>")
+        else:
+            data = base64.b64encode(png).decode("ascii")
+            parts.append(f"<img style='max-width:100%' src='data:image/png;base64,{data}'>")
+    return "".join(parts) + "</div>"
+
+
+class NotebookDisplay:
+    """``_repr_html_`` for a notebook: the result's title, its main table
+    (``notebook_table()``, default ``to_pandas()``) and, where ``inline_figure``, its
+    figure (``plot()``) as an inline PNG. A result whose ``plot()`` simulates sets
+    ``inline_figure = False`` (a display should not take seconds)."""
+
+    __slots__ = ()
+    inline_figure: ClassVar[bool] = True
+
+    def notebook_title(self) -> str:
+        return str(getattr(self, "report_title", "") or type(self).__name__)
+
+    def notebook_text(self) -> str:
+        text = getattr(self, "report_text", None)
+        return text() if callable(text) else ""
+
+    def notebook_table(self) -> pd.DataFrame | None:
+        return self.to_pandas()  # type: ignore[attr-defined]
+
+    def _repr_html_(self) -> str:
+        return notebook_html(self.notebook_title(), self.notebook_text(),
+                             self.notebook_table(),
+                             self.plot if self.inline_figure else None)  # type: ignore[attr-defined]
+
+
+class ResultVocabulary(NotebookDisplay):
     """What every result of pneumact speaks: ``to_pandas(name=None)`` (the main table,
     or the one named), ``plot()`` (a matplotlib ``Figure``) and ``write(folder)`` (each
     table as CSV, the figure as PNG, and ``report.html`` with both, all or nothing: a
@@ -221,7 +277,8 @@ class ResultVocabulary:
                          figure_png(make(), dpi=PNG_DPI), name.replace("_", " "))
         for name, frame in self.tables().items():
             cut = len(frame) > REPORT_ROWS
-            report.table(frame.head(REPORT_ROWS), f"{name.replace('_', ' ')}" + (
+            report.table(display_frame(frame.head(REPORT_ROWS)),
+                         f"{name.replace('_', ' ')}" + (
                 f" (first {REPORT_ROWS} of {len(frame)} rows; all in {name}.csv)"
                 if cut else ""), index=not _plain_index(frame))
         return report

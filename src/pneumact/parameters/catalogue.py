@@ -40,6 +40,7 @@ DECLARING_MODULES = (
     "pneumact.models.valves",
     "pneumact.models.rig",
     "pneumact.models.controllers",
+    "pneumact.models.sensors",
 )
 
 

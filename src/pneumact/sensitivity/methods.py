@@ -153,6 +153,9 @@ class StudyResult(ResultVocabulary):
         ax.set_xticks(x + 0.4 - width / 2, table.index)
         ax.axhline(0, color="k", lw=0.6)
         ax.set_title(f"{self.method}: {output}", fontsize=10)
+        ax.set_xlabel("parameter")
+        unit = "[output unit]" if self.method in ("morris", "dgsm") else "[1]"
+        ax.set_ylabel(f"{', '.join(keys)} {unit}")
         ax.legend(fontsize=8)
         ax.grid(True, axis="y", alpha=0.3)
         fig.tight_layout()
@@ -285,7 +288,8 @@ def src(problem: Problem, evaluate: Evaluate, n: int = 500, seed: int = 0,
         rank: bool = False) -> StudyResult:
     """Standardised regression coefficients (paper eq. 14): SRC_i = b_i·sd(x_i)/sd(y) of
     the linear regression of y on the parameters over a Latin hypercube of n runs, with
-    SRC² (the share of variance for independent inputs) and the regression's R²; with
+    SRC² (the share of variance for independent inputs) with its bootstrap 95 % half-width
+    (SRC2_conf) and the regression's R²; with
     ``rank`` the same on ranks (SRRC, for monotone non-linear responses). Warns when
     R² < 0.7: the linear model then explains too little for the coefficients to rank."""
     from SALib.sample import latin
@@ -297,7 +301,9 @@ def src(problem: Problem, evaluate: Evaluate, n: int = 500, seed: int = 0,
     values = problem.transform(x)
     rows = []
     for column in outputs.columns:
-        coef, r2 = src_coefficients(values, outputs[column].to_numpy(float), rank)
+        y = outputs[column].to_numpy(float)
+        coef, r2 = src_coefficients(values, y, rank)
+        conf = src_intervals(values, y, rank, seed=bootstrap_seed(seed))
         if r2 < SRC_MIN_R2:
             warnings.warn(f"{'SRRC' if rank else 'SRC'} of {column}: R² = {r2:.2f} < "
                           f"{SRC_MIN_R2}; the regression explains too little of the variance "
@@ -305,9 +311,23 @@ def src(problem: Problem, evaluate: Evaluate, n: int = 500, seed: int = 0,
                           SensitivityWarning, stacklevel=2)
         for j, name in enumerate(problem.names):
             rows.append({"output": column, "parameter": name, "SRC": coef[j],
-                         "SRC2": coef[j] ** 2, "R2": r2})
+                         "SRC2": coef[j] ** 2, "SRC2_conf": conf[j], "R2": r2})
     return StudyResult("src", pd.DataFrame(rows), _frame(problem, x), outputs,
                        {"n": n, "rank": rank})
+
+
+def src_intervals(x: np.ndarray, y: np.ndarray, rank: bool = False, *,
+                  resamples: int = 200, conf_level: float = 0.95, seed=None) -> np.ndarray:
+    """Half-width of the bootstrap ``conf_level`` interval of each SRC² (the runs resampled
+    with replacement ``resamples`` times): two parameters whose SRC² differ by less cannot
+    be ranked on this sample."""
+    rng = np.random.default_rng(seed)
+    squares = np.empty((resamples, x.shape[1]))
+    for i in range(resamples):
+        pick = rng.integers(0, len(y), len(y))
+        squares[i] = src_coefficients(x[pick], y[pick], rank)[0] ** 2
+    low, high = np.quantile(squares, [(1 - conf_level) / 2, (1 + conf_level) / 2], axis=0)
+    return (high - low) / 2
 
 
 def src_coefficients(x: np.ndarray, y: np.ndarray, rank: bool = False

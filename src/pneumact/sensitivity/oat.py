@@ -61,7 +61,8 @@ class OneAtATime(ResultVocabulary):
     def plot_loops(self, zoom: bool = False) -> Figure:
         """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5);
         with ``zoom`` a row per parameter: the whole loop, the break-away (where the
-        diaphragm leaves rest) and the low-pressure reversal, where σ0, σ1 and vs act."""
+        diaphragm leaves rest), the middle of the stroke (the loop's width in position on
+        its own scale) and the low-pressure reversal, where σ0, σ1 and vs act."""
         params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
         if zoom:
             return self._plot_zoomed(params)
@@ -99,8 +100,11 @@ class OneAtATime(ResultVocabulary):
         width = summary["loop_width_pressure"] * 1e-3
         breakaway = summary["breakaway_pressure"] * 1e-3
         turn = float(p.min()) * 1e-3
+        middle = float(np.interp(0.5 * x.max(), x[: int(np.argmax(x)) + 1],
+                                 p[: int(np.argmax(x)) + 1])) * 1e-3
         windows = {"whole loop": None,
                    "at break-away": (breakaway - 0.8 * width, breakaway + 0.8 * width),
+                   "mid-stroke": (middle - 1.5 * width, middle + 1.5 * width),
                    "at the reversal": (turn - 0.1 * width, turn + 1.3 * width)}
         if not np.isfinite(width) or not np.isfinite(breakaway):
             windows = {"whole loop": None}
@@ -246,8 +250,11 @@ class FrictionCurves(ResultVocabulary):
         if window is not None:
             values = np.concatenate(shown)
             if values.size:
-                pad = 0.08 * (np.ptp(values) or 0.1)
-                ax.set_ylim(values.min() - pad, values.max() + pad)
+                # at least 10 % of the friction level: curves that coincide stay flat
+                # instead of spreading round-off over the panel
+                span = max(np.ptp(values), 0.1 * float(np.max(np.abs(values))), 1e-9)
+                middle = 0.5 * (values.min() + values.max())
+                ax.set_ylim(middle - 0.58 * span, middle + 0.58 * span)
             ax.set_xlim(*window)
 
     def _plot_zoomed(self, params: list[str]):

@@ -210,16 +210,14 @@ class ConditionStudy(ResultVocabulary):
         """The index of ``output`` (default: the first) against v/vs (log axis), a line
         per parameter and a panel per valve and amplitude, with the confidence band where
         there is one."""
-        import matplotlib.pyplot as plt
-        from matplotlib.ticker import FuncFormatter, NullFormatter
+        from ..plotting import label_log_axis, panel_grid
 
         output = output or self.output_names[0]
         key = self._key(index)
         groups = list(self.conditions.groupby(["valve", "amplitude"], sort=False))
-        fig, axes = plt.subplots(1, len(groups), squeeze=False,
-                                 figsize=(min(5.2 * len(groups), 12.0), 3.8))
+        fig, panels = panel_grid(len(groups), width=5.2, height=3.8, columns=3)
         sub = self.indices[self.indices["output"] == output]
-        for ax, ((valve, amplitude), rows) in zip(axes[0], groups, strict=True):
+        for (ax,), ((valve, amplitude), rows) in zip(panels, groups, strict=True):
             part = sub[sub["condition"].isin(rows["condition"])]
             for name, line in part.groupby("parameter", sort=False):
                 line = line.sort_values("speed_vs")
@@ -228,15 +226,14 @@ class ConditionStudy(ResultVocabulary):
                     ax.fill_between(line["speed_vs"], line[key] - line[f"{key}_conf"],
                                     line[key] + line[f"{key}_conf"], alpha=0.15)
             ax.set_xscale("log")
-            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-            ax.xaxis.set_minor_formatter(NullFormatter())
+            label_log_axis(ax)
             ax.axvline(1.0, color="k", lw=0.6, ls=":")
             ax.set_xlabel("sliding speed v / vs (nominal run)")
             ax.set_ylabel(f"{key} of {output}")
             amp = "" if amplitude == 1 else f", amplitude {amplitude:g}"
             ax.set_title(f"{self.method}: {valve} valve{amp}", fontsize=9)
             ax.grid(True, which="both", alpha=0.3)
-        axes[0, 0].legend(fontsize=7)
+        panels[0][0].legend(fontsize=7)
         fig.tight_layout()
         return fig
 

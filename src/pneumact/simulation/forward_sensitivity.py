@@ -79,6 +79,20 @@ class SensitivityResult(ResultVocabulary):
     def tables(self) -> dict[str, pd.DataFrame]:
         return {"sensitivities": self.to_pandas(), "simulation": self.result.to_pandas()}
 
+    @staticmethod
+    def tables_names() -> tuple[str, ...]:
+        """The names of ``tables()`` (a signal of the same name yields to them)."""
+        return ("sensitivities", "simulation")
+
+    def notebook_table(self) -> pd.DataFrame:
+        """Per signal and parameter, the largest |θ·∂y/∂θ| over the run (``max``)."""
+        import pandas as pd
+
+        rows = [{"signal": sig, "parameter": par, "unit": self.result.units.get(sig, ""),
+                 "max": float(np.max(np.abs(self.relative(sig)[:, k])))}
+                for sig in self.signals for k, par in enumerate(self.parameters)]
+        return pd.DataFrame(rows, columns=["signal", "parameter", "unit", "max"])
+
     def report_text(self) -> str:
         return (f"∂signal/∂θ along {self.result.meta.get('experiment', 'the run')} for "
                 f"{', '.join(self.parameters)}; the figure shows θ·∂y/∂θ (the change per "
@@ -102,9 +116,18 @@ class SensitivityResult(ResultVocabulary):
 
     def to_pandas(self, name: str | None = None):
         """Long table: time, signal, parameter, sensitivity (SI units of signal/parameter);
-        ``name="simulation"``: the run's signals."""
+        ``name="simulation"``: the run's signals; ``name`` a signal ("position"): its
+        ∂signal/∂θ labelled, a column per parameter over a ``time`` index, the units in
+        ``attrs["units"]`` (``self["position"]`` is the same as a bare array)."""
         import pandas as pd
 
+        if name is not None and name in self.signals and name not in self.tables_names():
+            frame = pd.DataFrame(self[name], columns=list(self.parameters),
+                                 index=pd.Index(np.array(self.result.time), name="time"))
+            frame.attrs["units"] = {par: f"{self.result.units.get(name, '')}/"
+                                         f"({self.units.get(par) or '1'})"
+                                    for par in self.parameters}
+            return frame
         if name is not None:
             return super().to_pandas(name)
         frames = []

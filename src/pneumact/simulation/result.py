@@ -186,6 +186,12 @@ class Result(ResultVocabulary):
 
         return plot_time_series(self, signals=signals, axes=axes)
 
+    def notebook_table(self):
+        """Each signal's first, smallest, largest and last value (a notebook's display)."""
+        from ..io.display import signal_summary
+
+        return signal_summary(self.signals, self.units)
+
     def __repr__(self) -> str:
         return (f"Result({len(self.time)} samples over {self.time[0]:g}..{self.time[-1]:g} s, "
                 f"signals={self.names})")

@@ -579,15 +579,12 @@ class FrictionComparison(ResultVocabulary):
     def plot(self) -> Figure:
         """Each held-out record's loop (the measured signal against the model's input):
         measured in black, every fitted law in its colour."""
-        import matplotlib.pyplot as plt
-
-        from ..plotting import display_values
+        from ..plotting import display_values, panel_grid
 
         signal = self.signals[0]
         drive = self.model.input_signal
-        n = len(self.test)
-        fig, axes = plt.subplots(1, n, squeeze=False, figsize=(5.2 * n, 4.2))
-        for ax, (j, rec) in zip(axes[0], enumerate(self.test), strict=True):
+        fig, panels = panel_grid(len(self.test), width=5.2, height=4.2)
+        for (ax,), (j, rec) in zip(panels, enumerate(self.test), strict=True):
             x, x_label = display_values(rec, drive)
             y, y_label = display_values(rec, signal)
             ax.plot(x, y, "k", lw=1.6, label="measured")
@@ -598,7 +595,7 @@ class FrictionComparison(ResultVocabulary):
             ax.set_ylabel(y_label)
             ax.set_title(os.path.basename(rec.source), fontsize=9)
             ax.grid(True, alpha=0.3)
-        axes[0][0].legend(fontsize=7, loc="upper left")  # "best" scans every sample: slow
+        panels[0][0].legend(fontsize=7, loc="upper left")  # "best" scans every sample: slow
         fig.tight_layout()
         return fig
 

@@ -20,6 +20,7 @@ import pandas as pd
 
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
+from ..io.report import NotebookDisplay
 from .metrics import METRIC_NAMES, error_metrics
 
 if TYPE_CHECKING:
@@ -29,7 +30,7 @@ __all__ = ["FrictionValidation", "friction_across_levels", "validate_friction"]
 
 
 @dataclass(eq=False)
-class FrictionValidation:
+class FrictionValidation(NotebookDisplay):
     """Predicted against measured force per record (``predictions[name]``: time,
     velocity, measured, predicted, SI) and the parameters each prediction used.
 
@@ -70,25 +71,25 @@ class FrictionValidation:
 
     def plot(self) -> Figure:
         """Per record: measured and predicted force against time, and against velocity."""
-        import matplotlib.pyplot as plt
+        from ..plotting import panel_grid
 
-        n = len(self.predictions)
-        fig, axes = plt.subplots(2, n, squeeze=False, figsize=(4.6 * n, 6.2))
-        for i, (name, d) in enumerate(self.predictions.items()):
-            axes[0, i].plot(d["time"], d["measured"], "k-", lw=0.6, label="measured")
-            axes[0, i].plot(d["time"], d["predicted"], "C0-", lw=0.8, label="model")
-            axes[0, i].set_xlabel("time [s]")
-            axes[0, i].set_ylabel("force [N]")
-            axes[0, i].set_title(f"{name} ({self.role.get(name, 'validation')})", fontsize=9)
+        fig, panels = panel_grid(len(self.predictions), rows_per=2, height=3.1)
+        for (ax_time, ax_vel), (name, d) in zip(panels, self.predictions.items(),
+                                                strict=True):
+            ax_time.plot(d["time"], d["measured"], "k-", lw=0.6, label="measured")
+            ax_time.plot(d["time"], d["predicted"], "C0-", lw=0.8, label="model")
+            ax_time.set_xlabel("time [s]")
+            ax_time.set_ylabel("force [N]")
+            ax_time.set_title(f"{name} ({self.role.get(name, 'validation')})", fontsize=9)
             order = np.argsort(d["velocity"].to_numpy())
-            axes[1, i].plot(d["velocity"] * 1e3, d["measured"], "k.", ms=1)
-            axes[1, i].plot(d["velocity"].to_numpy()[order] * 1e3,
-                            d["predicted"].to_numpy()[order], "C0-", lw=1)
-            axes[1, i].set_xlabel("velocity [mm/s]")
-            axes[1, i].set_ylabel("force [N]")
-            for ax in axes[:, i]:
+            ax_vel.plot(d["velocity"] * 1e3, d["measured"], "k.", ms=1)
+            ax_vel.plot(d["velocity"].to_numpy()[order] * 1e3,
+                        d["predicted"].to_numpy()[order], "C0-", lw=1)
+            ax_vel.set_xlabel("velocity [mm/s]")
+            ax_vel.set_ylabel("force [N]")
+            for ax in (ax_time, ax_vel):
                 ax.grid(True, alpha=0.3)
-        axes[0, 0].legend(fontsize=8)
+        panels[0][0].legend(fontsize=8)
         fig.tight_layout()
         return fig
 

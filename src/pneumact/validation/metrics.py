@@ -14,11 +14,16 @@ With e = y − ŷ over N samples and ȳ the mean of the measurement:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["METRIC_NAMES", "autocorrelation", "error_metrics"]
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["METRIC_NAMES", "autocorrelation", "error_metrics", "metrics_for_reading"]
 
 METRIC_NAMES = ("rms", "max", "nrmse", "fit_percent", "r2", "n")
 
@@ -66,3 +71,22 @@ def autocorrelation(residual, max_lag: int | None = None) -> tuple[np.ndarray, f
     full = correlate(e, e, mode="full", method="auto")[e.size - 1:e.size + lags]
     acf = full / full[0] if full[0] > 0 else np.zeros(lags + 1)
     return acf, 1.96 / np.sqrt(e.size)
+
+
+#: the metric columns as a person reads them ("rms" and "max" get the signal's unit)
+_READ_AS = {"nrmse": "NRMSE [1]", "fit_percent": "fit [%]", "r2": "R² [1]"}
+
+
+def metrics_for_reading(frame: pd.DataFrame) -> dict[str, pd.DataFrame]:
+    """A metrics table (``Validation.metrics``) for a person: one table per signal, its
+    RMS and max in display units (µm or mm, kPa, N) with the unit in the header."""
+    from ..core.units import signal_unit
+    from ..io.display import display_frame
+
+    tables = {}
+    for signal, part in frame.groupby("signal", sort=False):
+        unit = signal_unit(str(signal)) or "1"
+        named = part.drop(columns="signal").rename(
+            columns={"rms": f"rms [{unit}]", "max": f"max [{unit}]", **_READ_AS})
+        tables[str(signal)] = display_frame(named)
+    return tables

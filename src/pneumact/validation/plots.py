@@ -4,28 +4,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import DISPLAY_UNITS
+from ..io.display import display_frame, display_unit
+from ..plotting import DISPLAY_UNITS, panel_grid
+from .metrics import metrics_for_reading
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
 
 
-def _display(rv, signal: str) -> tuple[str, float]:
-    return DISPLAY_UNITS.get(rv.record.units.get(signal, ""), ("", 1.0))
-
-
-def _grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.4):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(rows_per, n, squeeze=False, figsize=(width * n, height * rows_per))
-    return fig, axes
+def _display(rv, signal: str, values=()) -> tuple[str, float]:
+    """(unit shown, factor) of ``signal``: µm for residuals of some micrometres."""
+    si = rv.record.units.get(signal, "")
+    return display_unit(si, values) if si else DISPLAY_UNITS.get(si, ("", 1.0))
 
 
 def plot_loops(validation):
     """Measured (black dashed) and predicted pressure–position loops, one panel per
     record with pressure and position."""
     records = [rv for rv in validation.records if rv.has_loop]
-    fig, axes = _grid(len(records))
-    for ax, rv in zip(axes[0], records, strict=True):
+    fig, panels = panel_grid(len(records))
+    for (ax,), rv in zip(panels, records, strict=True):
         ax.plot(rv.record["pressure"] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
                 label="measured")
         ax.plot(rv.predicted("pressure") * 1e-3, rv.predicted("position") * 1e3, "C0-",
@@ -34,7 +31,7 @@ def plot_loops(validation):
         ax.set_ylabel("position [mm]")
         ax.set_title(rv.name, fontsize=9)
         ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(fontsize=8)
+    panels[0][0].legend(fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -55,29 +52,39 @@ def plot_residuals(validation):
     from .metrics import autocorrelation
 
     signal = validation.signals[0]
-    fig, axes = _grid(len(validation.records), rows_per=2, height=3.0)
-    for i, rv in enumerate(validation.records):
-        unit, factor = _display(rv, signal)
+    fig, panels = panel_grid(len(validation.records), rows_per=2, height=3.0)
+    for (ax_res, ax_acf), rv in zip(panels, validation.records, strict=True):
         residual = rv.residual(signal)
+        unit, factor = _display(rv, signal, residual)
         if "pressure" in rv.record:
-            axes[0, i].plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
-            axes[0, i].set_xlabel("pressure [kPa abs]")
+            ax_res.plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
+            ax_res.set_xlabel("pressure [kPa abs]")
         else:
-            axes[0, i].plot(rv.record.time, residual * factor, ".", ms=1.5)
-            axes[0, i].set_xlabel("time [s]")
-        axes[0, i].set_ylabel(f"{signal} residual [{unit}]")
-        axes[0, i].set_title(rv.name, fontsize=9)
+            ax_res.plot(rv.record.time, residual * factor, ".", ms=1.5)
+            ax_res.set_xlabel("time [s]")
+        ax_res.set_ylabel(f"{signal} residual [{unit}]")
+        ax_res.set_title(rv.name, fontsize=9)
         acf, band = autocorrelation(residual)
         lags = np.arange(acf.size)
-        axes[1, i].vlines(lags, 0, acf, lw=1)
-        axes[1, i].axhspan(-band, band, color="C2", alpha=0.2, label="white noise, 95 %")
-        axes[1, i].set_xlabel("lag [samples]")
-        axes[1, i].set_ylabel("autocorrelation")
-        for ax in axes[:, i]:
+        ax_acf.vlines(lags, 0, acf, lw=1)
+        ax_acf.axhspan(-band, band, color="C2", alpha=0.2, label="white noise, 95 %")
+        ax_acf.set_xlabel("lag [samples]")
+        ax_acf.set_ylabel("autocorrelation")
+        for ax in (ax_res, ax_acf):
             ax.grid(True, alpha=0.3)
-    axes[1, 0].legend(fontsize=8)
+    panels[0][1].legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def _reversal_units(table) -> dict[str, str]:
+    """The SI unit of each column of a reversal table (``Validation.reversals``)."""
+    units = {}
+    for column in table.columns:
+        name = str(column)
+        units[column] = ("Pa" if "pressure" in name else "m" if "position" in name
+                         else "s" if "time" in name else "")
+    return {c: u for c, u in units.items() if u}
 
 
 def add_to_report(validation, report, title: str | None, figures: dict[str, bytes]) -> None:
@@ -87,7 +94,8 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     report.heading(label)
     report.text(f"{len(validation.records)} record(s); compared: "
                 f"{', '.join(validation.signals)}. NRMSE = ‖y − ŷ‖/‖y − ȳ‖, "
-                "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; SI units.")
+                "fit % = 100·(1 − NRMSE), R² = 1 − NRMSE²; shown in mm or µm, kPa and N (the "
+                "CSV files are SI).")
     verdicts = validation.verdicts()
     c = validation.criteria
     report.text("Verdict per record: fit % alone is not enough (a model whose loop is half "
@@ -103,15 +111,18 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     for _, row in verdicts[verdicts["verdict"] == "inadequate"].iterrows():
         report.note(f"{row['record']}: the model is inadequate for this record: "
                     f"{row['reasons']}.")
-    report.table(validation.metrics(), "Error metrics per record and pooled", index=False)
+    for signal, shown in metrics_for_reading(validation.metrics()).items():
+        report.table(shown, f"Error metrics of the {signal}, per record and pooled",
+                     index=False)
     loops = validation.loops()
     if len(loops):
-        report.table(loops, "Hysteresis-loop measures, model against measurement "
-                            "(difference = model − measured)", index=False)
+        report.table(display_frame(loops), "Hysteresis-loop measures, model against "
+                     "measurement (difference = model − measured)", index=False)
         report.image(figures["loops"], "Pressure–position loops: measured (dashed) and "
                                        "model (like the paper's Fig. 6)")
         reversal_table = validation.reversals()
         if len(reversal_table):
-            report.table(reversal_table, "Reversal points of the pressure", index=False)
+            report.table(display_frame(reversal_table, _reversal_units(reversal_table)),
+                         "Reversal points of the pressure", index=False)
     report.image(figures["time"], "Measured and predicted signals, residuals")
     report.image(figures["residuals"], "Residuals against pressure and their autocorrelation")

@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
+from ..io.report import NotebookDisplay
 from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS, valve_for_signal
 from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
@@ -86,7 +87,7 @@ def _write_bytes(data: bytes, path: Path) -> None:
 
 
 @dataclass(eq=False)
-class RecordValidation:
+class RecordValidation(NotebookDisplay):
     """One record against the model's prediction of it: ``metrics()`` and
     ``to_pandas()`` (tables), ``plot()`` (a Figure) and ``write(folder)`` as those of a
     ``Validation`` of this record alone."""
@@ -97,6 +98,9 @@ class RecordValidation:
     signals: tuple[str, ...]
     input: str = ""
     valve: str = ""
+    #: signals asked for but not compared: the record's input drives the model with
+    #: them, so the model would only repeat them (a fit of 100 % that says nothing)
+    dropped: tuple[str, ...] = ()
 
     def measured(self, signal: str) -> np.ndarray:
         return self.record[signal]
@@ -107,6 +111,10 @@ class RecordValidation:
     def residual(self, signal: str) -> np.ndarray:
         """Measured − predicted, on the record's time grid."""
         return self.measured(signal) - self.predicted(signal)
+
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
 
     def metrics(self) -> pd.DataFrame:
         """Per signal: RMS, max, NRMSE, fit %, R², n (``validation.metrics``)."""
@@ -160,7 +168,7 @@ class RecordValidation:
 
 
 @dataclass(eq=False)
-class Validation:
+class Validation(NotebookDisplay):
     """Validation of one model on a set of records; ``label`` names the set (e.g. test).
 
     ``to_pandas()``: the time series, long (``"metrics"``, ``"verdicts"``, ``"loops"``:
@@ -173,6 +181,10 @@ class Validation:
     label: str = "validation"
     criteria: Criteria = field(default_factory=Criteria)
 
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
+
     def metrics(self) -> pd.DataFrame:
         """Per record and signal, plus all records pooled: RMS, max, NRMSE, fit %, R², n,
         and the record's verdict (``verdicts()``; pooled: the worst)."""
@@ -182,8 +194,11 @@ class Validation:
             for row in rv.metrics().to_dict("records"):
                 rows.append({**row, "verdict": verdicts[rv.name]})
         for signal in self.signals:
-            measured = np.concatenate([rv.measured(signal) for rv in self.records])
-            predicted = np.concatenate([rv.predicted(signal) for rv in self.records])
+            compared = [rv for rv in self.records if signal in rv.signals]
+            if not compared:
+                continue
+            measured = np.concatenate([rv.measured(signal) for rv in compared])
+            predicted = np.concatenate([rv.predicted(signal) for rv in compared])
             rows.append({"record": ALL_RECORDS, "signal": signal,
                          **error_metrics(measured, predicted, f"{ALL_RECORDS}: {signal}"),
                          "verdict": worst_verdict(verdicts)})
@@ -216,7 +231,7 @@ class Validation:
         """Autocorrelation of each record's residual (lag, acf, band) per signal."""
         rows = []
         for rv in self.records:
-            for signal in self.signals:
+            for signal in rv.signals:
                 acf, band = autocorrelation(rv.residual(signal), max_lag)
                 rows.append(pd.DataFrame({"record": rv.name, "signal": signal,
                                           "lag": np.arange(acf.size), "acf": acf,
@@ -234,7 +249,7 @@ class Validation:
             return others[name]()
         frames = []
         for rv in self.records:
-            for s in self.signals:
+            for s in rv.signals:
                 frames.append(pd.DataFrame({"record": rv.name, "time": rv.record.time,
                                             "signal": s, "measured": rv.measured(s),
                                             "model": rv.predicted(s),
@@ -348,17 +363,23 @@ def validate(model, records: Record | Sequence[Record], *,
         record.require(signals, "validation")
         driven, signal = drive_for(model, record, input)
         name = os.path.basename(record.source) or f"record {i + 1}"
+        compared = tuple(s for s in signals if s != signal)
+        if not compared:
+            raise DataError(f"validate: {name} drives the model with its {signal}, the "
+                            f"only signal asked (signals={list(signals)}): the model would "
+                            "repeat its input; compare another signal (e.g. position)")
         experiment = experiment_for(driven, record, smooth_input)
         simulated = simulate(driven, experiment, solver, t_eval=record.time,
                              values=dict(values or {}))
-        out.append(RecordValidation(name, record, simulated, signals, signal,
-                                    driven.drive_label))
+        out.append(RecordValidation(name, record, simulated, compared, signal,
+                                    driven.drive_label, tuple(s for s in signals
+                                                              if s not in compared)))
         notify(progress, "validate", i + 1, len(records))
     return Validation(out, signals, dict(values or {}), label, criteria or Criteria())
 
 
 @dataclass(eq=False)
-class TrainTest:
+class TrainTest(NotebookDisplay):
     """A fit on training records and its validation on those and on test records.
 
     ``to_pandas()``: training and test metrics (``metrics()``; ``"summary"``: pooled,
@@ -368,6 +389,10 @@ class TrainTest:
     fit: FitResult
     train: Validation
     test: Validation
+
+    def notebook_table(self) -> pd.DataFrame:
+        """The metrics, for a notebook's display."""
+        return self.metrics()
 
     def metrics(self) -> pd.DataFrame:
         """Training and test metrics in one table (``set`` column): over-fitting shows as
@@ -402,7 +427,11 @@ class TrainTest:
         report.heading("Fitted parameters")
         report.table(self.fit.to_pandas(), "Estimates with standard errors (training records)")
         report.heading("Training against test")
-        report.table(self.metrics(), "Error metrics per record and pooled", index=False)
+        from .metrics import metrics_for_reading
+
+        for signal, shown in metrics_for_reading(self.metrics()).items():
+            report.table(shown, f"Error metrics of the {signal}, per record and pooled",
+                         index=False)
         train_figures, test_figures = self.train.figure_pngs(), self.test.figure_pngs()
         self.train.add_to(report, "Training records", train_figures)
         self.test.add_to(report, "Test records", test_figures)

@@ -110,8 +110,11 @@ def record_verdict(rv, criteria: Criteria) -> dict:
         reasons.append(f"{100 * outside:.3g} % of the residual autocorrelation lags lie "
                        f"outside the white-noise band (at most "
                        f"{100 * criteria.max_lags_outside:g} %)")
+    dropped = getattr(rv, "dropped", ())
+    note = (f" ({', '.join(dropped)} not compared: the record's input, it drives the "
+            "model)" if dropped else "")
     return {"record": rv.name, "input": rv.input, "valve": rv.valve, "verdict": verdict,
-            "reasons": "; ".join(reasons) or "all checks pass",
+            "reasons": ("; ".join(reasons) or "all checks pass") + note,
             "fit_percent": min(fits.values()), **loop_values,
             "residual_lags_outside": outside}
 

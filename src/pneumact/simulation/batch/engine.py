@@ -110,17 +110,21 @@ class BatchResult(ResultVocabulary):
             ax.set_xlabel("time [s]")
             ax.set_ylabel(f"{name} [{self.units.get(name, '')}]")
             return fig
+        from ...plotting import MAX_PANEL_COLUMNS, panel_grid
+
         columns = varied or ["set"]
-        fig, axes = plt.subplots(max(1, len(features)), len(columns), squeeze=False,
-                                 figsize=(3.2 * len(columns) + 1, 2.4 * max(1, len(features))))
-        for i, feature in enumerate(features):
-            for j, column in enumerate(columns):
-                x = ok.index if column == "set" else ok[column]
-                axes[i, j].plot(x, ok[feature], ".", ms=4)
-                axes[i, j].set_xlabel(f"{column} [{self.units.get(column, '')}]"
-                                      if column != "set" else "set")
-                axes[i, j].set_ylabel(f"{feature} [{FEATURE_UNITS[feature]}]", fontsize=8)
-                axes[i, j].grid(True, alpha=0.3)
+        # a row per feature, a column per varied input; more inputs than fit side by side
+        # wrap into rows (a figure of many inputs stays readable)
+        pairs = [(feature, column) for feature in features for column in columns]
+        fig, panels = panel_grid(len(pairs), width=3.4, height=2.4,
+                                 columns=min(len(columns), MAX_PANEL_COLUMNS))
+        for (ax,), (feature, column) in zip(panels, pairs, strict=False):
+            x = ok.index if column == "set" else ok[column]
+            ax.plot(x, ok[feature], ".", ms=4)
+            ax.set_xlabel(f"{column} [{self.units.get(column, '')}]"
+                          if column != "set" else "set")
+            ax.set_ylabel(f"{feature} [{FEATURE_UNITS[feature]}]", fontsize=8)
+            ax.grid(True, alpha=0.3)
         fig.tight_layout()
         return fig
 
