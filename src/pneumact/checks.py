@@ -249,9 +249,22 @@ def check_path(name: str, value: Any, *, where: str = "") -> Path:
                             f"(a str or a pathlib.Path), not {type(value).__name__}")
 
 
+#: the longest output folder name [bytes of UTF-8]: file systems allow 255, and a run
+#: stages beside the folder under its name plus at most 30 characters
+#: (".NAME.pneumact-stage-XXXXXXXX")
+MAX_OUT_NAME_BYTES = 225
+
+
 def check_out_dir(name: str, value: Any, *, where: str = "") -> Path:
-    """An output folder: a path that is not an existing file, whose parents are not files."""
+    """An output folder: a path that is not an existing file, whose parents are not files,
+    whose name leaves room for the run's staging folder beside it."""
     path = check_path(name, value, where=where)
+    size = len(path.resolve().name.encode("utf-8", "surrogateescape"))
+    if size > MAX_OUT_NAME_BYTES:
+        raise ArgumentError(f"{_prefix(where)}{name}: the folder name is {size} characters "
+                            f"long ('{path.name[:40]}...'); at most {MAX_OUT_NAME_BYTES} "
+                            "(file systems allow 255 per name, and a run works in a folder "
+                            "beside it named after it): give a shorter name")
     if path.exists() and not path.is_dir():
         raise ArgumentError(f"{_prefix(where)}{name} = '{path}': is a file; give a folder "
                             "(it is created if missing)")

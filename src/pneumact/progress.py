@@ -7,17 +7,26 @@ done of all sets, a fit each multistart start or profile point, a validation the
 a reproduction each step. The command line draws its progress bars from these reports in
 one place (``pneumact.cli.common``).
 
+Ctrl-C stops long work within a simulation: the main thread receives the interrupt,
+``stop_threads`` asks the pool's threads to stop (each simulation starts with
+``raise_if_stopped``), cancels the starts not begun and waits for the running ones, which
+end at their next simulation.
+
 A base module (it imports only ``pneumact.errors``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import threading
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor as FuturesExecutor
 from dataclasses import dataclass
 
 from .errors import ArgumentTypeError
 
-__all__ = ["Progress", "ProgressCallback", "check_progress", "notify"]
+__all__ = ["Progress", "ProgressCallback", "check_progress", "notify", "raise_if_stopped",
+           "stop_requested", "stop_threads"]
 
 
 @dataclass(frozen=True)
@@ -56,3 +65,40 @@ def notify(progress: ProgressCallback | None, stage: str, done: float, total: fl
     """Call ``progress`` (when given) with ``Progress(stage, done, total, failed)``."""
     if progress is not None:
         progress(Progress(stage, float(done), float(total), int(failed)))
+
+
+# ----------------------------------------------------------------------- stopping work
+_stop_lock = threading.Lock()
+_stop_requests = 0  # > 0 while a pool is being stopped (nested pools count each)
+
+
+def stop_requested() -> bool:
+    """Whether long work was asked to stop (Ctrl-C, or a failure beside it)."""
+    return _stop_requests > 0
+
+
+def raise_if_stopped() -> None:
+    """Raise ``KeyboardInterrupt`` when long work was asked to stop: called before each
+    simulation, so that the threads of a pool end at their next one."""
+    if _stop_requests > 0:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def stop_threads(pool: FuturesExecutor) -> Iterator[FuturesExecutor]:
+    """Shut ``pool`` down on leaving; when the block raises (Ctrl-C in the main thread,
+    or a failure), first ask its threads to stop, cancel what has not begun and wait for
+    the running work (one simulation at most) before the exception goes on."""
+    global _stop_requests
+    try:
+        yield pool
+    except BaseException:
+        with _stop_lock:
+            _stop_requests += 1
+        try:
+            pool.shutdown(wait=True, cancel_futures=True)
+        finally:
+            with _stop_lock:
+                _stop_requests -= 1
+        raise
+    pool.shutdown(wait=True)

@@ -193,7 +193,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--max-evaluations": ["-1"],
     "--rounds": ["-1"],
     "--margin": ["1", "-0.1"],
-    "--gains-file": ["missing.toml"],
+    "--gains-file": ["missing.toml", *sorted(str(p) for p in (BAD / "gains").glob("*.toml"))],
     "--regime": ["gliding"],
     "--velocity": ["0", "-5"],
     "--tuned": ["missing.toml", str(BAD / "not_toml.toml")],
@@ -207,7 +207,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "negative_pressure.csv", "huge_pressure.csv", "kpa_as_pa.csv", "negative_time.csv",
         "nan_cell.csv", "time_backwards.csv", "no_header.csv", "position_in_metres.csv",
         "text_cell.csv", "empty.csv", "one_row.csv", "no_unit.csv", "wrong_dimension.csv",
-        "not_utf8.csv", "missing.csv")],
+        "not_utf8.csv", "missing.csv", "epoch_time.csv")],
     "validate": [str(BAD / "position_in_metres.csv"), str(BAD / "negative_pressure.csv")],
     "params show": ["vgt-papr", str(BAD / "k_huge.toml")],
     "params check": [str(BAD / name) for name in (
@@ -216,7 +216,7 @@ BAD_ARGUMENTS: dict[str, list[str]] = {
         "bare_number.toml", "unknown_unit.toml", "not_toml.toml", "negative_volume.toml",
         "missing.toml", "params.json")] + [str(BAD)],  # a folder where a file is expected
     "control profile": [str(BAD / "negative_time.csv"), str(BAD / "missing.csv")],
-    "identify paper": [str(BAD / "kpa_as_pa.csv")],
+    "identify paper": [str(BAD / "kpa_as_pa.csv"), str(BAD / "position_in_percent.csv")],
     "identify signature": [str(BAD / "kpa_as_pa.csv")],
     "identify friction": [str(BAD / "missing.csv"), str(BAD / "no_motion.csv")],
     "sensitivity": ["sobbol"],
@@ -522,7 +522,10 @@ def _api_cases(vgt, actuator, record, folder: Path):
         ("validate(a record twice)", lambda: pa.validate(actuator, [record, record])),
         *[(f"read_record {p.name}", lambda p=p: pa.read_record(p))
           for p in sorted(BAD.glob("*.csv")) if not p.name.startswith("table_")
-          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv")],
+          and p.name not in ("command_five.csv", "position_in_metres.csv", "no_motion.csv",
+                             "position_in_percent.csv", "saturated_position.csv")],
+        ("identify_paper(positions in %)", lambda: pa.identify_paper(
+            [pa.read_record(BAD / "position_in_percent.csv")], vgt)),
         ("inverse_friction(no motion)", lambda: inverse_friction(
             pa.read_record(BAD / "no_motion.csv"))),
         ("command record of 5", lambda: pa.read_record(BAD / "command_five.csv")),
@@ -670,3 +673,122 @@ def test_bad_files_corpus_is_complete():
     api_used = {p.name for p in BAD.glob("*.csv")} | {p.name for p in BAD.glob("*.toml")}
     for path in BAD.iterdir():
         assert path.name in used or path.name in api_used, path.name
+
+
+#: options that would do nothing where they are given (issue 42, finding 10), and a word
+#: each refusal must say besides the option: refused, not silently ignored
+USELESS_OPTIONS: dict[str, tuple[list[str], str]] = {
+    "fit --f-scale with the linear loss": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--f-scale", "2", "--out", "OUT"],
+        "--f-scale"),
+    "fit --seed without multistart": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--seed", "3", "--out", "OUT"],
+        "--seed"),
+    "fit --points without a profile": (
+        ["fit", str(GOOD / "record.csv"), "--free", "Fc", "--points", "5", "--out", "OUT"],
+        "--points"),
+    "fit --per-record with one record": (
+        ["fit", str(GOOD / "record.csv"), "--free", "sigma0", "--per-record", "sigma0",
+         "--out", "OUT"], "one record"),
+    "campaign --plan --seed": (["campaign", "--plan", "--seed", "3", "--out", "OUT"],
+                               "--seed"),
+    "campaign --plan --pressure-noise": (
+        ["campaign", "--plan", "--pressure-noise", "0.1", "--out", "OUT"],
+        "--pressure-noise"),
+    "validate --input setpoint --valve source": (
+        ["validate", str(GOOD / "record.csv"), "--input", "pressure", "--valve", "source",
+         "--out", "OUT"], "--valve"),
+    "validate --train the test record": (
+        ["validate", str(GOOD / "record.csv"), "--train", str(GOOD / "record.csv"),
+         "--free", "Fc", "--out", "OUT"], "training record"),
+    "control step --sample-time longer than the run": (
+        ["control", "step", "--sample-time", "10", "--out", "OUT"], "sample_time = 10 s"),
+    "control step without a step": (
+        ["control", "step", "--start", "4", "--stop", "4", "--out", "OUT"], "no step"),
+    "control step --u-min/--u-max in kPa": (
+        ["control", "step", "--u-min", "10", "--u-max", "100", "--out", "OUT"],
+        "looks like kPa"),
+}
+
+
+@pytest.mark.parametrize("case", list(USELESS_OPTIONS))
+def test_an_option_that_would_do_nothing_is_refused(workdir, case):
+    args, words = USELESS_OPTIONS[case]
+    result = _invoke(args, workdir)
+    assert_refused(result, words)
+    assert not any(workdir.iterdir()), "a refused command left files"
+
+
+def test_epoch_timestamps_are_refused_naming_the_offset(workdir):
+    """t = 1.7e9 s (issue 42, finding 9): a message about the time offset, not the
+    solver's "step size underflow"."""
+    result = _invoke(["fit", str(BAD / "epoch_time.csv"), "--free", "Fc", "--out", "OUT"],
+                     workdir)
+    assert_refused(result, "epoch_time.csv")
+    assert "timestamp" in result.stderr and "starts at 1.7e+09 s" in result.stderr
+    assert "underflow" not in result.stderr
+
+
+@pytest.mark.parametrize("args", [["simulate", "--t-end", "abc"], ["simulate", "--nope"],
+                                  ["batch"]])
+def test_usage_errors_end_in_the_one_error_prefix(workdir, args):
+    """The parser's mistakes speak like every command's refusals (issue 42): one
+    ``error:`` line after the usage, not a box titled "Error"."""
+    result = _invoke(args, workdir)
+    assert result.exit_code == EXIT_USER_ERROR
+    assert [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert "Error" not in result.output and "╭" not in result.output
+
+
+def test_messages_carry_no_python_reprs(workdir, monkeypatch):
+    """numpy's reprs of numbers and a KeyError's quotes never reach a message."""
+    import importlib
+
+    import numpy as np
+
+    from pneumact.cli.common import plain_message
+
+    assert plain_message(f"Fc = {np.float64(np.nan)!r}, n = {np.int64(3)!r}") == "Fc = nan, n = 3"
+    command = importlib.import_module("pneumact.cli.simulate")
+
+    def broken(*args, **kwargs):
+        raise KeyError("position")
+
+    monkeypatch.setattr(command, "build_experiment", broken)
+    result = _invoke(["simulate", "--out", "OUT"], workdir)
+    assert "KeyError: position (" in result.stderr and "'position'" not in result.stderr
+
+
+def test_a_study_beyond_the_memory_limit_is_refused_before_any_run(workdir, monkeypatch):
+    """oat --times 10000000 (issue 42, finding 8): its estimate, the stated limit and how
+    to raise it, before the features run (not minutes later at 3.5 GB)."""
+    from pneumact.simulation import memory
+
+    monkeypatch.delenv(memory.MEMORY_LIMIT_ENV, raising=False)
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 << 40)  # any machine
+    result = _invoke(["sensitivity", "oat", "--signals", "position", "--times", "10000000",
+                      "--out", "OUT"], workdir)
+    assert_refused(result, "--times")
+    assert "GiB of memory, above the limit of 4 GiB" in result.stderr
+    assert "PNEUMACT_MEMORY_LIMIT" in result.stderr and "largest change" not in result.output
+
+
+def test_identify_paper_refuses_positions_beyond_the_stroke_as_validate_does(workdir):
+    """Positions in % labelled [mm] (54 'mm' on a 20 mm stroke; issue 42, finding 6):
+    the unit named, not "0 of 8 identified"."""
+    for command in (["identify", "paper"], ["validate"]):
+        result = _invoke([*command, str(BAD / "position_in_percent.csv"), "--out", "OUT"],
+                         workdir)
+        assert_refused(result, "position_in_percent.csv")
+        assert "position spans" in result.stderr and "position unit" in result.stderr
+
+
+@pytest.mark.parametrize("command", [["fit", "--free", "Fc"], ["validate"]])
+def test_a_saturated_position_sensor_is_named(workdir, command):
+    """A position clipped at 6 mm while the pressure goes on (issue 42, finding 6): the
+    run names the saturated sensor, whatever it concludes."""
+    result = _invoke([command[0], str(BAD / "saturated_position.csv"), *command[1:],
+                      "--out", "OUT"], workdir)
+    assert "saturated position sensor" in result.stderr, result.output
+    assert "from t = 0.65 to 1.35 s" in result.stderr
+    assert "Traceback" not in result.output

@@ -208,3 +208,15 @@ def test_a_plant_with_state_events_is_refused_with_the_reason():
     with pytest.raises(ParameterError, match=r"GMS\(n_elements=4\) switches modes at state "
                                              "events"):
         pa.ClosedLoop(plant, pa.PID(kp=1.0))
+
+
+@pytest.mark.parametrize(("sample_time", "words"), [
+    (10.0, "not shorter than the run"),  # the controller would never act
+    (1e-9, "controller samples"),  # 1e9 breakpoints: 8 GB, and no Ctrl-C for an hour
+])
+def test_a_sample_time_the_run_cannot_use_is_refused(canudas, sample_time, words):
+    rig = pa.FrictionRig(canudas, pa.LuGre(), drive="force")
+    loop = ClosedLoop(rig, PID(kp=1.0, sample_time=sample_time))
+    with pytest.raises(ExperimentError, match=words) as refused:
+        loop.breakpoints(np.array([0.0, 1.0]), None, 0.0, 1.0)
+    assert f"sample_time = {sample_time:g} s" in str(refused.value)

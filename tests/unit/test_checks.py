@@ -12,7 +12,13 @@ import pytest
 
 from pneumact import checks
 from pneumact.errors import ArgumentError, ArgumentTypeError, DataError, PneumactError
-from pneumact.io.tables import RUN_LISTING, partial_folder, staged_folder, write_files
+from pneumact.io.tables import (
+    RUN_LISTING,
+    lock_file,
+    partial_folder,
+    staged_folder,
+    write_files,
+)
 
 
 # --------------------------------------------------------------------------- checks
@@ -218,8 +224,34 @@ def test_memory_estimate_refuses_with_the_figure(monkeypatch):
 
     monkeypatch.setattr(memory, "available_memory", lambda: 1 << 30)  # 1 GiB
     memory.check_memory(memory.simulate_bytes(1000, 3, 10), "small")
-    with pytest.raises(ResourceError, match=r"about .* GiB of memory; 1 GiB are available"):
+    with pytest.raises(ResourceError, match=r"about .* GiB of memory, above the limit of "
+                                            r".*; 1 GiB are available"):
         memory.check_memory(memory.simulate_bytes(10**9, 3, 10), "a run of 1e9 points")
+
+
+def test_a_stated_memory_limit_refuses_above_it_and_can_be_raised(monkeypatch, caplog):
+    """Big work says its memory estimate first and is refused above a stated limit
+    (issue 42), whatever the machine has; PNEUMACT_MEMORY_LIMIT raises or lowers it."""
+    import logging
+
+    from pneumact.errors import ResourceError
+    from pneumact.simulation import memory
+
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 << 40)  # 1 TiB free
+    monkeypatch.delenv(memory.MEMORY_LIMIT_ENV, raising=False)
+    three_gib, six_gib = 3 * 1024**3, 6 * 1024**3
+    with caplog.at_level(logging.INFO, logger=memory.ESTIMATES.name):
+        memory.check_memory(three_gib, "oat: 7 runs x 10000000 times")
+    assert "about 3 GiB of memory (limit 4 GiB)" in caplog.text
+    with pytest.raises(ResourceError, match=r"6 GiB of memory, above the limit of 4 GiB "
+                                            r"\(the default; raise it") as refused:
+        memory.check_memory(six_gib, "oat: 14 runs x 10000000 times")
+    assert "PNEUMACT_MEMORY_LIMIT=16GiB" in refused.value.for_cli()
+    monkeypatch.setenv(memory.MEMORY_LIMIT_ENV, "8GiB")
+    memory.check_memory(six_gib, "oat: 14 runs x 10000000 times")  # raised: runs
+    monkeypatch.setenv(memory.MEMORY_LIMIT_ENV, "lots")
+    with pytest.raises(ResourceError, match="PNEUMACT_MEMORY_LIMIT = 'lots'"):
+        memory.check_memory(six_gib, "a run")
 
 
 def test_signal_extremes_see_both_sides_of_a_jump():
@@ -230,3 +262,44 @@ def test_signal_extremes_see_both_sides_of_a_jump():
     low, high = (Sine(1.0, 1.0) + 2.0).extremes(0.0, 1.0)
     assert low == pytest.approx(1.0, abs=1e-6) and high == pytest.approx(3.0, abs=1e-6)
     assert np.isfinite(low)
+
+
+def test_a_folder_another_live_run_writes_is_refused_naming_that_run(tmp_path):
+    """Two runs into one folder (issue 42): the second is told which run holds it, not
+    advised to --overwrite (which would wipe the running one); the lock goes with the
+    run, and a stale lock (its process gone) is taken over."""
+    import socket
+    import subprocess
+    import sys
+
+    out = tmp_path / "batch"
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        lock_file(out).write_text(json.dumps({"pid": other.pid, "host": socket.gethostname(),
+                                              "started": "now"}), encoding="utf-8")
+        with pytest.raises(ArgumentError, match=f"another run \\(pid {other.pid}") as held:
+            with staged_folder(out, resumable=True):
+                pass
+        assert "--overwrite" not in held.value.for_cli() and "--out" in held.value.for_cli()
+        assert not out.exists() and not partial_folder(out).exists()
+    finally:
+        other.kill()
+        other.wait()
+    # the holder is gone: its lock is stale and taken over
+    with staged_folder(out, resumable=True) as stage:
+        assert json.loads(lock_file(out).read_text(encoding="utf-8"))["pid"] == os.getpid()
+        (stage / "chunk-0").write_text("done")
+    assert not lock_file(out).exists() and (out / "chunk-0").exists()
+
+
+def test_an_output_folder_name_too_long_to_stage_beside_is_refused_naming_its_length(
+        tmp_path):
+    """A 250-character --out (issue 42, finding 9) is refused for its name, not with an
+    error about the hidden staging folder that would not fit beside it."""
+    with pytest.raises(ArgumentError, match="folder name is 250 characters") as refused:
+        checks.check_out_dir("--out", tmp_path / ("a" * 250))
+    assert "pneumact-stage" not in str(refused.value)
+    assert checks.check_out_dir("--out", tmp_path / ("a" * checks.MAX_OUT_NAME_BYTES))
+    written = write_files(tmp_path / ("b" * checks.MAX_OUT_NAME_BYTES),
+                          {"x.csv": lambda p: p.write_text("1")})
+    assert written[0].read_text() == "1"  # the longest allowed name stages and writes

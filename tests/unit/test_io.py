@@ -485,3 +485,32 @@ def test_figures_do_not_pass_on_the_slow_legend_warning_but_others():
     fig.add_artist(Warns("something else"))
     with pytest.warns(UserWarning, match="something else"):
         figure_png(fig)
+
+
+def test_a_clipped_position_is_a_saturated_sensor_a_stick_at_the_turn_is_not():
+    """issue 42, finding 6: held at its top while the pressure goes on past the hold's
+    start and comes back: clipped; held from the pressure's turn on: a stick."""
+    from pneumact.io.records import Record
+
+    t = np.linspace(0.0, 2.0, 201)
+    pressure = 1e5 - 6e4 * (1.0 - np.abs(t - 1.0))  # 100 -> 40 -> 100 kPa
+    travel = 0.011 * (1.0 - np.abs(t - 1.0))  # up to 11 mm at the turn
+    clipped = Record.from_arrays(t, {"pressure": pressure,
+                                     "position": np.minimum(travel, 0.006)}, source="c")
+    assert "saturated position sensor" in clipped.saturation()
+    stick = np.where(t < 1.0, travel, np.maximum(travel[100] - 0.02 * (t - 1.3), 0.0))
+    stick = np.minimum(stick, travel[100])  # held from the turn (t = 1 s) to 1.3 s
+    stuck = Record.from_arrays(t, {"pressure": pressure, "position": stick}, source="s")
+    assert int(np.sum(stick == stick.max())) >= 30  # a long hold at the top
+    assert stuck.saturation() is None
+
+
+def test_a_hold_on_the_end_stop_is_not_a_saturated_sensor():
+    from pneumact.io.records import Record
+
+    t = np.linspace(0.0, 2.0, 201)
+    pressure = 1e5 - 6e4 * (1.0 - np.abs(t - 1.0))
+    on_stop = np.minimum(0.011 * (1.0 - np.abs(t - 1.0)), 0.006)  # a 6 mm stroke's stop
+    record = Record.from_arrays(t, {"pressure": pressure, "position": on_stop}, source="s")
+    assert record.saturation() is not None  # without the stroke: looks clipped
+    assert record.saturation(x_max=0.006) is None

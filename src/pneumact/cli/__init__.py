@@ -24,12 +24,13 @@ a successful run, atomically, and together. A user's mistake prints one red line
 
 from __future__ import annotations
 
-from typing import Annotated
+from collections.abc import Sequence
+from typing import Annotated, Any, cast
 
 import typer
 from typer.core import TyperGroup, TyperOption
 
-from pneumact.cli.common import out_console
+from pneumact.cli.common import err_console, out_console, print_error, show_estimates
 from pneumact.cli.compare import compare_command
 from pneumact.cli.control import control_app
 from pneumact.cli.export import export_app
@@ -76,9 +77,46 @@ def _flags_show_no_type(show_type):
 TyperOption.display_type_rich = _flags_show_no_type(  # type: ignore[method-assign]
     TyperOption.display_type_rich)
 
+
+class OneErrorPrefix(_Commands):
+    """The root command: the parser's usage errors (a mistyped option or value) end in
+    one ``error:`` line, as every command's own refusals do, instead of a box titled
+    "Error"; everything else as typer does it."""
+
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True,
+             windows_expand_args: bool = True, **extra: Any) -> Any:
+        import sys
+
+        # click's exception base as typer uses it (typer may vendor its own click)
+        click_exception = cast("type[Exception]", next(
+            c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException"))
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode,
+                                windows_expand_args, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, False, windows_expand_args,
+                                **extra)
+        except click_exception as exc:
+            exit_code = int(getattr(exc, "exit_code", 2))
+            if type(exc).__name__ == "NoArgsIsHelpError":  # the help is already shown
+                sys.exit(exit_code)
+            context = getattr(exc, "ctx", None)
+            if context is not None:
+                err_console.print(context.get_usage(), markup=False, highlight=False)
+                err_console.print(f"Try '{context.command_path} --help' for help.",
+                                  markup=False, highlight=False)
+            print_error(getattr(exc, "format_message", exc.__str__)())
+            sys.exit(exit_code)
+        except typer.Abort:
+            print_error("aborted")
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
 app = typer.Typer(
+    cls=OneErrorPrefix,
     name="pneumact",
-    cls=_Commands,
     help="Pneumatic diaphragm actuators with LuGre friction: simulate, test, inspect.",
     no_args_is_help=True,
     add_completion=False,
@@ -103,9 +141,9 @@ def main(
                                           help="Print the version and exit.")] = False,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
-    from pneumact.cli.common import err_console
     from pneumact.core.compile_lock import on_first_compile
 
+    show_estimates()
     on_first_compile(lambda: err_console.print(COMPILING, style="yellow"))
 
 

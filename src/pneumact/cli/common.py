@@ -12,6 +12,7 @@ module level: a command pays for what it uses.
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import os
 import warnings
@@ -291,12 +292,21 @@ def build_experiment(options: ModelOptions, params):
 
 
 # --------------------------------------------------------------------------- plumbing
+def plain_message(message: str) -> str:
+    """A message as a person reads it: numpy's reprs of numbers (``np.float64(nan)``,
+    ``np.int64(3)``) written as the numbers."""
+    import re
+
+    return re.sub(r"np\.(?:float|int|uint|bool|complex)_?\d*\(([^()]*)\)", r"\1", message)
+
+
 def print_error(message: str, prefix: str = "error") -> None:
-    err_console.print(Text(f"{prefix}: {message}", style="red"), soft_wrap=True)
+    err_console.print(Text(f"{prefix}: {plain_message(message)}", style="red"),
+                      soft_wrap=True)
 
 
 def _print_warning(message: warnings.WarningMessage) -> None:
-    text = f"warning: {message.category.__name__}: {message.message}"
+    text = plain_message(f"warning: {message.category.__name__}: {message.message}")
     err_console.print(Text(text, style="yellow"), soft_wrap=True)
 
 
@@ -348,7 +358,8 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             _flush_warnings(caught)
             if os.environ.get("PNEUMACT_TRACEBACK"):
                 raise
-            print_error(f"{type(exc).__name__}: {exc} (this is a bug in pneumact, not a "
+            text = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc  # no quotes
+            print_error(f"{type(exc).__name__}: {text} (this is a bug in pneumact, not a "
                         "mistake of yours: please report it with the command; "
                         "PNEUMACT_TRACEBACK=1 shows where it happened)",
                         prefix="internal error")
@@ -399,35 +410,52 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         TaskProgressColumn,
         TextColumn,
         TimeElapsedColumn,
-        TimeRemainingColumn,
     )
 
     columns: list[Any] = [SpinnerColumn(), TextColumn("{task.description}"), BarColumn()]
     if counts:
         columns += [MofNCompleteColumn(), TextColumn("failed {task.fields[failed]}"),
                     TextColumn("{task.fields[rate]} sims/s"), TimeElapsedColumn(),
-                    TextColumn("left"), TimeRemainingColumn()]
+                    TextColumn("left {task.fields[left]}")]
     else:
         columns += [TaskProgressColumn(), TimeElapsedColumn()]
     started = time.perf_counter()
     with Progress(*columns, console=err_console, transient=transient) as bar:
-        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-")
+        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-", left="-:--:--")
         tasks: dict[str, Any] = {}
         first: dict[str, float] = {}
+        estimated: set[str] = set()
+        first_chunk: dict[str, tuple[float, float]] = {}
 
         def update(report: ProgressReport) -> None:
             task = tasks.get(report.stage if bar_per_stage else "")
             if task is None:
                 task = waiting if not tasks else bar.add_task("", total=None, failed=0,
-                                                               rate="-")
+                                                               rate="-", left="-:--:--")
                 tasks[report.stage if bar_per_stage else ""] = task
             first.setdefault(report.stage, report.done)
-            elapsed = time.perf_counter() - started
+            now = time.perf_counter()
+            elapsed = now - started
             rate = (report.done - first[report.stage]) / elapsed if elapsed > 0 else 0.0
+            # the steady rate: from the first finished chunk on (compiling excluded)
+            if report.stage not in first_chunk and report.done > first[report.stage]:
+                first_chunk[report.stage] = (now, report.done)
+            since, done_then = first_chunk.get(report.stage, (now, report.done))
+            steady = ((report.done - done_then) / (now - since)
+                      if now - since >= STEADY_WINDOW_S else 0.0)
             shown = (report.stage if not label else label
                      if report.stage in WHOLE_RUN_STAGES else f"{label}: {report.stage}")
+            # the time left at the rate measured in this session (reused chunks and a
+            # burst of finished chunks do not count as speed)
+            left = remaining_time(report.total - report.done, steady if steady > 0 else rate)
+            if (steady > 0 and report.total > 1 and report.done < report.total
+                    and report.stage not in estimated):  # sets, starts, points: not runs
+                estimated.add(report.stage)
+                logging.getLogger("pneumact.estimates").info(
+                    "%s: %d of %d left; at the rate after the first (%.3g/s) about %s",
+                    shown, report.total - report.done, report.total, steady, left)
             bar.update(task, description=shown, completed=report.done, total=report.total,
-                       failed=report.failed, rate=f"{rate:.0f}")
+                       failed=report.failed, rate=f"{rate:.0f}", left=left)
 
         yield update
 
@@ -495,3 +523,56 @@ def shown_path(path: Path, stage: Path, out: Path) -> Path:
         return out / Path(path).relative_to(stage)
     except ValueError:
         return Path(path)
+
+
+def given_options(ctx: typer.Context, *params: str) -> list[str]:
+    """The options among ``params`` (parameter names) given on the command line, as the
+    user typed them (``--f-scale``), in the order asked."""
+    flags = []
+    for name in params:
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name != "DEFAULT":
+            flags.append("--" + name.replace("_", "-"))
+    return flags
+
+
+def refuse_unused(ctx: typer.Context, params: tuple[str, ...] | str, why: str,
+                  fix: str = "leave it out") -> None:
+    """Refuse the options among ``params`` given on the command line where they would do
+    nothing (``why``: "with the linear loss"), one message naming them."""
+    flags = given_options(ctx, *((params,) if isinstance(params, str) else params))
+    if flags:
+        verb = "does" if len(flags) == 1 else "do"
+        raise ArgumentError(f"{', '.join(flags)} {verb} nothing {why}; {fix}")
+
+
+
+class _NoteHandler(logging.Handler):
+    """Prints the estimates big work logs before it starts (``pneumact.estimates``:
+    memory, time) as ``note:`` lines on stderr, as they come."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        err_console.print(Text(f"note: {plain_message(record.getMessage())}",
+                               style="yellow"), soft_wrap=True)
+
+
+def show_estimates() -> None:
+    """Let the estimates before big work reach the terminal (once per process)."""
+    logger = logging.getLogger("pneumact.estimates")
+    logger.setLevel(logging.INFO)
+    if not any(isinstance(h, _NoteHandler) for h in logger.handlers):
+        logger.addHandler(_NoteHandler())
+        logger.propagate = False
+
+
+#: seconds after the first finished chunk before its rate counts (the threads' first
+#: chunks finish together: a burst, not a rate)
+STEADY_WINDOW_S = 2.0
+
+
+def remaining_time(left: float, rate: float) -> str:
+    """``left`` items at ``rate`` per second as h:mm:ss ("-:--:--" without a rate)."""
+    if not rate > 0 or not math.isfinite(left / rate):
+        return "-:--:--"
+    seconds = round(max(left, 0.0) / rate)
+    return f"{seconds // 3600}:{seconds % 3600 // 60:02d}:{seconds % 60:02d}"

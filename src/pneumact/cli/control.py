@@ -136,6 +136,12 @@ class ControllerOptions:
 def _limits(plant: Plant, params, options: ControllerOptions) -> tuple[float, float]:
     if plant in (Plant.regulator, Plant.source):  # a rig's set has no p_atm
         natural = (REGULATOR_MIN_PRESSURE, float(params["p_atm"]))
+        for flag, value in (("--u-min", options.u_min), ("--u-max", options.u_max)):
+            if value is not None and math.isfinite(value) and 0.0 < value < 1e3:
+                raise ParameterError(
+                    f"{flag} = {value:g} Pa: the limits are absolute pressures in Pa (the "
+                    f"plant works from {natural[0]:g} to {natural[1]:g} Pa); {value:g} looks "
+                    f"like kPa: {flag} {value * 1e3:g}")
     else:
         natural = {"command": (0.0, 1.0), "rig": (-math.inf, math.inf)}[plant.value]
     return (natural[0] if options.u_min is None else options.u_min,
@@ -196,7 +202,8 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
     if gains is not None:
         from pneumact.control import load_gains
 
-        controller = load_gains(gains)
+        unit = ClosedLoop(model, build_controller(plant, params, options)).command_unit
+        controller = load_gains(gains, command_unit=unit)
     else:
         controller = build_controller(plant, params, options)
     loop = ClosedLoop(model, controller)
@@ -365,6 +372,9 @@ def step_command(
         out = check_out_dir("--out", out)
         options = _options(ctx)
         _refuse_with_gains(ctx, gains_file)
+        if start == stop:
+            raise ParameterError(f"--start = --stop = {start:g} mm: there is no step to "
+                                 "follow; give two different positions")
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
         _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file)

@@ -40,6 +40,7 @@ from pneumact.cli.common import (
     names,
     out_console,
     progress_display,
+    refuse_unused,
     the_call,
     use_agg,
     user_errors,
@@ -121,6 +122,7 @@ def _plan_cell(value) -> str:
 
 
 def campaign(
+    ctx: typer.Context,
     params: ParamsOption = "vgt-paper",
     out: Annotated[Path, typer.Option(help="Output directory for the records.")] = Path(
         "pneumact-campaign"),
@@ -149,6 +151,10 @@ def campaign(
         from pneumact.identification import Noise, design_campaign, synthetic_campaign
         from pneumact.identification.campaign import read_plan
 
+        if plan:
+            refuse_unused(ctx, ("seed", "pressure_noise", "position_noise", "resolution"),
+                          "with --plan (it only designs the tests, nothing is simulated)",
+                          "leave them out, or simulate the plan with --simulate")
         check_seed("--seed", seed)
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         for label, value in (("--pressure-noise", pressure_noise),
@@ -492,6 +498,15 @@ def fit_command(
         check_seed("--seed", seed)
         check_int("--points", points, minimum=3)
         check_positive("--f-scale", f_scale)
+        if loss.value == "linear":
+            refuse_unused(ctx, "f_scale", "with the linear loss (it scales a robust loss)",
+                          "give --loss soft_l1, huber, cauchy or arctan, or leave it out")
+        if multistart == 0:
+            refuse_unused(ctx, "seed", "without --multistart (it seeds the extra starts)",
+                          "give --multistart N, or leave it out")
+        if profile is None:
+            refuse_unused(ctx, "points", "without --profile (it sizes the profiles)",
+                          "give --profile NAMES, or leave it out")
         executor = executor_of(workers, scheduler)
         free_names = names(free, "--free")
         span = None

@@ -167,6 +167,15 @@ def sensitivity(
             raise ParameterError(f"--variations: {exc.message}") from None
         if method is not Method.oat:
             check_sample_size(method, study.n, len(factors))
+        if signal_names:  # the largest allocation, estimated before any run
+            from pneumact.simulation import assemble
+            from pneumact.simulation.memory import check_memory, simulate_bytes
+
+            assembly = assemble(actuator)
+            check_memory(simulate_bytes(times, len(assembly.states),
+                                        len(assembly.output_names), len(factors)),
+                         f"--signals on --times {times} points (sensitivities to "
+                         f"{len(factors)} parameters)")
         from pneumact.io.tables import staged_folder
 
         with staged_folder(out, resumable=method is not Method.oat, resume=resume,

@@ -40,6 +40,7 @@ from pneumact.cli.common import (
     fmt,
     names,
     out_console,
+    refuse_unused,
     the_call,
     use_agg,
     user_errors,
@@ -92,6 +93,10 @@ def validate_command(
         wanted = tuple(names(signals, "--signals") or ("position",))
         free_names = names(free, "--free")
         drive = str(input)
+        if drive not in ("auto", "model"):
+            refuse_unused(ctx, "valve", f"with --input {drive} (the records' {drive} chooses "
+                          "the valve)", "leave it out, or give --input model to drive every "
+                          "record through --valve")
         parameter_set, model = build_model(ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
             exponent=exponent, decaying_damping=decaying_damping,

@@ -33,6 +33,32 @@ LOOP_TEMPLATE = "pneumact.models.loop_template"
 SNAP = 1e-6
 
 
+#: the most controller samples one run may take: each is a breakpoint of the integrator
+#: (8 bytes, and 4-8 µs of compiled work measured: 2e6 samples ≈ 10 s), which runs
+#: between Ctrl-C checks; more is a sample time typed in the wrong unit
+MAX_CONTROLLER_SAMPLES = 2_000_000
+
+
+def _check_samples(period: float, t_start: float, t_end: float) -> None:
+    """Refuse a sample time the run cannot use: longer than the run (the controller would
+    never act after the start), or so short that the run takes more than
+    ``MAX_CONTROLLER_SAMPLES`` samples."""
+    duration = t_end - t_start
+    if period >= duration:
+        raise ExperimentError(
+            f"sample_time = {period:g} s is not shorter than the run ({duration:g} s): the "
+            "controller would act only at the start; give a sample time well below the "
+            "run's length (a digital controller samples every 0.1-10 ms)")
+    samples = duration / period
+    if samples > MAX_CONTROLLER_SAMPLES:
+        raise ExperimentError(
+            f"sample_time = {period:g} s takes {samples:.3g} controller samples over the "
+            f"{duration:g} s run (about {8 * samples / 1e9:.3g} GB of sample times and "
+            f"{samples * 5e-6 / 60:.3g} min of computing); at most "
+            f"{MAX_CONTROLLER_SAMPLES:,}: give a longer sample time (in seconds) or leave it "
+            "out for a continuous controller")
+
+
 @dataclass(frozen=True, eq=False)
 class ClosedLoop:
     """``plant`` (an ``Actuator`` behind any valve, or a ``FrictionRig`` with a force
@@ -241,6 +267,7 @@ class ClosedLoop:
         points = points[(points >= t_start) & (points <= t_end)]
         if self.controller.sample_time is not None:  # a sampled controller
             period = float(self.controller.sample_time)
+            _check_samples(period, t_start, t_end)
             k = np.arange(math.ceil(t_start / period - SNAP), math.floor(t_end / period + SNAP)
                           + 1)
             samples = k * period

@@ -562,8 +562,19 @@ def _toml(value: object) -> str:
     return f'"{value}"' if isinstance(value, str) else repr(value)
 
 
-def load_gains(path: str | os.PathLike) -> Controller:
-    """The controller a gains file (``TuningResult.write_gains``) describes."""
+#: the tables and keys of a gains file
+GAINS_FILE_KEYS = ("format", "controller", "specs", "options", "gains", "units")
+#: the gains each controller takes when it is made (the others are set afterwards)
+_MADE_WITH = {"PID": ("kp", "ki", "kd"), "Cascade": ("kx", "kv", "ki")}
+
+
+def load_gains(path: str | os.PathLike, command_unit: str | None = None) -> Controller:
+    """The controller a gains file (``TuningResult.write_gains``) describes. Gains are SI
+    unless a ``[units]`` table gives theirs (``kp = "kPa/mm"``), then converted; with
+    ``command_unit`` (the plant's input unit: ``ClosedLoop.command_unit``) each given unit
+    must measure what the gain does. A file without ``[gains]``, an unknown table, option
+    or gain, or a unit that is not one is refused naming it."""
+    import dataclasses
     import tomllib
 
     from ..errors import DataError
@@ -580,16 +591,80 @@ def load_gains(path: str | os.PathLike) -> Controller:
         raise DataError(f"gains file {path}: format = {data.get('format')!r}; expected "
                         f"{GAINS_FORMAT!r} (written by pneumact control tune)")
     kinds = {"PID": PID, "Cascade": Cascade}
-    kind = kinds.get(str(data.get("controller")))
+    name = str(data.get("controller"))
+    kind = kinds.get(name)
     if kind is None:
         raise DataError(f"gains file {path}: controller = {data.get('controller')!r}; "
                         f"allowed: {', '.join(kinds)}")
-    options = dict(data.get("options", {}))
-    gains = dict(data.get("gains", {}))
-    base = kind(**options, **{n: gains[n] for n in ("kp", "ki", "kd", "kx", "kv")
-                              if n in gains})
-    rest = {n: v for n, v in gains.items() if n in base.parameters()}
+    unknown = [k for k in data if k not in GAINS_FILE_KEYS]
+    if unknown and not data.get("gains"):
+        raise DataError(f"gains file {path}: no [gains] table ({', '.join(unknown)} stands "
+                        "outside one); write the gains under a [gains] line")
+    if unknown:
+        raise DataError(f"gains file {path}: unknown {', '.join(unknown)}; a gains file has "
+                        f"{', '.join(GAINS_FILE_KEYS)}")
+    options, gains, units = (data.get(t, {}) for t in ("options", "gains", "units"))
+    for table, value in (("options", options), ("gains", gains), ("units", units)):
+        if not isinstance(value, dict):
+            raise DataError(f"gains file {path}: {table} = {value!r} must be a table "
+                            f"([{table}])")
+    if not gains:
+        raise DataError(f"gains file {path}: no [gains] table: give the gains of the "
+                        f"{name} ({', '.join(_MADE_WITH[name])}), SI or with a [units] table")
+    made_with = _MADE_WITH[name]
+    allowed_options = [f.name for f in dataclasses.fields(kind)
+                       if f.init and f.name not in (*made_with, "compensation")]
+    bad = [k for k in options if k not in allowed_options]
+    if bad:
+        raise DataError(f"gains file {path}: [options] {', '.join(bad)} is not an option of "
+                        f"a {name}; its options: {', '.join(allowed_options)}")
+    # the controller's structure (a PID's filter_time only with a derivative term)
+    probe = kind(**options, **{n: 1.0 for n in made_with if n != "kd" or gains.get("kd")})
+    known = list(dict.fromkeys([*made_with, *probe.parameters()]))
+    bad = [k for k in gains if k not in known]
+    if bad:
+        raise DataError(f"gains file {path}: [gains] {', '.join(bad)} is not a gain of a "
+                        f"{name} (controller = \"{name}\"); its gains: {', '.join(known)}")
+    bad = [k for k in units if k not in gains]
+    if bad:
+        raise DataError(f"gains file {path}: [units] names {', '.join(bad)}, which [gains] "
+                        "does not give")
+    expected = probe.parameter_units(command_unit) if command_unit is not None else {}
+    values = {k: _gain_in_si(path, k, v, units.get(k), expected.get(k))
+              for k, v in gains.items()}
+    base = kind(**options, **{n: values[n] for n in made_with if n in values})
+    rest = {n: v for n, v in values.items() if n in base.parameters()}
     return base.with_parameters(**rest)
+
+
+def _gain_in_si(path: Path, name: str, value: object, unit: object,
+                expected: str | None) -> float:
+    """A gain of a gains file in SI: ``value`` in ``unit`` (None: SI already), which must
+    have the dimension of ``expected`` when that is known."""
+    from ..errors import DataError
+    from ..io.quantities import unit_registry
+
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DataError(f"gains file {path}: [gains] {name} = {value!r}: must be a number")
+    if unit is None:
+        return float(value)
+    import re
+
+    registry = unit_registry()
+    # a number in a unit is the drive gain of the controller's command unit ("(N/35.3)/m"
+    # for the EMPS drive): gains are in command units, so only the unit's prefixes and
+    # units convert ("kPa/mm" -> 1e6 Pa/m)
+    plain = re.sub(r"(?<=[/(])\s*\d+(?:\.\d*)?(?:[eE][-+]?\d+)?", "1", str(unit))
+    try:
+        quantity = float(value) * registry.parse_expression(plain)
+    except Exception:
+        raise DataError(f"gains file {path}: [units] {name} = \"{unit}\" is not a unit "
+                        "(e.g. \"kPa/mm\")") from None
+    if expected is not None and quantity.dimensionality != registry.parse_expression(
+            expected).dimensionality:
+        raise DataError(f"gains file {path}: [units] {name} = \"{unit}\" does not measure "
+                        f"{name} (its SI unit is {expected})")
+    return float(quantity.to_base_units().magnitude)
 
 
 # --------------------------------------------------------------------------- tuning

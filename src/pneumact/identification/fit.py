@@ -38,7 +38,7 @@ from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import Sensors, first_order_lag, lag_derivative
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
-from ..progress import ProgressCallback, notify
+from ..progress import ProgressCallback, notify, stop_threads
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
 
@@ -585,6 +585,10 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
     if unknown:
         raise ParameterError(f"fit: per_record names {unknown} are not among the free "
                              f"parameters {list(free)}")
+    if per_record and n_records == 1:
+        raise ParameterError(f"fit: per_record = {', '.join(per_record)} with one record: one "
+                             "value per record is then the shared value; give several records, "
+                             "or leave per_record out")
     cols = []
     for name in free:
         if name in SENSOR_LAGS:
@@ -916,7 +920,7 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
         problem.simulations += sum(sol.simulations for sol in done)
         return done
     done = []
-    with ThreadPoolExecutor(max_workers=executor.threads) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=executor.threads)) as pool:
         futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
         for k, fut in enumerate(futures):
             done.append(fut.result())
@@ -942,7 +946,7 @@ def map_on_threads(workers: int, fn, items):
     items = list(items)
     if workers <= 1 or len(items) <= 1:
         return [fn(item) for item in items]
-    with ThreadPoolExecutor(max_workers=min(workers, len(items))) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=min(workers, len(items)))) as pool:
         return list(pool.map(fn, items))
 
 

@@ -929,6 +929,9 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
 
     records = as_records(records, "identify_paper")
     params = as_parameter_set(params, "identify_paper")
+    if "x_max" in params:  # positions in % labelled [mm] (83 mm on a 20 mm stroke)
+        for record in records:
+            record.check_within_stroke(params["x_max"], "identify_paper")
     pool = Executor.of(executor, "identify_paper")
     workers = pool.workers
     if not 0 <= prior_spread < 1:

@@ -34,6 +34,7 @@ import pandas as pd
 
 from ..errors import ParameterError, SolverError
 from ..options import Executor
+from ..progress import stop_threads
 from .estimates import Estimates
 from .fit import FitResult, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
@@ -116,7 +117,7 @@ def input_replicates(models, records, values: dict[str, float], masks, *,
             return None
 
     out: dict[int, list[np.ndarray]] = {i: [] for i in baselines}
-    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1)) as pool:
         nominal = dict(zip(baselines, pool.map(lambda i: run(i, None), baselines),
                            strict=True))
         for (i, _), moved in zip(jobs, pool.map(lambda job: run(*job), jobs), strict=True):
@@ -204,7 +205,7 @@ def nuisance_covariance(fit: FitResult, held: dict[str, float], solver=None,
                 sens[signal][fit.masks()[i], k]
         return block
 
-    with ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1)) as pool:
         j_held = np.vstack(list(pool.map(column_block, range(len(fit.records)))))
     gain = -np.linalg.pinv(fit.jacobian) @ j_held
     return gain @ np.diag([held[n] ** 2 for n in names]) @ gain.T

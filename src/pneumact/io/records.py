@@ -160,6 +160,7 @@ class Record(ResultVocabulary):
         a unit mistake (mm read as m) or another actuator's record."""
         if "position" not in self.signals:
             return
+        self.warn_if_saturated(x_max)
         x = self.signals["position"]
         low, high = float(np.min(x)), float(np.max(x))
         margin = 0.5 * x_max
@@ -168,6 +169,51 @@ class Record(ResultVocabulary):
                 f"{self.source}: position spans {low * 1e3:.6g} to {high * 1e3:.6g} mm, "
                 f"which {use} compares with an actuator of stroke 0 to {x_max * 1e3:g} mm; "
                 "check the position unit in the header (e.g. 'position [mm]')")
+
+    def saturation(self, x_max: float | None = None) -> str | None:
+        """Why the position looks clipped by a saturated sensor, or None: it holds
+        exactly its highest value over a stretch (at least 10 samples and 5 % of the
+        record) during which the input goes on beyond where the stretch began and comes
+        back (by a tenth of its range each way): the actuator moved on, the sensor did
+        not. A stick at the input's turning point holds from the turn on, not across it;
+        a hold at the end of the stroke ``x_max`` (its stop) is the actuator's own."""
+        drive = next((s for s in ("pressure", "setpoint", "command") if s in self.signals),
+                     None)
+        if "position" not in self.signals or drive is None:
+            return None
+        x, u = self.signals["position"], self.signals[drive]
+        if x_max is not None and x.max() >= x_max * (1.0 - 1e-3):
+            return None  # on the stop
+        held = np.flatnonzero(np.diff(np.concatenate([[0], (x == x.max()).astype(np.int8),
+                                                      [0]])))
+        if held.size < 2:
+            return None
+        starts, ends = held[::2], held[1::2]
+        k = int(np.argmax(ends - starts))
+        first, last = int(starts[k]), int(ends[k]) - 1
+        if last - first + 1 < max(10, 0.05 * x.size):
+            return None
+        stretch = u[first:last + 1]
+        span = float(np.ptp(u))
+        for extreme in (float(stretch.max()), float(stretch.min())):
+            if span > 0 and min(abs(extreme - u[first]), abs(extreme - u[last])) > 0.1 * span:
+                return (f"{self.source or 'record'}: position holds exactly "
+                        f"{x.max() * 1e3:.6g} mm, its highest value, from t = "
+                        f"{self.time[first]:.6g} to {self.time[last]:.6g} s while the "
+                        f"{drive} goes on and comes back: a saturated position sensor? "
+                        "the model is compared with a clipped signal there (crop the "
+                        "record, or give the sensor more range)")
+        return None
+
+    def warn_if_saturated(self, x_max: float | None = None) -> None:
+        """A ``PlausibilityWarning`` naming a saturated position sensor (``saturation``)."""
+        import warnings
+
+        from pneumact.errors import PlausibilityWarning
+
+        reason = self.saturation(x_max)
+        if reason is not None:
+            warnings.warn(reason, PlausibilityWarning, stacklevel=2)
 
     def save(self, path: PathLike, units: Mapping[str, str] | None = None) -> Path:
         """Write CSV or Parquet (by suffix) atomically, each column in ``units`` (e.g.
@@ -317,10 +363,16 @@ def _rows(mask: np.ndarray) -> str:
     return f"{n} such row{'s' * (n != 1)}"
 
 
+#: the latest start of a record's time [s] (11.6 days): later is a clock or epoch
+#: timestamp (1.7e9 s), whose float spacing (2.4e-7 s) the solver's steps cannot resolve
+MAX_TIME_OFFSET = 1e6
+
+
 def check_physics(source, name: str, values: np.ndarray, label: str | None = None) -> None:
     """What the physics allows of a known signal in SI: an absolute pressure (or pressure
     set-point) > 0 and <= MAX_ABSOLUTE_PRESSURE, not all below 1 kPa (kPa read as Pa); a
-    valve command within [0, 1]; a time >= 0. One DataError naming the first bad row."""
+    valve command within [0, 1]; a time from 0 to ``MAX_TIME_OFFSET``. One DataError
+    naming the first bad row."""
     from pneumact.checks import MAX_ABSOLUTE_PRESSURE, pressure_hint
 
     label = label or f"column {name!r}"
@@ -329,6 +381,13 @@ def check_physics(source, name: str, values: np.ndarray, label: str | None = Non
     if name == "time" and values[0] < 0:
         raise DataError(f"{source}: {label} starts at {values[0]:.6g} s; times must be >= 0 "
                         "(shift the record's time axis so that it starts at 0)")
+    if name == "time" and values[0] > MAX_TIME_OFFSET:
+        spacing = float(np.spacing(values[0]))
+        raise DataError(
+            f"{source}: {label} starts at {values[0]:.6g} s ({values[0] / 86400:.3g} days: "
+            f"a clock or epoch timestamp?); at that offset time has a resolution of only "
+            f"{spacing:.2g} s, too coarse for the solver's steps: subtract the first time so "
+            "that the record starts at 0")
     if name in ("pressure", "setpoint"):
         bad = (values <= 0) | (values > MAX_ABSOLUTE_PRESSURE)
         if bad.any():

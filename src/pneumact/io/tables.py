@@ -69,6 +69,100 @@ def partial_folder(out_dir: PathLike) -> Path:
     return out.parent / f".{out.name}{PARTIAL_SUFFIX}"
 
 
+#: the lock a run holds on its output folder while it writes (a hidden sibling: JSON with
+#: the process id, host and start time), so that a second run into the same folder is
+#: told another run holds it instead of being advised to overwrite the running one
+LOCK_SUFFIX = ".pneumact-lock"
+_HELD_LOCKS: dict[Path, int] = {}  # this process's locks (re-entered, not refused)
+
+
+def lock_file(out_dir: PathLike) -> Path:
+    """The lock file of output folder ``out_dir``: a hidden sibling."""
+    out = Path(out_dir).resolve()
+    return out.parent / f".{out.name}{LOCK_SUFFIX}"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # a process of another user, or a platform that cannot tell: alive
+    return True
+
+
+def _lock_holder(lock: Path) -> dict | None:
+    """The holder of ``lock`` if it is alive (or on another host); None when the lock
+    is stale (its process ended without removing it) or unreadable half-written."""
+    import socket
+
+    try:
+        holder = json.loads(lock.read_text(encoding="utf-8"))
+        pid = int(holder["pid"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if holder.get("host") not in (None, socket.gethostname()):
+        return holder
+    return holder if _pid_alive(pid) else None
+
+
+@contextlib.contextmanager
+def folder_lock(out_dir: PathLike, display: object = None) -> Iterator[None]:
+    """Hold the lock of output folder ``out_dir`` for the block: refused (an
+    ``ArgumentError`` naming the process) while another live run holds it; a stale lock
+    (its process is gone) is taken over; re-entered freely within this process."""
+    import socket
+    import time
+
+    from pneumact.errors import ArgumentError
+
+    lock = lock_file(out_dir)
+    with _STAGES_LOCK:
+        if lock in _HELD_LOCKS:
+            _HELD_LOCKS[lock] += 1
+            mine = False
+        else:
+            mine = True
+    if mine:
+        record = json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
+                             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+        for _ in range(3):
+            try:
+                fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = _lock_holder(lock)
+                if holder is not None:
+                    raise ArgumentError(
+                        f"{display or out_dir}: another run (pid {holder.get('pid')} on "
+                        f"{holder.get('host')}, started {holder.get('started')}) is writing "
+                        "this folder",
+                        api_hint="wait for it to finish or write elsewhere",
+                        cli_hint="wait for it to finish or choose another --out "
+                                 f"(should that run be gone, remove {lock})") from None
+                with contextlib.suppress(OSError):
+                    lock.unlink()  # stale: its process is gone
+                continue
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                handle.write(record)
+            break
+        else:
+            raise ArgumentError(f"{display or out_dir}: could not take the lock {lock}")
+        with _STAGES_LOCK:
+            _HELD_LOCKS[lock] = 1
+    try:
+        yield
+    finally:
+        with _STAGES_LOCK:
+            _HELD_LOCKS[lock] -= 1
+            last = _HELD_LOCKS[lock] == 0
+            if last:
+                del _HELD_LOCKS[lock]
+        if last:
+            with contextlib.suppress(OSError):
+                lock.unlink()
+
+
 def _inside_open_stage(path: Path) -> bool:
     resolved = path.resolve()
     with _STAGES_LOCK:
@@ -182,12 +276,22 @@ def staged_folder(out_dir: PathLike, *, resumable: bool = False, resume: bool = 
     adds its files.
     """
     from pneumact.checks import check_out_dir
-    from pneumact.errors import ArgumentError, PneumactError
 
     display = check_out_dir("out_dir", out_dir)
     out = display.resolve()  # "." has a parent to stage in
     out.parent.mkdir(parents=True, exist_ok=True)
     nested = not resumable and _inside_open_stage(out)
+    with contextlib.ExitStack() as locked:
+        if not nested:
+            locked.enter_context(folder_lock(out, display))
+        yield from _staged(display, out, nested, resumable, resume, overwrite)
+
+
+def _staged(display: Path, out: Path, nested: bool, resumable: bool, resume: bool,
+            overwrite: bool) -> Iterator[Path]:
+    """``staged_folder``'s work, once the folder's lock is held."""
+    from pneumact.errors import ArgumentError, PneumactError
+
     existed = False
     if resumable:
         stage = partial_folder(out)

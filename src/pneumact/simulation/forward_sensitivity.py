@@ -24,10 +24,12 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
+from ..progress import raise_if_stopped
 
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
+from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .simulate import Prepared, failure, prepare
 from .solvers import Rodas4
@@ -170,6 +172,7 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     """
     from ..parameters import catalogue
 
+    raise_if_stopped()
     solver = Rodas4() if solver is None else solver
     if solver.kernel_function != "integrate_rodas4":
         raise ParameterError(f"sensitivities need the Rodas4 solver, got "
@@ -184,6 +187,9 @@ def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     assembly, kernel = prep.assembly, prep.kernel
     names = assembly.check_parameters(names, "sensitivities")
+    check_memory(simulate_bytes(prep.t_out.size, len(assembly.states), kernel.NOUT,
+                                len(names)),
+                 f"sensitivities to {len(names)} parameters on {prep.t_out.size} output points")
     w_ptr, w_idx, w_val = assembly.directions(prep.vector, names)
     needed = np.zeros(assembly.size, dtype=np.bool_)
     needed[w_idx] = True

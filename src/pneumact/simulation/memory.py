@@ -9,11 +9,29 @@ allocation the machine cannot make.
 
 from __future__ import annotations
 
+import logging
 import os
+import re
 
 from ..errors import ResourceError
 
-__all__ = ["available_memory", "batch_bytes", "check_memory", "simulate_bytes"]
+__all__ = ["ESTIMATES", "MEMORY_LIMIT_ENV", "available_memory", "batch_bytes",
+           "check_memory", "memory_limit", "simulate_bytes"]
+
+#: the environment variable that sets the memory limit of one run ("8GiB", "500MB",
+#: bytes); without it the limit is DEFAULT_MEMORY_LIMIT or the share MEMORY_FRACTION of
+#: the available memory, whichever is smaller
+MEMORY_LIMIT_ENV = "PNEUMACT_MEMORY_LIMIT"
+#: the default limit [bytes]: larger runs are refused until the limit is raised
+DEFAULT_MEMORY_LIMIT = 4 * 1024**3
+#: estimates of memory and time before big work, as INFO records (the command line
+#: prints them as they come)
+ESTIMATES = logging.getLogger("pneumact.estimates")
+#: runs planning this much memory or more say so before they start
+ANNOUNCED_BYTES = 256 * 1024**2
+_UNITS = {"": 1, "b": 1, "k": 1e3, "kb": 1e3, "kib": 1024, "m": 1e6, "mb": 1e6,
+          "mib": 1024**2, "g": 1e9, "gb": 1e9, "gib": 1024**3, "t": 1e12, "tb": 1e12,
+          "tib": 1024**4}
 
 #: share of the available memory one run may plan to use
 MEMORY_FRACTION = 0.8
@@ -62,15 +80,40 @@ def _size(n: float) -> str:
     return f"{n:.3g} TiB"  # pragma: no cover - the loop returns
 
 
-def check_memory(needed: int, what: str) -> None:
-    """ResourceError when ``needed`` bytes exceed the share of the available memory a run
-    may use; ``what`` names the run (its sizes) in the message."""
+def memory_limit() -> tuple[int, str]:
+    """(bytes one run may plan to use, where that limit comes from)."""
+    text = os.environ.get(MEMORY_LIMIT_ENV, "").strip()
+    if text:
+        match = re.fullmatch(r"([0-9.]+(?:[eE][-+]?\d+)?)\s*([A-Za-z]*)", text)
+        factor = _UNITS.get(match.group(2).lower()) if match else None
+        if match is None or factor is None:
+            raise ResourceError(f"{MEMORY_LIMIT_ENV} = {text!r}: give a size such as 8GiB, "
+                                "500MB or a number of bytes")
+        return int(float(match.group(1)) * factor), f"{MEMORY_LIMIT_ENV}={text}"
     available = available_memory()
-    if available is None or needed <= MEMORY_FRACTION * available:
+    if available is not None and MEMORY_FRACTION * available < DEFAULT_MEMORY_LIMIT:
+        return int(MEMORY_FRACTION * available), (
+            f"{MEMORY_FRACTION:.0%} of the {_size(available)} available")
+    return DEFAULT_MEMORY_LIMIT, f"the default; raise it with {MEMORY_LIMIT_ENV}, e.g. 16GiB"
+
+
+def check_memory(needed: int, what: str) -> None:
+    """ResourceError when ``needed`` bytes exceed the memory limit of one run
+    (``memory_limit``); ``what`` names the run (its sizes) in the message. A run that
+    plans ``ANNOUNCED_BYTES`` or more says its estimate first (``ESTIMATES``)."""
+    limit, source = memory_limit()
+    if needed <= limit:
+        if needed >= ANNOUNCED_BYTES:
+            ESTIMATES.info("%s: about %s of memory (limit %s)", what, _size(needed),
+                           _size(limit))
         return
+    available = available_memory()
+    there = f"; {_size(available)} are available" if available is not None else ""
     raise ResourceError(
-        f"{what} would need about {_size(needed)} of memory; {_size(available)} are "
-        "available", api_hint="keep fewer output points (a shorter run, n_points or t_eval), "
-                              "fewer signals or fewer sets per run",
+        f"{what} would need about {_size(needed)} of memory, above the limit of "
+        f"{_size(limit)} ({source}){there}",
+        api_hint="keep fewer output points (a shorter run, n_points or t_eval), fewer "
+                 "signals or fewer sets per run",
         cli_hint="keep fewer output points (a shorter --t-end, fewer samples per second or "
-                 "--times), fewer --signals or fewer sets")
+                 f"--times), fewer --signals or fewer sets, or raise the limit "
+                 f"({MEMORY_LIMIT_ENV}=16GiB pneumact ...)")

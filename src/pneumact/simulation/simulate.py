@@ -22,7 +22,7 @@ from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
 from ..experiments.actuator import Experiment
-from ..progress import ProgressCallback, check_progress, notify
+from ..progress import ProgressCallback, check_progress, notify, raise_if_stopped
 from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
@@ -352,6 +352,7 @@ def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_e
     """
     solver = checked_solver(solver)
     check_progress(progress, "simulate")
+    raise_if_stopped()
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     n_t = prep.t_out.size
     compiled(getattr(prep.kernel, solver.kernel_function), prep.y0, prep.vector, prep.sig,

@@ -41,7 +41,7 @@ from ..identification.estimates import long_run_variance
 from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..options import Executor, Multistart, Optimizer
-from ..progress import ProgressCallback, notify
+from ..progress import ProgressCallback, notify, stop_threads
 from .loops import loop_measures
 from .metrics import autocorrelation, error_metrics
 
@@ -364,7 +364,8 @@ def _run(jobs, executor: Executor, progress) -> list[LawScore]:
         notify(progress, "compare", len(jobs), len(jobs))
         return list(gathered)
     scores: list[LawScore | None] = [None] * len(jobs)
-    with ThreadPoolExecutor(max_workers=max(1, min(executor.threads, len(jobs)))) as pool:
+    with stop_threads(ThreadPoolExecutor(max_workers=max(1, min(executor.threads,
+                                                                 len(jobs))))) as pool:
         futures = {pool.submit(_score_one, *job): k for k, job in enumerate(jobs)}
         for done, future in enumerate(as_completed(futures), start=1):
             scores[futures[future]] = future.result()

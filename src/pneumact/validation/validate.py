@@ -443,6 +443,22 @@ class TrainTest(NotebookDisplay):
         return write_files(out_dir, writers)
 
 
+def _refuse_trained_tests(train: Sequence[Record], test: Sequence[Record]) -> None:
+    """A test record that is also a training record (the same data) tests nothing."""
+    for k, record in enumerate(test):
+        for trained in train:
+            if (record.time.shape == trained.time.shape
+                    and np.array_equal(record.time, trained.time)
+                    and set(record.signals) == set(trained.signals)
+                    and all(np.array_equal(record.signals[n], trained.signals[n])
+                            for n in record.signals)):
+                raise DataError(
+                    f"train_test: test record {k + 1} ({record.source or 'record'}) is also "
+                    f"a training record ({trained.source or 'record'}): a model validated "
+                    "on the data it was fitted to is not tested; hold out a record the fit "
+                    "does not see")
+
+
 def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Sequence[str],
                *, signals: Sequence[str] = ("position",), input: str = DEFAULT_INPUT,
                **fit_options) -> TrainTest:
@@ -455,6 +471,7 @@ def train_test(model, train: Sequence[Record], test: Sequence[Record], free: Seq
     train, test = list(train), list(test)
     if not train or not test:
         raise DataError("train_test: give at least one training and one test record")
+    _refuse_trained_tests(train, test)
     chosen = input
     if input == "auto":
         shared = [s for s in INPUT_SIGNALS.values() if all(s in r for r in train)]

@@ -36,7 +36,7 @@ from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
 from ...io.report import ResultVocabulary
 from ...io.tables import partial_folder, staged_folder
-from ...progress import ProgressCallback, check_progress, notify
+from ...progress import ProgressCallback, check_progress, notify, stop_threads
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -214,15 +214,13 @@ def dask_client(scheduler):
 # --------------------------------------------------------------------------- execution
 def _run_threads(runner: ChunkRunner, starts, rows_of, todo, n_workers: int, finished) -> None:
     """Chunks on a thread pool; results handed to ``finished`` in completion order."""
-    pool = ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="pneumact-batch")
-    try:
+    with stop_threads(ThreadPoolExecutor(max_workers=n_workers,
+                                         thread_name_prefix="pneumact-batch")) as pool:
         pending = {pool.submit(runner.run, starts[c], rows_of[c]): c for c in todo}
         while pending:
             ready, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in ready:
                 finished(pending.pop(future), future.result())
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _run_dask(client, spec: BatchSpec, starts, rows_of, todo, finished) -> None:

@@ -23,6 +23,7 @@ from ...core.features import FEATURES, N_FEATURES, all_features
 from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
 from ...parameters.validation import row_problems
+from ...progress import raise_if_stopped
 from ..result import SolverStats
 from ..simulate import prepare
 from .spec import BatchSpec
@@ -160,6 +161,7 @@ class ChunkRunner:
                         np.empty(kernel.NSTATE))
         crashed: dict[int, str] = {}
         for r in np.flatnonzero(valid):
+            raise_if_stopped()  # Ctrl-C: the chunk ends at its next row
             try:
                 self._row(values[r], work)
             except Exception as exc:
