@@ -44,13 +44,20 @@ main()
 """
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt(stage: str, args: list[str], cwd: Path) -> tuple[int, float, str]:
     """(exit code, seconds from SIGINT to exit, stderr) of ``pneumact ARGS`` interrupted
     once ``stage`` has reported progress."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get(
         "PYTHONPATH", "")]), COLUMNS="200")
+    # a pytest-xdist worker ignores SIGINT, and an ignored signal stays ignored across
+    # exec: the child must start with the default handler, as in a terminal
     proc = subprocess.Popen([sys.executable, "-c", _HOOKED, stage, *args], cwd=cwd, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_sigint)
     lines = []
     try:
         for line in proc.stderr:  # type: ignore[union-attr]
@@ -68,6 +75,8 @@ def _interrupt(stage: str, args: list[str], cwd: Path) -> tuple[int, float, str]
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+        if proc.stderr is not None:
+            proc.stderr.close()
 
 
 def _assert_stopped(code: int, seconds: float, stderr: str) -> None:

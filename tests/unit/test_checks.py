@@ -238,6 +238,9 @@ def test_a_stated_memory_limit_refuses_above_it_and_can_be_raised(monkeypatch, c
     from pneumact.simulation import memory
 
     monkeypatch.setattr(memory, "available_memory", lambda: 1 << 40)  # 1 TiB free
+    # a command line run earlier in this process sends the estimates to the terminal
+    # only (``cli.common.show_estimates``); here they reach the captured log
+    monkeypatch.setattr(memory.ESTIMATES, "propagate", True)
     monkeypatch.delenv(memory.MEMORY_LIMIT_ENV, raising=False)
     three_gib, six_gib = 3 * 1024**3, 6 * 1024**3
     with caplog.at_level(logging.INFO, logger=memory.ESTIMATES.name):

@@ -21,6 +21,9 @@ def test_reused_items_are_not_speed_and_the_first_chunk_gives_an_estimate(caplog
                                                                           monkeypatch):
     clock = itertools.count(0.0, 1.0)  # each reading one second later
     monkeypatch.setattr(time, "perf_counter", lambda: next(clock))
+    # a command line run earlier in this process sends the estimates to the terminal
+    # only (``cli.common.show_estimates``); here they reach the captured log
+    monkeypatch.setattr(logging.getLogger("pneumact.estimates"), "propagate", True)
     with caplog.at_level(logging.INFO, logger="pneumact.estimates"), \
             progress_display("batch", counts=True) as update:
         update(Progress("batch", 50_000, 100_000))  # resumed: half reused at once
