@@ -114,3 +114,25 @@ def small_rig_comparison(progress=None, executor=1):
                                       signals=["friction"], executor=executor,
                                       progress=progress,
                                       optimizer=pa.Optimizer(jacobian="2-point"))
+
+
+@pytest.fixture
+def estimates_log(monkeypatch) -> list[str]:
+    """The messages ``pneumact.estimates`` logs during the test, whatever earlier tests
+    in this process did to logging (a command line run sends them to the terminal only,
+    ``cli.common.show_estimates``, and caplog then saw nothing in the full suite)."""
+    import logging
+
+    notes: list[str] = []
+
+    class Collect(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            notes.append(record.getMessage())
+
+    logger = logging.getLogger("pneumact.estimates")
+    monkeypatch.setattr(logger, "handlers", [Collect()])
+    monkeypatch.setattr(logger, "disabled", False)
+    monkeypatch.setattr(logger, "propagate", False)
+    monkeypatch.setattr(logging.root.manager, "disable", 0)
+    logger.setLevel(logging.INFO)
+    return notes

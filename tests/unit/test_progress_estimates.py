@@ -5,7 +5,6 @@ when hours remained)."""
 from __future__ import annotations
 
 import itertools
-import logging
 import time
 
 from pneumact.cli.common import progress_display, remaining_time
@@ -17,19 +16,15 @@ def test_remaining_time_is_items_over_the_rate():
     assert remaining_time(10, 0.0) == "-:--:--"
 
 
-def test_reused_items_are_not_speed_and_the_first_chunk_gives_an_estimate(caplog,
+def test_reused_items_are_not_speed_and_the_first_chunk_gives_an_estimate(estimates_log,
                                                                           monkeypatch):
     clock = itertools.count(0.0, 1.0)  # each reading one second later
     monkeypatch.setattr(time, "perf_counter", lambda: next(clock))
-    # a command line run earlier in this process sends the estimates to the terminal
-    # only (``cli.common.show_estimates``); here they reach the captured log
-    monkeypatch.setattr(logging.getLogger("pneumact.estimates"), "propagate", True)
-    with caplog.at_level(logging.INFO, logger="pneumact.estimates"), \
-            progress_display("batch", counts=True) as update:
+    with progress_display("batch", counts=True) as update:
         update(Progress("batch", 50_000, 100_000))  # resumed: half reused at once
         update(Progress("batch", 50_001, 100_000))  # the first chunk (and compiling)
         update(Progress("batch", 50_006, 100_000))  # a burst of chunks 1 s after it
-        assert not caplog.text  # not a rate yet
+        assert not estimates_log  # not a rate yet
         update(Progress("batch", 50_011, 100_000))  # 10 sets in the 2 s after it
     # 5 sims/s, 49 989 left: 2.8 h, not the seconds the reused half implies
-    assert "about 2:46:38" in caplog.text
+    assert any("about 2:46:38" in note for note in estimates_log), estimates_log
