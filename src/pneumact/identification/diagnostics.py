@@ -49,6 +49,7 @@ __all__ = [
     "Diagnostic",
     "Verdict",
     "misfit_influence",
+    "named_list",
     "residual_checks",
     "verdicts",
 ]
@@ -148,6 +149,13 @@ def _moving_average(values: np.ndarray, width: int) -> np.ndarray:
     if values.ndim == 1:
         return np.convolve(values, kernel, mode="valid")
     return np.array([np.convolve(v, kernel, mode="valid") for v in values])
+
+
+def named_list(names: Sequence[str], shown: int = 3) -> str:
+    """'a, b, c and 4 more': a list of record names a line can hold."""
+    if len(names) <= shown + 1:
+        return ", ".join(names)
+    return f"{', '.join(names[:shown])} and {len(names) - shown} more"
 
 
 def residual_checks(fit, input_moves: dict | None = None, signal: str = "position"

@@ -39,7 +39,7 @@ import numpy as np
 import pandas as pd
 
 from ..io.records import Record
-from .diagnostics import Diagnostic
+from .diagnostics import Diagnostic, named_list
 from .inputs import noise_level, resolution, sensor_noise
 
 if TYPE_CHECKING:
@@ -184,9 +184,10 @@ def regulator_check(records: Sequence[Record], params, friction=None, chamber=No
     delay = float(slow["delay"].median())
     word = "later" if delay > 0 else "earlier"
     worst = slow.loc[slow["ratio"].idxmax()]
+    shown = named_list([Path(n).name for n in sorted(slow["record"])])
     return table, [Diagnostic(
         "warning", "bench", f"the chamber pressure the model makes from the set-point does "
-        f"not follow the measured one on {_names(sorted(slow['record']))} (up to "
+        f"not follow the measured one on {shown} (up to "
         f"{worst['ratio']:.3g}× the pressure noise, {Path(worst['record']).name}; the "
         f"bench's pressure follows {abs(delay) * 1e3:.3g} ms {word} than the model's): the "
         "bench's regulator or the chamber's thermodynamics are not the model's, and the "
@@ -194,13 +195,6 @@ def regulator_check(records: Sequence[Record], params, friction=None, chamber=No
         "state the regulator's reg_kp, reg_ti, reg_tau (datasheet, or its response to a "
         "set-point step), or try another chamber law (chamber=Adiabatic()), and identify "
         "again")]
-
-
-def _names(names: Sequence[str], shown: int = 3) -> str:
-    names = [Path(n).name for n in names]
-    if len(names) <= shown + 1:
-        return ", ".join(names)
-    return f"{', '.join(names[:shown])} and {len(names) - shown} more"
 
 
 def without_lag(records: Sequence[Record], tau: float) -> list[Record]:

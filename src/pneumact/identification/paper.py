@@ -49,6 +49,7 @@ from .diagnostics import (
     Diagnostic,
     Verdict,
     misfit_influence,
+    named_list,
     residual_checks,
     verdicts,
 )
@@ -821,13 +822,6 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage):
     return again, found_again, lagged, with_lag, [note]
 
 
-def _named(names: Sequence[str], shown: int = 3) -> str:
-    """'a, b, c and 4 more': a list of record names a line can hold."""
-    if len(names) <= shown + 1:
-        return ", ".join(names)
-    return f"{', '.join(names[:shown])} and {len(names) - shown} more"
-
-
 def _staged_checks(records, staged, friction, chamber, workers: int) -> pd.DataFrame:
     """Does the model at the staged values predict each record (``joint.
     prediction_ratio``: the position error's RMS within ``MISFIT_RATIO`` noise
@@ -1012,7 +1006,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         if misfit:
             diagnostics.append(Diagnostic(
                 "error", "stages", f"the model at the staged values does not predict "
-                f"{_named(misfit)} (position error above {MISFIT_RATIO:g}× the noise): "
+                f"{named_list(misfit)} (position error above {MISFIT_RATIO:g}× the noise): "
                 "the stages' force balances hide what the motion shows", MISFIT_REMEDY))
         at_bound = np.zeros(len(final_values.names), bool)
     diagnostics += _presliding_check(records, kinds, staged)
@@ -1043,7 +1037,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         half = (ci[idx, 1] - ci[idx, 0]) / 2
         trusted = list(moves)
     elif misfit:
-        caveat = f"the model does not fit {_named(misfit)}, so no interval holds"
+        caveat = f"the model does not fit {named_list(misfit)}, so no interval holds"
     elif refine and not converged:
         caveat = "the joint fit did not converge, so no interval holds"
     judged = verdicts(names, final_values.values[idx], half, at_bound[idx], caveat)
