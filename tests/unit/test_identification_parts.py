@@ -254,3 +254,33 @@ def test_the_presliding_window_starts_after_a_stick_slipping_approach():
     record = Record.from_arrays(time, {"position": x, "pressure": np.full(x.size, 9e4)},
                                 source="presliding")
     assert presliding_window(record, params) > slides[-1][1]
+
+
+def test_the_lag_search_stops_at_the_lag_stage_c_allows(vgt, monkeypatch):
+    """Stage (c) reads a position lag τ as viscous friction k·τ, so the staged σ2 bounds
+    the lag: the search re-stages only lags up to that bound, and none below one sample
+    (the suite's family paid a re-staging per grid point on every misfit actuator)."""
+    from pneumact.identification import faults, joint
+
+    monkeypatch.setattr(joint, "prediction_ratio", lambda *a, **k: 1.0)
+    period = 1e-3
+    time = np.arange(0.0, 1.0, period)
+    record = Record.from_arrays(time, {"position": 1e-3 * time}, {"position": "m"}, "ramp")
+    tried: list[float] = []
+
+    def restage(undone):
+        tried.append(float(undone[0]["position"][-1] - record["position"][-1]))
+        raise RuntimeError("not needed here")
+
+    bound = faults.viscous_lag_bound(vgt)
+    assert bound == pytest.approx(faults.LAG_BOUND_MARGIN * vgt["sigma2"] / vgt["k"])
+    longest = 5.5 * period
+    tau, _, with_lag, without = faults.lag_search([record], ["ramp"], vgt, restage,
+                                                  longest=longest)
+    # undoing τ adds τ·dx/dt = τ·1e-3 m/s to the position
+    assert np.allclose(np.array(tried) / 1e-3, [n * period for n in (1, 2, 4)])
+    assert tau == 0.0 and with_lag == without == 1.0
+    tried.clear()
+    tau, _, with_lag, _ = faults.lag_search([record], ["ramp"], vgt, restage,
+                                            longest=0.5 * period)
+    assert tried == [] and tau == 0.0 and with_lag == np.inf

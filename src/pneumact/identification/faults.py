@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from ..parameters.parameter_set import ParameterSet
 
 __all__ = [
+    "LAG_BOUND_MARGIN",
     "LAG_GAIN",
     "OFFSET_SIGMAS",
     "REGULATOR_RATIO",
@@ -56,6 +57,7 @@ __all__ = [
     "quantised_records",
     "regulator_check",
     "sensor_notes",
+    "viscous_lag_bound",
     "without_lag",
 ]
 
@@ -78,6 +80,10 @@ REGULATOR_RATIO = 10.0
 LAG_GAIN = 0.5
 #: Lags searched, in sample periods of the position record.
 LAG_GRID_SAMPLES = (1, 2, 4, 8, 16, 32, 64)
+#: Stage (c) takes a lag τ for viscous friction k·τ, so the σ2 it found bounds the lag:
+#: τ ≤ σ2/k. The grid stops at this multiple of that bound (σ2's scatter between
+#: stagings); a bound below one sample period skips the search (no re-staging).
+LAG_BOUND_MARGIN = 2.0
 #: A lag is undone with the slope of a cubic over this many samples (the shortest
 #: Savitzky-Golay derivative: the least smoothing).
 DELAG_SAMPLES = 7
@@ -219,7 +225,7 @@ def without_lag(records: Sequence[Record], tau: float) -> list[Record]:
 
 def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: ParameterSet,
                restage: Callable[[list[Record]], ParameterSet], friction=None,
-               chamber=None, workers: int | None = 1
+               chamber=None, workers: int | None = 1, longest: float = np.inf
                ) -> tuple[float, ParameterSet, float, float]:
     """(the position lag [s] that predicts ``records`` best, the staged values with it,
     the records' error with it, without it). For each lag of the grid the stages run
@@ -227,7 +233,9 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
     that lag undone (``without_lag``), and the model at those values, seen through the
     lag, predicts the original records; the error is the sum over the sweeps and ramps
     of the squared ratio of the prediction error to the noise
-    (``joint.prediction_ratio``). A lag of 0 (and ``staged``) when none helps."""
+    (``joint.prediction_ratio``). A lag of 0 (and ``staged``) when none helps. Only lags
+    up to ``longest`` are tried (``viscous_lag_bound``); none when it is below one sample
+    period, and then no error is computed (inf, inf)."""
     from .fit import map_on_threads
     from .joint import prediction_ratio
 
@@ -235,13 +243,16 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
     if not moving:
         return 0.0, staged, np.inf, np.inf
     period = float(np.median(np.diff(moving[0][0].time)))
+    grid = [n * period for n in LAG_GRID_SAMPLES if n * period <= longest]
+    if not grid:
+        return 0.0, staged, np.inf, np.inf
 
     def error(at) -> float:
         ratios = [prediction_ratio(r, kind, at, friction, chamber) for r, kind in moving]
         return float(np.sum(np.square(ratios)))
 
     trials = [(0.0, staged)]
-    for tau in (n * period for n in LAG_GRID_SAMPLES):
+    for tau in grid:
         try:
             trials.append((tau, restage(without_lag(records, tau)).with_values(
                 {"position_lag": tau})))
@@ -250,6 +261,12 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
     errors = map_on_threads(workers or 1, lambda trial: error(trial[1]), trials)
     best = int(np.nanargmin(errors))
     return trials[best][0], trials[best][1], float(errors[best]), float(errors[0])
+
+
+def viscous_lag_bound(staged: ParameterSet) -> float:
+    """The longest position lag [s] the staged values allow: stage (c) reads a lag τ as
+    viscous friction k·τ, so τ ≤ σ2/k, times ``LAG_BOUND_MARGIN``."""
+    return LAG_BOUND_MARGIN * max(staged["sigma2"], 0.0) / staged["k"]
 
 
 def sensor_notes(records: Sequence[Record], kinds: Sequence[str], params

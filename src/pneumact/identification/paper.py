@@ -62,6 +62,7 @@ from .faults import (
     quantised_records,
     regulator_check,
     sensor_notes,
+    viscous_lag_bound,
 )
 from .fit import FitResult, one_blas_thread
 from .joint import (
@@ -787,17 +788,18 @@ def _misfits(outcome) -> float:
     return float((~outcome[3]["fits"]).sum()) + (0.0 if outcome[0].success else 0.5)
 
 
-def _lag_hypothesis(records, kinds, staged, free, first, options, restage):
+def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longest):
     """Where the model does not fit: does a position-sensor lag explain it? The lag that
     predicts the records best (``faults.lag_search``) starts a joint fit that frees it
     (``position_lag``) from the stages run again on the records with that lag undone
-    (``restage``); kept only when the model with it fits every record. Returns
+    (``restage``); kept only when the model with it fits every record. Lags up to
+    ``longest`` [s] are tried (``faults.viscous_lag_bound``). Returns
     (outcome, its diagnostics, the staged values it started from, the free names,
     notes)."""
     outcome, found = first
     tau, lagged, error_with, error_without = lag_search(
         records, kinds, staged, restage, options["friction"], options["chamber"],
-        options["workers"])
+        options["workers"], longest)
     if not (tau > 0 and error_with <= LAG_GAIN * error_without):
         return outcome, found, staged, free, []
     lagged = lagged.with_values({n: staged[n] for n in options["held"]})
@@ -973,8 +975,12 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                 return _staged(_kinds(undone), params, friction, fit_delta, sliding_speed,
                                prior_spread, lambda *_: None)[1]
 
+            # stage (c) reads a lag as viscous friction: its σ2 bounds the lag (without
+            # stage (c), σ2 is the prior's and bounds nothing)
+            longest = viscous_lag_bound(staged) if "sliding" in stages else np.inf
             outcome, found, staged, free, note = _lag_hypothesis(
-                records, kind_list, staged, free, (outcome, found), options, restage)
+                records, kind_list, staged, free, (outcome, found), options, restage,
+                longest)
             diagnostics += note
         diagnostics += found
         if outcome is None:  # nothing left that output error can follow
