@@ -39,7 +39,7 @@ from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
            "SPRING_AND_FRICTION", "amplification", "bench_model", "feasible",
-           "joint_refinement", "prediction_ratio"]
+           "joint_refinement", "prediction_ratio", "refit_without"]
 
 #: Tolerance of the joint fit's simulations (see the module docstring).
 JOINT_RTOL = 1e-8
@@ -173,6 +173,36 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
         used = sorted(used + admitted)
     assert result is not None  # MAX_ROUNDS >= 1: one round at least
     return result
+
+
+def refit_without(joint: FitResult, keep: Sequence[bool],
+                  max_evaluations: int = MAX_EVALUATIONS) -> FitResult | None:
+    """The ``joint`` fit again on the records ``keep`` marks, from its optimum, with its
+    models, windows, weights, offsets and bounds: what the records the model fits say
+    without the others (``diagnostics.misfit_influence``). None when fewer than
+    ``MIN_RECORDS`` sweeps or ramps would be left, or the fit fails."""
+    from ..simulation import Rodas4
+
+    kept = [i for i, ok in enumerate(keep) if ok]
+    moving = [i for i in kept if joint.windows[i] is None]
+    if len(moving) < MIN_RECORDS:
+        return None
+    names = [n for n in joint.estimates.names if "[" not in n]
+    where = {n: joint.estimates.names.index(n) for n in names}
+    low, high = joint.bounds
+    offset = [k for k, i in enumerate(kept)
+              if f"offset_position[{i}]" in joint.estimates.names]
+    try:
+        return fit([joint.models[i] for i in kept], [joint.records[i] for i in kept], names,
+                   window=[joint.windows[i] for i in kept],
+                   offsets=Offsets(["position"] if offset else (), offset),
+                   solver=Rodas4(rtol=JOINT_RTOL),
+                   weights=Weights(records=[joint.record_weights[i] for i in kept]),
+                   optimizer=Optimizer(max_nfev=max_evaluations),
+                   bounds={n: (low[j], high[j]) for n, j in where.items()},
+                   start={n: joint.values[n] for n in names})
+    except (DataError, SolverError):
+        return None
 
 
 def _within(time: np.ndarray, window: tuple[float, float] | None) -> np.ndarray:

@@ -40,6 +40,7 @@ from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
 from .diagnostics import (
     MISFIT_RATIO,
+    MISFIT_REFIT_SHARE,
     MISFIT_REMEDY,
     MISFIT_STRUCTURE,
     MODEL_FIDELITY,
@@ -71,6 +72,7 @@ from .joint import (
     SPRING_AND_FRICTION,
     feasible,
     joint_refinement,
+    refit_without,
 )
 from .stages import (
     STAGES,
@@ -292,10 +294,11 @@ class PaperIdentification(ResultVocabulary):
 
     def _with_interval(self) -> set[str]:
         """The parameters whose interval holds: all when the model fits every record;
-        else those the misfit records neither carry nor move (``misfit_influence``)."""
-        if self.intervals_hold:
-            return set(self.estimates.names)
-        return set(self.extra.get("trusted", ()))
+        else those the misfit records neither carry nor move (``misfit_influence``); in
+        both, none for Fs and vs resting on faster records (``_stribeck_dip_check``)."""
+        shown = (set(self.estimates.names) if self.intervals_hold
+                 else set(self.extra.get("trusted", ())))
+        return shown - set(self.extra.get("no_interval", ()))
 
     def _staged_values(self) -> dict[str, tuple[str, float, float]]:
         out = {}
@@ -873,26 +876,28 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
     such ramp out (their stick-slip is not followed sample by sample), Fs and vs rest on
     faster records, where the Stribeck curve can trade Fs against vs: measured, a
     campaign of 4 ramp pairs gave Fs +18 %, vs −16 % with ±1 % intervals. Then they are
-    poorly identified, for that reason (a diagnostic says so)."""
+    poorly identified, for that reason (a diagnostic says so), and shown without an
+    interval (it would not hold). Returns (verdicts, the parameters so refused)."""
     from .bench import typical_speed
 
     vs = estimate.get("vs")
     ramps = [(r, typical_speed(r)) for r in ramp_records]
     if vs is None or not ramps:
-        return judged
+        return judged, []
     used = set(residuals["record"]) if len(residuals) else set()
     slow = [(r, v) for r, v in ramps if v < vs]
     if not slow or any(Path(r.source).name in used for r, _ in slow):
-        return judged
+        return judged, []
     names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
               "the joint fit: Fs and vs rest on faster records")
     diagnostics.append(Diagnostic("warning", "joint", reason, "ramps below vs that the "
                                   "diaphragm slides through steadily (a stiffer regulator, "
                                   "or more ramp speeds between vs/3 and vs)"))
+    refused = [v.parameter for v in judged
+               if v.parameter in STRIBECK_DIP_PARAMETERS and v.identified]
     return [Verdict(v.parameter, POORLY, reason, REMEDIES.get(v.parameter, ""))
-            if v.parameter in STRIBECK_DIP_PARAMETERS and v.identified else v
-            for v in judged]
+            if v.parameter in refused else v for v in judged], refused
 
 
 @one_blas_thread
@@ -1036,8 +1041,10 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     elif misfit and refine and converged and len(misfit) == int((~residuals["fits"]).sum()):
         # only records misfit: judge each parameter by what those records do to it
         assert joint is not None
-        refused, moves = misfit_influence(joint, list(residuals["fits"]),
-                                          final_values.stderr)
+        fits = list(residuals["fits"])
+        refit = (refit_without(joint, fits, max_evaluations)
+                 if len(misfit) <= MISFIT_REFIT_SHARE * len(fits) else None)
+        refused, moves = misfit_influence(joint, fits, final_values.stderr, refit)
         final_values = _with_moves(final_values, moves)
         ci = final_values.interval(0.95)
         half = (ci[idx, 1] - ci[idx, 0]) / 2
@@ -1050,9 +1057,10 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     judged = [Verdict(v.parameter, POORLY, refused[v.parameter], MISFIT_REMEDY)
               if v.parameter in refused and v.verdict != NOT_IDENTIFIABLE else v
               for v in judged]
+    no_interval: list[str] = []
     if refine:
-        judged = _stribeck_dip_check(kinds["ramp"], residuals, estimate, judged,
-                                     diagnostics)
+        judged, no_interval = _stribeck_dip_check(kinds["ramp"], residuals, estimate,
+                                                  judged, diagnostics)
     if held:  # shown at the prior's values, with no interval
         judged += [Verdict(n, "not identifiable", why_not, REMEDIES[n]) for n in held]
         final_values = _with_held(final_values, list(held), staged)
@@ -1077,7 +1085,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
-                                "trusted": trusted,
+                                "trusted": trusted, "no_interval": no_interval,
                                 "joint_failed": joint_failed,
                                 "pressure_side": side, "sensors": sensors,
                                 "regulator": regulator})
