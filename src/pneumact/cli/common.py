@@ -320,12 +320,21 @@ def _flush_warnings(caught: list[warnings.WarningMessage]) -> None:
     caught.clear()
 
 
+#: what a Ctrl-C keeps, said in the "stopped" line of a command that resumes nothing
+KEPT_AS_IT_WAS = ("nothing new was written; an output folder from an earlier run is kept "
+                  "as it was")
+#: ... and of one whose finished runs are kept (a batch, a global sensitivity study)
+KEPT_FOR_RESUME = "the finished runs are kept: run the same command with --resume to continue"
+
+
 @contextlib.contextmanager
-def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iterator[None]:
+def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False,
+                kept: str = KEPT_AS_IT_WAS) -> Iterator[None]:
     """Warnings -> yellow lines (the passivity of a set only with ``passivity``: that is
     for ``params show/check``); a pneumact error or a bad path -> one red line, exit
-    ``code``; Ctrl-C -> one line, exit 130; anything else is pneumact's own failure: one
-    line saying so, exit 1 (the traceback with PNEUMACT_TRACEBACK=1)."""
+    ``code``; Ctrl-C -> one line saying what is ``kept``, exit 130; anything else is
+    pneumact's own failure: one line saying so, exit 1 (the traceback with
+    PNEUMACT_TRACEBACK=1)."""
     passthrough = (typer.Exit, typer.Abort, typer.TyperException)
 
     with warnings.catch_warnings(record=True) as caught:
@@ -351,8 +360,7 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             raise typer.Exit(code) from None
         except KeyboardInterrupt:
             _flush_warnings(caught)
-            print_error("interrupted; a resumable run (batch, sensitivity) is kept for "
-                        "--resume", prefix="stopped")
+            print_error(f"interrupted; {kept}", prefix="stopped")
             raise typer.Exit(EXIT_INTERRUPTED) from None
         except Exception as exc:
             _flush_warnings(caught)
