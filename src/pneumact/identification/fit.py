@@ -910,10 +910,14 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
         from ..simulation.batch.engine import dask_client
 
         client, owned = dask_client(executor.scheduler)
+        futures = []
         try:
             futures = client.map(_solve_copy, [problem] * len(starts), starts,
                                  [options] * len(starts), pure=False)
             done = client.gather(futures)
+        except BaseException:  # Ctrl-C: the starts not begun on the workers are dropped
+            client.cancel(futures)
+            raise
         finally:
             if owned:
                 client.close()
