@@ -78,6 +78,27 @@ def test_validate_draws_twelve_records_as_a_grid(campaign, drawn, tmp_path, monk
     assert_scaled(drawn, tmp_path / "val")
 
 
+def test_records_beyond_a_page_make_a_figure_per_page(campaign, drawn, tmp_path,
+                                                      monkeypatch):
+    """Beyond a page of records the figure grew taller; now each page is a figure of its
+    own (loops.png, loops-2.png, ...) and the report shows every page. Pages of 5 here,
+    so that the campaign's 12 records make three."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(plotting, "PANELS_PER_PAGE", 5)
+    for record in campaign:
+        record.save(tmp_path / "bench" / f"{record.source}.csv")
+    result = runner.invoke(app, ["validate", "bench", "--out", "val"])
+    assert result.exit_code == 0, result.output
+    pages = {f"{name}{suffix}.png" for name in ("loops", "time", "residuals")
+             for suffix in ("", "-2", "-3")}
+    assert {p.name for p in (tmp_path / "val").glob("*.png")} == pages
+    assert_scaled(drawn, tmp_path / "val")
+    one_row = png_size(tmp_path / "val" / "loops-3.png")[1]  # 2 records: one row
+    assert png_size(tmp_path / "val" / "loops.png")[1] < 2.5 * one_row  # 5 records: two
+    html = (tmp_path / "val" / "report.html").read_text(encoding="utf-8")
+    assert html.count("<img") == len(pages) and "(page 3 of 3)" in html
+
+
 def test_measured_and_model_of_twelve_records_wraps_into_rows(tmp_path):
     """The figure of a joint fit (`identify paper`'s joint_fit.png, `fit`'s fit.png)."""
     time = np.linspace(0.0, 1.0, 50)

@@ -324,7 +324,8 @@ def _flush_warnings(caught: list[warnings.WarningMessage]) -> None:
 KEPT_AS_IT_WAS = ("nothing new was written; an output folder from an earlier run is kept "
                   "as it was")
 #: ... and of one whose finished runs are kept (a batch, a global sensitivity study)
-KEPT_FOR_RESUME = "the finished runs are kept: run the same command with --resume to continue"
+KEPT_FOR_RESUME = ("the runs finished so far are kept: run the same command with --resume "
+                   "to continue")
 
 
 @contextlib.contextmanager
