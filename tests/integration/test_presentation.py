@@ -311,3 +311,46 @@ def test_sensitivity_oat_writes_its_loops_with_zooms(tmp_path, drawn, monkeypatc
     assert any("at break-away" in t for t in titles) and any("whole loop" in t
                                                               for t in titles)
     assert_scaled(drawn, tmp_path / "oat")
+
+
+class _SweepRecord:
+    """What plot_band reads of a record: its source, kind, time and signals [SI]."""
+
+    def __init__(self, time: np.ndarray, signals: dict[str, np.ndarray]) -> None:
+        self.source, self.meta, self.time, self._signals = "bench/sweep.csv", {
+            "kind": "sweep"}, time, signals
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self._signals[name]
+
+
+def test_band_png_is_readable_with_units_and_a_micrometre_zoom(tmp_path):
+    """band.png of `identify paper`: its size, the axes' units, and the zoom in µm where
+    a band of some µm on a stroke of mm shows (issue #42: the band was invisible)."""
+    from types import SimpleNamespace
+
+    from pneumact.identification.paper import PaperIdentification
+
+    time = np.linspace(0.0, 4.0, 400)
+    pressure = 1.5e5 + 1e5 * np.sin(np.pi * time / 4.0) ** 2
+    position = 0.01 * np.sin(np.pi * time / 4.0) ** 2  # a 10 mm stroke
+    spread = 5e-6 * np.ones_like(time)  # a band of ±5 µm
+    record = _SweepRecord(time, {"pressure": pressure, "position": position + 1e-6})
+    nominal = {"pressure": pressure, "position": position}
+    band = SimpleNamespace(
+        time=time, level=0.95, nominal=nominal,
+        lower={"position": position - spread}, upper={"position": position + spread},
+        samples={"pressure": [pressure] * 3,
+                 "position": [position + d * spread for d in (-1, 0, 1)]})
+    result = SimpleNamespace(records=[record], band=lambda chosen: band)
+    fig = PaperIdentification.plot_band(result)  # type: ignore[arg-type]
+    labels = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    assert labels == [("chamber pressure [kPa abs]", "position [mm]"),
+                      ("time [s]", "position [mm]"),
+                      ("time [s]", "position − identified model [µm]")]
+    low, high = fig.axes[2].get_ylim()  # the zoom shows the ±5 µm band, in µm
+    assert 5.0 <= high < 50.0 and -50.0 < low <= -5.0, (low, high)
+    path = plotting.save_figure(fig, tmp_path / "band.png")
+    assert png_size(path)[0] <= ref.MAX_FIGURE_WIDTH_PX
+    panel = min(ax.get_window_extent().width for ax in fig.axes) * plotting.PNG_DPI / fig.dpi
+    assert panel >= ref.MIN_PANEL_WIDTH_PX
