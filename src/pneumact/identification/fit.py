@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from ..errors import DataError, ParameterError, SolverError
+from ..errors import DataError, ParameterError, PneumactError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import Sensors, first_order_lag, lag_derivative
@@ -923,6 +923,8 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
                 client.close()
         problem.simulations += sum(sol.simulations for sol in done)
         return done
+    if len(starts) > executor.threads:  # more than one round: say what it will take first
+        _announce_multistart(problem, starts, executor.threads)
     done = []
     with stop_threads(ThreadPoolExecutor(max_workers=executor.threads)) as pool:
         futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
@@ -931,6 +933,48 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
             problem.simulations += done[-1].simulations
             notify(progress, "multistart", k + 1, len(futures))
     return done
+
+
+#: evaluations of the records (each with its Jacobian) one start of a multistart
+#: typically takes: the range of the estimate said before the first start has finished
+EVALUATIONS_PER_START = (5, 50)
+#: results a problem's cache holds at most (``_Problem.evaluate``), per thread's copy
+CACHE_ENTRIES = 9
+
+
+def _announce_multistart(problem: _Problem, starts: list, threads: int) -> None:
+    """Time one evaluation of the records at the first start (a first chunk; the first
+    call may compile, so the second is timed), then say the time the starts will take
+    and check their memory (``check_memory``), before any start is committed."""
+    from ..simulation.memory import ESTIMATES, check_memory
+
+    own = _own_copy(problem)
+    theta = problem.theta(starts[0])
+    with_jacobian = problem.jacobian == "sensitivities"
+    try:
+        own.evaluate(theta, with_jacobian)
+        own._cache.clear()
+        tic = _time.perf_counter()
+        residuals, jacobian, results = own.evaluate(theta, with_jacobian)
+        seconds = _time.perf_counter() - tic
+    except PneumactError:
+        return  # the start is refused by the fit itself, with its message
+    per_entry = residuals.nbytes + (0 if jacobian is None else jacobian.nbytes) + sum(
+        values.nbytes for result in results for values in result.signals.values())
+    needed = threads * CACHE_ENTRIES * per_entry + len(starts) * 64 * (residuals.size + 1)
+    check_memory(needed, f"fit: {len(starts)} multistart starts on {threads} threads")
+    rounds = len(starts) / threads
+    low, high = (rounds * n * seconds for n in EVALUATIONS_PER_START)
+    ESTIMATES.info("multistart: %d starts on %d threads; one evaluation of the records "
+                   "takes %.2g s, a start %d to %d of them: about %s to %s; about %.3g MiB "
+                   "of memory", len(starts), threads, seconds, *EVALUATIONS_PER_START,
+                   _duration(low), _duration(high), needed / 1024**2)
+
+
+def _duration(seconds: float) -> str:
+    """``seconds`` as h:mm:ss."""
+    whole = round(seconds)
+    return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
 
 
 def _own_copy(problem: _Problem) -> _Problem:
