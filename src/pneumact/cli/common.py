@@ -47,6 +47,9 @@ EXIT_INTERRUPTED = 130
 DEFAULT_LOW_PRESSURE = 20e3
 DEFAULT_PERIOD = 20.0
 COMPILING = "compiling kernel (first use; cached afterwards)"
+#: a progress bar's label until the first report: the runs are being prepared (a large
+#: sample drawn, the kernel compiled on its first use: not only compiling)
+STARTING = "preparing the runs (compiling the kernel on its first use)"
 #: progress stages that are the whole run: a bar shows the command's label alone
 WHOLE_RUN_STAGES = ("simulate", "batch", "fit", "validate")
 
@@ -430,7 +433,7 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         columns += [TaskProgressColumn(), TimeElapsedColumn()]
     started = time.perf_counter()
     with Progress(*columns, console=err_console, transient=transient) as bar:
-        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-", left="-:--:--")
+        waiting = bar.add_task(STARTING, total=None, failed=0, rate="-", left="-:--:--")
         tasks: dict[str, Any] = {}
         first: dict[str, float] = {}
         estimated: set[str] = set()
