@@ -99,6 +99,32 @@ def test_records_beyond_a_page_make_a_figure_per_page(campaign, drawn, tmp_path,
     assert html.count("<img") == len(pages) and "(page 3 of 3)" in html
 
 
+def test_a_fit_beyond_a_page_of_records_writes_a_figure_per_page(vgt, tmp_path,
+                                                                 monkeypatch):
+    """fit.png (and identify paper's joint_fit.png, drawn by the same plot_fit) per page
+    of records; pages of 2 here, so that three records make two."""
+    import pneumact as pa
+
+    monkeypatch.setattr(plotting, "PANELS_PER_PAGE", 2)
+    model = pa.Actuator(vgt, valve=pa.PressureSource())
+    run = pa.simulate(model, pa.PressureCycle(high=100e3, low=40e3, period=2.0,
+                                              n_points=201))
+    rng = np.random.default_rng(0)
+    records = [pa.Record.from_arrays(
+        run.time, {"pressure": run["pressure"] + rng.normal(0.0, 20.0, run.time.size),
+                   "position": run["position"] + rng.normal(0.0, 1e-6, run.time.size)},
+        source=f"{kind}.csv") for kind in ("sweep", "ramp", "presliding")]
+    result = pa.fit(model, records, ["Fc"], optimizer=pa.Optimizer(max_nfev=2))
+    assert result.fit_pages == 2
+    result.write(tmp_path / "fit")
+    assert {p.name for p in (tmp_path / "fit").glob("fit*.png")} == {"fit.png", "fit-2.png"}
+    # two records side by side, then the third alone
+    assert png_size(tmp_path / "fit" / "fit-2.png")[0] < 0.7 * png_size(
+        tmp_path / "fit" / "fit.png")[0]
+    html = (tmp_path / "fit" / "report.html").read_text(encoding="utf-8")
+    assert "(page 2 of 2)" in html
+
+
 def test_measured_and_model_of_twelve_records_wraps_into_rows(tmp_path):
     """The figure of a joint fit (`identify paper`'s joint_fit.png, `fit`'s fit.png)."""
     time = np.linspace(0.0, 1.0, 50)

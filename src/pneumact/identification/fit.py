@@ -490,10 +490,11 @@ class FitResult(ResultVocabulary):
     def report_parameters(self):
         return self.parameters() if self.shared() and self.model is not None else None
 
-    def report(self, call: str = "", png: bytes | None = None) -> Report:
+    def report(self, call: str = "", png: bytes | dict[str, bytes] | None = None) -> Report:
         """Estimates, statistics, correlation and the fit figures as an HTML ``Report``
-        (not yet written; ``png``: the fit figure if already drawn)."""
-        from ..io.report import Report, figure_png
+        (not yet written; ``png``: the fit figure, or its pages by name, if already
+        drawn)."""
+        from ..io.report import Report
 
         report = Report(self.report_title, call=call, parameters=self.report_parameters())
         report.text(f"{len(self.records)} record(s), signals {', '.join(self.signals)}; "
@@ -503,26 +504,29 @@ class FitResult(ResultVocabulary):
                                        "(SI)")
         report.table(self.statistics, "Fit statistics per record and signal", index=False)
         report.table(self.correlation, "Correlation of the estimates")
-        report.image(png or figure_png(self.plot_fit()),
-                     "Measured and fitted signals, residuals")
+        pages = [png] if isinstance(png, bytes) else list((png or self.fit_pngs()).values())
+        for k, page in enumerate(pages, start=1):
+            report.image(page, "Measured and fitted signals, residuals" + (
+                f" (page {k} of {len(pages)})" if len(pages) > 1 else ""))
         if self.profiles:
             report.figure(self.plot_profiles(), "Profile likelihoods")
         return report
 
     def writers(self, call: str = "") -> dict[str, Callable[[Path], object]]:
         """The files of ``write``, by name: each a function writing to a path."""
-        from ..io.report import figure_png, table_writer
+        from ..io.report import table_writer
         from ..plotting import figure_writer
 
-        png = figure_png(self.plot_fit())
+        pngs = self.fit_pngs()
         writers: dict[str, Callable[[Path], object]] = {
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
-        writers["fit.png"] = lambda p: Path(p).write_bytes(png)
+        for name, png in pngs.items():
+            writers[f"{name}.png"] = functools.partial(_write_png_bytes, png)
         if len(self.starts) > 1:
             writers["waterfall.png"] = figure_writer(self.plot_waterfall)
         if self.profiles:
             writers["profiles.png"] = figure_writer(self.plot_profiles)
-        writers["report.html"] = self.report(call, png).write
+        writers["report.html"] = self.report(call, pngs).write
         if self.model is not None and not any("[" in n and not n.startswith("offset_")
                                               for n in self.estimates.names):
             from ..parameters import write_params
@@ -538,13 +542,31 @@ class FitResult(ResultVocabulary):
 
         return write_files(out_dir, self.writers(call))
 
-    def plot_fit(self):
-        """Measured and simulated signals per record, with residuals."""
-        from ..plotting import plot_measured_and_model
+    def plot_fit(self, page: int = 0):
+        """Measured and simulated signals per record, with residuals: every record
+        (``page`` 0), or the ``page``-th page of ``PANELS_PER_PAGE`` records (from 1)."""
+        from ..plotting import plot_measured_and_model, record_pages
 
         entries = [(os.path.basename(rec.source), rec.time, rec, sim, rec.units)
                    for rec, sim in zip(self.records, self.simulated, strict=True)]
+        if page:
+            entries = record_pages(entries)[page - 1]
         return plot_measured_and_model(entries, self.signals, "fitted model", self.window)
+
+    @property
+    def fit_pages(self) -> int:
+        """Pages of ``plot_fit`` the files and the report hold (fit.png, fit-2.png, ...)."""
+        from ..plotting import record_pages
+
+        return len(record_pages(self.records))
+
+    def fit_pngs(self) -> dict[str, bytes]:
+        """``fit``, ``fit-2``, ...: each page of ``plot_fit`` as PNG."""
+        from ..io.report import figure_png
+        from ..plotting import page_name
+
+        return {page_name("fit", k): figure_png(self.plot_fit(k))
+                for k in range(1, self.fit_pages + 1)}
 
     def plot_waterfall(self):
         """Final cost of every start, sorted: a flat first step means a found optimum."""
@@ -975,6 +997,11 @@ def _duration(seconds: float) -> str:
     """``seconds`` as h:mm:ss."""
     whole = round(seconds)
     return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
+
+
+def _write_png_bytes(png: bytes, path: Path) -> None:
+    """Write an already drawn PNG to ``path`` (a writer of ``write_files``)."""
+    Path(path).write_bytes(png)
 
 
 def _own_copy(problem: _Problem) -> _Problem:
