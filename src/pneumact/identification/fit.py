@@ -945,7 +945,8 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
                 client.close()
         problem.simulations += sum(sol.simulations for sol in done)
         return done
-    if len(starts) > executor.threads:  # more than one round: say what it will take first
+    if len(starts) > executor.threads and threading.current_thread() is \
+            threading.main_thread():  # more than one round, not a fit inside other work
         _announce_multistart(problem, starts, executor.threads)
     done = []
     with stop_threads(ThreadPoolExecutor(max_workers=executor.threads)) as pool:
