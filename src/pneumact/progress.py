@@ -80,10 +80,11 @@ _leave_after_grace = False
 
 
 def leave_stopped_work(leave: bool = True) -> None:
-    """Whether a stopped pool waits for its running work at most ``STOP_GRACE_S`` and then
-    leaves it running (True: for a process that exits right after, as the command line
-    does; its stop request then stays, so that nothing more starts) or waits until it
-    ends (False, the default: a notebook gets its threads back idle)."""
+    """Whether a pool stopped by Ctrl-C waits for its running work at most
+    ``STOP_GRACE_S`` and then leaves it running (True: for a process that exits right
+    after, as the command line does; its stop request then stays, so that nothing more
+    starts) or waits until it ends (False, the default: a notebook gets its threads back
+    idle). A pool stopped by a failure always waits."""
     global _leave_after_grace
     _leave_after_grace = leave
 
@@ -118,12 +119,13 @@ def stop_threads(pool: FuturesExecutor) -> Iterator[FuturesExecutor]:
     global _stop_requests
     try:
         yield pool
-    except BaseException:
+    except BaseException as stopping:
         with _stop_lock:
             _stop_requests += 1
         left_running = False
-        try:
-            leave = _leave_after_grace and hasattr(pool, "_threads")
+        try:  # only a Ctrl-C leaves work running: after a failure the caller may go on
+            leave = (_leave_after_grace and isinstance(stopping, KeyboardInterrupt)
+                     and hasattr(pool, "_threads"))
             pool.shutdown(wait=not leave, cancel_futures=True)
             left_running = leave and not _joined(pool, STOP_GRACE_S)
         finally:
