@@ -558,7 +558,9 @@ STAGED_LAG = 3e-3
 # seconds from SIGINT to the process's exit: the issue's 2 s, plus 1 s for the interpreter's
 # own exit on a loaded machine (fit --multistart 2000 measured 1.5 s with 4 jobs on 2 cores;
 # before the stop flag every start ran first: still running 20 s after Ctrl-C; the
-# study and comparison tests took 115 s and 10+ s)
+# study and comparison tests took 115 s and 10+ s; a comparison interrupted while a
+# worker thread compiles its kernel, cold cache: 112 s before the command left the thread,
+# 1.5 s after)
 INTERRUPT_EXIT_S = 3.0
 # Issue #40, Fig. 5a read as written: the loop change (share of the loop's width) on the
 # 20 s command cycle at σ0 × factor (the referee's hand numbers), its tolerance, and the

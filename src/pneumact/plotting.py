@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -28,14 +28,18 @@ __all__ = [
     "DISPLAY_UNITS",
     "FRICTION_TEST_KINDS",
     "MAX_PANEL_COLUMNS",
+    "PANELS_PER_PAGE",
     "SMALL_LENGTH",
     "figure_writer",
     "label_log_axis",
+    "page_name",
+    "page_names",
     "panel_grid",
     "plot_friction_test",
     "plot_hysteresis",
     "plot_measured_and_model",
     "plot_time_series",
+    "record_pages",
     "save_figure",
     "shown_unit",
 ]
@@ -76,6 +80,10 @@ PNG_DPI = 120
 #: so that every panel stays readable (≈ 500 px wide at PNG_DPI) and a figure of any
 #: number of records stays under ≈ 2 300 px wide
 MAX_PANEL_COLUMNS = 4
+#: at most this many records' panels on one figure (4 rows of MAX_PANEL_COLUMNS): more
+#: records make more figures, a page each (``record_pages``: loops.png, loops-2.png, ...),
+#: not an ever taller one
+PANELS_PER_PAGE = 16
 
 
 # --------------------------------------------------------------------------- access
@@ -172,6 +180,28 @@ def panel_grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.
         for j in range(rows_per):
             axes[(i // cols) * rows_per + j, i % cols].set_visible(False)
     return fig, panels
+
+
+def record_pages(items: Sequence[Any], per_page: int | None = None) -> list[list[Any]]:
+    """``items`` (records, or what stands for them) in pages of at most ``per_page``
+    (default ``PANELS_PER_PAGE``), one figure each; one empty page for no items."""
+    size = max(1, int(per_page or PANELS_PER_PAGE))
+    items = list(items)
+    return [items[k:k + size] for k in range(0, len(items), size)] or [[]]
+
+
+def page_name(name: str, page: int) -> str:
+    """The name of the ``page``-th figure (from 1) of ``name``: ``loops``, ``loops-2``, ..."""
+    return name if page <= 1 else f"{name}-{page}"
+
+
+def page_names(figures: Mapping[str, Any], name: str) -> list[str]:
+    """The keys of ``figures`` that are pages of ``name``, in page order."""
+    found, page = [], 1
+    while page_name(name, page) in figures:
+        found.append(page_name(name, page))
+        page += 1
+    return found
 
 
 def label_log_axis(ax: Axes, axis: str = "x") -> None:

@@ -10,7 +10,10 @@ one place (``pneumact.cli.common``).
 Ctrl-C stops long work within a simulation: the main thread receives the interrupt,
 ``stop_threads`` asks the pool's threads to stop (each simulation starts with
 ``raise_if_stopped``), cancels the starts not begun and waits for the running ones, which
-end at their next simulation.
+end at their next simulation. A process that exits right after the stop (the command
+line: ``leave_stopped_work``) waits for them at most ``STOP_GRACE_S`` and then leaves them:
+a thread compiling a kernel cannot be interrupted from Python and would hold the exit
+for a minute.
 
 A base module (it imports only ``pneumact.errors``).
 """
@@ -19,14 +22,15 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor as FuturesExecutor
 from dataclasses import dataclass
 
 from .errors import ArgumentTypeError
 
-__all__ = ["Progress", "ProgressCallback", "check_progress", "notify", "raise_if_stopped",
-           "stop_requested", "stop_threads"]
+__all__ = ["Progress", "ProgressCallback", "check_progress", "leave_stopped_work", "notify",
+           "raise_if_stopped", "stop_requested", "stop_threads"]
 
 
 @dataclass(frozen=True)
@@ -70,6 +74,29 @@ def notify(progress: ProgressCallback | None, stage: str, done: float, total: fl
 # ----------------------------------------------------------------------- stopping work
 _stop_lock = threading.Lock()
 _stop_requests = 0  # > 0 while a pool is being stopped (nested pools count each)
+#: seconds a stopped pool's running work may take to end when the process exits after it
+STOP_GRACE_S = 1.0
+_leave_after_grace = False
+
+
+def leave_stopped_work(leave: bool = True) -> None:
+    """Whether a pool stopped by Ctrl-C waits for its running work at most
+    ``STOP_GRACE_S`` and then leaves it running (True: for a process that exits right
+    after, as the command line does; its stop request then stays, so that nothing more
+    starts) or waits until it ends (False, the default: a notebook gets its threads back
+    idle). A pool stopped by a failure always waits."""
+    global _leave_after_grace
+    _leave_after_grace = leave
+
+
+def _joined(pool: FuturesExecutor, seconds: float) -> bool:
+    """Whether every thread of ``pool`` ended within ``seconds``."""
+    deadline = time.monotonic() + seconds
+    for thread in list(getattr(pool, "_threads", ())):
+        thread.join(max(0.0, deadline - time.monotonic()))
+        if thread.is_alive():
+            return False
+    return True
 
 
 def stop_requested() -> bool:
@@ -92,13 +119,18 @@ def stop_threads(pool: FuturesExecutor) -> Iterator[FuturesExecutor]:
     global _stop_requests
     try:
         yield pool
-    except BaseException:
+    except BaseException as stopping:
         with _stop_lock:
             _stop_requests += 1
-        try:
-            pool.shutdown(wait=True, cancel_futures=True)
+        left_running = False
+        try:  # only a Ctrl-C leaves work running: after a failure the caller may go on
+            leave = (_leave_after_grace and isinstance(stopping, KeyboardInterrupt)
+                     and hasattr(pool, "_threads"))
+            pool.shutdown(wait=not leave, cancel_futures=True)
+            left_running = leave and not _joined(pool, STOP_GRACE_S)
         finally:
-            with _stop_lock:
-                _stop_requests -= 1
+            if not left_running:
+                with _stop_lock:
+                    _stop_requests -= 1
         raise
     pool.shutdown(wait=True)

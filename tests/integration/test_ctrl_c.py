@@ -25,6 +25,7 @@ SRC = Path(__file__).resolve().parents[2] / "src"
 
 #: the command line, with a hook that prints STAGE-STARTED once the stage has done something
 _HOOKED = """
+import os
 import sys
 import pneumact.progress as progress
 
@@ -38,6 +39,20 @@ def notify(callback, name, done=0, *args, **kwargs):
     return real(callback, name, done, *args, **kwargs)
 
 progress.notify = notify
+
+if os.environ.get("HOOK_CALL"):  # "module:function": say CALL-STARTED when it is first called
+    import importlib
+
+    where, name = os.environ["HOOK_CALL"].split(":")
+    module = importlib.import_module(where)
+    real_call = getattr(module, name)
+
+    def called(*args, **kwargs):
+        sys.stderr.write("CALL-STARTED\\n")
+        sys.stderr.flush()
+        return real_call(*args, **kwargs)
+
+    setattr(module, name, called)
 sys.argv = ["pneumact", *sys.argv[2:]]
 from pneumact.__main__ import main
 main()
@@ -48,11 +63,13 @@ def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def _interrupt(stage: str, args: list[str], cwd: Path) -> tuple[int, float, str]:
+def _interrupt(stage: str, args: list[str], cwd: Path, *, marker: str = "STAGE-STARTED",
+               extra_env: dict[str, str] | None = None, delay: float = 0.3,
+               ) -> tuple[int, float, str]:
     """(exit code, seconds from SIGINT to exit, stderr) of ``pneumact ARGS`` interrupted
-    once ``stage`` has reported progress."""
+    ``delay`` seconds after ``stage`` has reported progress (or ``marker`` was printed)."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get(
-        "PYTHONPATH", "")]), COLUMNS="200")
+        "PYTHONPATH", "")]), COLUMNS="200", **(extra_env or {}))
     # a pytest-xdist worker ignores SIGINT, and an ignored signal stays ignored across
     # exec: the child must start with the default handler, as in a terminal
     proc = subprocess.Popen([sys.executable, "-c", _HOOKED, stage, *args], cwd=cwd, env=env,
@@ -62,11 +79,11 @@ def _interrupt(stage: str, args: list[str], cwd: Path) -> tuple[int, float, str]
     try:
         for line in proc.stderr:  # type: ignore[union-attr]
             lines.append(line)
-            if "STAGE-STARTED" in line:
+            if marker in line:
                 break
         else:
-            pytest.fail(f"the stage {stage!r} never started: {''.join(lines)[-2000:]}")
-        time.sleep(0.3)  # well inside the stage
+            pytest.fail(f"the stage {stage!r} never started ({marker!r}): {''.join(lines)[-2000:]}")
+        time.sleep(delay)  # well inside the stage
         sent = time.perf_counter()
         proc.send_signal(signal.SIGINT)
         rest = proc.communicate(timeout=120)[1]
@@ -91,6 +108,8 @@ def test_ctrl_c_stops_a_multistart_fit(tmp_path):
         "--workers", "2", "--out", "OUT"], tmp_path)
     _assert_stopped(code, seconds, stderr)
     assert not (tmp_path / "OUT").exists()
+    # a fit resumes nothing: the line says what is kept instead of advising --resume
+    assert "--resume" not in stderr and "kept as it was" in stderr
 
 
 def test_ctrl_c_stops_a_batch_and_keeps_its_chunks(tmp_path):
@@ -110,6 +129,7 @@ def test_ctrl_c_stops_a_sensitivity_study_and_keeps_its_runs(tmp_path):
         "sensitivity", "sobol", "--n", "4096", "--t-end", "2", "--workers", "2",
         "--chunk-size", "16", "--out", "STUDY"], tmp_path)
     _assert_stopped(code, seconds, stderr)
+    assert "--resume" in stderr
     kept = partial_folder(tmp_path / "STUDY")  # for --resume
     assert kept.is_dir() and any(p.is_file() for p in kept.rglob("*"))
 
@@ -119,3 +139,17 @@ def test_ctrl_c_stops_a_comparison_of_friction_laws(tmp_path):
         "compare", str(DATA / "record.csv"), "--workers", "2", "--out", "OUT"], tmp_path)
     _assert_stopped(code, seconds, stderr)
     assert not (tmp_path / "OUT").exists()
+
+
+def test_ctrl_c_stops_a_comparison_while_its_kernel_compiles(tmp_path):
+    """A kernel compiling in a worker thread cannot be interrupted from Python: the command
+    leaves it and exits (before: 112 s from Ctrl-C to exit, the rest of the compilation)."""
+    code, seconds, stderr = _interrupt("compare", [
+        "compare", str(DATA / "record.csv"), "--workers", "2", "--out", "OUT"], tmp_path,
+        marker="CALL-STARTED", delay=3.0, extra_env={  # 3 s into a law's fit: compiling
+            "NUMBA_CACHE_DIR": str(tmp_path / "kernels"),  # empty: every kernel compiles
+            "HOOK_CALL": "pneumact.validation.compare:fit"})  # a law's fit, in a thread
+    assert "compiling the model" in stderr
+    _assert_stopped(code, seconds, stderr)
+    assert not (tmp_path / "OUT").exists()
+    assert "--resume" not in stderr

@@ -78,6 +78,53 @@ def test_validate_draws_twelve_records_as_a_grid(campaign, drawn, tmp_path, monk
     assert_scaled(drawn, tmp_path / "val")
 
 
+def test_records_beyond_a_page_make_a_figure_per_page(campaign, drawn, tmp_path,
+                                                      monkeypatch):
+    """Beyond a page of records the figure grew taller; now each page is a figure of its
+    own (loops.png, loops-2.png, ...) and the report shows every page. Pages of 5 here,
+    so that the campaign's 12 records make three."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(plotting, "PANELS_PER_PAGE", 5)
+    for record in campaign:
+        record.save(tmp_path / "bench" / f"{record.source}.csv")
+    result = runner.invoke(app, ["validate", "bench", "--out", "val"])
+    assert result.exit_code == 0, result.output
+    pages = {f"{name}{suffix}.png" for name in ("loops", "time", "residuals")
+             for suffix in ("", "-2", "-3")}
+    assert {p.name for p in (tmp_path / "val").glob("*.png")} == pages
+    assert_scaled(drawn, tmp_path / "val")
+    one_row = png_size(tmp_path / "val" / "loops-3.png")[1]  # 2 records: one row
+    assert png_size(tmp_path / "val" / "loops.png")[1] < 2.5 * one_row  # 5 records: two
+    html = (tmp_path / "val" / "report.html").read_text(encoding="utf-8")
+    assert html.count("<img") == len(pages) and "(page 3 of 3)" in html
+
+
+def test_a_fit_beyond_a_page_of_records_writes_a_figure_per_page(vgt, tmp_path,
+                                                                 monkeypatch):
+    """fit.png (and identify paper's joint_fit.png, drawn by the same plot_fit) per page
+    of records; pages of 2 here, so that three records make two."""
+    import pneumact as pa
+
+    monkeypatch.setattr(plotting, "PANELS_PER_PAGE", 2)
+    model = pa.Actuator(vgt, valve=pa.PressureSource())
+    run = pa.simulate(model, pa.PressureCycle(high=100e3, low=40e3, period=2.0,
+                                              n_points=201))
+    rng = np.random.default_rng(0)
+    records = [pa.Record.from_arrays(
+        run.time, {"pressure": run["pressure"] + rng.normal(0.0, 20.0, run.time.size),
+                   "position": run["position"] + rng.normal(0.0, 1e-6, run.time.size)},
+        source=f"{kind}.csv") for kind in ("sweep", "ramp", "presliding")]
+    result = pa.fit(model, records, ["Fc"], optimizer=pa.Optimizer(max_nfev=2))
+    assert result.fit_pages == 2
+    result.write(tmp_path / "fit")
+    assert {p.name for p in (tmp_path / "fit").glob("fit*.png")} == {"fit.png", "fit-2.png"}
+    # two records side by side, then the third alone
+    assert png_size(tmp_path / "fit" / "fit-2.png")[0] < 0.7 * png_size(
+        tmp_path / "fit" / "fit.png")[0]
+    html = (tmp_path / "fit" / "report.html").read_text(encoding="utf-8")
+    assert "(page 2 of 2)" in html
+
+
 def test_measured_and_model_of_twelve_records_wraps_into_rows(tmp_path):
     """The figure of a joint fit (`identify paper`'s joint_fit.png, `fit`'s fit.png)."""
     time = np.linspace(0.0, 1.0, 50)
@@ -290,3 +337,46 @@ def test_sensitivity_oat_writes_its_loops_with_zooms(tmp_path, drawn, monkeypatc
     assert any("at break-away" in t for t in titles) and any("whole loop" in t
                                                               for t in titles)
     assert_scaled(drawn, tmp_path / "oat")
+
+
+class _SweepRecord:
+    """What plot_band reads of a record: its source, kind, time and signals [SI]."""
+
+    def __init__(self, time: np.ndarray, signals: dict[str, np.ndarray]) -> None:
+        self.source, self.meta, self.time, self._signals = "bench/sweep.csv", {
+            "kind": "sweep"}, time, signals
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self._signals[name]
+
+
+def test_band_png_is_readable_with_units_and_a_micrometre_zoom(tmp_path):
+    """band.png of `identify paper`: its size, the axes' units, and the zoom in µm where
+    a band of some µm on a stroke of mm shows (issue #42: the band was invisible)."""
+    from types import SimpleNamespace
+
+    from pneumact.identification.paper import PaperIdentification
+
+    time = np.linspace(0.0, 4.0, 400)
+    pressure = 1.5e5 + 1e5 * np.sin(np.pi * time / 4.0) ** 2
+    position = 0.01 * np.sin(np.pi * time / 4.0) ** 2  # a 10 mm stroke
+    spread = 5e-6 * np.ones_like(time)  # a band of ±5 µm
+    record = _SweepRecord(time, {"pressure": pressure, "position": position + 1e-6})
+    nominal = {"pressure": pressure, "position": position}
+    band = SimpleNamespace(
+        time=time, level=0.95, nominal=nominal,
+        lower={"position": position - spread}, upper={"position": position + spread},
+        samples={"pressure": [pressure] * 3,
+                 "position": [position + d * spread for d in (-1, 0, 1)]})
+    result = SimpleNamespace(records=[record], band=lambda chosen: band)
+    fig = PaperIdentification.plot_band(result)  # type: ignore[arg-type]
+    labels = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    assert labels == [("chamber pressure [kPa abs]", "position [mm]"),
+                      ("time [s]", "position [mm]"),
+                      ("time [s]", "position − identified model [µm]")]
+    low, high = fig.axes[2].get_ylim()  # the zoom shows the ±5 µm band, in µm
+    assert 5.0 <= high < 50.0 and -50.0 < low <= -5.0, (low, high)
+    path = plotting.save_figure(fig, tmp_path / "band.png")
+    assert png_size(path)[0] <= ref.MAX_FIGURE_WIDTH_PX
+    panel = min(ax.get_window_extent().width for ax in fig.axes) * plotting.PNG_DPI / fig.dpi
+    assert panel >= ref.MIN_PANEL_WIDTH_PX

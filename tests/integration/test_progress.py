@@ -177,3 +177,22 @@ def test_progress_receives_progress_reports(name, setup):
 def test_a_progress_that_is_not_a_function_is_refused(setup):
     with pytest.raises(pa.ArgumentTypeError, match="progress"):
         pa.simulate(setup[0], setup[1], progress=3)
+
+
+def test_a_multistart_says_its_time_and_memory_before_a_start_finishes(setup,
+                                                                        estimates_log):
+    """fit --multistart gave no estimate until its first starts had finished (minutes
+    for a slow fit): one evaluation is timed first and the range is said before."""
+    model, _, records = setup
+    before_first_start: list[int] = []
+
+    def progress(report: Progress) -> None:
+        if report.stage == "multistart" and not before_first_start:
+            before_first_start.append(len(estimates_log))
+
+    pa.fit(model, records[:1], ["Fc"], optimizer=pa.Optimizer(max_nfev=2),
+           multistart=pa.Multistart(4, seed=1), executor=2, progress=progress)
+    assert before_first_start == [1], estimates_log
+    note = estimates_log[0]
+    assert note.startswith("multistart: 5 starts on 2 threads; one evaluation"), note
+    assert "MiB of memory" in note and " to " in note

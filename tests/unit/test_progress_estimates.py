@@ -28,3 +28,25 @@ def test_reused_items_are_not_speed_and_the_first_chunk_gives_an_estimate(estima
         update(Progress("batch", 50_011, 100_000))  # 10 sets in the 2 s after it
     # 5 sims/s, 49 989 left: 2.8 h, not the seconds the reused half implies
     assert any("about 2:46:38" in note for note in estimates_log), estimates_log
+
+
+def test_a_big_sobol_sample_is_announced_before_it_is_drawn(estimates_log, monkeypatch):
+    """sobol --n 1048576 drew its sample for a minute behind a silent "0/?" bar."""
+    import numpy as np
+
+    from pneumact.sensitivity import methods
+    from pneumact.sensitivity.problem import Factor, Problem
+
+    problem = Problem((Factor("a", 1.0, 2.0, 1.5), Factor("b", 0.5, 1.5, 1.0)))
+    drawn: list[int] = []
+
+    def evaluate(values: np.ndarray) -> np.ndarray:
+        drawn.append(len(estimates_log))  # the notes logged before the first run
+        return values[:, 0] + values[:, 1] ** 2
+
+    methods.sobol(problem, evaluate, n=64, resamples=2)
+    assert drawn == [0] and not estimates_log  # 256 runs: nothing to announce
+    monkeypatch.setattr(methods, "ANNOUNCED_SAMPLE_RUNS", 256)
+    methods.sobol(problem, evaluate, n=64, resamples=2)
+    assert drawn[-1] == 1, estimates_log
+    assert "drawing the sample first: 256 runs x 2 parameters" in estimates_log[0]

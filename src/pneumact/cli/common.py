@@ -47,6 +47,9 @@ EXIT_INTERRUPTED = 130
 DEFAULT_LOW_PRESSURE = 20e3
 DEFAULT_PERIOD = 20.0
 COMPILING = "compiling kernel (first use; cached afterwards)"
+#: a progress bar's label until the first report: the runs are being prepared (a large
+#: sample drawn, the kernel compiled on its first use: not only compiling)
+STARTING = "preparing the runs (compiling the kernel on its first use)"
 #: progress stages that are the whole run: a bar shows the command's label alone
 WHOLE_RUN_STAGES = ("simulate", "batch", "fit", "validate")
 
@@ -320,12 +323,22 @@ def _flush_warnings(caught: list[warnings.WarningMessage]) -> None:
     caught.clear()
 
 
+#: what a Ctrl-C keeps, said in the "stopped" line of a command that resumes nothing
+KEPT_AS_IT_WAS = ("nothing new was written; an output folder from an earlier run is kept "
+                  "as it was")
+#: ... and of one whose finished runs are kept (a batch, a global sensitivity study)
+KEPT_FOR_RESUME = ("the runs finished so far are kept: run the same command with --resume "
+                   "to continue")
+
+
 @contextlib.contextmanager
-def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iterator[None]:
+def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False,
+                kept: str = KEPT_AS_IT_WAS) -> Iterator[None]:
     """Warnings -> yellow lines (the passivity of a set only with ``passivity``: that is
     for ``params show/check``); a pneumact error or a bad path -> one red line, exit
-    ``code``; Ctrl-C -> one line, exit 130; anything else is pneumact's own failure: one
-    line saying so, exit 1 (the traceback with PNEUMACT_TRACEBACK=1)."""
+    ``code``; Ctrl-C -> one line saying what is ``kept``, exit 130; anything else is
+    pneumact's own failure: one line saying so, exit 1 (the traceback with
+    PNEUMACT_TRACEBACK=1)."""
     passthrough = (typer.Exit, typer.Abort, typer.TyperException)
 
     with warnings.catch_warnings(record=True) as caught:
@@ -351,8 +364,7 @@ def user_errors(code: int = EXIT_USER_ERROR, *, passivity: bool = False) -> Iter
             raise typer.Exit(code) from None
         except KeyboardInterrupt:
             _flush_warnings(caught)
-            print_error("interrupted; a resumable run (batch, sensitivity) is kept for "
-                        "--resume", prefix="stopped")
+            print_error(f"interrupted; {kept}", prefix="stopped")
             raise typer.Exit(EXIT_INTERRUPTED) from None
         except Exception as exc:
             _flush_warnings(caught)
@@ -421,7 +433,7 @@ def progress_display(label: str = "", *, counts: bool = False, transient: bool =
         columns += [TaskProgressColumn(), TimeElapsedColumn()]
     started = time.perf_counter()
     with Progress(*columns, console=err_console, transient=transient) as bar:
-        waiting = bar.add_task(COMPILING, total=None, failed=0, rate="-", left="-:--:--")
+        waiting = bar.add_task(STARTING, total=None, failed=0, rate="-", left="-:--:--")
         tasks: dict[str, Any] = {}
         first: dict[str, float] = {}
         estimated: set[str] = set()

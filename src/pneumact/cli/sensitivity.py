@@ -18,6 +18,8 @@ from pneumact.cli.common import (
     DEFAULT_EXPONENT,
     DEFAULT_FRICTION,
     DEFAULT_VALVE,
+    KEPT_AS_IT_WAS,
+    KEPT_FOR_RESUME,
     Chamber,
     ChamberOption,
     ChunkSizeOption,
@@ -131,7 +133,7 @@ def sensitivity(
 ) -> None:
     """Sensitivity of the actuator's features (and signals) to its parameters, on the
     batch engine. The runs of the global methods are kept in OUT/runs (resumable)."""
-    with user_errors():
+    with user_errors(kept=KEPT_AS_IT_WAS if method is Method.oat else KEPT_FOR_RESUME):
         import numpy as np
 
         executor = executor_of(workers, scheduler, chunk_size)

@@ -20,6 +20,7 @@ from pneumact.cli.common import (
     DEFAULT_EXPONENT,
     DEFAULT_FRICTION,
     DEFAULT_VALVE,
+    KEPT_FOR_RESUME,
     Chamber,
     ChamberOption,
     ChunkSizeOption,
@@ -113,7 +114,7 @@ def simulate_batch(
     overwrite: OverwriteOption = Checkpoint.overwrite,
 ) -> None:
     """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
-    with user_errors():
+    with user_errors(kept=KEPT_FOR_RESUME):
         import pneumact as pa
 
         executor = executor_of(workers, scheduler, chunk_size)

@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from ..errors import DataError, ParameterError, SolverError
+from ..errors import DataError, ParameterError, PneumactError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import Sensors, first_order_lag, lag_derivative
@@ -490,10 +490,11 @@ class FitResult(ResultVocabulary):
     def report_parameters(self):
         return self.parameters() if self.shared() and self.model is not None else None
 
-    def report(self, call: str = "", png: bytes | None = None) -> Report:
+    def report(self, call: str = "", png: bytes | dict[str, bytes] | None = None) -> Report:
         """Estimates, statistics, correlation and the fit figures as an HTML ``Report``
-        (not yet written; ``png``: the fit figure if already drawn)."""
-        from ..io.report import Report, figure_png
+        (not yet written; ``png``: the fit figure, or its pages by name, if already
+        drawn)."""
+        from ..io.report import Report
 
         report = Report(self.report_title, call=call, parameters=self.report_parameters())
         report.text(f"{len(self.records)} record(s), signals {', '.join(self.signals)}; "
@@ -503,26 +504,29 @@ class FitResult(ResultVocabulary):
                                        "(SI)")
         report.table(self.statistics, "Fit statistics per record and signal", index=False)
         report.table(self.correlation, "Correlation of the estimates")
-        report.image(png or figure_png(self.plot_fit()),
-                     "Measured and fitted signals, residuals")
+        pages = [png] if isinstance(png, bytes) else list((png or self.fit_pngs()).values())
+        for k, page in enumerate(pages, start=1):
+            report.image(page, "Measured and fitted signals, residuals" + (
+                f" (page {k} of {len(pages)})" if len(pages) > 1 else ""))
         if self.profiles:
             report.figure(self.plot_profiles(), "Profile likelihoods")
         return report
 
     def writers(self, call: str = "") -> dict[str, Callable[[Path], object]]:
         """The files of ``write``, by name: each a function writing to a path."""
-        from ..io.report import figure_png, table_writer
+        from ..io.report import table_writer
         from ..plotting import figure_writer
 
-        png = figure_png(self.plot_fit())
+        pngs = self.fit_pngs()
         writers: dict[str, Callable[[Path], object]] = {
             f"{name}.csv": table_writer(frame) for name, frame in self.tables().items()}
-        writers["fit.png"] = lambda p: Path(p).write_bytes(png)
+        for name, png in pngs.items():
+            writers[f"{name}.png"] = functools.partial(_write_png_bytes, png)
         if len(self.starts) > 1:
             writers["waterfall.png"] = figure_writer(self.plot_waterfall)
         if self.profiles:
             writers["profiles.png"] = figure_writer(self.plot_profiles)
-        writers["report.html"] = self.report(call, png).write
+        writers["report.html"] = self.report(call, pngs).write
         if self.model is not None and not any("[" in n and not n.startswith("offset_")
                                               for n in self.estimates.names):
             from ..parameters import write_params
@@ -538,13 +542,31 @@ class FitResult(ResultVocabulary):
 
         return write_files(out_dir, self.writers(call))
 
-    def plot_fit(self):
-        """Measured and simulated signals per record, with residuals."""
-        from ..plotting import plot_measured_and_model
+    def plot_fit(self, page: int = 0):
+        """Measured and simulated signals per record, with residuals: every record
+        (``page`` 0), or the ``page``-th page of ``PANELS_PER_PAGE`` records (from 1)."""
+        from ..plotting import plot_measured_and_model, record_pages
 
         entries = [(os.path.basename(rec.source), rec.time, rec, sim, rec.units)
                    for rec, sim in zip(self.records, self.simulated, strict=True)]
+        if page:
+            entries = record_pages(entries)[page - 1]
         return plot_measured_and_model(entries, self.signals, "fitted model", self.window)
+
+    @property
+    def fit_pages(self) -> int:
+        """Pages of ``plot_fit`` the files and the report hold (fit.png, fit-2.png, ...)."""
+        from ..plotting import record_pages
+
+        return len(record_pages(self.records))
+
+    def fit_pngs(self) -> dict[str, bytes]:
+        """``fit``, ``fit-2``, ...: each page of ``plot_fit`` as PNG."""
+        from ..io.report import figure_png
+        from ..plotting import page_name
+
+        return {page_name("fit", k): figure_png(self.plot_fit(k))
+                for k in range(1, self.fit_pages + 1)}
 
     def plot_waterfall(self):
         """Final cost of every start, sorted: a flat first step means a found optimum."""
@@ -910,15 +932,22 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
         from ..simulation.batch.engine import dask_client
 
         client, owned = dask_client(executor.scheduler)
+        futures = []
         try:
             futures = client.map(_solve_copy, [problem] * len(starts), starts,
                                  [options] * len(starts), pure=False)
             done = client.gather(futures)
+        except BaseException:  # Ctrl-C: the starts not begun on the workers are dropped
+            client.cancel(futures)
+            raise
         finally:
             if owned:
                 client.close()
         problem.simulations += sum(sol.simulations for sol in done)
         return done
+    if len(starts) > executor.threads and threading.current_thread() is \
+            threading.main_thread():  # more than one round, not a fit inside other work
+        _announce_multistart(problem, starts, executor.threads)
     done = []
     with stop_threads(ThreadPoolExecutor(max_workers=executor.threads)) as pool:
         futures = [pool.submit(_solve_copy, problem, s, options) for s in starts]
@@ -927,6 +956,53 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
             problem.simulations += done[-1].simulations
             notify(progress, "multistart", k + 1, len(futures))
     return done
+
+
+#: evaluations of the records (each with its Jacobian) one start of a multistart
+#: typically takes: the range of the estimate said before the first start has finished
+EVALUATIONS_PER_START = (5, 50)
+#: results a problem's cache holds at most (``_Problem.evaluate``), per thread's copy
+CACHE_ENTRIES = 9
+
+
+def _announce_multistart(problem: _Problem, starts: list, threads: int) -> None:
+    """Time one evaluation of the records at the first start (a first chunk; the first
+    call may compile, so the second is timed), then say the time the starts will take
+    and check their memory (``check_memory``), before any start is committed."""
+    from ..simulation.memory import ESTIMATES, check_memory
+
+    own = _own_copy(problem)
+    theta = problem.theta(starts[0])
+    with_jacobian = problem.jacobian == "sensitivities"
+    try:
+        own.evaluate(theta, with_jacobian)
+        own._cache.clear()
+        tic = _time.perf_counter()
+        residuals, jacobian, results = own.evaluate(theta, with_jacobian)
+        seconds = _time.perf_counter() - tic
+    except PneumactError:
+        return  # the start is refused by the fit itself, with its message
+    per_entry = residuals.nbytes + (0 if jacobian is None else jacobian.nbytes) + sum(
+        values.nbytes for result in results for values in result.signals.values())
+    needed = threads * CACHE_ENTRIES * per_entry + len(starts) * 64 * (residuals.size + 1)
+    check_memory(needed, f"fit: {len(starts)} multistart starts on {threads} threads")
+    rounds = len(starts) / threads
+    low, high = (rounds * n * seconds for n in EVALUATIONS_PER_START)
+    ESTIMATES.info("multistart: %d starts on %d threads; one evaluation of the records "
+                   "takes %.2g s, a start %d to %d of them: about %s to %s; about %.3g MiB "
+                   "of memory", len(starts), threads, seconds, *EVALUATIONS_PER_START,
+                   _duration(low), _duration(high), needed / 1024**2)
+
+
+def _duration(seconds: float) -> str:
+    """``seconds`` as h:mm:ss."""
+    whole = round(seconds)
+    return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
+
+
+def _write_png_bytes(png: bytes, path: Path) -> None:
+    """Write an already drawn PNG to ``path`` (a writer of ``write_files``)."""
+    Path(path).write_bytes(png)
 
 
 def _own_copy(problem: _Problem) -> _Problem:

@@ -23,6 +23,7 @@ parameter is identified, unless a partial result is asked for.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -477,10 +478,14 @@ class PaperIdentification(ResultVocabulary):
 
     def figures(self) -> dict[str, Callable[[], Figure]]:
         """The figures ``write`` draws, by file name: each stage's, then (after a joint
-        refinement) the joint fit and the prediction band."""
+        refinement) the joint fit (joint_fit, joint_fit-2, ... beyond a page of records)
+        and the prediction band."""
+        from ..plotting import page_name
+
         makers = {f"stage_{name}": stage.plot for name, stage in self.stages.items()}
-        if self.joint is not None:
-            makers["joint_fit"] = self.joint.plot_fit
+        if self.joint is not None:  # a page per PANELS_PER_PAGE records
+            for k in range(1, self.joint.fit_pages + 1):
+                makers[page_name("joint_fit", k)] = functools.partial(self.joint.plot_fit, k)
             makers["band"] = self.plot_band
         return makers
 
@@ -533,6 +538,7 @@ class PaperIdentification(ResultVocabulary):
         figures as a self-contained HTML ``Report`` (not yet written; ``png``: the joint
         fit's figure if already drawn; ``pngs``: any figures already drawn, by name)."""
         from ..io.report import Report
+        from ..plotting import page_names
 
         drawn = dict(pngs or {})
         if png is not None:
@@ -565,7 +571,10 @@ class PaperIdentification(ResultVocabulary):
             figure("band", "The loop and the time series with the band the parameter "
                    "uncertainty leaves")
             report.heading("Joint refinement")
-            figure("joint_fit", "Measured and fitted position, all records")
+            pages = page_names(makers, "joint_fit")
+            for k, name in enumerate(pages, start=1):
+                figure(name, "Measured and fitted position, all records" + (
+                    f" (page {k} of {len(pages)})" if len(pages) > 1 else ""))
         for name, stage in self.stages.items():
             report.heading(stage.title)
             figure(f"stage_{name}", stage.title)

@@ -355,9 +355,13 @@ def _run(jobs, executor: Executor, progress) -> list[LawScore]:
         from ..simulation.batch.engine import dask_client
 
         client, owned = dask_client(executor.scheduler)
+        remote: list = []
         try:
-            gathered = client.gather(client.map(_score_one, *zip(*jobs, strict=True),
-                                                pure=False))
+            remote = client.map(_score_one, *zip(*jobs, strict=True), pure=False)
+            gathered = client.gather(remote)
+        except BaseException:  # Ctrl-C: the laws not begun on the workers are dropped
+            client.cancel(remote)
+            raise
         finally:
             if owned:
                 client.close()

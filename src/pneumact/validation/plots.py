@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.display import display_frame, display_unit
-from ..plotting import DISPLAY_UNITS, panel_grid
+from ..plotting import DISPLAY_UNITS, page_names, panel_grid
 from .metrics import metrics_for_reading
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
@@ -17,10 +17,11 @@ def _display(rv, signal: str, values=()) -> tuple[str, float]:
     return display_unit(si, values) if si else DISPLAY_UNITS.get(si, ("", 1.0))
 
 
-def plot_loops(validation):
+def plot_loops(validation, records=None):
     """Measured (black dashed) and predicted pressure–position loops, one panel per
-    record with pressure and position."""
-    records = [rv for rv in validation.records if rv.has_loop]
+    record with pressure and position (of ``records``, default all: a page of them)."""
+    records = [rv for rv in (validation.records if records is None else records)
+               if rv.has_loop]
     fig, panels = panel_grid(len(records))
     for (ax,), rv in zip(panels, records, strict=True):
         ax.plot(rv.record["pressure"] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
@@ -36,24 +37,27 @@ def plot_loops(validation):
     return fig
 
 
-def plot_time(validation):
-    """Per record and signal: measured and predicted against time, residual below."""
+def plot_time(validation, records=None):
+    """Per record (of ``records``, default all) and signal: measured and predicted
+    against time, residual below."""
     from ..plotting import plot_measured_and_model
 
     entries = [(rv.name, rv.record.time, rv.record,
                 {s: rv.predicted(s) for s in validation.signals}, rv.record.units)
-               for rv in validation.records]
+               for rv in (validation.records if records is None else records)]
     return plot_measured_and_model(entries, validation.signals)
 
 
-def plot_residuals(validation):
-    """Per record: the first signal's residual against pressure (or time, without a
-    pressure record), and the residual autocorrelation with the ±1.96/√N band."""
+def plot_residuals(validation, records=None):
+    """Per record (of ``records``, default all): the first signal's residual against
+    pressure (or time, without a pressure record), and the residual autocorrelation with
+    the ±1.96/√N band."""
     from .metrics import autocorrelation
 
     signal = validation.signals[0]
-    fig, panels = panel_grid(len(validation.records), rows_per=2, height=3.0)
-    for (ax_res, ax_acf), rv in zip(panels, validation.records, strict=True):
+    records = validation.records if records is None else records
+    fig, panels = panel_grid(len(records), rows_per=2, height=3.0)
+    for (ax_res, ax_acf), rv in zip(panels, records, strict=True):
         residual = rv.residual(signal)
         unit, factor = _display(rv, signal, residual)
         if "pressure" in rv.record:
@@ -118,11 +122,20 @@ def add_to_report(validation, report, title: str | None, figures: dict[str, byte
     if len(loops):
         report.table(display_frame(loops), "Hysteresis-loop measures, model against "
                      "measurement (difference = model − measured)", index=False)
-        report.image(figures["loops"], "Pressure–position loops: measured (dashed) and "
-                                       "model (like the paper's Fig. 6)")
+        _images(report, figures, "loops", "Pressure–position loops: measured (dashed) and "
+                                          "model (like the paper's Fig. 6)")
         reversal_table = validation.reversals()
         if len(reversal_table):
             report.table(display_frame(reversal_table, _reversal_units(reversal_table)),
                          "Reversal points of the pressure", index=False)
-    report.image(figures["time"], "Measured and predicted signals, residuals")
-    report.image(figures["residuals"], "Residuals against pressure and their autocorrelation")
+    _images(report, figures, "time", "Measured and predicted signals, residuals")
+    _images(report, figures, "residuals", "Residuals against pressure and their "
+                                          "autocorrelation")
+
+
+def _images(report, figures: dict[str, bytes], name: str, caption: str) -> None:
+    """Every page of the figure ``name`` (``name``, ``name-2``, ...), captioned."""
+    pages = page_names(figures, name)
+    for k, key in enumerate(pages, start=1):
+        report.image(figures[key], caption if len(pages) == 1
+                     else f"{caption} (page {k} of {len(pages)})")

@@ -285,14 +285,20 @@ class Validation(NotebookDisplay):
     # ----------------------------------------------------------------------- output
     def figure_pngs(self) -> dict[str, bytes]:
         """The figures as PNG, rendered once for both the files and the report: time,
-        residuals, and loops when a record has pressure and position."""
+        residuals, and loops when a record has pressure and position; each a figure per
+        page of records beyond ``PANELS_PER_PAGE`` (``loops``, ``loops-2``, ...)."""
         from ..io.report import figure_png
-        from ..plotting import PNG_DPI
+        from ..plotting import PNG_DPI, page_name, record_pages
+        from .plots import plot_loops, plot_residuals, plot_time
 
-        makes = {"time": self.plot_time, "residuals": self.plot_residuals}
-        if any(rv.has_loop for rv in self.records):
-            makes["loops"] = self.plot_loops
-        return {name: figure_png(make(), dpi=PNG_DPI) for name, make in makes.items()}
+        looped = [rv for rv in self.records if rv.has_loop]
+        makes = [("time", plot_time, self.records), ("residuals", plot_residuals,
+                                                     self.records)]
+        if looped:
+            makes.append(("loops", plot_loops, looped))
+        return {page_name(name, k): figure_png(make(self, page), dpi=PNG_DPI)
+                for name, make, records in makes
+                for k, page in enumerate(record_pages(records), start=1)}
 
     def add_to(self, report, title: str | None = None,
                figures: dict[str, bytes] | None = None) -> None:
