@@ -63,6 +63,11 @@ BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[temperature]": "
               "[current]": "A", "[substance]": "mol", "[luminosity]": "cd"}
 TEMPLATES = "pneumact.export"
 STOP_TIME = 10.0
+#: the mechanics' parameters the FMU's end-stop check reads, in the template's order
+STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
+#: the FMU ends a run whose stop penetration passes this many times the deepest one the
+#: forces can cause (an explicit solver gone unstable on the stiff contact, issue 39)
+STOP_MARGIN = 10.0
 
 F64 = types.float64
 VECTOR = types.float64[::1]
@@ -294,7 +299,11 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
         slots.extend(asm.slots[name])
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
-    return render("fmu.c.j2", identifier=identifier, guid=guid, n_states=len(asm.states),
+    force = next(v.index for v in variables if v.name == FORCE_INPUT[0])
+    return render("fmu.c.j2", position_state=asm.state_index("position"),
+                  mechanics_slots=", ".join(str(asm.slots[name][0])
+                                            for name in STOP_CHECK_PARAMETERS),
+                  force_entry=force, stop_margin=repr(STOP_MARGIN), identifier=identifier, guid=guid, n_states=len(asm.states),
                   n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
                   n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),

@@ -34,8 +34,11 @@ declare(
       group="mechanics", plausible=(1e-4, 2.0)),
     P("k_stop", "N/m", "end-stop contact stiffness (penalty)", 1e8, 0.0, True, 1e14,
       group="mechanics", plausible=(1e5, 1e12)),
+    # c_stop: critically damps vgt-paper's diaphragm resting on its stop (penetration
+    # δ0 = F0/k_stop = 0.33 µm; c_stop·δ0 = 2·sqrt(k_stop·m)): its fastest pole moves
+    # from −5.2e5 (the former 1e12) to −1.7e4 1/s, and loop widths by < 3e-6 (issue 39)
     P("c_stop", "N*s/m^2", "end-stop Hunt-Crossley damping: force c_stop·δ·dδ/dt on the "
-      "penetration δ", 1e12, 0.0, False, 1e18, group="mechanics"),
+      "penetration δ", 5e10, 0.0, False, 1e18, group="mechanics"),
     P("A_d", "m^2", "effective diaphragm area", None, 0.0, True, 10.0, group="pneumatics",
       plausible=(1e-6, 1.0)),
     P("p_atm", "Pa", "atmospheric pressure (absolute)", None, 1e3, False, 1e7,
