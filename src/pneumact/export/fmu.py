@@ -322,7 +322,8 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
     return render("fmu.c.j2", position_state=asm.state_index("position"),
                   mechanics_slots=", ".join(str(asm.slots[name][0])
                                             for name in STOP_CHECK_PARAMETERS),
-                  force_entry=force, stop_margin=repr(STOP_MARGIN), identifier=identifier, guid=guid, n_states=len(asm.states),
+                  force_entry=force, stop_margin=repr(STOP_MARGIN), identifier=identifier,
+                  guid=guid, n_states=len(asm.states),
                   n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
                   n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),

@@ -175,7 +175,7 @@ def explicit_step_limit(m: float, k: float, f0: float, k_stop: float, c_stop: fl
                         ) -> float:
     """The largest stable forward-Euler step [s] on the rest stop under the preload ``f0``.
 
-    Resting at the penetration δ0 = F0/k_stop, the contact linearises to
+    Resting at the penetration δ0 = F0/(k_stop + k), the contact linearises to
     m·s² + c_stop·δ0·s + (k_stop + k): Euler is stable for h < 2/|λ| on a real pole and
     h < 2·Re(−λ)/|λ|² on a complex pair. The FMU's end-stop check (``export``) states the
     same figure when an explicit importer goes unstable there. No preload: the diaphragm
@@ -184,7 +184,7 @@ def explicit_step_limit(m: float, k: float, f0: float, k_stop: float, c_stop: fl
     if f0 <= 0.0:
         return float("inf")
     stiffness = k_stop + k
-    damping = c_stop * abs(f0) / k_stop
+    damping = c_stop * f0 / stiffness
     disc = damping * damping - 4.0 * stiffness * m
     if disc >= 0.0:
         return 4.0 * m / (damping + disc**0.5)
