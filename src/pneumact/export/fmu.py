@@ -9,7 +9,11 @@ fmu.c.j2``) holds the FMI side: an instance's arrays and the value references on
 What drives the model becomes an FMU input (a one-point input channel of the packed
 signals: the pressure, the set-point or the command, and an external force); every
 parameter of the set is a tunable parameter with its unit, description and provenance;
-every state and every output of the kernel is an output; the derivatives are declared.
+every state and every output of the kernel is an output; the derivatives are declared;
+inputs and parameters carry their hard ranges and nominal values, and the default
+experiment a tolerance and a step that forward Euler takes on the end stops. A run that
+goes unstable on an end stop (an explicit importer's step past the stiff contact's
+limit, issue 39) ends with fmi2Error and a message naming the limit and the remedy.
 The archive holds the C sources (an importer on another platform builds them) and, unless
 ``binary=False``, the binary built here with the machine's C compiler.
 """
@@ -227,9 +231,9 @@ def input_starts(model: Actuator, inputs: Mapping[str, float] | None) -> dict[st
 
 def input_variables(model: Actuator, ptr: np.ndarray, starts: Mapping[str, float]
                     ) -> list[FmuVariable]:
-    """The drive and the external force, with the ranges ``input_starts`` checks (an
-    absolute pressure in (0, 10 MPa], a command in [0, 1]) and nominal magnitudes (the
-    atmosphere, a full command, the pressure force of one atmosphere on the diaphragm)."""
+    """The drive and the external force, with the drive's hard range (an absolute
+    pressure from 0 to pneumact's 10 MPa ceiling, a command in [0, 1]) and nominal
+    magnitudes (the atmosphere, a full command, one atmosphere on the diaphragm)."""
     from ..checks import MAX_ABSOLUTE_PRESSURE
 
     name, unit, description = DRIVE_INPUTS[model.input_signal]
