@@ -32,7 +32,9 @@ from reference import (
     MASS_BALANCE_RATE_RTOL,
     REGULATOR_RAMP_ERROR,
     REGULATOR_STEADY_ERROR,
+    STOP_DAMPING_LOOP_WIDTH_CHANGE,
     STOP_ENERGY_RTOL,
+    STOP_REST_FASTEST_POLE,
     TIGHT_RTOL,
 )
 
@@ -110,6 +112,58 @@ def test_end_stops_create_no_energy_and_never_pull(pressure, x_start, stop, vgt)
     assert np.all(f_stop[x <= 0.0] >= 0.0), "the rest stop pulled"
     assert np.all(f_stop[x >= x_max] <= 0.0), "the far stop pulled"
     assert np.all(f_stop[(x > 0.0) & (x < x_max)] == 0.0), "stop force inside the stroke"
+
+
+def _jacobian_at_rest(params, friction=None):
+    """The kernel's Jacobian at the rest state under atmospheric pressure (on the stop)."""
+    from pneumact.core.assembly import assemble
+    from pneumact.core.signals import pack_channels
+
+    model = Actuator(params, valve=PressureSource(), load=Constant(0.0),
+                     **({"friction": friction} if friction is not None else {}))
+    asm = assemble(model)
+    vec = asm.pack()
+    sig, ptr = pack_channels(model.channels(Constant(params["p_atm"])))
+    n = len(asm.states)
+    rest, jac = np.zeros(n), np.zeros((n, n))
+    asm.kernel.initial_state(0.0, 0.0, vec, sig, ptr, rest)
+    assert rest[asm.state_index("position")] < 0.0  # on the stop, under the preload
+    asm.kernel.jac(0.0, 0.0, rest, vec, sig, ptr, jac)
+    return jac
+
+
+def test_the_default_stop_holds_the_resting_diaphragm_without_a_fast_pole(vgt):
+    """Issue 39: vgt-paper resting on its stop under the preload has no pole faster than
+    2e4 1/s (the former c_stop = 1e12 put one at -5.2e5, where forward Euler needs steps
+    under 3.9 µs); ``explicit_step_limit`` is the Euler limit of the contact's poles."""
+    from pneumact.models.mechanics import explicit_step_limit
+
+    assert np.linalg.eigvals(_jacobian_at_rest(vgt)).real.min() > -STOP_REST_FASTEST_POLE
+    for c_stop in (vgt["c_stop"], 1e12, 1e9):  # critical, overdamped, underdamped
+        params = vgt.replace(c_stop=c_stop, Fc=0.0, sigma2=0.0)  # the stop and spring alone
+        jac = _jacobian_at_rest(params, CoulombViscous())
+        poles = np.linalg.eigvals(jac[:2, :2])
+        euler = min(2.0 * -lam.real / abs(lam) ** 2 for lam in poles)
+        limit = explicit_step_limit(params["m"], params["k"], params["F0"], params["k_stop"],
+                                    c_stop)
+        assert limit == pytest.approx(euler, rel=1e-6)
+
+
+@pytest.mark.parametrize("valve", ["source", "command"])
+def test_the_softer_stop_damping_leaves_the_loop_as_it_was(valve, vgt):
+    """Issue 39: the default c_stop went from 1e12 to 5e10; the loop width of the default
+    cycle moves by less than 1e-5, the rest position not at all."""
+    from pneumact.core.features import loop_width_pressure
+    from pneumact.experiments.actuator import CommandCycle, PressureCycle
+
+    runs = []
+    for params in (vgt.replace(c_stop=1e12), vgt):
+        model = Actuator(params, valve=PressureSource() if valve == "source" else CommandValve())
+        r = simulate(model, PressureCycle() if valve == "source" else CommandCycle())
+        runs.append((loop_width_pressure(r["pressure"], r["position"]), r["position"][0]))
+    (width_before, rest_before), (width, rest) = runs
+    assert abs(width - width_before) <= STOP_DAMPING_LOOP_WIDTH_CHANGE * width_before
+    assert rest == rest_before
 
 
 # ----------------------------------------------------------------------------- regulator

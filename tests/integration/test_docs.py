@@ -108,8 +108,9 @@ def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
         pytest.skip(str(error))
     namespace = _run_page("fmu-export.md", tmp_path, monkeypatch)
     assert (tmp_path / "vgt_actuator.fmu").exists()
-    stroke = namespace["actuator"].params["x_max"]
-    assert namespace["rms"] <= ref.FMU_POSITION_RMS_OF_STROKE * stroke
+    assert namespace["travelled"] > 0.5 * namespace["actuator"].params["x_max"]
+    assert namespace["rms"] <= ref.FMU_POSITION_RMS_OF_STROKE * namespace["travelled"]
+    assert namespace["euler_rms"] <= ref.FMU_EULER_POSITION_RMS * namespace["travelled"]
 
 
 def test_the_control_tuning_page_runs(tmp_path, monkeypatch):

@@ -9,7 +9,11 @@ fmu.c.j2``) holds the FMI side: an instance's arrays and the value references on
 What drives the model becomes an FMU input (a one-point input channel of the packed
 signals: the pressure, the set-point or the command, and an external force); every
 parameter of the set is a tunable parameter with its unit, description and provenance;
-every state and every output of the kernel is an output; the derivatives are declared.
+every state and every output of the kernel is an output; the derivatives are declared;
+inputs and parameters carry their hard ranges and nominal values, and the default
+experiment a tolerance and a step that forward Euler takes on the end stops. A run that
+goes unstable on an end stop (an explicit importer's step past the stiff contact's
+limit, issue 39) ends with fmi2Error and a message naming the limit and the remedy.
 The archive holds the C sources (an importer on another platform builds them) and, unless
 ``binary=False``, the binary built here with the machine's C compiler.
 """
@@ -39,6 +43,7 @@ from ..core.signals import Constant, pack_channels
 from ..errors import ArgumentError, ExportError
 from ..files import atomic_write
 from ..models import Actuator
+from ..models.mechanics import explicit_step
 from ..parameters.catalogue import catalogue
 from ..version import __version__
 from .compiler import (
@@ -63,6 +68,14 @@ BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[temperature]": "
               "[current]": "A", "[substance]": "mol", "[luminosity]": "cd"}
 TEMPLATES = "pneumact.export"
 STOP_TIME = 10.0
+#: the mechanics' parameters the FMU's end-stop check reads, in the template's order
+STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
+#: the FMU ends a run whose stop penetration passes this many times the deepest one the
+#: forces can cause (an explicit solver gone unstable on the stiff contact, issue 39)
+STOP_MARGIN = 10.0
+#: the relative tolerance the FMU's DefaultExperiment recommends (a stiff variable-step
+#: solver; measured against pa.simulate in docs/fmu-export.md)
+RECOMMENDED_TOLERANCE = 1e-6
 
 F64 = types.float64
 VECTOR = types.float64[::1]
@@ -178,12 +191,18 @@ def parameter_variables(model: Actuator, asm: Assembly, vec: np.ndarray
         spec = specs[name]
         note = info.get(name)
         source = f" [{note.source}: {note.given}]" if note is not None else " [catalogue default]"
-        low = spec.minimum if spec.minimum is not None and not spec.strict_minimum else None
+        # FMI's min is inclusive: a strict bound (> 0) is written as its closure (>= 0)
         out.append(FmuVariable(name, "parameter", "parameter", k, spec.unit,
                                spec.description + source, start=values[name],
-                               variability="tunable", initial="exact", minimum=low,
-                               maximum=spec.maximum))
+                               variability="tunable", initial="exact", minimum=spec.minimum,
+                               maximum=spec.maximum, nominal=nominal_of(values[name])))
     return out
+
+
+def nominal_of(value: float) -> float | None:
+    """A parameter's nominal value (its magnitude, for an importer's scaling): |value|,
+    none for zero."""
+    return abs(value) if value != 0.0 and np.isfinite(value) else None
 
 
 def input_starts(model: Actuator, inputs: Mapping[str, float] | None) -> dict[str, float]:
@@ -212,12 +231,21 @@ def input_starts(model: Actuator, inputs: Mapping[str, float] | None) -> dict[st
 
 def input_variables(model: Actuator, ptr: np.ndarray, starts: Mapping[str, float]
                     ) -> list[FmuVariable]:
+    """The drive and the external force, with the drive's hard range (an absolute
+    pressure from 0 to pneumact's 10 MPa ceiling, a command in [0, 1]) and nominal
+    magnitudes (the atmosphere, a full command, one atmosphere on the diaphragm)."""
+    from ..checks import MAX_ABSOLUTE_PRESSURE
+
     name, unit, description = DRIVE_INPUTS[model.input_signal]
     drive = int(ptr[CH_DRIVE]) + INPUT_OFFSET
     force = int(ptr[CH_LOAD_T]) + INPUT_OFFSET
-    return [FmuVariable(name, "input", "input", drive, unit, description, start=starts[name]),
+    p_atm = float(model.params["p_atm"])
+    low, high, nominal = (0.0, MAX_ABSOLUTE_PRESSURE, p_atm) if unit == "Pa" else (0.0, 1.0, 1.0)
+    return [FmuVariable(name, "input", "input", drive, unit, description, start=starts[name],
+                        minimum=low, maximum=high, nominal=nominal),
             FmuVariable(FORCE_INPUT[0], "input", "input", force, FORCE_INPUT[1], FORCE_INPUT[2],
-                        start=starts[FORCE_INPUT[0]])]
+                        start=starts[FORCE_INPUT[0]],
+                        nominal=p_atm * float(model.params["A_d"]))]
 
 
 def state_variables(asm: Assembly, nominals: np.ndarray, first: int
@@ -294,7 +322,12 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
         slots.extend(asm.slots[name])
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
-    return render("fmu.c.j2", identifier=identifier, guid=guid, n_states=len(asm.states),
+    force = next(v.index for v in variables if v.name == FORCE_INPUT[0])
+    return render("fmu.c.j2", position_state=asm.state_index("position"),
+                  mechanics_slots=", ".join(str(asm.slots[name][0])
+                                            for name in STOP_CHECK_PARAMETERS),
+                  force_entry=force, stop_margin=repr(STOP_MARGIN), identifier=identifier,
+                  guid=guid, n_states=len(asm.states),
                   n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
                   n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),
@@ -324,9 +357,20 @@ def model_description(model: Actuator, identifier: str, guid: str,
                   description=description, version=__version__,
                   date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
                   n_indicators=indicators, identifier=identifier, units=unit_definitions(variables),
-                  stop_time=STOP_TIME, variables=[_xml_fields(v) for v in variables],
+                  stop_time=STOP_TIME, tolerance=RECOMMENDED_TOLERANCE,
+                  step_size=recommended_step(model),
+                  variables=[_xml_fields(v) for v in variables],
                   outputs=outputs, derivatives=derivatives,
                   initial_unknowns=sorted(set(outputs) | set(derivatives)))
+
+
+def recommended_step(model: Actuator) -> float:
+    """The DefaultExperiment's stepSize [s]: a step at which a fixed-step explicit importer
+    (forward Euler, fmusim, ode1) stays stable on the end stops (``explicit_step``); a
+    variable-step solver takes its own steps and reads it as the output interval."""
+    p = model.params
+    return explicit_step(float(p["m"]), float(p["k"]), float(p["F0"]), float(p["k_stop"]),
+                         float(p["c_stop"]))
 
 
 def _xml_fields(v: FmuVariable) -> dict:
