@@ -1,4 +1,4 @@
-"""Export an actuator as an FMI 2.0 Model Exchange FMU.
+"""Export an actuator as an FMI 2.0 FMU: Model Exchange, Co-Simulation or both.
 
 The FMU's physics is the model's kernel written in C by the kernel generator's second
 back end (``core.c_source``), from the same component functions the compiled kernels
@@ -12,6 +12,12 @@ parameter of the set is a tunable parameter with its unit, description and prove
 every state and every output of the kernel is an output; the derivatives are declared.
 The archive holds the C sources (an importer on another platform builds them) and, unless
 ``binary=False``, the binary built here with the machine's C compiler.
+
+A Co-Simulation FMU (``kind="cs"`` or ``"both"``) steps itself with pneumact's own
+integrator: ``integrate_rodas4`` (``core/integrators.py``), translated to C by the same back
+end from the same source as the compiled integrator, so a communication step is what
+``pa.simulate`` does over that interval with the inputs held (RODAS4, its step control,
+tolerances, jumps and state events).
 """
 
 from __future__ import annotations
@@ -33,13 +39,14 @@ import numpy as np
 from numba.core import types
 
 from ..core.assembly import Assembly, assemble
-from ..core.c_source import CUnit, translate
+from ..core.c_source import translate
 from ..core.channels import CH_DRIVE, CH_LOAD_T, INPUT_OFFSET
 from ..core.signals import Constant, pack_channels
 from ..errors import ArgumentError, ExportError
 from ..files import atomic_write
 from ..models import Actuator
 from ..parameters.catalogue import catalogue
+from ..simulation.solvers import DEFAULT_MAX_STEPS, Rodas4
 from ..version import __version__
 from .compiler import (
     binary_folder,
@@ -63,6 +70,8 @@ BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[temperature]": "
               "[current]": "A", "[substance]": "mol", "[luminosity]": "cd"}
 TEMPLATES = "pneumact.export"
 STOP_TIME = 10.0
+#: the FMI interfaces of each kind: (Model Exchange, Co-Simulation)
+KINDS = {"me": (True, False), "cs": (False, True), "both": (True, True)}
 
 F64 = types.float64
 VECTOR = types.float64[::1]
@@ -101,6 +110,7 @@ class ExportedFmu:
     compiler: str | None
     event_indicators: int  # the end stops' guards, then the friction law's mode guards
     mode_switches: int  # of which the friction law's (GMS: one per block)
+    kind: str = "me"  # "me" (Model Exchange), "cs" (Co-Simulation) or "both"
 
     def variable_table(self):
         """The FMU's variables, one row each (value reference, causality, unit, start,
@@ -116,7 +126,8 @@ class ExportedFmu:
 
     def __repr__(self) -> str:
         built = f"binary {self.platform}" if self.platform else "sources only"
-        return (f"ExportedFmu({str(self.path)!r}, inputs={list(self.names('input'))}, "
+        return (f"ExportedFmu({str(self.path)!r}, kind={self.kind!r}, "
+                f"inputs={list(self.names('input'))}, "
                 f"{len(self.names('parameter'))} parameters, "
                 f"{len(self.names('output'))} outputs, {self.event_indicators} event "
                 f"indicators, "
@@ -136,8 +147,9 @@ def exportable(model) -> Actuator:
     return dataclasses.replace(model, load=Constant(0.0))
 
 
-def kernel_roots(kernel: ModuleType, events: bool) -> dict:
-    """The kernel functions the FMU calls, with their argument types."""
+def kernel_roots(kernel: ModuleType, events: bool, cosimulation: bool = False) -> dict:
+    """The kernel functions the FMU calls, with their argument types; a Co-Simulation
+    FMU's also the integrator and the states' scales (its absolute tolerances)."""
     run = (F64, F64, VECTOR, VECTOR, VECTOR, INDICES)
     roots = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
              "pa_outputs": (kernel.outputs, (*run, VECTOR)),
@@ -149,6 +161,11 @@ def kernel_roots(kernel: ModuleType, events: bool) -> dict:
     if events:
         roots["pa_event_guards"] = (kernel.event_guards, (*run, VECTOR))
         roots["pa_event_switch"] = (kernel.event_switch, (*run, FLAGS))
+    if cosimulation:
+        roots["pa_state_scales"] = (kernel.state_scales, (VECTOR, VECTOR))
+        roots["pa_integrate"] = (kernel.integrate_rodas4, (
+            VECTOR, VECTOR, VECTOR, INDICES, VECTOR, VECTOR, F64, VECTOR, F64, F64, types.int64,
+            MATRIX, MATRIX, VECTOR))
     return roots
 
 
@@ -285,8 +302,8 @@ def _exponent(value) -> str:
 
 # ------------------------------------------------------------------------------ files
 def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
-                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int]
-                ) -> str:
+                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int],
+                kind: str = "me") -> str:
     kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4}
     slot_ptr: list[int] = [0]
     slots: list[int] = []
@@ -294,7 +311,17 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
         slots.extend(asm.slots[name])
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
+    me, cs = KINDS[kind]
+    kernel = asm.kernel
+    solver = Rodas4()
+    status_text = ", ".join(_c_string(kernel.STATUS_TEXT.get(code, "unknown status"))
+                            for code in range(1, max(kernel.STATUS_TEXT) + 1))
     return render("fmu.c.j2", identifier=identifier, guid=guid, n_states=len(asm.states),
+                  me=me, cs=cs, interfaces=interfaces(kind),
+                  info_length=kernel.INFO_LENGTH, info_status=kernel.INFO_STATUS,
+                  info_h=kernel.INFO_H, info_t=kernel.INFO_T, rtol=repr(solver.rtol),
+                  h_init=repr(solver.h_init), max_steps=DEFAULT_MAX_STEPS,
+                  status_text=status_text,
                   n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
                   n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),
@@ -305,6 +332,16 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
                   slot_ptr=", ".join(map(str, slot_ptr)), slots=", ".join(map(str, slots)))
 
 
+def interfaces(kind: str) -> str:
+    """The FMI interfaces of ``kind``, in words."""
+    return {"me": "Model Exchange", "cs": "Co-Simulation",
+            "both": "Model Exchange and Co-Simulation"}[kind]
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
 def _c_list(values) -> str:
     return ", ".join(repr(float(v)) if np.isfinite(v) else
                      ("INFINITY" if v > 0 else "(-INFINITY)" if v < 0 else "NAN")
@@ -312,7 +349,7 @@ def _c_list(values) -> str:
 
 
 def model_description(model: Actuator, identifier: str, guid: str,
-                      variables: list[FmuVariable], indicators: int) -> str:
+                      variables: list[FmuVariable], indicators: int, kind: str = "me") -> str:
     index = {id(v): i + 1 for i, v in enumerate(variables)}
     outputs = [index[id(v)] for v in variables if v.causality == "output"]
     derivatives = [index[id(v)] for v in variables if v.kind == "derivative"]
@@ -320,7 +357,8 @@ def model_description(model: Actuator, identifier: str, guid: str,
         model.params.provenance, Mapping) else ""
     description = (f"pneumact {model.describe()}, parameter set '{model.params.name}'"
                    + (f" ({provenance})" if provenance else ""))
-    return render("modelDescription.xml.j2", model_name=identifier, guid=guid,
+    me, cs = KINDS[kind]
+    return render("modelDescription.xml.j2", model_name=identifier, guid=guid, me=me, cs=cs,
                   description=description, version=__version__,
                   date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
                   n_indicators=indicators, identifier=identifier, units=unit_definitions(variables),
@@ -356,8 +394,12 @@ def identifier_for(path: Path) -> str:
 # ------------------------------------------------------------------------------ the export
 def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
                inputs: Mapping[str, float] | None = None, binary: bool = True,
-               compiler: str | None = None) -> ExportedFmu:
-    """Write ``model`` as an FMI 2.0 Model Exchange FMU at ``path`` (``.fmu``).
+               compiler: str | None = None, kind: str = "me") -> ExportedFmu:
+    """Write ``model`` as an FMI 2.0 FMU at ``path`` (``.fmu``).
+
+    ``kind``: ``"me"`` Model Exchange (the importer's solver integrates the equations),
+    ``"cs"`` Co-Simulation (the FMU steps itself with pneumact's RODAS4 at pa.simulate's
+    tolerance, the inputs held over each communication step) or ``"both"``.
 
     ``inputs``: start values of the FMU's inputs by name (default: at rest, atmospheric
     pressure, no force). ``binary``: build this platform's binary with the C compiler
@@ -365,6 +407,9 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     written atomically: a failed export leaves an existing file as it was.
     """
     path = Path(path)
+    if kind not in KINDS:
+        raise ArgumentError(f"export_fmu: kind = {kind!r}; one of {', '.join(map(repr, KINDS))}"
+                            " (Model Exchange, Co-Simulation, both)")
     if path.suffix != ".fmu":
         raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
     fmu_model = exportable(model)
@@ -381,27 +426,26 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
         if v.kind == "input":
             sig[v.index] = v.start
     guards = guard_counts(kernel, vec, sig, ptr, len(asm.states))
-    unit = translate(kernel_roots(kernel, guards[1] > 0))
+    unit = translate(kernel_roots(kernel, guards[1] > 0, cosimulation=KINDS[kind][1]))
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
         [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
-    description = model_description(fmu_model, identifier, guid, variables, sum(guards))
+    description = model_description(fmu_model, identifier, guid, variables, sum(guards), kind)
     files: dict[str, str | bytes] = {"modelDescription.xml": description,
              "sources/model.c": unit.source, "sources/model.h": unit.header,
              "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
-                                          guards)}
+                                          guards, kind)}
     platform, used = None, None
     if binary:
         platform = binary_folder()
-        library, used = build(unit, files, identifier, compiler)
+        library, used = build(files, identifier, compiler)
         files[f"binaries/{platform}/{identifier}{shared_library_suffix()}"] = library
     write_archive(path, files)
     return ExportedFmu(path, identifier, tuple(variables), platform, used, sum(guards),
-                       guards[1])
+                       guards[1], kind)
 
 
-def build(unit: CUnit, files: dict, identifier: str, compiler: str | None
-          ) -> tuple[bytes, str]:
+def build(files: dict, identifier: str, compiler: str | None) -> tuple[bytes, str]:
     """The binary built from the FMU's sources, and the compiler that built it."""
     with tempfile.TemporaryDirectory(prefix="pneumact-fmu-") as folder:
         root = Path(folder)
