@@ -27,6 +27,7 @@ from pneumact.cli import app
 from pneumact.core.signals import PiecewiseLinear
 from pneumact.errors import ExportError
 from pneumact.export import find_compiler
+from pneumact.export.compiler import FLAGS
 from pneumact.simulation.simulate import prepare
 from pneumact.simulation.solvers import Rodas4
 
@@ -142,13 +143,14 @@ class _State(ctypes.Structure):
 def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
     """The FMU's model.c (its integrator translated from core/integrators.py), built here
     and called on a whole regulator cycle, gives the numba kernel's run: the same step
-    counts, states and outputs (bit-equal on x86-64 with gcc -O2)."""
+    counts, states and outputs (bit-equal on x86-64 with gcc -O3, the FMU's flags)."""
     model, fmu = cosimulation["regulator"]
     source = zipfile.ZipFile(fmu.path).read("sources/model.c")
     (tmp_path / "model.c").write_bytes(source)
     library = tmp_path / "model.so"
-    subprocess.run([_compiler(), "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(library),
-                    str(tmp_path / "model.c"), "-lm"], check=True)
+    flags = [f for f in FLAGS if f != "-fvisibility=hidden"]  # the FMU's build, exported
+    subprocess.run([_compiler(), *flags, "-o", str(library), str(tmp_path / "model.c"), "-lm"],
+                   check=True)
     lib = ctypes.CDLL(str(library))
     lib.pa_integrate.restype = _State
     solver = Rodas4()

@@ -27,7 +27,7 @@ INSTALL_HINT = {
     "win32": "install a gcc or clang for Windows (e.g. MinGW-w64 or LLVM) and put it on PATH, "
              "or set CC to it",
 }
-FLAGS = ("-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
+FLAGS = ("-O3", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
 
 
 def find_compiler(compiler: str | None = None) -> str:
