@@ -110,6 +110,8 @@ def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
     assert (tmp_path / "vgt_actuator.fmu").exists()
     stroke = namespace["actuator"].params["x_max"]
     assert namespace["rms"] <= ref.FMU_POSITION_RMS_OF_STROKE * stroke
+    assert (tmp_path / "vgt_actuator_cs.fmu").exists()  # the Co-Simulation FMU's section
+    assert namespace["cs_rms"] <= ref.CS_POSITION_RMS_OF_TRAVEL * namespace["travel"]
 
 
 def test_the_control_tuning_page_runs(tmp_path, monkeypatch):
