@@ -7,12 +7,16 @@
   and step counts equal the numba kernel's (a change to the C side's step control fails
   here).
 - A step the integrator cannot finish is fmi2Error with the reason, the state kept.
-- ``pneumact export fmu --kind``; a wrong kind is refused.
+- ``pneumact export fmu --kind --fmi``; a wrong kind or version is refused.
+- FMI 3.0 from the same C: FMPy's validation passes, its CS run is the FMI 2.0 one's, its
+  ME run agrees with pa.simulate; the sources alone build from the FMI 3.0 build
+  description.
 """
 
 from __future__ import annotations
 
 import ctypes
+import shutil
 import subprocess
 import zipfile
 
@@ -228,17 +232,64 @@ def test_a_failed_step_is_an_error_with_the_reason(cosimulation, tmp_path):
     instance.freeInstance()
 
 
-def test_cli_exports_a_cs_fmu(tmp_path):
-    path = tmp_path / "cs.fmu"
-    result = CliRunner().invoke(app, ["export", "fmu", "--kind", "both", "--no-binary",
-                                      "--out", str(path)])
+@pytest.mark.filterwarnings("ignore::ResourceWarning",  # FMPy's build leaves a temporary
+                            "ignore::pytest.PytestUnraisableExceptionWarning")  # folder to GC
+def test_cli_exports_a_sources_only_fmi3_fmu_that_builds(tmp_path):
+    """``--kind both --fmi 3 --no-binary``: an FMI 3.0 FMU with both interfaces whose
+    sources FMPy builds from their FMI 3.0 build description (CMake); the build runs."""
+    path = tmp_path / "cs3.fmu"
+    result = CliRunner().invoke(app, ["export", "fmu", "--kind", "both", "--fmi", "3",
+                                      "--no-binary", "--out", str(path)])
     assert result.exit_code == 0, result.output
+    assert "FMI 3" in result.output
+    names = zipfile.ZipFile(path).namelist()
+    assert "sources/buildDescription.xml" in names
+    assert not any(n.startswith("binaries/") for n in names)
     description = read_model_description(str(path))
+    assert description.fmiVersion == "3.0"
     assert description.coSimulation is not None and description.modelExchange is not None
     assert description.coSimulation.canHandleVariableCommunicationStepSize
     assert validate_fmu(str(path)) == []
     refused = CliRunner().invoke(app, ["export", "fmu", "--kind", "hybrid",
                                        "--out", str(tmp_path / "b.fmu")])
     assert refused.exit_code == 2 and "hybrid" in refused.output
-    with pytest.raises(pa.ArgumentError, match="kind = 'hybrid'"):
-        pa.export_fmu(actuator("source"), tmp_path / "c.fmu", kind="hybrid")
+    for wrong, words in (({"kind": "hybrid"}, "kind = 'hybrid'"), ({"fmi": 1}, "fmi = 1")):
+        with pytest.raises(pa.ArgumentError, match=words):
+            pa.export_fmu(actuator("source"), tmp_path / "c.fmu", **wrong)
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake (FMPy's build tool) is not installed")
+    from fmpy.build import build_platform_binary
+
+    folder = fmpy.extract(str(path), str(tmp_path / "unzipped"))
+    build_platform_binary(folder)
+    out = fmpy.simulate_fmu(folder, fmi_type="CoSimulation", stop_time=1.0, step_size=0.01,
+                            start_values={"pressure_input": 60e3}, output=["position"])
+    assert np.isfinite(out["position"]).all() and out["position"][-1] > 0.0
+
+
+def test_fmi3_runs_like_fmi2(cosimulation, tmp_path):
+    """The FMI 3.0 FMU (both interfaces, from the same model.c): FMPy's validation passes;
+    its Co-Simulation run is the FMI 2.0 one's, its Model Exchange run (FMPy's CVode)
+    agrees with pa.simulate as the FMI 2.0 Model Exchange FMU does."""
+    model, fmu2 = cosimulation["source"]
+    fmu3 = pa.export_fmu(model, tmp_path / "source3.fmu", kind="both", fmi=3)
+    assert validate_fmu(str(fmu3.path)) == []
+    assert read_model_description(str(fmu3.path)).numberOfEventIndicators == 2
+    experiment = experiment_for("source")
+    grid, drive = held(experiment, 0.01)
+    table = np.array(list(zip(grid, drive, np.zeros_like(drive), strict=True)),
+                     dtype=[("time", float), ("pressure_input", float), ("external_force", float)])
+    runs = [fmpy.simulate_fmu(str(fmu.path), fmi_type="CoSimulation", stop_time=experiment.t_end,
+                              input=table, start_values={"pressure_input": float(drive[0])},
+                              step_size=0.01, output_interval=0.01, output=["position"])
+            for fmu in (fmu2, fmu3)]
+    np.testing.assert_array_equal(runs[0]["position"], runs[1]["position"])
+    down = experiment.with_duration(experiment.t_end / 2)  # the ramp down, to keep it short
+    ramp = np.array([(t, down.drive(t), 0.0) for t in (0.0, down.t_end)], dtype=table.dtype)
+    me = fmpy.simulate_fmu(str(fmu3.path), fmi_type="ModelExchange", stop_time=down.t_end,
+                           input=ramp, start_values={"pressure_input": float(ramp[0][1])},
+                           relative_tolerance=ref.FMU_RTOL,
+                           output_interval=down.t_end / 1000, output=["position"])
+    run = pa.simulate(model, down, t_eval=me["time"])
+    rms = np.sqrt(np.mean((me["position"] - run["position"]) ** 2))
+    assert rms <= ref.FMU_POSITION_RMS_OF_STROKE * float(model.params["x_max"])

@@ -1,5 +1,5 @@
-"""``pneumact export fmu``: the actuator as an FMI 2.0 FMU (Model Exchange, Co-Simulation
-or both)."""
+"""``pneumact export fmu``: the actuator as an FMI 2.0 or 3.0 FMU (Model Exchange,
+Co-Simulation or both)."""
 
 from __future__ import annotations
 
@@ -67,10 +67,12 @@ def export_fmu_command(
         help="me: Model Exchange (the importer's solver integrates); cs: Co-Simulation (the "
              "FMU steps itself with pneumact's RODAS4, inputs held over each step); both.",
         case_sensitive=False)] = FmuKind.me,
+    fmi: Annotated[int, typer.Option(
+        min=2, max=3, help="The FMI version: 2 (2.0) or 3 (3.0).")] = 2,
 ) -> None:
-    """Export the actuator as an FMI 2.0 FMU (Simulink, Dymola, OpenModelica, GT-SUITE,
-    FMPy), Model Exchange, Co-Simulation or both: inputs, every parameter, states and
-    outputs."""
+    """Export the actuator as an FMI 2.0 or 3.0 FMU (Simulink, Dymola, OpenModelica,
+    GT-SUITE, FMPy), Model Exchange, Co-Simulation or both: inputs, every parameter, states
+    and outputs."""
     with user_errors():
         from pneumact.export import export_fmu
 
@@ -82,12 +84,12 @@ def export_fmu_command(
                                elements=elements)
         _, actuator = build_model(options)
         fmu = export_fmu(actuator, target, binary=binary, compiler=compiler,
-                         kind=FmuKind(kind).value)
+                         kind=FmuKind(kind).value, fmi=fmi)
         _print_summary(fmu)
 
 
 def _print_summary(fmu) -> None:
-    table = Table(title=f"pneumact export fmu: {fmu.identifier} ({fmu.kind})",
+    table = Table(title=f"pneumact export fmu: {fmu.identifier} ({fmu.kind}, FMI {fmu.fmi})",
                   show_header=True)
     table.add_column("causality")
     table.add_column("variables")
