@@ -288,7 +288,8 @@ def _typed_ir(py_func: Callable, argtypes: tuple):
     the function is typed afresh; what it calls is typed through those dispatchers."""
     target = registry.cpu_target
     flags = Flags()
-    flags.nrt = True  # a function may return an array it allocates (the integrator's state)
+    # a function may return an array it allocates (the integrator's state)
+    flags.nrt = True  # type: ignore[misc, assignment]  # numba's Flags declare options so
     try:
         annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
                                    argtypes, None, flags, {}, pipeline_class=_TypedIR)
@@ -410,7 +411,8 @@ class _FunctionWriter:
         """A new array (np.empty, np.zeros, np.full, a.copy()) in the arena, as
         statements; None for any other call."""
         fn = self.objects.get(expr.func.name)
-        copy = isinstance(fn, _Method) and fn.attr == "copy" and not expr.args
+        method = fn if isinstance(fn, _Method) else None
+        copy = method is not None and method.attr == "copy" and not expr.args
         numpy_new = (getattr(fn, "__name__", None) in ALLOCATORS
                      and getattr(fn, "__module__", None) == "numpy")
         if not (copy or numpy_new):
@@ -422,8 +424,8 @@ class _FunctionWriter:
             raise self.fail(f"the arguments of {fn!r} but the shape, fill value and dtype")
         lhs, ndim = self.var(target), t.ndim
         element = "uint8_t" if isinstance(t.dtype, types.Boolean) else self.unit.ctype(t.dtype)
-        if copy:
-            source = self.var(fn.array)
+        if method is not None:
+            source = self.var(method.array)
             shape = [f"{source}.shape[{k}]" for k in range(ndim)]
         else:
             size = self.type_of(expr.args[0])

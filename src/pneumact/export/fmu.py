@@ -172,7 +172,7 @@ def kernel_roots(kernel: ModuleType, events: bool, cosimulation: bool = False) -
     """The kernel functions the FMU calls, with their argument types; a Co-Simulation
     FMU's also the integrator and the states' scales (its absolute tolerances)."""
     run = (F64, F64, VECTOR, VECTOR, VECTOR, INDICES)
-    roots = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
+    roots: dict[str, tuple] = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
              "pa_outputs": (kernel.outputs, (*run, VECTOR)),
              "pa_jac": (kernel.jac, (*run, MATRIX)),
              "pa_initial_state": (kernel.initial_state, (F64, F64, VECTOR, VECTOR, INDICES,
