@@ -57,6 +57,7 @@ from .compiler import (
     build_binary,
     find_compiler,
     fmi_headers,
+    platform_tuple,
     shared_library_suffix,
 )
 
@@ -78,9 +79,6 @@ STOP_TIME = 10.0
 KINDS = {"me": (True, False), "cs": (False, True), "both": (True, True)}
 #: the FMI versions exported
 FMI_VERSIONS = (2, 3)
-#: FMI 3.0's platform tuples, by FMI 2.0's binaries folder
-FMI3_PLATFORMS = {"linux64": "x86_64-linux", "darwin64": "x86_64-darwin",
-                  "win64": "x86_64-windows", "linux32": "x86-linux", "win32": "x86-windows"}
 #: the FMI 3.0 functions fmu3.c.j2 implements; every other one the header declares is a stub
 FMI3_IMPLEMENTED = frozenset({
     "fmi3GetVersion", "fmi3SetDebugLogging", "fmi3InstantiateModelExchange",
@@ -511,9 +509,7 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
                                                        identifier=identifier)
     platform, used = None, None
     if binary:
-        platform = binary_folder()
-        if fmi == 3:
-            platform = FMI3_PLATFORMS.get(platform, platform)
+        platform = binary_folder() if fmi == 2 else platform_tuple()
         library, used = build(files, identifier, compiler)
         files[f"binaries/{platform}/{identifier}{shared_library_suffix()}"] = library
     write_archive(path, files)
