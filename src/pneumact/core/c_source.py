@@ -9,10 +9,16 @@ per IR variable, tuples as structs, arrays as a (data, shape, strides) struct. S
 C code and the compiled kernels come from the same component equations, and a change
 to a component changes both.
 
-What it covers is what the kernels use: float and integer scalars and their arithmetic
-with Python's semantics (floor division and modulo, negative indices), ``math`` functions,
-``abs``/``min``/``max``/``int``/``float``, tuples, ``range`` loops, 1-D and 2-D arrays,
-calls between compiled functions. Anything else is refused with the construct and the
+What it covers is what the kernels and the integrator driver (``core/integrators.py``)
+use: float and integer scalars and their arithmetic with Python's semantics (floor
+division and modulo, negative indices), ``math`` functions, ``abs``/``min``/``max``/``int``
+/``float``, tuples (a homogeneous one indexed at run time too), ``range`` loops, arrays of
+any dimension and their row views (``a[i]``), global arrays (constants), ``x is None``
+where the types decide it (numba prunes an argument that is None), calls between compiled
+functions, and arrays a function allocates (``np.empty``/``zeros``/``full``, ``a.copy()``):
+those live in an arena (``pa_arena``) that a function which allocates takes as its first
+parameter, down to its entry point; the caller resets the arena between calls (the memory
+is kept) and frees it at the end. Anything else is refused with the construct and the
 function named (``CSourceError``), never translated approximately.
 """
 
