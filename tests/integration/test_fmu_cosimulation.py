@@ -1,6 +1,6 @@
 """The Co-Simulation FMU (issue 39): pneumact's own integrator, translated to C.
 
-- FMPy runs the CS FMU at communication steps of 1 ms, 10 ms and 0.1 s; each run equals
+- FMPy runs the CS FMU at communication steps of 1 ms, 10 ms, 0.1 s and 1 s; each run equals
   ``pa.simulate`` of the same model driven by the same zero-order-hold (staircase) input,
   for the three valves and GMS-4; FMPy's validation passes.
 - The C integrator in the FMU is the compiled one: on a whole cycle its states, outputs
