@@ -198,6 +198,8 @@ BAD_VALUES: dict[str, list[str]] = {
     "--velocity": ["0", "-5"],
     "--tuned": ["missing.toml", str(BAD / "not_toml.toml")],
     "--compiler": ["no-such-cc"],
+    "--kind": ["hybrid"],
+    "--fmi": ["1", "4"],
 }
 #: arguments (not options) and the bad values each command must refuse
 BAD_ARGUMENTS: dict[str, list[str]] = {

@@ -122,3 +122,79 @@ def test_two_dimensional_arrays_are_row_major(library):
 def test_an_untranslated_construct_is_refused_by_name():
     with pytest.raises(CSourceError, match=r"raising.*raise statement"):
         translate({"c_raising": (raising, (F64,))})
+
+
+WEIGHTS = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])  # a global array: frozen, a constant
+FLAGS_OF = (False, True, True)  # a global tuple indexed at run time
+
+
+@njit
+def _scaled_row(m, i, factor):
+    row = m[i]  # a view: writing it writes m
+    for j in range(row.shape[0]):
+        row[j] *= factor
+    return m
+
+
+@njit
+def allocating(values, extra):
+    """np.empty/zeros/full, .copy(), row views, a global array and a global tuple indexed
+    at run time, min of three, an optional argument decided by its type; returns a new
+    array (in the caller's arena)."""
+    n = values.shape[0]
+    out = values.copy()
+    grid = np.zeros((2, n))
+    marks = np.full(n, 2.0)
+    flags = np.zeros(n, dtype=np.bool_)
+    work = np.empty(n)
+    for j in range(n):
+        grid[0, j] = values[j] * WEIGHTS[1, j % 3]
+        grid[1, j] = min(values[j], marks[j], 1.5)
+        flags[j] = FLAGS_OF[j % 3]
+        work[j] = grid[1, j] + (1.0 if flags[j] else 0.0)
+    _scaled_row(grid, 1, 10.0)
+    for j in range(n):
+        out[j] += grid[0, j] + grid[1, j] + work[j]
+        if extra is not None:
+            out[j] += extra
+    return out
+
+
+@njit
+def ones(n):
+    return np.ones(n)
+
+
+def test_allocations_views_and_constants_are_python_s(tmp_path):
+    arr1d = types.float64[::1]
+    unit = translate({"c_allocating": (allocating, (arr1d, types.none))})
+    assert "pa_arena *" in unit.header  # it allocates: the caller passes the arena
+    (tmp_path / "unit.c").write_text(unit.source)
+    subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(tmp_path / "unit.so"),
+                    str(tmp_path / "unit.c"), "-lm"], check=True)
+    lib = ctypes.CDLL(str(tmp_path / "unit.so"))
+
+    class Arena(ctypes.Structure):
+        _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
+                    ("failed", ctypes.c_int)]
+
+    class Result(ctypes.Structure):
+        _fields_ = [("data", ctypes.POINTER(ctypes.c_double)), ("shape", ctypes.c_int64 * 1),
+                    ("strides", ctypes.c_int64 * 1)]
+
+    lib.c_allocating.restype = Result
+    values = np.array([0.5, -1.25, 3.0, 2.5, 1.0])
+    arena = Arena()
+    for _ in range(2):  # a reset arena is used again
+        result = lib.c_allocating(ctypes.byref(arena), array(values))
+        got = np.array(result.data[:values.size])
+        assert result.shape[0] == values.size
+        np.testing.assert_array_equal(got, allocating(values, None))
+        lib.pa_arena_reset(ctypes.byref(arena))
+    assert not arena.failed
+    lib.pa_arena_free(ctypes.byref(arena))
+
+
+def test_an_allocation_it_does_not_know_is_refused():
+    with pytest.raises(CSourceError, match=r"ones.*a call of"):
+        translate({"c_ones": (ones, (I64,))})

@@ -1,7 +1,9 @@
-"""``pneumact export fmu``: the actuator as an FMI 2.0 Model Exchange FMU."""
+"""``pneumact export fmu``: the actuator as an FMI 2.0 or 3.0 FMU (Model Exchange,
+Co-Simulation or both)."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -34,6 +36,14 @@ export_app = typer.Typer(help="Export the actuator to the tools it goes into (FM
 DEFAULT_NAME = "actuator.fmu"
 
 
+class FmuKind(StrEnum):
+    """The FMI interfaces of the FMU."""
+
+    me = "me"
+    cs = "cs"
+    both = "both"
+
+
 @export_app.command("fmu")
 def export_fmu_command(
     params: ParamsOption = "vgt-paper",
@@ -53,9 +63,16 @@ def export_fmu_command(
     compiler: Annotated[str | None, typer.Option(
         help="The C compiler to build the binary with (default: $CC, else cc, gcc, "
              "clang).")] = None,
+    kind: Annotated[FmuKind, typer.Option(
+        help="me: Model Exchange (the importer's solver integrates); cs: Co-Simulation (the "
+             "FMU steps itself with pneumact's RODAS4, inputs held over each step); both.",
+        case_sensitive=False)] = FmuKind.me,
+    fmi: Annotated[int, typer.Option(
+        min=2, max=3, help="The FMI version: 2 (2.0) or 3 (3.0).")] = 2,
 ) -> None:
-    """Export the actuator as an FMI 2.0 Model Exchange FMU (Simulink, Dymola,
-    OpenModelica, GT-SUITE, FMPy): inputs, every parameter, states and outputs."""
+    """Export the actuator as an FMI 2.0 or 3.0 FMU (Simulink, Dymola, OpenModelica,
+    GT-SUITE, FMPy), Model Exchange, Co-Simulation or both: inputs, every parameter, states
+    and outputs."""
     with user_errors():
         from pneumact.export import export_fmu
 
@@ -66,12 +83,14 @@ def export_fmu_command(
                                exponent=exponent, decaying_damping=decaying_damping,
                                elements=elements)
         _, actuator = build_model(options)
-        fmu = export_fmu(actuator, target, binary=binary, compiler=compiler)
+        fmu = export_fmu(actuator, target, binary=binary, compiler=compiler,
+                         kind=FmuKind(kind).value, fmi=fmi)
         _print_summary(fmu)
 
 
 def _print_summary(fmu) -> None:
-    table = Table(title=f"pneumact export fmu: {fmu.identifier}", show_header=True)
+    table = Table(title=f"pneumact export fmu: {fmu.identifier} ({fmu.kind}, FMI {fmu.fmi})",
+                  show_header=True)
     table.add_column("causality")
     table.add_column("variables")
     for causality in ("input", "parameter", "output"):

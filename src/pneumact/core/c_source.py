@@ -9,10 +9,16 @@ per IR variable, tuples as structs, arrays as a (data, shape, strides) struct. S
 C code and the compiled kernels come from the same component equations, and a change
 to a component changes both.
 
-What it covers is what the kernels use: float and integer scalars and their arithmetic
-with Python's semantics (floor division and modulo, negative indices), ``math`` functions,
-``abs``/``min``/``max``/``int``/``float``, tuples, ``range`` loops, 1-D and 2-D arrays,
-calls between compiled functions. Anything else is refused with the construct and the
+What it covers is what the kernels and the integrator driver (``core/integrators.py``)
+use: float and integer scalars and their arithmetic with Python's semantics (floor
+division and modulo, negative indices), ``math`` functions, ``abs``/``min``/``max``/``int``
+/``float``, tuples (a homogeneous one indexed at run time too), ``range`` loops, arrays of
+any dimension and their row views (``a[i]``), global arrays (constants), ``x is None``
+where the types decide it (numba prunes an argument that is None), calls between compiled
+functions, and arrays a function allocates (``np.empty``/``zeros``/``full``, ``a.copy()``):
+those live in an arena (``pa_arena``) that a function which allocates takes as its first
+parameter, down to its entry point; the caller resets the arena between calls (the memory
+is kept) and frees it at the end. Anything else is refused with the construct and the
 function named (``CSourceError``), never translated approximately.
 """
 
@@ -58,6 +64,15 @@ MATH = {"exp": "exp", "log": "log", "log10": "log10", "log1p": "log1p", "expm1":
         "absolute": "fabs", "power": "pow", "arctan": "atan", "arctan2": "atan2",
         "arcsin": "asin", "arccos": "acos", "trunc": "trunc"}
 
+#: the arena's type and functions, declared in the header too (its user resets and frees it)
+ARENA_TYPES = r"""
+typedef struct pa_chunk pa_chunk;
+typedef struct { pa_chunk *first, *current; int failed; } pa_arena;
+"""
+ARENA_FUNCTIONS = "void pa_arena_reset(pa_arena *m);\nvoid pa_arena_free(pa_arena *m);"
+#: numpy functions that allocate an array (its dtype is the target's type)
+ALLOCATORS = ("empty", "zeros", "full")
+
 PRELUDE = r"""
 #include <math.h>
 #include <stdint.h>
@@ -92,7 +107,39 @@ static inline int64_t pa_ipow(int64_t a, int64_t n) {
 }
 static inline double pa_sign(double x) { return (x > 0.0) - (x < 0.0); }
 static inline int64_t pa_index(int64_t i, int64_t n) { return i < 0 ? i + n : i; }
+""" + ARENA_TYPES + r"""
+/* the arena: arrays a function allocates (np.empty, np.zeros, np.full, .copy()) live
+   until the arena is reset or freed by whoever called the entry point; a reset keeps the
+   memory, so a caller that runs an entry point again allocates nothing new */
+struct pa_chunk { struct pa_chunk *next; int64_t size, used; double data[]; };
+static void *pa_alloc(pa_arena *m, int64_t bytes) {
+    int64_t n = bytes > 0 ? (bytes + 7) / 8 : 1;
+    while (m->current && m->current->size - m->current->used < n && m->current->next)
+        m->current = m->current->next;
+    if (!m->current || m->current->size - m->current->used < n) {
+        int64_t size = n > 4096 ? n : 4096;
+        pa_chunk *c = (pa_chunk *)malloc(sizeof(pa_chunk) + (size_t)size * sizeof(double));
+        if (!c) { m->failed = 1; return NULL; }
+        c->size = size; c->used = 0;
+        c->next = m->current ? m->current->next : NULL;
+        if (m->current) m->current->next = c; else m->first = c;
+        m->current = c;
+    }
+    m->current->used += n;
+    return m->current->data + (m->current->used - n);
+}
+void pa_arena_reset(pa_arena *m) {
+    pa_chunk *c;
+    for (c = m->first; c; c = c->next) c->used = 0;
+    m->current = m->first;
+    m->failed = 0;
+}
+void pa_arena_free(pa_arena *m) {
+    while (m->first) { pa_chunk *next = m->first->next; free(m->first); m->first = next; }
+    m->current = NULL;
+}
 """
+
 
 
 @dataclass
@@ -111,6 +158,7 @@ class _Function:
     name: str
     prototype: str
     body: list[str] = field(default_factory=list)
+    arena: bool = False  # it (or what it calls) allocates: its first parameter is the arena
 
 
 class _Translator:
@@ -119,6 +167,7 @@ class _Translator:
         self.functions: dict[tuple, _Function] = {}
         self.order: list[tuple] = []
         self.entries: dict[str, str] = {}
+        self.constants: list[str] = []  # global arrays frozen into the code
         self.counter = itertools.count()
 
     # -- types -------------------------------------------------------------------------
@@ -177,10 +226,11 @@ class _Translator:
         return self.functions[key]
 
     def entry(self, name: str, inner: _Function) -> str:
-        """An exported function ``name`` that calls the (static) ``inner``."""
+        """An exported function ``name`` that calls the (static) ``inner``; one that
+        allocates takes the arena (``pa_arena *``) first, as ``inner`` does."""
         prototype = inner.prototype.replace("static ", "", 1).replace(
             f" {inner.name}(", f" {name}(", 1)
-        arguments = ", ".join(re.findall(r" (a\d+)(?=[,)])", inner.prototype))
+        arguments = ", ".join(re.findall(r"[ *](pa_mem|a\d+)(?=[,)])", inner.prototype))
         call = f"{inner.name}({arguments})"
         body = call if prototype.startswith("void ") else f"return {call}"
         self.entries[name] = f"{prototype} {{ {body}; }}"
@@ -190,11 +240,19 @@ class _Translator:
         structs = "\n".join(definition for _, definition in self.structs.values())
         prototypes = "\n".join(self.functions[k].prototype + ";" for k in self.order)
         bodies = "\n\n".join("\n".join(self.functions[k].body) for k in self.order)
-        source = "\n".join([PRELUDE, structs, "", prototypes, "", bodies, "",
-                            *self.entries.values(), ""])
-        header = "\n".join(["#include <stdint.h>", structs, "",
+        source = "\n".join([PRELUDE, structs, "", *self.constants, "", prototypes, "", bodies,
+                            "", *self.entries.values(), ""])
+        header = "\n".join(["#include <stdint.h>", ARENA_TYPES, ARENA_FUNCTIONS, structs, "",
                             *(e.split(" {", 1)[0] + ";" for e in self.entries.values()), ""])
         return CUnit(source, header, tuple(self.entries))
+
+
+@dataclass(frozen=True)
+class _Method:
+    """A method of an array (``a.copy``), bound by a getattr and called next."""
+
+    array: ir.Var
+    attr: str
 
 
 def _members(t: Any) -> tuple:
@@ -236,6 +294,8 @@ def _typed_ir(py_func: Callable, argtypes: tuple):
     the function is typed afresh; what it calls is typed through those dispatchers."""
     target = registry.cpu_target
     flags = Flags()
+    # a function may return an array it allocates (the integrator's state)
+    flags.nrt = True  # type: ignore[misc, assignment]  # numba's Flags declare options so
     try:
         annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
                                    argtypes, None, flags, {}, pipeline_class=_TypedIR)
@@ -285,12 +345,14 @@ class _FunctionWriter:
         rtype = self.unit.ctype(self.signature.return_type) or "void"
         params = [f"{self.unit.ctype(t)} a{i}" for i, t in enumerate(self.signature.args)
                   if self.unit.ctype(t) is not None]
-        self.out.prototype = f"static {rtype} {self.out.name}({', '.join(params) or 'void'})"
         lines: list[str] = []
         for label in sorted(self.blocks):
             lines.append(f"  L{label}:;")
             for stmt in self.blocks[label].body:
                 lines.extend("    " + s for s in self.statement(stmt, rtype))
+        if self.out.arena:  # known once the body is written
+            params.insert(0, "pa_arena *pa_mem")
+        self.out.prototype = f"static {rtype} {self.out.name}({', '.join(params) or 'void'})"
         declarations = []
         for name, cname in self.names.items():
             ctype = self.unit.ctype(self.typemap[name]) if name in self.typemap else None
@@ -333,6 +395,8 @@ class _FunctionWriter:
                 base = self.objects.get(value.value.name)
                 if base is not None:
                     self.objects[target.name] = getattr(base, value.attr)
+                elif isinstance(self.type_of(value.value), types.Array):
+                    self.objects[target.name] = _Method(value.value, value.attr)
             elif isinstance(value, ir.Expr) and value.op == "call":
                 return [self.call(target, value) + ";"]
             return []
@@ -341,9 +405,71 @@ class _FunctionWriter:
             return [f"{lhs} = a{value.index};"]
         if isinstance(value, ir.Var):
             return [f"{lhs} = {self.coerce(value, t)};"]
+        if isinstance(value, ir.Expr) and value.op == "call":
+            allocation = self.allocation(target, value)
+            if allocation is not None:
+                return allocation
         if isinstance(value, ir.Expr):
             return [f"{lhs} = {self.expression(target, value)};"]
         raise self.fail(f"the assignment {target} = {value!r}")
+
+    def allocation(self, target: ir.Var, expr: ir.Expr) -> list[str] | None:
+        """A new array (np.empty, np.zeros, np.full, a.copy()) in the arena, as
+        statements; None for any other call."""
+        fn = self.objects.get(expr.func.name)
+        method = fn if isinstance(fn, _Method) else None
+        copy = method is not None and method.attr == "copy" and not expr.args
+        numpy_new = (getattr(fn, "__name__", None) in ALLOCATORS
+                     and getattr(fn, "__module__", None) == "numpy")
+        if not (copy or numpy_new):
+            return None
+        t = self.type_of(target)
+        if not isinstance(t, types.Array) or t.layout != "C":
+            raise self.fail(f"an allocation of {t}")
+        if expr.vararg or any(name != "dtype" for name, _ in expr.kws):
+            raise self.fail(f"the arguments of {fn!r} but the shape, fill value and dtype")
+        lhs, ndim = self.var(target), t.ndim
+        element = "uint8_t" if isinstance(t.dtype, types.Boolean) else self.unit.ctype(t.dtype)
+        if method is not None:
+            source = self.var(method.array)
+            shape = [f"{source}.shape[{k}]" for k in range(ndim)]
+        else:
+            size = self.type_of(expr.args[0])
+            if isinstance(size, types.BaseTuple):
+                shape = [f"{self.var(expr.args[0])}.f{k}" for k in range(len(size))]
+            else:
+                shape = [self.var(expr.args[0])]
+            if len(shape) != ndim:
+                raise self.fail(f"an allocation of {t} with the shape {size}")
+        out = [f"{lhs}.shape[{k}] = {shape[k]};" for k in range(ndim)]
+        out.append(f"{lhs}.strides[{ndim - 1}] = 1;")
+        for k in range(ndim - 2, -1, -1):
+            out.append(f"{lhs}.strides[{k}] = {lhs}.strides[{k + 1}] * {lhs}.shape[{k + 1}];")
+        count = " * ".join(f"{lhs}.shape[{k}]" for k in range(ndim))
+        out.append(f"{lhs}.data = ({element} *)pa_alloc(pa_mem, ({count}) * "
+                   f"(int64_t)sizeof({element}));")
+        self.out.arena = True
+        name = getattr(fn, "__name__", "")
+        if copy or name != "empty":
+            index = f"pa_i{next(self.unit.counter)}"
+            if copy:
+                value = f"{source}.data[{self._unravel(index, source, ndim)}]"
+            elif name == "zeros":
+                value = "0"
+            else:
+                value = self.var(expr.args[1])
+            out.append(f"for (int64_t {index} = 0; {index} < {count}; {index}++) "
+                       f"{lhs}.data[{index}] = {value};")
+        return out
+
+    @staticmethod
+    def _unravel(flat: str, array: str, ndim: int) -> str:
+        """The strided offset in ``array`` of the row-major flat index ``flat``."""
+        terms, rest = [], flat
+        for k in range(ndim - 1, -1, -1):
+            terms.append(f"(({rest}) % {array}.shape[{k}]) * {array}.strides[{k}]")
+            rest = f"({rest}) / {array}.shape[{k}]"
+        return " + ".join(terms)
 
     def constant(self, target: ir.Var, value) -> list[str]:
         t = self.type_of(target)
@@ -351,7 +477,26 @@ class _FunctionWriter:
         if ctype is None:
             self.objects[target.name] = value
             return []
+        if isinstance(value, np.ndarray) and isinstance(t, types.Array):
+            return [f"{self.var(target)} = {self.constant_array(value, t)};"]
         return [f"{self.var(target)} = {self.literal(value, t)};"]
+
+    def constant_array(self, value: np.ndarray, t: types.Array) -> str:
+        """A global array (frozen into the compiled code as a constant): its elements as
+        a static C array, the struct onto them."""
+        if not isinstance(t.dtype, types.Float | types.Integer) or value.ndim != t.ndim:
+            raise self.fail(f"the global array of {t}")
+        element = self.unit.ctype(t.dtype)
+        name = f"pa_const_{next(self.unit.counter)}"
+        flat = np.ascontiguousarray(value).ravel()
+        items = ", ".join(self.literal(v, t.dtype) for v in flat.tolist()) or "0"
+        self.unit.constants.append(f"static const {element} {name}[] = {{{items}}};")
+        shape = ", ".join(str(n) for n in value.shape) or "0"
+        strides = [1] * value.ndim
+        for k in range(value.ndim - 2, -1, -1):
+            strides[k] = strides[k + 1] * value.shape[k + 1]
+        return (f"(({self.unit.ctype(t)}){{({element} *){name}, {{{shape}}}, "
+                f"{{{', '.join(map(str, strides))}}}}})")
 
     def literal(self, value, t) -> str:
         if isinstance(t, types.Literal):
@@ -439,6 +584,14 @@ class _FunctionWriter:
         if fn in (operator.pow, operator.ipow):
             return f"pa_ipow({a}, {b})" if ints else f"pow({a}, {b})"
         if fn in (operator.is_, operator.is_not):
+            # decided by the types: None is None, and a value of another type is not None
+            if isinstance(ta, types.NoneType | types.Omitted) or isinstance(
+                    tb, types.NoneType | types.Omitted):
+                same = isinstance(ta, types.NoneType | types.Omitted) and isinstance(
+                    tb, types.NoneType | types.Omitted)
+                if isinstance(ta, types.Optional) or isinstance(tb, types.Optional):
+                    raise self.fail("'is' comparisons of optional values")
+                return "1" if same == (fn is operator.is_) else "0"
             raise self.fail("'is' comparisons")
         if fn in BINARY:
             return f"({a} {BINARY[fn]} {b})"
@@ -464,18 +617,43 @@ class _FunctionWriter:
         t = self.type_of(value)
         if isinstance(t, types.BaseTuple):
             if static is None:
-                raise self.fail("a tuple indexed by a run-time value")
+                kinds = {types.unliteral(e) for e in _members(t)}
+                element = self.unit.ctype(kinds.pop()) if len(kinds) == 1 else None
+                if element is None or len(t) == 0:
+                    raise self.fail(f"the tuple {t} indexed by a run-time value")
+                items = ", ".join(f"{self.var(value)}.f{k}" for k in range(len(t)))
+                return (f"(({element}[]){{{items}}})"
+                        f"[pa_index({self.var(index)}, {len(t)})]")
             k = static if static >= 0 else len(t) + static
             kept = [i for i, e in enumerate(_members(t)) if self.unit.ctype(e) is not None]
             return f"{self.var(value)}.f{k}" if k in kept else "0"
         if isinstance(t, types.Array):
+            it = self.type_of(index)
+            count = len(it) if isinstance(it, types.BaseTuple) else 1
+            if count < t.ndim:
+                return self.view(value, index, count)
             return self.element(value, index)
         raise self.fail(f"indexing a {t}")
+
+    def view(self, array: ir.Var, index: ir.Var, count: int) -> str:
+        """``array[i]`` (or ``array[i, j]``) of an array of more dimensions: the view
+        onto the rest, sharing the data."""
+        t = self.type_of(array)
+        arr = self.var(array)
+        offset = self._offset(array, index)
+        kept = range(count, t.ndim)
+        view = self.unit._array(types.Array(t.dtype, t.ndim - count, "A"))
+        shape = ", ".join(f"{arr}.shape[{k}]" for k in kept)
+        strides = ", ".join(f"{arr}.strides[{k}]" for k in kept)
+        return f"(({view}){{{arr}.data + {offset}, {{{shape}}}, {{{strides}}}}})"
 
     def element(self, array: ir.Var, index: ir.Var) -> str:
         t = self.type_of(array)
         if not isinstance(t, types.Array):
             raise self.fail(f"item assignment into a {t}")
+        return f"{self.var(array)}.data[{self._offset(array, index)}]"
+
+    def _offset(self, array: ir.Var, index: ir.Var) -> str:
         arr = self.var(array)
         it = self.type_of(index)
         if isinstance(it, types.BaseTuple):
@@ -487,7 +665,7 @@ class _FunctionWriter:
             parts = [f"pa_index({self.var(index)}, {arr}.shape[0]) * {arr}.strides[0]"]
         else:
             raise self.fail(f"the array index {it} (slices)")
-        return f"{arr}.data[{' + '.join(parts)}]"
+        return " + ".join(parts)
 
     def call(self, target: ir.Var, expr: ir.Expr) -> str:
         fn = self.objects.get(expr.func.name)
@@ -497,20 +675,28 @@ class _FunctionWriter:
         if isinstance(fn, numba.core.registry.CPUDispatcher):
             args = [self.coerce(a, t) for a, t in zip(expr.args, signature.args, strict=True)
                     if self.unit.ctype(t) is not None]
-            name = self.unit.function(fn.py_func, signature.args).name
-            return f"{name}({', '.join(args)})"
+            callee = self.unit.function(fn.py_func, signature.args)
+            if callee.arena:
+                self.out.arena = True
+                args.insert(0, "pa_mem")
+            return f"{callee.name}({', '.join(args)})"
         args = [self.var(a) for a in expr.args if self.unit.ctype(self.type_of(a)) is not None]
         if fn in (builtins.abs, np.abs, np.absolute):
             t = types.unliteral(self.type_of(expr.args[0]))
             return f"{'llabs' if isinstance(t, types.Integer) else 'fabs'}({args[0]})"
-        if fn in (builtins.min, builtins.max) and len(args) == 2:
+        if fn in (builtins.min, builtins.max) and len(args) >= 2 and all(
+                isinstance(types.unliteral(self.type_of(a)), types.Number) for a in expr.args):
             compare = "<" if fn is builtins.min else ">"
-            a, b = args
-            return f"({b} {compare} {a} ? {b} : {a})"
+            result = args[0]  # Python's: the first of equal values, left to right
+            for b in args[1:]:
+                result = f"({b} {compare} {result} ? {b} : {result})"
+            return result
         if fn is builtins.int:
             return f"((int64_t)({args[0]}))"
         if fn is builtins.float:
             return f"((double)({args[0]}))"
+        if isinstance(fn, type) and issubclass(fn, np.integer | np.floating) and len(args) == 1:
+            return f"(({self.unit.ctype(types.unliteral(self.type_of(target)))})({args[0]}))"
         if fn is builtins.bool:
             return f"(({args[0]}) != 0)"
         if fn is builtins.range:

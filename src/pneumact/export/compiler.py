@@ -17,7 +17,7 @@ from pathlib import Path
 from ..errors import ExportError
 
 __all__ = ["binary_folder", "build_binary", "find_compiler", "fmi_headers",
-           "shared_library_suffix"]
+           "platform_tuple", "shared_library_suffix"]
 
 CANDIDATES = ("cc", "gcc", "clang")
 #: what to install, per platform, when no C compiler is found
@@ -27,7 +27,7 @@ INSTALL_HINT = {
     "win32": "install a gcc or clang for Windows (e.g. MinGW-w64 or LLVM) and put it on PATH, "
              "or set CC to it",
 }
-FLAGS = ("-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
+FLAGS = ("-O3", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
 
 
 def find_compiler(compiler: str | None = None) -> str:
@@ -51,7 +51,7 @@ def find_compiler(compiler: str | None = None) -> str:
 
 
 def fmi_headers() -> Path:
-    """The folder of FMPy's FMI 2.0 headers (fmi2Functions.h, …)."""
+    """The folder of FMPy's FMI 2.0 and 3.0 headers (fmi2Functions.h, fmi3Functions.h, …)."""
     try:
         import fmpy  # type: ignore[import-untyped]
     except ImportError as error:
@@ -72,6 +72,16 @@ def binary_folder() -> str:
         raise ExportError(f"no FMI 2.0 binaries folder for {sys.platform} "
                           f"{platform.machine()}: export the sources only (binary=False)")
     return system + bits
+
+
+def platform_tuple() -> str:
+    """FMI 3.0's name of this platform's binaries folder (x86_64-linux, aarch64-darwin, …)."""
+    folder = binary_folder()  # refuses a platform FMI does not name
+    machine = platform.machine().lower()
+    architecture = {"amd64": "x86_64", "arm64": "aarch64", "i686": "x86"}.get(machine, machine)
+    if sys.maxsize <= 2**32 and architecture == "x86_64":
+        architecture = "x86"
+    return f"{architecture}-{folder.rstrip('0123456789').replace('win', 'windows')}"
 
 
 def shared_library_suffix() -> str:

@@ -1,4 +1,4 @@
-"""Export an actuator as an FMI 2.0 Model Exchange FMU.
+"""Export an actuator as an FMI 2.0 or 3.0 FMU: Model Exchange, Co-Simulation or both.
 
 The FMU's physics is the model's kernel written in C by the kernel generator's second
 back end (``core.c_source``), from the same component functions the compiled kernels
@@ -16,6 +16,16 @@ goes unstable on an end stop (an explicit importer's step past the stiff contact
 limit, issue 39) ends with fmi2Error and a message naming the limit and the remedy.
 The archive holds the C sources (an importer on another platform builds them) and, unless
 ``binary=False``, the binary built here with the machine's C compiler.
+
+A Co-Simulation FMU (``kind="cs"`` or ``"both"``) steps itself with pneumact's own
+integrator: ``integrate_rodas4`` (``core/integrators.py``), translated to C by the same back
+end from the same source as the compiled integrator, so a communication step is what
+``pa.simulate`` does over that interval with the inputs held (RODAS4, its step control,
+tolerances, jumps and state events).
+
+FMI 3.0 (``fmi=3``) takes the same model.c; its glue (``templates/fmu3.c.j2``) maps FMI 3.0's
+calls, declares the event indicators as variables and the time as the independent one, and
+the sources carry the FMI 3.0 build description (``sources/buildDescription.xml``).
 """
 
 from __future__ import annotations
@@ -37,7 +47,7 @@ import numpy as np
 from numba.core import types
 
 from ..core.assembly import Assembly, assemble
-from ..core.c_source import CUnit, translate
+from ..core.c_source import translate
 from ..core.channels import CH_DRIVE, CH_LOAD_T, INPUT_OFFSET
 from ..core.signals import Constant, pack_channels
 from ..errors import ArgumentError, ExportError
@@ -45,12 +55,14 @@ from ..files import atomic_write
 from ..models import Actuator
 from ..models.mechanics import explicit_step
 from ..parameters.catalogue import catalogue
+from ..simulation.solvers import DEFAULT_MAX_STEPS, Rodas4
 from ..version import __version__
 from .compiler import (
     binary_folder,
     build_binary,
     find_compiler,
     fmi_headers,
+    platform_tuple,
     shared_library_suffix,
 )
 
@@ -76,6 +88,24 @@ STOP_MARGIN = 10.0
 #: the relative tolerance the FMU's DefaultExperiment recommends (a stiff variable-step
 #: solver; measured against pa.simulate in docs/fmu-export.md)
 RECOMMENDED_TOLERANCE = 1e-6
+#: the communication step a Co-Simulation-only FMU recommends: its own integrator takes
+#: the steps the tolerance asks for inside it (a control task's period)
+CS_STEP = 1e-3
+#: the FMI interfaces of each kind: (Model Exchange, Co-Simulation)
+KINDS = {"me": (True, False), "cs": (False, True), "both": (True, True)}
+#: the FMI versions exported
+FMI_VERSIONS = (2, 3)
+#: the FMI 3.0 functions fmu3.c.j2 implements; every other one the header declares is a stub
+FMI3_IMPLEMENTED = frozenset({
+    "fmi3GetVersion", "fmi3SetDebugLogging", "fmi3InstantiateModelExchange",
+    "fmi3InstantiateCoSimulation", "fmi3FreeInstance", "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode", "fmi3Terminate", "fmi3Reset", "fmi3GetFloat64",
+    "fmi3SetFloat64", "fmi3GetFMUState", "fmi3SetFMUState", "fmi3FreeFMUState",
+    "fmi3GetDirectionalDerivative", "fmi3EnterEventMode", "fmi3UpdateDiscreteStates",
+    "fmi3EnterContinuousTimeMode", "fmi3CompletedIntegratorStep", "fmi3SetTime",
+    "fmi3SetContinuousStates", "fmi3GetContinuousStateDerivatives", "fmi3GetEventIndicators",
+    "fmi3GetContinuousStates", "fmi3GetNominalsOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators", "fmi3GetNumberOfContinuousStates", "fmi3DoStep"})
 
 F64 = types.float64
 VECTOR = types.float64[::1]
@@ -114,6 +144,8 @@ class ExportedFmu:
     compiler: str | None
     event_indicators: int  # the end stops' guards, then the friction law's mode guards
     mode_switches: int  # of which the friction law's (GMS: one per block)
+    kind: str = "me"  # "me" (Model Exchange), "cs" (Co-Simulation) or "both"
+    fmi: int = 2  # the FMI version
 
     def variable_table(self):
         """The FMU's variables, one row each (value reference, causality, unit, start,
@@ -129,7 +161,8 @@ class ExportedFmu:
 
     def __repr__(self) -> str:
         built = f"binary {self.platform}" if self.platform else "sources only"
-        return (f"ExportedFmu({str(self.path)!r}, inputs={list(self.names('input'))}, "
+        return (f"ExportedFmu({str(self.path)!r}, kind={self.kind!r}, fmi={self.fmi}, "
+                f"inputs={list(self.names('input'))}, "
                 f"{len(self.names('parameter'))} parameters, "
                 f"{len(self.names('output'))} outputs, {self.event_indicators} event "
                 f"indicators, "
@@ -149,10 +182,11 @@ def exportable(model) -> Actuator:
     return dataclasses.replace(model, load=Constant(0.0))
 
 
-def kernel_roots(kernel: ModuleType, events: bool) -> dict:
-    """The kernel functions the FMU calls, with their argument types."""
+def kernel_roots(kernel: ModuleType, events: bool, cosimulation: bool = False) -> dict:
+    """The kernel functions the FMU calls, with their argument types; a Co-Simulation
+    FMU's also the integrator and the states' scales (its absolute tolerances)."""
     run = (F64, F64, VECTOR, VECTOR, VECTOR, INDICES)
-    roots = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
+    roots: dict[str, tuple] = {"pa_rhs": (kernel.rhs, (*run, VECTOR)),
              "pa_outputs": (kernel.outputs, (*run, VECTOR)),
              "pa_jac": (kernel.jac, (*run, MATRIX)),
              "pa_initial_state": (kernel.initial_state, (F64, F64, VECTOR, VECTOR, INDICES,
@@ -162,6 +196,11 @@ def kernel_roots(kernel: ModuleType, events: bool) -> dict:
     if events:
         roots["pa_event_guards"] = (kernel.event_guards, (*run, VECTOR))
         roots["pa_event_switch"] = (kernel.event_switch, (*run, FLAGS))
+    if cosimulation:
+        roots["pa_state_scales"] = (kernel.state_scales, (VECTOR, VECTOR))
+        roots["pa_integrate"] = (kernel.integrate_rodas4, (
+            VECTOR, VECTOR, VECTOR, INDICES, VECTOR, VECTOR, F64, VECTOR, F64, F64, types.int64,
+            MATRIX, MATRIX, VECTOR))
     return roots
 
 
@@ -313,21 +352,33 @@ def _exponent(value) -> str:
 
 # ------------------------------------------------------------------------------ files
 def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
-                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int]
-                ) -> str:
-    kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4}
+                vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int],
+                kind: str = "me", fmi: int = 2) -> str:
+    kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4,
+             "indicator": 5, "time": 6}
     slot_ptr: list[int] = [0]
     slots: list[int] = []
     for name in asm.parameter_names:
         slots.extend(asm.slots[name])
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
+    me, cs = KINDS[kind]
+    kernel = asm.kernel
+    solver = Rodas4()
+    status_text = ", ".join(_c_string(kernel.STATUS_TEXT.get(code, "unknown status"))
+                            for code in range(1, max(kernel.STATUS_TEXT) + 1))
+    extra = {"stubs": fmi3_stubs()} if fmi == 3 else {}
     force = next(v.index for v in variables if v.name == FORCE_INPUT[0])
-    return render("fmu.c.j2", position_state=asm.state_index("position"),
+    return render("fmu3.c.j2" if fmi == 3 else "fmu.c.j2", identifier=identifier, guid=guid,
+                  n_states=len(asm.states), me=me, cs=cs, interfaces=interfaces(kind), **extra,
+                  position_state=asm.state_index("position"),
                   mechanics_slots=", ".join(str(asm.slots[name][0])
                                             for name in STOP_CHECK_PARAMETERS),
-                  force_entry=force, stop_margin=repr(STOP_MARGIN), identifier=identifier,
-                  guid=guid, n_states=len(asm.states),
+                  force_entry=force, stop_margin=repr(STOP_MARGIN),
+                  info_length=kernel.INFO_LENGTH, info_status=kernel.INFO_STATUS,
+                  info_h=kernel.INFO_H, info_t=kernel.INFO_T, rtol=repr(solver.rtol),
+                  h_init=repr(solver.h_init), max_steps=DEFAULT_MAX_STEPS,
+                  status_text=status_text,
                   n_vector=len(vec), n_outputs=len(asm.output_names), n_switches=guards[0],
                   n_events=guards[1],
                   n_sig=len(sig), n_channels=len(ptr), n_variables=len(variables),
@@ -338,6 +389,54 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
                   slot_ptr=", ".join(map(str, slot_ptr)), slots=", ".join(map(str, slots)))
 
 
+def fmi3_variables(variables: list[FmuVariable], guards: tuple[int, int]
+                   ) -> list[FmuVariable]:
+    """FMI 3.0's variables beyond FMI 2.0's (after them: the value references of the others
+    stay): the event indicators (FMI 3.0 declares them as variables) and the time."""
+    names = [f"end_stop_guard[{k + 1}]" for k in range(guards[0])]
+    names += [f"friction_mode_guard[{k + 1}]" for k in range(guards[1])]
+    extra = [FmuVariable(name, "local", "indicator", k, "", "event indicator: "
+                         + ("an end stop's contact" if k < guards[0] else
+                            "a friction block's stick/slip switch"), initial="calculated")
+             for k, name in enumerate(names)]
+    return [*variables, *extra, FmuVariable("time", "independent", "time", 0, "s",
+                                            "simulation time")]
+
+
+def fmi3_stubs() -> str:
+    """C definitions of the FMI 3.0 functions the glue does not implement (clocks, other
+    types, serialisation, adjoints, scheduled execution, …), read off FMPy's header: each
+    logs that it is not supported and returns fmi3Error (an instance, NULL)."""
+    header = (fmi_headers() / "fmi3FunctionTypes.h").read_text()
+    out = []
+    for ret, name, params in re.findall(r"typedef\s+([\w\s*]+?)\s*\b(fmi3\w+)TYPE\s*\((.*?)\);",
+                                        header, re.S):
+        if name in FMI3_IMPLEMENTED:
+            continue
+        params = " ".join(params.split())
+        names = [re.sub(r"\[\]$", "", p.split()[-1]).lstrip("*") for p in params.split(",")
+                 if p.strip() and p.strip() != "void"]
+        ignored = " ".join(f"(void){n};" for n in names)
+        if ret.strip() == "fmi3Status":
+            first = names[0] if names and "fmi3Instance" in params.split(",")[0] else None
+            body = (f"{ignored} log_error((Instance *){first}, \"{name} is not supported\"); "
+                    "return fmi3Error;" if first else f"{ignored} return fmi3Error;")
+        else:
+            body = f"{ignored} return NULL;"
+        out.append(f"{ret.strip()} {name}({params}) {{ {body} }}")
+    return "\n".join(out)
+
+
+def interfaces(kind: str) -> str:
+    """The FMI interfaces of ``kind``, in words."""
+    return {"me": "Model Exchange", "cs": "Co-Simulation",
+            "both": "Model Exchange and Co-Simulation"}[kind]
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
 def _c_list(values) -> str:
     return ", ".join(repr(float(v)) if np.isfinite(v) else
                      ("INFINITY" if v > 0 else "(-INFINITY)" if v < 0 else "NAN")
@@ -345,7 +444,8 @@ def _c_list(values) -> str:
 
 
 def model_description(model: Actuator, identifier: str, guid: str,
-                      variables: list[FmuVariable], indicators: int) -> str:
+                      variables: list[FmuVariable], indicators: int, kind: str = "me",
+                      fmi: int = 2) -> str:
     index = {id(v): i + 1 for i, v in enumerate(variables)}
     outputs = [index[id(v)] for v in variables if v.causality == "output"]
     derivatives = [index[id(v)] for v in variables if v.kind == "derivative"]
@@ -353,12 +453,17 @@ def model_description(model: Actuator, identifier: str, guid: str,
         model.params.provenance, Mapping) else ""
     description = (f"pneumact {model.describe()}, parameter set '{model.params.name}'"
                    + (f" ({provenance})" if provenance else ""))
-    return render("modelDescription.xml.j2", model_name=identifier, guid=guid,
+    me, cs = KINDS[kind]
+    extra = {}
+    if fmi == 3:
+        extra["event_indicators"] = [index[id(v)] for v in variables if v.kind == "indicator"]
+    return render("modelDescription3.xml.j2" if fmi == 3 else "modelDescription.xml.j2",
+                  model_name=identifier, guid=guid, me=me, cs=cs, **extra,
                   description=description, version=__version__,
                   date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
                   n_indicators=indicators, identifier=identifier, units=unit_definitions(variables),
                   stop_time=STOP_TIME, tolerance=RECOMMENDED_TOLERANCE,
-                  step_size=recommended_step(model),
+                  step_size=recommended_step(model) if me else CS_STEP,
                   variables=[_xml_fields(v) for v in variables],
                   outputs=outputs, derivatives=derivatives,
                   initial_unknowns=sorted(set(outputs) | set(derivatives)))
@@ -400,8 +505,12 @@ def identifier_for(path: Path) -> str:
 # ------------------------------------------------------------------------------ the export
 def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
                inputs: Mapping[str, float] | None = None, binary: bool = True,
-               compiler: str | None = None) -> ExportedFmu:
-    """Write ``model`` as an FMI 2.0 Model Exchange FMU at ``path`` (``.fmu``).
+               compiler: str | None = None, kind: str = "me", fmi: int = 2) -> ExportedFmu:
+    """Write ``model`` as an FMI 2.0 (``fmi=2``) or 3.0 (``fmi=3``) FMU at ``path``.
+
+    ``kind``: ``"me"`` Model Exchange (the importer's solver integrates the equations),
+    ``"cs"`` Co-Simulation (the FMU steps itself with pneumact's RODAS4 at pa.simulate's
+    tolerance, the inputs held over each communication step) or ``"both"``.
 
     ``inputs``: start values of the FMU's inputs by name (default: at rest, atmospheric
     pressure, no force). ``binary``: build this platform's binary with the C compiler
@@ -409,6 +518,11 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     written atomically: a failed export leaves an existing file as it was.
     """
     path = Path(path)
+    if kind not in KINDS:
+        raise ArgumentError(f"export_fmu: kind = {kind!r}; one of {', '.join(map(repr, KINDS))}"
+                            " (Model Exchange, Co-Simulation, both)")
+    if fmi not in FMI_VERSIONS:
+        raise ArgumentError(f"export_fmu: fmi = {fmi!r}; the FMI versions exported are 2 and 3")
     if path.suffix != ".fmu":
         raise ArgumentError(f"export_fmu: path = {str(path)!r}; an FMU's file name ends in .fmu")
     fmu_model = exportable(model)
@@ -425,27 +539,32 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
         if v.kind == "input":
             sig[v.index] = v.start
     guards = guard_counts(kernel, vec, sig, ptr, len(asm.states))
-    unit = translate(kernel_roots(kernel, guards[1] > 0))
+    if fmi == 3:
+        variables = fmi3_variables(variables, guards)
+    unit = translate(kernel_roots(kernel, guards[1] > 0, cosimulation=KINDS[kind][1]))
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
         [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
-    description = model_description(fmu_model, identifier, guid, variables, sum(guards))
+    description = model_description(fmu_model, identifier, guid, variables, sum(guards), kind,
+                                    fmi)
     files: dict[str, str | bytes] = {"modelDescription.xml": description,
              "sources/model.c": unit.source, "sources/model.h": unit.header,
              "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
-                                          guards)}
+                                          guards, kind, fmi)}
+    if fmi == 3:
+        files["sources/buildDescription.xml"] = render("buildDescription.xml.j2",
+                                                       identifier=identifier)
     platform, used = None, None
     if binary:
-        platform = binary_folder()
-        library, used = build(unit, files, identifier, compiler)
+        platform = binary_folder() if fmi == 2 else platform_tuple()
+        library, used = build(files, identifier, compiler)
         files[f"binaries/{platform}/{identifier}{shared_library_suffix()}"] = library
     write_archive(path, files)
     return ExportedFmu(path, identifier, tuple(variables), platform, used, sum(guards),
-                       guards[1])
+                       guards[1], kind, fmi)
 
 
-def build(unit: CUnit, files: dict, identifier: str, compiler: str | None
-          ) -> tuple[bytes, str]:
+def build(files: dict, identifier: str, compiler: str | None) -> tuple[bytes, str]:
     """The binary built from the FMU's sources, and the compiler that built it."""
     with tempfile.TemporaryDirectory(prefix="pneumact-fmu-") as folder:
         root = Path(folder)

@@ -1,0 +1,295 @@
+"""The Co-Simulation FMU (issue 39): pneumact's own integrator, translated to C.
+
+- FMPy runs the CS FMU at communication steps of 1 ms, 10 ms, 0.1 s and 1 s; each run equals
+  ``pa.simulate`` of the same model driven by the same zero-order-hold (staircase) input,
+  for the three valves and GMS-4; FMPy's validation passes.
+- The C integrator in the FMU is the compiled one: on a whole cycle its states, outputs
+  and step counts equal the numba kernel's (a change to the C side's step control fails
+  here).
+- A step the integrator cannot finish is fmi2Error with the reason, the state kept.
+- ``pneumact export fmu --kind --fmi``; a wrong kind or version is refused.
+- FMI 3.0 from the same C: FMPy's validation passes, its CS run is the FMI 2.0 one's, its
+  ME run agrees with pa.simulate; the sources alone build from the FMI 3.0 build
+  description.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import pneumact as pa
+import reference as ref
+from conftest import load_quietly
+from pneumact.cli import app
+from pneumact.core.signals import PiecewiseLinear
+from pneumact.errors import ExportError
+from pneumact.export import find_compiler
+from pneumact.export.compiler import FLAGS
+from pneumact.simulation.simulate import prepare
+from pneumact.simulation.solvers import Rodas4
+
+fmpy = pytest.importorskip("fmpy", reason="FMPy (the test extra) simulates the FMUs")
+from fmpy.fmi1 import FMICallException  # noqa: E402
+from fmpy.fmi2 import (  # noqa: E402
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.model_description import read_model_description  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+
+def _compiler() -> str | None:
+    try:
+        return find_compiler()
+    except ExportError:
+        return None
+
+
+pytestmark = pytest.mark.skipif(_compiler() is None, reason="no C compiler to build FMUs with "
+                                                           "(install gcc or clang)")
+
+VALVES = {"source": pa.PressureSource, "command": pa.CommandValve,
+          "regulator": pa.PressureRegulator}
+CASES = (*VALVES, "gms4")
+
+
+def actuator(case: str) -> pa.Actuator:
+    if case == "gms4":
+        return pa.Actuator(load_quietly("vgt-paper-gms4"), friction=pa.GMS(n_elements=4),
+                           valve=pa.PressureSource())
+    return pa.Actuator(load_quietly("vgt-paper"), valve=VALVES[case]())
+
+
+def experiment_for(case: str) -> pa.Experiment:
+    """A 10 s cycle (5 s for GMS-4): the loop of the paper's Fig. 5, faster."""
+    if case == "command":
+        return pa.CommandCycle(period=10.0)
+    return pa.PressureCycle(period=5.0 if case == "gms4" else 10.0)
+
+
+@pytest.fixture(scope="module")
+def cosimulation(tmp_path_factory):
+    """case -> (model, ExportedFmu): one Co-Simulation FMU per case, exported once."""
+    folder = tmp_path_factory.mktemp("cs")
+    return {case: (model, pa.export_fmu(model, folder / f"{case}.fmu", kind="cs"))
+            for case, model in ((c, actuator(c)) for c in CASES)}
+
+
+def held(experiment: pa.Experiment, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """The communication points and the drive held over each step from its value there."""
+    grid = np.linspace(0.0, experiment.t_end, round(experiment.t_end / step) + 1)
+    return grid, np.array([experiment.drive(t) for t in grid])
+
+
+def staircase(experiment: pa.Experiment, grid: np.ndarray, values: np.ndarray
+              ) -> pa.Experiment:
+    """The same zero-order-hold input for pa.simulate: a jump at every communication point."""
+    times = np.concatenate([[grid[0]], np.repeat(grid[1:-1], 2), [grid[-1]]])
+    return pa.Experiment(PiecewiseLinear(times, np.repeat(values[:-1], 2)), experiment.quantity,
+                         experiment.t_end, n_points=grid.size, name="held drive")
+
+
+@pytest.mark.parametrize("step", ref.CS_STEPS)
+@pytest.mark.parametrize("case", CASES)
+def test_the_cs_fmu_steps_like_pa_simulate_with_held_inputs(cosimulation, case, step):
+    model, fmu = cosimulation[case]
+    experiment = experiment_for(case)
+    grid, drive = held(experiment, step)
+    name = fmu.names("input")[0]
+    table = np.array(list(zip(grid, drive, np.zeros_like(drive), strict=True)),
+                     dtype=[("time", float), (name, float), ("external_force", float)])
+    out = fmpy.simulate_fmu(str(fmu.path), fmi_type="CoSimulation", stop_time=experiment.t_end,
+                            input=table, start_values={name: float(drive[0])},
+                            step_size=step, output_interval=step, output=["position"])
+    assert np.allclose(out["time"], grid, rtol=0, atol=1e-9 * experiment.t_end)
+    run = pa.simulate(model, staircase(experiment, grid, drive), t_eval=grid)
+    x = run["position"]
+    travel = float(np.max(x) - np.min(x))
+    assert travel > 0.2 * float(model.params["x_max"])  # the actuator does move
+    rms = np.sqrt(np.mean((out["position"] - x) ** 2))
+    assert rms <= ref.CS_POSITION_RMS_OF_TRAVEL * travel
+    if step == ref.CS_STEPS[0]:
+        assert validate_fmu(str(fmu.path)) == []
+
+
+def c_array(values: np.ndarray):
+    """The C back end's array struct: data, shape[ndim], strides[ndim] (in elements)."""
+    element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
+    ndim = values.ndim
+    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
+              ("strides", ctypes.c_int64 * ndim)]
+    struct = type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
+    return struct(values.ctypes.data_as(ctypes.POINTER(element)),
+                  (ctypes.c_int64 * ndim)(*values.shape),
+                  (ctypes.c_int64 * ndim)(*[s // values.itemsize for s in values.strides]))
+
+
+class _Arena(ctypes.Structure):
+    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
+                ("failed", ctypes.c_int)]
+
+
+class _State(ctypes.Structure):
+    _fields_ = [("data", ctypes.POINTER(ctypes.c_double)), ("shape", ctypes.c_int64 * 1),
+                ("strides", ctypes.c_int64 * 1)]
+
+
+def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
+    """The FMU's model.c (its integrator translated from core/integrators.py), built here
+    and called on a whole regulator cycle, gives the numba kernel's run: the same step
+    counts, states and outputs (bit-equal on x86-64 with gcc -O3, the FMU's flags)."""
+    model, fmu = cosimulation["regulator"]
+    source = zipfile.ZipFile(fmu.path).read("sources/model.c")
+    (tmp_path / "model.c").write_bytes(source)
+    library = tmp_path / "model.so"
+    flags = [f for f in FLAGS if f != "-fvisibility=hidden"]  # the FMU's build, exported
+    subprocess.run([_compiler(), *flags, "-o", str(library), str(tmp_path / "model.c"), "-lm"],
+                   check=True)
+    lib = ctypes.CDLL(str(library))
+    lib.pa_integrate.restype = _State
+    solver = Rodas4()
+    prep = prepare(model, experiment_for("regulator"), solver)
+    kernel = prep.kernel
+    runs = []
+    for language in ("C", "numba"):
+        y_out = np.zeros((prep.t_out.size, kernel.NSTATE))
+        out = np.zeros((prep.t_out.size, kernel.NOUT))
+        info = np.zeros(kernel.INFO_LENGTH)
+        vector = prep.vector.copy()
+        if language == "C":
+            arena = _Arena()
+            state = lib.pa_integrate(
+                ctypes.byref(arena), c_array(prep.y0), c_array(vector), c_array(prep.sig),
+                c_array(prep.ptr), c_array(prep.breakpoints), c_array(prep.t_out),
+                ctypes.c_double(solver.rtol), c_array(prep.atol),
+                ctypes.c_double(solver.h_init), ctypes.c_double(solver.h_max),
+                ctypes.c_int64(prep.max_steps), c_array(y_out), c_array(out), c_array(info))
+            end = np.array(state.data[:kernel.NSTATE])
+            lib.pa_arena_free(ctypes.byref(arena))
+        else:
+            end = kernel.integrate_rodas4(prep.y0, vector, prep.sig, prep.ptr,
+                                          prep.breakpoints, prep.t_out, solver.rtol, prep.atol,
+                                          solver.h_init, solver.h_max, prep.max_steps, y_out,
+                                          out, info)
+        runs.append((end, y_out, out, info))
+    (c_end, c_states, c_outputs, c_info), (end, states, outputs, info) = runs
+    assert c_info[kernel.INFO_STATUS] == 0 and info[kernel.INFO_STATUS] == 0
+    counters = [kernel.INFO_STEPS, kernel.INFO_REJECTED, kernel.INFO_RHS, kernel.INFO_JAC]
+    assert c_info[counters].tolist() == info[counters].tolist()
+    assert info[kernel.INFO_STEPS] > 100
+    for c_values, values in ((c_end, end), (c_states, states), (c_outputs, outputs)):
+        assert np.allclose(c_values, values, rtol=ref.FMU_KERNEL_RTOL, atol=0)
+
+
+def test_a_failed_step_is_an_error_with_the_reason(cosimulation, tmp_path):
+    """A mass made NaN after initialisation: the step fails; fmi2DoStep says why and where,
+    and the FMU keeps its state (no NaN); a variable step size is taken as it comes."""
+    _, fmu = cosimulation["source"]
+    description = read_model_description(str(fmu.path))
+    refs = {v.name: v.valueReference for v in description.modelVariables}
+    messages: list[str] = []
+
+    def logger(environment, instance, status, category, message):
+        messages.append(message.decode())
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+    from fmpy.logging import addLoggerProxy
+
+    addLoggerProxy(ctypes.byref(callbacks))
+    folder = fmpy.extract(str(fmu.path), str(tmp_path / "unzipped"))
+    instance = FMU2Slave(guid=description.guid, unzipDirectory=folder,
+                         modelIdentifier=fmu.identifier, instanceName="failing")
+    instance.instantiate(callbacks=callbacks)
+    instance.setupExperiment(startTime=0.0)
+    instance.enterInitializationMode()
+    instance.exitInitializationMode()
+    instance.setReal([refs["pressure_input"]], [60e3])
+    t = 0.0
+    for step in (1e-3, 0.05, 0.2):  # canHandleVariableCommunicationStepSize
+        instance.doStep(t, step)
+        t += step
+    moved = instance.getReal([refs["position"]])[0]
+    assert moved > 0.0
+    instance.setReal([refs["m"]], [float("nan")])
+    with pytest.raises(FMICallException):
+        instance.doStep(t, 0.01)
+    assert any("failed at t" in m and "non-finite" in m for m in messages), messages
+    assert instance.getReal([refs["position"]])[0] == moved
+    instance.terminate()
+    instance.freeInstance()
+
+
+@pytest.mark.filterwarnings("ignore::ResourceWarning",  # FMPy's build leaves a temporary
+                            "ignore::pytest.PytestUnraisableExceptionWarning")  # folder to GC
+def test_cli_exports_a_sources_only_fmi3_fmu_that_builds(tmp_path):
+    """``--kind both --fmi 3 --no-binary``: an FMI 3.0 FMU with both interfaces whose
+    sources FMPy builds from their FMI 3.0 build description (CMake); the build runs."""
+    path = tmp_path / "cs3.fmu"
+    result = CliRunner().invoke(app, ["export", "fmu", "--kind", "both", "--fmi", "3",
+                                      "--no-binary", "--out", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "FMI 3" in result.output
+    names = zipfile.ZipFile(path).namelist()
+    assert "sources/buildDescription.xml" in names
+    assert not any(n.startswith("binaries/") for n in names)
+    description = read_model_description(str(path))
+    assert description.fmiVersion == "3.0"
+    assert description.coSimulation is not None and description.modelExchange is not None
+    assert description.coSimulation.canHandleVariableCommunicationStepSize
+    assert validate_fmu(str(path)) == []
+    refused = CliRunner().invoke(app, ["export", "fmu", "--kind", "hybrid",
+                                       "--out", str(tmp_path / "b.fmu")])
+    assert refused.exit_code == 2 and "hybrid" in refused.output
+    for wrong, words in (({"kind": "hybrid"}, "kind = 'hybrid'"), ({"fmi": 1}, "fmi = 1")):
+        with pytest.raises(pa.ArgumentError, match=words):
+            pa.export_fmu(actuator("source"), tmp_path / "c.fmu", **wrong)
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake (FMPy's build tool) is not installed")
+    from fmpy.build import build_platform_binary
+
+    folder = fmpy.extract(str(path), str(tmp_path / "unzipped"))
+    build_platform_binary(folder)
+    out = fmpy.simulate_fmu(folder, fmi_type="CoSimulation", stop_time=1.0, step_size=0.01,
+                            start_values={"pressure_input": 60e3}, output=["position"])
+    assert np.isfinite(out["position"]).all() and out["position"][-1] > 0.0
+
+
+def test_fmi3_runs_like_fmi2(cosimulation, tmp_path):
+    """The FMI 3.0 FMU (both interfaces, from the same model.c): FMPy's validation passes;
+    its Co-Simulation run is the FMI 2.0 one's, its Model Exchange run (FMPy's CVode)
+    agrees with pa.simulate as the FMI 2.0 Model Exchange FMU does."""
+    model, fmu2 = cosimulation["source"]
+    fmu3 = pa.export_fmu(model, tmp_path / "source3.fmu", kind="both", fmi=3)
+    assert validate_fmu(str(fmu3.path)) == []
+    assert read_model_description(str(fmu3.path)).numberOfEventIndicators == 2
+    experiment = experiment_for("source")
+    grid, drive = held(experiment, 0.01)
+    table = np.array(list(zip(grid, drive, np.zeros_like(drive), strict=True)),
+                     dtype=[("time", float), ("pressure_input", float), ("external_force", float)])
+    runs = [fmpy.simulate_fmu(str(fmu.path), fmi_type="CoSimulation", stop_time=experiment.t_end,
+                              input=table, start_values={"pressure_input": float(drive[0])},
+                              step_size=0.01, output_interval=0.01, output=["position"])
+            for fmu in (fmu2, fmu3)]
+    np.testing.assert_array_equal(runs[0]["position"], runs[1]["position"])
+    down = experiment.with_duration(experiment.t_end / 2)  # the ramp down, to keep it short
+    ramp = np.array([(t, down.drive(t), 0.0) for t in (0.0, down.t_end)], dtype=table.dtype)
+    me = fmpy.simulate_fmu(str(fmu3.path), fmi_type="ModelExchange", stop_time=down.t_end,
+                           input=ramp, start_values={"pressure_input": float(ramp[0][1])},
+                           relative_tolerance=ref.FMU_RTOL,
+                           output_interval=down.t_end / 1000, output=["position"])
+    run = pa.simulate(model, down, t_eval=me["time"])
+    rms = np.sqrt(np.mean((me["position"] - run["position"]) ** 2))
+    assert rms <= ref.FMU_POSITION_RMS_OF_STROKE * float(model.params["x_max"])
