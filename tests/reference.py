@@ -519,6 +519,7 @@ FMU_INPUT_JACOBIAN_RTOL = 1e-5
 CS_POSITION_RMS_OF_TRAVEL = 1e-3
 #: the communication steps the CS FMU is run at [s] (the issue's three, and its longest)
 CS_STEPS = (1e-3, 1e-2, 0.1, 1.0)
+CS_SHORTEST_STEP = 1e-4  # on a 1 s cycle (10 000 communication steps)
 
 # --- controller synthesis (tests/integration/test_tuning.py) ---------------------------
 #: forward sensitivities through a closed loop's controller (continuous, and across a

@@ -102,8 +102,21 @@ def staircase(experiment: pa.Experiment, grid: np.ndarray, values: np.ndarray
 @pytest.mark.parametrize("step", ref.CS_STEPS)
 @pytest.mark.parametrize("case", CASES)
 def test_the_cs_fmu_steps_like_pa_simulate_with_held_inputs(cosimulation, case, step):
+    _steps_like_pa_simulate(cosimulation, case, step, experiment_for(case))
+
+
+@pytest.mark.parametrize("case", ["source", "command"])
+def test_a_tenth_of_a_millisecond_step_too(cosimulation, case):
+    """The shortest communication step the issue names (0.1 ms, a HIL task's), on a 1 s
+    cycle (10 000 steps: FMPy's own loop is most of the time)."""
+    experiment = (pa.CommandCycle(period=1.0) if case == "command"
+                  else pa.PressureCycle(period=1.0))
+    _steps_like_pa_simulate(cosimulation, case, ref.CS_SHORTEST_STEP, experiment)
+
+
+def _steps_like_pa_simulate(cosimulation, case: str, step: float,
+                            experiment: pa.Experiment) -> None:
     model, fmu = cosimulation[case]
-    experiment = experiment_for(case)
     grid, drive = held(experiment, step)
     name = fmu.names("input")[0]
     table = np.array(list(zip(grid, drive, np.zeros_like(drive), strict=True)),
