@@ -827,7 +827,8 @@ class _PrefixCache:
 
     def __call__(self, values: np.ndarray) -> pd.DataFrame:
         done = 0 if self.inputs is None else len(self.inputs)
-        if done and (len(values) < done or not np.array_equal(values[:done], self.inputs)):
+        if self.inputs is not None and (len(values) < done or
+                                        not np.array_equal(values[:done], self.inputs)):
             done = 0
         new = pd.DataFrame(self.evaluate(values[done:])).reset_index(drop=True)
         outputs = new if done == 0 else pd.concat([self.outputs, new], ignore_index=True)
@@ -1223,7 +1224,23 @@ def _identification_richer(parts: _Parts, params, sizes: Sizes, seed: int
                     "own verdict, each parameter's error against the truth (%), where the "
                     "truth lies outside the reported 95 % interval, and the faults it names "
                     "(lag and resolution as the bench table gives them)")
+        parts.report.text("What changes against the self-consistent case above: "
+                          + "; ".join(_what_changes(row) for row in rows) + ".")
     return table
+
+
+def _what_changes(row: dict) -> str:
+    """One clause per richer campaign: its verdict, its largest error, and whether the
+    sensor's lag was named where the records had one."""
+    errors = {name: row[f"{name} error %"] for name in IDENTIFIED_SHOWN
+              if np.isfinite(row[f"{name} error %"])}
+    worst = max(errors, key=lambda name: abs(errors[name]))
+    clause = (f"{row['records made by']}: {row['identified']}, the largest error "
+              f"{worst} {errors[worst]:+.3g} %")
+    if "lag" in row["records made by"]:
+        clause += (", the lag named" if "position lag" in row["faults named"] else
+                   ", the lag not named (no position_lag in its bench table)")
+    return clause
 
 
 def identify_richer(params, case: str, tests, seed: int = 0) -> dict:
