@@ -373,3 +373,11 @@ def test_identification_on_a_campaign_made_with_delta_two(vgt):
         assert abs(row[f"{name} error %"]) < ref.RICHER_DELTA2_SPRING_COULOMB_ERROR, name
     assert abs(row["Fs error %"]) > ref.RICHER_DELTA2_STRIBECK_ERROR
     assert "Fs" in row["truth outside 95 % interval"]
+
+
+def test_cli_seal_data_without_the_records_is_refused_before_any_work(tmp_path):
+    result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", str(tmp_path / "out"),
+                                      "--seal-data", str(tmp_path)])
+    assert result.exit_code != 0
+    assert "lacks O-ring_1bar.csv" in result.output
+    assert not (tmp_path / "out").exists()
