@@ -324,6 +324,13 @@ def test_sobol_sample_size_is_chosen_by_the_convergence_check(quick):
         assert "converged" in html or "the order is settled" in html
 
 
+def test_quick_mode_says_which_richer_campaigns_it_left_out(quick):
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    assert ("Quick mode: not run on δ = 2, GMS-4, adiabatic chamber, 5 µm steps, 5 ms lag"
+            in html)
+    assert "identification_richer" not in quick.tables
+
+
 def test_the_seal_section_says_how_to_run_it_without_the_data(quick):
     html = unescape(quick.report.read_text(encoding="utf-8"))
     assert "Real friction data: the TU Delft cylinder's O-ring seal" in html
