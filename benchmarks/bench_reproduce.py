@@ -6,13 +6,19 @@ is cold (reported separately, not counted), then ``--repeats`` runs are timed an
 best and median are printed. The quick mode runs inside the test suite; the full mode is
 the one the README quotes.
 
+``--sections`` instead runs ``reproduce()`` once in this process and prints, per section,
+the wall and CPU time (this process's threads and its children) it took: where the time
+goes (``--seal-data DIR`` adds the real seal section, ``--quick`` the quick mode).
+
 Run (after ``pip install -e .``, or with ``PYTHONPATH=src`` from the repository root):
     python benchmarks/bench_reproduce.py [--repeats 3] [--quick-only]
+    python benchmarks/bench_reproduce.py --sections [--quick] [--seal-data DIR]
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import resource
 import statistics
@@ -39,11 +45,45 @@ def run(args: list[str], out: Path) -> tuple[float, float]:
     return wall, _cpu() - cpu
 
 
+def _cpu_here() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    return own.ru_utime + own.ru_stime + _cpu()
+
+
+def sections(quick: bool, seal_data: str | None) -> None:
+    """One ``reproduce()`` in this process, timed by section (wall and CPU)."""
+    from pneumact.reproduction import reproduce
+
+    marks: list[tuple[str, float, float]] = []
+
+    def progress(report) -> None:
+        if not marks or marks[-1][0] != report.stage:
+            marks.append((report.stage, time.perf_counter(), _cpu_here()))
+
+    print(f"reproduce(quick={quick}) by section; {os.cpu_count()} CPUs, load average "
+          f"{os.getloadavg()[0]:.2f}")
+    with tempfile.TemporaryDirectory(prefix="pneumact-reproduce-") as tmp:
+        reproduce(Path(tmp) / "out", quick=quick, progress=progress, seal_data=seal_data)
+    marks.append(("end", time.perf_counter(), _cpu_here()))
+    for (name, wall, cpu), (_, next_wall, next_cpu) in itertools.pairwise(marks):
+        print(f"  {name:28s} wall {next_wall - wall:6.1f} s  CPU {next_cpu - cpu:6.1f} s")
+    print(f"  {'total':28s} wall {marks[-1][1] - marks[0][1]:6.1f} s  CPU "
+          f"{marks[-1][2] - marks[0][2]:6.1f} s; load average now {os.getloadavg()[0]:.2f}")
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per mode")
     parser.add_argument("--quick-only", action="store_true", help="time --quick only")
+    parser.add_argument("--sections", action="store_true",
+                        help="one reproduce() in this process, timed by section")
+    parser.add_argument("--quick", action="store_true", help="with --sections: quick mode")
+    parser.add_argument("--seal-data", default=None,
+                        help="with --sections: the TU Delft seal records' folder")
     args = parser.parse_args(argv)
+    if args.sections:
+        sections(args.quick, args.seal_data)
+        return
     print(f"pneumact reproduce benchmark; {os.cpu_count()} CPUs, load average "
           f"{os.getloadavg()[0]:.2f}")
     modes = {"pneumact reproduce --quick": ["--quick"]}

@@ -649,3 +649,19 @@ MANY_RECORDS = 12  # a campaign's size (sweep, 10 ramps, presliding: `pneumact c
 #: times it (a hundred times too low)
 STRIBECK_RESTART_VS = 5e-5
 STRIBECK_RESTART_PRIOR_FACTOR = 0.01
+
+# ------------------------------------------------------------------- reproduction (issue 40)
+# y = Σ a_i·x_i on [0, 1]³, weights far apart: the ST intervals stand apart from n = 32
+# (at 16 those of the two small inputs overlap), long before the cap; the dominant
+# input's interval is still 0.12 wide at n = 1024 (SALib's bootstrap), so a width target
+# of 0.1 alone would never stop
+CONVERGENCE_WEIGHTS = (10.0, 1.0, 0.5)
+CONVERGENCE_N_ORDERED = 32
+CONVERGENCE_N_CAP = 1024
+# TU Delft seal in the reproduction: a Stribeck fit's vs below this [mm/s] means the
+# records show no dip (measured 1e-7 to 2e-3 mm/s; the strokes run at tens of mm/s)
+SEAL_NO_DIP_SPEED = 0.1
+# identify_paper on the small campaign made by LuGre with δ = 2 (seed 0): F0, k, Fc within
+# 1 % (measured ≤ 0.11 %), Fs off by more than 10 % (measured +37 %, vs −59 %)
+RICHER_DELTA2_SPRING_COULOMB_ERROR = 1.0
+RICHER_DELTA2_STRIBECK_ERROR = 10.0

@@ -67,6 +67,8 @@ BASE = {
 #: parser of every number option: ``test_every_number_option_refuses_nan``). Keys are
 #: "--option" (the same meaning in every command) or "command --option".
 BAD_VALUES: dict[str, list[str]] = {
+    # a folder that is not there, and one without the TU Delft seal records
+    "reproduce --seal-data": [str(BAD / "missing"), str(BAD)],
     "--params": ["vgt-papr", str(BAD / "k_huge.toml"), str(BAD / "m_tiny.toml"),
                  str(BAD / "k_in_n_per_mm.toml"),
                  str(BAD / "p_atm_in_kpa_as_pa.toml"), str(BAD / "p_atm_nan.toml"),

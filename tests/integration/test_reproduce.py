@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 from html import unescape
 from html.parser import HTMLParser
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -15,20 +16,23 @@ from typer.testing import CliRunner
 import reference as ref
 from browser import assert_fits_the_page, needs_browser
 from pneumact.cli import app
-from pneumact.reproduction import reproduce
+from pneumact.reproduction import SOBOL_TARGET_WIDTH, Sizes, reproduce
 from pneumact.statements import STATEMENTS
 
+SEAL_DATA = (Path(__file__).resolve().parents[3] / "shared" / "data"
+             / "pneumatic_cylinder_friction_tudelft")
 FIGURES = ("fig2_friction_velocity", "fig3_friction_variations", "fig5_loops",
            "fig5_changes_by_speed", "fig6_validation", "identification_spring",
            "identification_sliding", "identification_stribeck", "identification_presliding",
            "sobol_loop_width_pressure", "sobol_breakaway_pressure", "src_by_speed",
-           "pneumatics_flow", "chamber_step", "fig6_richer")
+           "pneumatics_flow", "chamber_step", "fig6_richer",
+           "identification_presliding_window")
 TABLES = ("table_1", "chamber_time_constant", "natural_frequencies", "modelling_choices",
           "fig3_effects", "oat_runs", "conditions", "fig5_changes",
           "identification", "eq13", "validation_verdicts", "validation_metrics",
           "validation_loops", "validation_richer", "sensitivity_ranking", "oat_ranking",
           "global_by_condition", "fig5a_sigma0_factors", "law_changes", "statement_texts",
-          "paper_statements", "statement_conditions")
+          "paper_statements", "statement_conditions", "sobol_convergence")
 
 
 class _Tables(HTMLParser):
@@ -299,3 +303,88 @@ def test_cli_reproduce_quick(quick_cli):
     assert returned.report == folder / "index.html"
     assert "pneumact reproduce --quick --out paper" in (
         folder / "index.html").read_text(encoding="utf-8")
+
+
+def test_sobol_sample_size_is_chosen_by_the_convergence_check(quick):
+    """Issue #40, item 3: the Sobol ranking runs at the size the convergence check stopped
+    at, and the report says whether that size settles the order or is too wide to rank
+    (then only at the largest size)."""
+    table = quick.tables["sobol_convergence"]
+    sizes = Sizes.quick()
+    n = int(table["n"].iloc[-1])
+    assert list(table["n"]) == [sizes.sobol_min_n * 2**i for i in range(len(table))]
+    assert n <= sizes.sobol_n
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    assert "chosen by the convergence check" in html
+    assert f"Sobol total indices ({n * (6 + 2)} runs)" in html
+    widest = float(table.filter(like="widest ST").iloc[-1].max())
+    if "too wide to rank" in html:
+        assert n == sizes.sobol_n and widest > SOBOL_TARGET_WIDTH
+    else:
+        assert "converged" in html or "the order is settled" in html
+
+
+def test_quick_mode_says_which_richer_campaigns_it_left_out(quick):
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    assert ("Quick mode: not run on δ = 2, GMS-4, adiabatic chamber, 5 µm steps, 5 ms lag"
+            in html)
+    assert "identification_richer" not in quick.tables
+
+
+def test_the_seal_section_says_how_to_run_it_without_the_data(quick):
+    html = unescape(quick.report.read_text(encoding="utf-8"))
+    assert "Real friction data: the TU Delft cylinder's O-ring seal" in html
+    assert "--seal-data FOLDER" in html
+    assert "seal_friction" not in quick.tables
+
+
+@pytest.mark.skipif(not SEAL_DATA.is_dir(), reason="shared TU Delft data set not available")
+def test_the_seal_section_on_the_tudelft_records():
+    """Issue #40, item 4 (real data, friction alone): identified at 1 and 7 bar, the
+    friction predicted at 3 and 5 bar within the real-data tolerance; the records show no
+    Stribeck dip (the fitted vs lies below the speeds the 100 Hz laser resolves)."""
+    from pneumact.io.report import Report
+    from pneumact.reproduction import _Parts, _seal_friction
+
+    parts = _Parts(Report("seal"))
+    _seal_friction(parts, SEAL_DATA)
+    table = parts.tables["seal_friction"].set_index("supply pressure [bar gauge]")
+    assert list(table.index) == [1.0, 3.0, 5.0, 7.0]
+    predicted = table[table["role"] == "validation"]
+    assert list(predicted.index) == [3.0, 5.0]
+    assert (predicted["relative force error"] < ref.TUDELFT_ACROSS_FORCE_ERROR).all()
+    assert (table["Fc [N]"] > 0).all() and (table["σ2 (Fv) [N·s/m]"] > 0).all()
+    assert (table["Stribeck fit's vs [mm/s]"].fillna(0.0) < ref.SEAL_NO_DIP_SPEED).all()
+    assert "seal_friction.png" in parts.writers
+
+
+def test_identification_on_a_campaign_made_with_delta_two(vgt):
+    """Issue #40, item 4: section III.2 on records made by LuGre with δ = 2 (the quick
+    mode skips the richer campaigns; this one runs here on the full mode's small
+    campaign). The spring and Coulomb level stay right; the Stribeck pair is not
+    identified and the identification says so itself (its verdict names Fs and vs)."""
+    import warnings
+
+    from pneumact.identification import paper_campaign
+    from pneumact.reproduction import identify_richer
+
+    sizes = Sizes.full()
+    tests = paper_campaign(vgt, speeds=sizes.richer_ramp_speeds,
+                           sweep_period=sizes.richer_sweep_period)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        row = identify_richer(vgt, "δ = 2", tests)
+    assert row["records made by"] == "δ = 2"
+    assert "(not: Fs, vs)" in row["identified"]
+    for name in ("F0", "k", "Fc"):
+        assert abs(row[f"{name} error %"]) < ref.RICHER_DELTA2_SPRING_COULOMB_ERROR, name
+    assert abs(row["Fs error %"]) > ref.RICHER_DELTA2_STRIBECK_ERROR
+    assert "Fs" in row["truth outside 95 % interval"]
+
+
+def test_cli_seal_data_without_the_records_is_refused_before_any_work(tmp_path):
+    result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", str(tmp_path / "out"),
+                                      "--seal-data", str(tmp_path)])
+    assert result.exit_code != 0
+    assert "lacks O-ring_1bar.csv" in result.output
+    assert not (tmp_path / "out").exists()

@@ -26,10 +26,15 @@ def reproduce_command(
     seed: Annotated[int, typer.Option(help="Seed of the synthetic noise and samples "
                                              "(>= 0).")] = 0,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-paper"),
+    seal_data: Annotated[Path | None, typer.Option(
+        "--seal-data", help="Folder of the TU Delft cylinder's seal records "
+                            "(O-ring_<p>bar.csv) for the section on real friction data.")
+    ] = None,
 ) -> None:
     """Reproduce the paper: Table I, Figs. 2, 3, 5 and 6, the identification on a
-    synthetic campaign, the sensitivity across operating conditions, and every statement
-    of the paper with the conditions in which it holds; writes OUT/index.html with every
+    synthetic campaign and on campaigns made by richer models, the sensitivity across
+    operating conditions, every statement of the paper with the conditions in which it
+    holds, and (--seal-data) friction measured on a real seal; writes OUT/index.html with every
     table and figure (also as CSV and PNG)."""
     with user_errors():
         from pneumact.cli.common import load_quietly
@@ -40,7 +45,7 @@ def reproduce_command(
         parameter_set = load_quietly(params)
         with progress_display("reproducing", bar_per_stage=False) as progress:
             result = reproduce(out, quick=quick, params=parameter_set, seed=seed,
-                               call=the_call(ctx), progress=progress)
+                               call=the_call(ctx), progress=progress, seal_data=seal_data)
     statements = result.tables["paper_statements"]
     for _, row in statements.iterrows():
         held = row["holds for"]

@@ -125,7 +125,12 @@ class StageResult(ResultVocabulary):
         order = np.argsort(self.data["x"].to_numpy())
         d = self.data.iloc[order]
         ax.plot(d["x"], d["measured"], "k.", ms=3, label="from the records")
-        ax.plot(d["x"], d["fitted"], "C0-", lw=1.2, label="fitted")
+        x, fitted = d["x"].to_numpy(), d["fitted"].to_numpy()
+        both = (x < 0).any() and (x > 0).any()
+        branches = [x < 0, x > 0] if both else [np.ones_like(x, dtype=bool)]
+        for i, branch in enumerate(branches):  # a Coulomb step is not drawn through v = 0
+            ax.plot(x[branch], fitted[branch], "C0-", lw=1.2,
+                    label="fitted" if i == 0 else None)
         axr.plot(d["x"], d["measured"] - d["fitted"], "C3.", ms=3)
         axr.axhline(0, color="k", lw=0.6)
         ax.set_ylabel(self.ylabel)

@@ -81,10 +81,12 @@ class FrictionValidation(NotebookDisplay):
             ax_time.set_xlabel("time [s]")
             ax_time.set_ylabel("force [N]")
             ax_time.set_title(f"{name} ({self.role.get(name, 'validation')})", fontsize=9)
-            order = np.argsort(d["velocity"].to_numpy())
-            ax_vel.plot(d["velocity"] * 1e3, d["measured"], "k.", ms=1)
-            ax_vel.plot(d["velocity"].to_numpy()[order] * 1e3,
-                        d["predicted"].to_numpy()[order], "C0-", lw=1)
+            velocity, predicted = d["velocity"].to_numpy(), d["predicted"].to_numpy()
+            ax_vel.plot(velocity * 1e3, d["measured"], "k.", ms=1)
+            for branch in (velocity < 0, velocity > 0):  # the Coulomb step: not drawn
+                order = np.argsort(velocity[branch])    # through v = 0
+                ax_vel.plot(velocity[branch][order] * 1e3, predicted[branch][order], "C0-",
+                            lw=1)
             ax_vel.set_xlabel("velocity [mm/s]")
             ax_vel.set_ylabel("force [N]")
             for ax in (ax_time, ax_vel):

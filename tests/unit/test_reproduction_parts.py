@@ -1,0 +1,102 @@
+"""Parts of the reproduction on known answers: Sobol's sample size chosen by the
+convergence check (and each doubling runs only the new runs), fitted friction lines
+drawn per direction (never through v = 0)."""
+
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+import reference as ref
+from pneumact.identification import Estimates, StageResult
+from pneumact.reproduction import (
+    SOBOL_TARGET_WIDTH,
+    sobol_by_convergence,
+    sobol_converged,
+)
+from pneumact.sensitivity.problem import Factor, Problem
+
+
+class _Counting:
+    """y = Σ a_i·x_i (x_i uniform on [0, 1]), counting the runs it is asked for."""
+
+    def __init__(self, weights) -> None:
+        self.weights = np.asarray(weights, float)
+        self.runs = 0
+
+    def __call__(self, values: np.ndarray) -> pd.DataFrame:
+        self.runs += len(values)
+        return pd.DataFrame({"y": values @ self.weights})
+
+
+def _problem(k: int) -> Problem:
+    return Problem(tuple(Factor(f"x{i}", 0.0, 1.0, 0.5) for i in range(k)))
+
+
+def test_sobol_stops_at_the_first_size_that_orders_the_inputs():
+    """Inputs of clearly unequal weight: the check stops before the cap, at the first n
+    whose ST intervals stand apart (the previous n's did not), and the doublings ran
+    each run once."""
+    evaluate = _Counting(ref.CONVERGENCE_WEIGHTS)
+    study, table = sobol_by_convergence(_problem(3), evaluate, 8, ref.CONVERGENCE_N_CAP)
+    n = int(table["n"].max())
+    assert n == ref.CONVERGENCE_N_ORDERED
+    assert sobol_converged(table)
+    assert not sobol_converged(table[table["n"] < n])
+    assert evaluate.runs == n * (3 + 2) == len(study.sample)
+
+
+def test_sobol_is_converged_by_narrow_intervals_alone():
+    """Two inputs that tie (their order cannot settle) with intervals within the target:
+    converged by the width alone."""
+    table = pd.DataFrame({"output": "y", "parameter": ["a", "b"], "n": 64,
+                          "ST": [0.5, 0.5], "ST_width": [0.5 * SOBOL_TARGET_WIDTH] * 2})
+    assert sobol_converged(table)
+    assert not sobol_converged(table.assign(ST_width=2 * SOBOL_TARGET_WIDTH))
+
+
+def test_sobol_stops_at_the_cap_when_the_intervals_stay_wide():
+    """Equal inputs with a small cap: the intervals never narrow to the target, the check
+    stops at the cap, and its table says so (widest interval above the target)."""
+    evaluate = _Counting(np.ones(6))
+    _, table = sobol_by_convergence(_problem(6), evaluate, 8, 16)
+    assert int(table["n"].max()) == 16
+    assert table.loc[table["n"] == 16, "ST_width"].max() > SOBOL_TARGET_WIDTH
+    assert evaluate.runs == 16 * (6 + 2)
+
+
+def test_stage_fit_is_drawn_per_direction_not_through_zero():
+    """Eq. 13's fitted force jumps by 2·Fc at v = 0: each fitted line keeps one sign of v."""
+    matplotlib.use("Agg")
+    v = np.array([-8.0, -5.0, -2.0, 2.0, 5.0, 8.0])
+    fitted = np.sign(v) * 10.0 + 0.5 * v
+    data = pd.DataFrame({"x": v, "measured": fitted + 0.1, "fitted": fitted})
+    estimates = Estimates(("Fc",), np.array([10.0]), np.array([0.1]), np.eye(1) * 0.01, 4,
+                          ("N",))
+    stage = StageResult("sliding", estimates, ("r",), data, "velocity [mm/s]",
+                        "friction force [N]")
+    fig = stage.plot()
+    lines = [line for line in fig.axes[0].lines if line.get_linestyle() == "-"]
+    assert len(lines) == 2
+    for line in lines:
+        x = np.asarray(line.get_xdata(), float)
+        assert (x < 0).all() or (x > 0).all(), x
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("x", [np.array([1.0, 2.0, 3.0])])
+def test_stage_fit_on_one_sign_is_one_line(x):
+    """A stage whose x keeps one sign (the spring's position) is one line, as before."""
+    matplotlib.use("Agg")
+    data = pd.DataFrame({"x": x, "measured": x, "fitted": x})
+    estimates = Estimates(("k",), np.array([1.0]), np.array([0.1]), np.eye(1) * 0.01, 2,
+                          ("N/m",))
+    fig = StageResult("spring", estimates, ("r",), data, "position [mm]", "force [N]").plot()
+    assert len([line for line in fig.axes[0].lines if line.get_linestyle() == "-"]) == 1
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
