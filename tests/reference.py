@@ -442,10 +442,11 @@ FAMILY_TOLERANCE_PERCENT = {"F0": 5.0, "k": 5.0, "Fc": 5.0, "sigma2": 5.0, "Fs":
 FAMILY_COVERAGE = 0.90  # issue 18: >= 90 % of the reported 95 % intervals hold the truth
 FAMILY_MIN_INTERVALS = 60  # at least this many reported intervals make the coverage
 # Refusing is not a way to pass: at least this share of the family's parameters must be
-# identified. Measured 45-51 % (this family with 16 or 32 replicates, on two machines:
-# the stick-slip records are chaotic, so the last bits of the arithmetic move verdicts);
-# benchmarks/README.md, "identification on a family", has the longer study.
-FAMILY_MIN_IDENTIFIED = 0.4
+# identified. Measured 45-51 % (16 or 32 replicates, two machines: the stick-slip
+# records are chaotic, so the last bits of the arithmetic move verdicts) until a misfit
+# minority was judged by a refit (issue 38): 60.0 % (96 of 160), 93.1 % of 102 intervals
+# holding; benchmarks/README.md, "identification on a family", has the longer study.
+FAMILY_MIN_IDENTIFIED = 0.5
 # A thinner campaign (issue 18, found by the family study): family actuator 1 with 4 ramp
 # pairs has one ramp below vs (0.16·vs), left out of the joint fit: the model fitted to
 # the steadier records predicts it 30× the noise (the admission limit is 10×); the next
