@@ -7,6 +7,8 @@ from __future__ import annotations
 import itertools
 import time
 
+import pytest
+
 from pneumact.cli.common import progress_display, remaining_time
 from pneumact.progress import Progress
 
@@ -50,3 +52,27 @@ def test_a_big_sobol_sample_is_announced_before_it_is_drawn(estimates_log, monke
     methods.sobol(problem, evaluate, n=64, resamples=2)
     assert drawn[-1] == 1, estimates_log
     assert "drawing the sample first: 256 runs x 2 parameters" in estimates_log[0]
+
+
+def test_a_sobol_sample_past_the_memory_limit_is_refused_before_it_is_drawn(monkeypatch):
+    """sobol's sample was announced but its memory never checked against the limit
+    (issue 42, item 3): refused before any draw, naming the sizes and the limit."""
+    import numpy as np
+
+    import pneumact as pa
+    from pneumact.sensitivity import methods
+    from pneumact.sensitivity.problem import Factor, Problem
+
+    problem = Problem((Factor("a", 1.0, 2.0, 1.5), Factor("b", 0.5, 1.5, 1.0)))
+    runs: list[int] = []
+
+    def evaluate(values: np.ndarray) -> np.ndarray:
+        runs.append(len(values))
+        return values[:, 0]
+
+    monkeypatch.setenv("PNEUMACT_MEMORY_LIMIT", "1MiB")
+    with pytest.raises(pa.ResourceError, match=r"65 536 runs x 2 parameters .*limit of 1 MiB"):
+        methods.sobol(problem, evaluate, n=16384, resamples=2)
+    assert runs == []
+    methods.sobol(problem, evaluate, n=64, resamples=2)  # 256 runs: 8 KiB
+    assert runs == [256]

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..checks import check_int, check_range, check_seed, check_type
-from ..errors import ArgumentError, ArgumentTypeError, PneumactError
+from ..errors import ArgumentError, ArgumentTypeError, PneumactError, ResourceError
 from ..io.report import ResultVocabulary
 from ..options import Checkpoint, Executor
 from ..progress import ProgressCallback
@@ -170,11 +170,28 @@ ANNOUNCED_SAMPLE_RUNS = 500_000
 #: runs a second SALib's Sobol sampler draws (measured: 655 360 runs x 8 parameters in
 #: 2.9 s on a loaded 2-core machine)
 SAMPLE_DRAW_RATE = 200_000.0
+#: copies of a sample held at once: SALib's unit sample and the factors' values
+SAMPLE_COPIES = 2
 
 
-def _announce_sample(method: str, runs: int, k: int) -> None:
+def _size_the_sample(method: str, runs: int, k: int) -> None:
     """Say how big the sample is before drawing it (the ``pneumact.estimates`` log, a
-    ``note:`` line on the command line), so that a long draw is not a silent "0/?"."""
+    ``note:`` line on the command line), so that a long draw is not a silent "0/?"; and
+    refuse a sample whose copies (the unit sample and its values, ``SAMPLE_COPIES``)
+    would pass the memory limit, before drawing it."""
+    from ..simulation.memory import memory_limit
+
+    needed = SAMPLE_COPIES * runs * k * 8
+    limit, source = memory_limit()
+    if needed > limit:
+        raise ResourceError(
+            f"{method}: the sample of {runs:,} runs x {k} parameters would need about "
+            f"{needed / 1024**2:.0f} MiB of memory before the first run, above the limit "
+            f"of {limit / 1024**2:.0f} MiB ({source})".replace(",", " "),
+            api_hint="a smaller n (the convergence check, sobol_convergence, says when "
+                     "the indices are good enough), or fewer factors",
+            cli_hint="a smaller --n, or fewer factors, or raise the limit "
+                     "(PNEUMACT_MEMORY_LIMIT=16GiB pneumact ...)")
     if runs >= ANNOUNCED_SAMPLE_RUNS:
         logging.getLogger("pneumact.estimates").info(
             "%s: drawing the sample first: %s runs x %d parameters (%.0f MiB), about %.0f s "
@@ -219,7 +236,7 @@ def sobol(problem: Problem, evaluate: Evaluate, n: int = 1024, second_order: boo
                 where="sobol")
     salib = problem.to_salib()
     k = len(problem.names)
-    _announce_sample("sobol", n * (2 * k + 2 if second_order else k + 2), k)
+    _size_the_sample("sobol", n * (2 * k + 2 if second_order else k + 2), k)
     x = sample.sample(salib, n, calc_second_order=bool(second_order), seed=seed)
     outputs = _evaluate(problem, evaluate, x)
     rows = []
