@@ -380,3 +380,44 @@ def test_band_png_is_readable_with_units_and_a_micrometre_zoom(tmp_path):
     assert png_size(path)[0] <= ref.MAX_FIGURE_WIDTH_PX
     panel = min(ax.get_window_extent().width for ax in fig.axes) * plotting.PNG_DPI / fig.dpi
     assert panel >= ref.MIN_PANEL_WIDTH_PX
+
+
+def _friction_records(n: int):
+    """``n`` short friction records (a sine of position, a smooth Coulomb force)."""
+    import pneumact as pa
+
+    time = np.linspace(0.0, 1.0, 101)
+    return [pa.Record.from_arrays(time, {"position": 1e-3 * np.sin(2 * np.pi * time),
+                                         "friction": 5.0 * np.tanh(np.cos(2 * np.pi * time)
+                                                                   * 50) + 0.1 * k},
+                                  source=f"seal_{k}.csv") for k in range(n)]
+
+
+def test_a_comparison_and_a_friction_validation_page_their_records(drawn, tmp_path,
+                                                                    monkeypatch):
+    """The two record figures left growing taller beyond a page (issue 42, item 5):
+    compare's held-out loops and a friction validation's force figure, a figure per
+    page of records (pages of 2 here: five records make three)."""
+    from types import SimpleNamespace
+
+    from pneumact.validation.compare import FrictionComparison, LawScore
+    from pneumact.validation.friction import FrictionValidation
+
+    monkeypatch.setattr(plotting, "PANELS_PER_PAGE", 2)
+    records = _friction_records(5)
+    score = LawScore("LuGre", None, predictions=records, residuals=[np.zeros(3)])
+    comparison = FrictionComparison(model=SimpleNamespace(input_signal="position"),
+                                    scores=[score], train=[], test=records,
+                                    held_out=list(range(5)), signals=("friction",))
+    assert list(comparison.figures()) == ["loops", "loops-2", "loops-3"]
+    assert len(comparison.figures()["loops-3"]().axes) == 1  # the fifth record alone
+    frames = {r.source: pd.DataFrame({"time": r.time, "velocity": np.gradient(
+        r["position"], r.time), "measured": r["friction"], "predicted": r["friction"]})
+        for r in records}
+    validation = FrictionValidation("LuGre", ["seal_0.csv"], frames, pd.DataFrame())
+    validation.write(tmp_path / "seal")
+    assert {p.name for p in (tmp_path / "seal").glob("*.png")} == {
+        "force.png", "force-2.png", "force-3.png"}
+    assert_scaled(drawn, tmp_path / "seal")
+    html = (tmp_path / "seal" / "report.html").read_text(encoding="utf-8")
+    assert "(page 3 of 3)" in html

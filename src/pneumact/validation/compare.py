@@ -23,9 +23,10 @@ sliding for a Stribeck dip) fit several laws equally well.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import time as _time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -580,15 +581,26 @@ class FrictionComparison(ResultVocabulary):
                 f"{held}{split}. {self.recommendation}\n\n" + "\n".join(self.reasons()))
 
     # -- the figure ----------------------------------------------------------------------
-    def plot(self) -> Figure:
+    def figures(self) -> dict[str, Callable[[], Figure]]:
+        """``loops``, ``loops-2``, ...: a figure per page of held-out records."""
+        from ..plotting import page_name, record_pages
+
+        return {page_name(self.figure_name, k): functools.partial(self.plot, page=k)
+                for k in range(1, len(record_pages(self.test)) + 1)}
+
+    def plot(self, page: int = 0) -> Figure:
         """Each held-out record's loop (the measured signal against the model's input):
-        measured in black, every fitted law in its colour."""
-        from ..plotting import display_values, panel_grid
+        measured in black, every fitted law in its colour; every record (``page`` 0) or
+        the ``page``-th page of ``PANELS_PER_PAGE`` records (from 1)."""
+        from ..plotting import display_values, panel_grid, record_pages
 
         signal = self.signals[0]
         drive = self.model.input_signal
-        fig, panels = panel_grid(len(self.test), width=5.2, height=4.2)
-        for (ax,), (j, rec) in zip(panels, enumerate(self.test), strict=True):
+        shown = list(enumerate(self.test))
+        if page:
+            shown = record_pages(shown)[page - 1]
+        fig, panels = panel_grid(len(shown), width=5.2, height=4.2)
+        for (ax,), (j, rec) in zip(panels, shown, strict=True):
             x, x_label = display_values(rec, drive)
             y, y_label = display_values(rec, signal)
             ax.plot(x, y, "k", lw=1.6, label="measured")

@@ -9,6 +9,7 @@ and predict the friction at the other levels.
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -69,13 +70,17 @@ class FrictionValidation(NotebookDisplay):
         return pd.concat([frame.assign(record=record)[["record", *frame.columns]]
                           for record, frame in self.predictions.items()], ignore_index=True)
 
-    def plot(self) -> Figure:
-        """Per record: measured and predicted force against time, and against velocity."""
-        from ..plotting import panel_grid
+    def plot(self, page: int = 0) -> Figure:
+        """Per record: measured and predicted force against time, and against velocity;
+        every record (``page`` 0) or the ``page``-th page of ``PANELS_PER_PAGE`` records
+        (from 1)."""
+        from ..plotting import panel_grid, record_pages
 
-        fig, panels = panel_grid(len(self.predictions), rows_per=2, height=3.1)
-        for (ax_time, ax_vel), (name, d) in zip(panels, self.predictions.items(),
-                                                strict=True):
+        shown = list(self.predictions.items())
+        if page:
+            shown = record_pages(shown)[page - 1]
+        fig, panels = panel_grid(len(shown), rows_per=2, height=3.1)
+        for (ax_time, ax_vel), (name, d) in zip(panels, shown, strict=True):
             ax_time.plot(d["time"], d["measured"], "k-", lw=0.6, label="measured")
             ax_time.plot(d["time"], d["predicted"], "C0-", lw=0.8, label="model")
             ax_time.set_xlabel("time [s]")
@@ -100,7 +105,7 @@ class FrictionValidation(NotebookDisplay):
         or nothing."""
         from ..io.report import Report
         from ..io.tables import write_files
-        from ..plotting import figure_writer
+        from ..plotting import figure_writer, page_name, record_pages
 
         report = Report(title or f"Friction ({self.model}) against measured force",
                         call=call)
@@ -109,12 +114,16 @@ class FrictionValidation(NotebookDisplay):
                     "100·(1 − NRMSE); relative force error = ‖F − F̂‖/‖F‖.")
         report.table(self.metrics(), "Force error per record", index=False)
         report.table(self.parameters, "Parameters of each prediction (SI)")
-        report.figure(self.plot(), "Measured and predicted force")
+        pages = len(record_pages(list(self.predictions)))
+        for k in range(1, pages + 1):
+            report.figure(self.plot(page=k), "Measured and predicted force"
+                          + (f" (page {k} of {pages})" if pages > 1 else ""))
         return write_files(out_dir, {
             "predictions.csv": lambda p: self.to_pandas().to_csv(p, index=False),
             "metrics.csv": lambda p: self.metrics().to_csv(p, index=False),
             "parameters.csv": lambda p: self.parameters.to_csv(p),
-            "force.png": figure_writer(self.plot),
+            **{f"{page_name('force', k)}.png": figure_writer(
+                functools.partial(self.plot, page=k)) for k in range(1, pages + 1)},
             "report.html": report.write})
 
 
