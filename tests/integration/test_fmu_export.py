@@ -252,11 +252,11 @@ def test_stock_fmpy_stalls_at_1e_8_behind_a_pressure_source(exported):
         simulate_fmu(fmu, experiment_for("source"), relative_tolerance=ref.FMU_TIGHT_RTOLS[-1])
 
 
-def euler_log(fmu, experiment, step: float, **options) -> list[str]:
+def euler_log(fmu, experiment, step: float, fmi: int = 2, **options) -> list[str]:
     """FMPy's forward Euler at ``step`` (FMPy takes one step per output interval), ended
-    by the FMU with fmi2Error: the FMU's log messages."""
+    by the FMU with fmi2Error (fmi3Error): the FMU's log messages."""
     messages: list[str] = []
-    with pytest.raises(Exception, match="fmi2CompletedIntegratorStep failed"):
+    with pytest.raises(Exception, match=f"fmi{fmi}CompletedIntegratorStep failed"):
         simulate_fmu(fmu, experiment, solver="Euler", step_size=step, output_interval=step,
                      logger=lambda *args: messages.append(args[-1].decode()), **options)
     return messages
@@ -286,6 +286,17 @@ def test_euler_at_an_importer_s_step_ends_with_the_stop_s_limit(exported, valve,
     position = float(re.search(r"the position (\S+) m", text).group(1))
     # ended within a step or two of the bound (measured: 0.17-7.4 m), not at 1e37 m
     assert abs(position) < 1e3 * p["x_max"]
+
+
+def test_the_fmi3_model_exchange_fmu_ends_an_unstable_euler_run_too(exported, tmp_path):
+    """FMI 3.0's glue shares the end-stop check (templates/stop_check.c.j2): Euler at 1 ms
+    ends with fmi3Error and the same message, not a position of 1e37 m."""
+    model = exported["source"][0]
+    fmu = pa.export_fmu(model, tmp_path / "fmi3.fmu", fmi=3)
+    text = " ".join(euler_log(fmu, experiment_for("source"), ref.FMU_IMPORTER_STEPS[0],
+                              fmi=3))
+    assert "the solver has gone unstable on an end stop" in text
+    assert "Co-Simulation FMU" in text
 
 
 def test_euler_at_1_ms_runs_the_cycle_on_a_softened_stop(exported):
