@@ -7,6 +7,9 @@ import re
 from pathlib import Path
 
 import matplotlib
+import pytest
+
+import reference as ref
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 GUIDE = DOCS / "guide.md"
@@ -41,7 +44,11 @@ def test_the_features_page_runs(tmp_path, monkeypatch, capsys):
     assert namespace["profile"].shape == (41,)
     printed = capsys.readouterr().out
     assert "320 s cycle: v = 0.56·vs" in printed  # the numbers the page quotes
-    assert "+0.7% on 2·Fc/A_d" in printed and "+11.8% on 2·Fc/A_d" in printed
+    assert "+0.7% on 2·Fc/A_d" in printed
+    # the slow cycle stick-slips: its width moves with the last digits of the arithmetic
+    # (1990 Pa, +11.8 %, with c_stop 1e12; 1988 Pa, +11.7 %, with 5e10)
+    slow = float(re.search(r"320 s cycle.*?\(\+([\d.]+)% on 2·Fc/A_d\)", printed).group(1))
+    assert slow == pytest.approx(ref.FEATURES_SLOW_EXCESS_PERCENT, abs=0.3)
     # a user's statement: σ0 ×0.1 moves the loop visibly under the applied pressure
     assert (namespace["verdicts"]["verdict"] == "holds").all()
     assert "all of v/vs 0.23–3.6 studied" in printed
