@@ -46,6 +46,7 @@ except ImportError:  # not installed: use the source tree next to this script
 
 import fmpy
 
+from pneumact.core.c_source import Arena, c_array
 from pneumact.core.features import loop_width_pressure
 from pneumact.core.signals import PiecewiseLinear
 from pneumact.simulation.simulate import prepare
@@ -253,22 +254,6 @@ def c_integrator(fmu_path: Path, folder: Path):
 
     lib.pa_integrate.restype = State
     return lib
-
-
-def c_array(values: np.ndarray):
-    element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
-    ndim = values.ndim
-    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
-    struct = type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
-    return struct(values.ctypes.data_as(ctypes.POINTER(element)),
-                  (ctypes.c_int64 * ndim)(*values.shape),
-                  (ctypes.c_int64 * ndim)(*[s // values.itemsize for s in values.strides]))
-
-
-class Arena(ctypes.Structure):
-    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
-                ("failed", ctypes.c_int)]
 
 
 def integrator_times(lib, model, experiment, repeats: int) -> tuple[float, float]:

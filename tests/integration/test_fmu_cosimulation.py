@@ -28,6 +28,7 @@ import pneumact as pa
 import reference as ref
 from conftest import load_quietly
 from pneumact.cli import app
+from pneumact.core.c_source import Arena, c_array
 from pneumact.core.signals import PiecewiseLinear
 from pneumact.errors import ExportError
 from pneumact.export import find_compiler
@@ -135,23 +136,6 @@ def _steps_like_pa_simulate(cosimulation, case: str, step: float,
         assert validate_fmu(str(fmu.path)) == []
 
 
-def c_array(values: np.ndarray):
-    """The C back end's array struct: data, shape[ndim], strides[ndim] (in elements)."""
-    element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
-    ndim = values.ndim
-    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
-    struct = type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
-    return struct(values.ctypes.data_as(ctypes.POINTER(element)),
-                  (ctypes.c_int64 * ndim)(*values.shape),
-                  (ctypes.c_int64 * ndim)(*[s // values.itemsize for s in values.strides]))
-
-
-class _Arena(ctypes.Structure):
-    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
-                ("failed", ctypes.c_int)]
-
-
 class _State(ctypes.Structure):
     _fields_ = [("data", ctypes.POINTER(ctypes.c_double)), ("shape", ctypes.c_int64 * 1),
                 ("strides", ctypes.c_int64 * 1)]
@@ -180,7 +164,7 @@ def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
         info = np.zeros(kernel.INFO_LENGTH)
         vector = prep.vector.copy()
         if language == "C":
-            arena = _Arena()
+            arena = Arena()
             state = lib.pa_integrate(
                 ctypes.byref(arena), c_array(prep.y0), c_array(vector), c_array(prep.sig),
                 c_array(prep.ptr), c_array(prep.breakpoints), c_array(prep.t_out),

@@ -19,7 +19,7 @@ import pytest
 from numba import njit
 from numba.core import types
 
-from pneumact.core.c_source import CSourceError, translate
+from pneumact.core.c_source import Arena, CSourceError, translate
 
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler (install gcc or clang)")
@@ -173,10 +173,6 @@ def test_allocations_views_and_constants_are_python_s(tmp_path):
     subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(tmp_path / "unit.so"),
                     str(tmp_path / "unit.c"), "-lm"], check=True)
     lib = ctypes.CDLL(str(tmp_path / "unit.so"))
-
-    class Arena(ctypes.Structure):
-        _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
-                    ("failed", ctypes.c_int)]
 
     class Result(ctypes.Structure):
         _fields_ = [("data", ctypes.POINTER(ctypes.c_double)), ("shape", ctypes.c_int64 * 1),

@@ -25,6 +25,7 @@ function named (``CSourceError``), never translated approximately.
 from __future__ import annotations
 
 import builtins
+import ctypes
 import itertools
 import math
 import operator
@@ -41,7 +42,7 @@ from numba.core.compiler_machinery import FunctionPass, PassManager, register_pa
 from numba.core.typed_passes import AnnotateTypes
 from numba.core.typing.templates import signature
 
-__all__ = ["CSourceError", "CUnit", "translate"]
+__all__ = ["Arena", "CSourceError", "CUnit", "c_array", "translate"]
 
 
 class CSourceError(RuntimeError):
@@ -720,3 +721,28 @@ def translate(roots: dict[str, tuple[Callable, Sequence]]) -> CUnit:
         py_func = getattr(function, "py_func", function)
         unit.entry(entry, unit.function(py_func, argtypes))
     return unit.unit()
+
+
+# --------------------------------------------------------------------------- calling it
+# What a caller of a built unit passes (ctypes mirrors of the structs above): the tests,
+# the benchmarks and a run-time engine load the same library the FMU carries.
+
+class Arena(ctypes.Structure):
+    """``pa_arena``: the allocations of a function that allocates (zero it to start)."""
+
+    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
+                ("failed", ctypes.c_int)]
+
+
+def c_array(values: np.ndarray) -> ctypes.Structure:
+    """The back end's array struct of ``values`` (float64 or int64, any ndim): data,
+    shape[ndim], strides[ndim] in elements; it points into ``values``, which must
+    outlive the call."""
+    element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
+    ndim = values.ndim
+    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
+              ("strides", ctypes.c_int64 * ndim)]
+    struct = type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
+    return struct(values.ctypes.data_as(ctypes.POINTER(element)),
+                  (ctypes.c_int64 * ndim)(*values.shape),
+                  (ctypes.c_int64 * ndim)(*[n // values.itemsize for n in values.strides]))
