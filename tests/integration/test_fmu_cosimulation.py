@@ -27,10 +27,10 @@ from typer.testing import CliRunner
 import pneumact as pa
 import reference as ref
 from conftest import load_quietly
+from fmu_support import VALVES, needs_compiler
 from pneumact.cli import app
 from pneumact.core.c_source import Arena, c_array
 from pneumact.core.signals import PiecewiseLinear
-from pneumact.errors import ExportError
 from pneumact.export import find_compiler
 from pneumact.export.compiler import FLAGS
 from pneumact.simulation.simulate import prepare
@@ -48,19 +48,7 @@ from fmpy.fmi2 import (  # noqa: E402
 from fmpy.model_description import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-
-def _compiler() -> str | None:
-    try:
-        return find_compiler()
-    except ExportError:
-        return None
-
-
-pytestmark = pytest.mark.skipif(_compiler() is None, reason="no C compiler to build FMUs with "
-                                                           "(install gcc or clang)")
-
-VALVES = {"source": pa.PressureSource, "command": pa.CommandValve,
-          "regulator": pa.PressureRegulator}
+pytestmark = needs_compiler
 CASES = (*VALVES, "gms4")
 
 
@@ -150,7 +138,7 @@ def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
     (tmp_path / "model.c").write_bytes(source)
     library = tmp_path / "model.so"
     flags = [f for f in FLAGS if f != "-fvisibility=hidden"]  # the FMU's build, exported
-    subprocess.run([_compiler(), *flags, "-o", str(library), str(tmp_path / "model.c"), "-lm"],
+    subprocess.run([find_compiler(), *flags, "-o", str(library), str(tmp_path / "model.c"), "-lm"],
                    check=True)
     lib = ctypes.CDLL(str(library))
     lib.pa_integrate.restype = _State

@@ -31,12 +31,12 @@ from typer.testing import CliRunner
 import pneumact as pa
 import reference as ref
 from conftest import load_quietly
+from fmu_support import VALVES, needs_compiler
 from pneumact.cli import app
 from pneumact.core.assembly import assemble
 from pneumact.core.features import loop_width_pressure
 from pneumact.core.signals import Constant, pack_channels
 from pneumact.errors import ExportError
-from pneumact.export import find_compiler
 from pneumact.models.mechanics import explicit_step, explicit_step_limit
 from pneumact.parameters.family import ActuatorFamily
 
@@ -45,19 +45,7 @@ from fmpy.fmi2 import FMU2Model  # noqa: E402
 from fmpy.model_description import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-
-def _compiler() -> str | None:
-    try:
-        return find_compiler()
-    except ExportError:
-        return None
-
-
-pytestmark = pytest.mark.skipif(_compiler() is None, reason="no C compiler to build FMUs with "
-                                                           "(install gcc or clang)")
-
-VALVES = {"source": pa.PressureSource, "command": pa.CommandValve,
-          "regulator": pa.PressureRegulator}
+pytestmark = needs_compiler
 
 
 def actuator(valve: str, friction=None) -> pa.Actuator:
