@@ -674,3 +674,8 @@ RICHER_DELTA2_STRIBECK_ERROR = 10.0
 #: the 320 s command cycle's loop width over 2·Fc/A_d [%] the page quotes (+12 %):
 #: measured 11.8 (c_stop 1e12) and 11.7 (c_stop 5e10, issue 39); it stick-slips
 FEATURES_SLOW_EXCESS_PERCENT = 11.8
+
+# --------------------------------------------------------------------------- engines (issue 43)
+#: the C engine against numba: largest difference of any output signal over its range (the
+#: C back end translates numba's typed IR, so the runs agree to rounding; measured 0.0)
+ENGINE_AGREEMENT = 1e-12

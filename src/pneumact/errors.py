@@ -80,3 +80,11 @@ class PlausibilityWarning(UserWarning):
     a thousand times off, an atmosphere of 30 kPa): often a unit typed wrong. If the
     value is meant, silence it with
     ``warnings.filterwarnings("ignore", category=pneumact.PlausibilityWarning)``."""
+
+
+class EngineWarning(UserWarning):
+    """The C engine was asked for (``auto``, the default) but cannot run this model here,
+    so the numba engine runs it; the message says why (no C compiler, a construct the C
+    back end does not translate, a failed build). Silence it with
+    ``PNEUMACT_ENGINE=numba`` or ``warnings.filterwarnings("ignore",
+    category=pneumact.EngineWarning)``."""

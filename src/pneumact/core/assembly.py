@@ -26,12 +26,12 @@ import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from types import ModuleType
 
 import numpy as np
 
 from ..errors import ParameterError
 from . import codegen
+from .c_engine import Kernel, current_engine, engine_kernel
 from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
 __all__ = ["Assembly", "assemble"]
@@ -54,6 +54,7 @@ class Assembly:
 
     def __init__(self, model):
         self.model = model
+        self._kernels: dict[str, Kernel] = {}
         self.parts: tuple[Part, ...] = tuple(model.parts())
         self.template: str = model.template
         entries: list[Slot] = []
@@ -237,14 +238,31 @@ class Assembly:
         return codegen.KernelSpec(label, tuple(templates), tuple(imports),
                                   tuple(dict.fromkeys(constants)), children, components)
 
+    @property
+    def kernel(self) -> Kernel:
+        """The compiled kernel of the engine in force (``core.c_engine.current_engine``):
+        the numba kernel module, or the C kernel that looks like it."""
+        return self.kernel_on(current_engine())
+
+    def kernel_on(self, engine: str) -> Kernel:
+        """The kernel on ``engine`` ('auto', 'c' or 'numba'), built on first use and
+        cached on disk; the numba module is what the C back end translates."""
+        kernel = self._kernels.get(engine)
+        if kernel is None:
+            with _KERNEL_LOCK:
+                kernel = self._kernels.get(engine)
+                if kernel is None:
+                    kernel = self._kernels[engine] = engine_kernel(self._spec, engine)
+        return kernel
+
     @cached_property
-    def kernel(self) -> ModuleType:
-        """The compiled kernel module (generated on first use, cached on disk)."""
-        return codegen.load(self.kernel_spec())
+    def _spec(self) -> codegen.KernelSpec:
+        return self.kernel_spec()
 
 
 _ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _LOCK = threading.Lock()
+_KERNEL_LOCK = threading.RLock()  # building a kernel (one at a time in this process)
 
 
 def output_constant(name: str) -> str:

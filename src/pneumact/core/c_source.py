@@ -609,6 +609,8 @@ class _FunctionWriter:
                 return " * ".join(f"{arr}.shape[{k}]" for k in range(base_type.ndim))
             if expr.attr == "ndim":
                 return str(base_type.ndim)
+        if isinstance(base_type, types.BaseNamedTuple) and expr.attr in base_type.fields:
+            return f"{self.var(expr.value)}.f{base_type.fields.index(expr.attr)}"
         base = self.objects.get(expr.value.name)
         if base is not None and isinstance(getattr(base, expr.attr, None), int | float):
             return self.literal(getattr(base, expr.attr), self.type_of(target))
@@ -692,6 +694,12 @@ class _FunctionWriter:
             for b in args[1:]:
                 result = f"({b} {compare} {result} ? {b} : {result})"
             return result
+        if isinstance(fn, type) and issubclass(fn, tuple) and hasattr(fn, "_fields"):
+            t = self.type_of(target)  # a namedtuple built: its struct, member by member
+            items = [self._member(self.var(a), self.type_of(a), m)
+                     for a, m in zip(expr.args, _members(t), strict=True)
+                     if self.unit.ctype(m) is not None]
+            return f"(({self.unit.ctype(t)}){{{', '.join(items)}}})"
         if fn is builtins.int:
             return f"((int64_t)({args[0]}))"
         if fn is builtins.float:

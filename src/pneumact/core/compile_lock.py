@@ -29,7 +29,7 @@ try:
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["compile_one_process_at_a_time", "on_first_compile"]
+__all__ = ["compile_one_process_at_a_time", "file_lock", "on_first_compile"]
 
 #: lock file -> (descriptor, depth) of the locks this process holds
 _HELD: dict[Path, tuple[int, int]] = {}
@@ -88,6 +88,12 @@ def _file_lock(path: Path) -> Iterator[None]:
             del _HELD[path]
             fcntl.flock(fd, fcntl.LOCK_UN)
             os.close(fd)
+
+
+def file_lock(path: Path) -> contextlib.AbstractContextManager[None]:
+    """An exclusive lock on the file ``path`` across processes (re-entrant within this
+    process; its callers hold a lock of their own against other threads)."""
+    return _file_lock(path)
 
 
 def compile_one_process_at_a_time(dispatcher: Any, lock_path: Path | Callable[[], Path]

@@ -9,45 +9,36 @@ from __future__ import annotations
 
 import os
 import platform
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
+from ..core.c_build import (
+    CBuildError,
+    compile_library,
+    compiler_path,
+    missing_compiler,
+    shared_library_suffix,
+)
 from ..errors import ExportError
 
 __all__ = ["binary_folder", "build_binary", "find_compiler", "fmi_headers",
            "platform_tuple", "shared_library_suffix"]
 
-CANDIDATES = ("cc", "gcc", "clang")
-#: what to install, per platform, when no C compiler is found
-INSTALL_HINT = {
-    "linux": "install gcc (Debian/Ubuntu: sudo apt install gcc; Fedora: sudo dnf install gcc)",
-    "darwin": "install the Xcode command line tools (xcode-select --install)",
-    "win32": "install a gcc or clang for Windows (e.g. MinGW-w64 or LLVM) and put it on PATH, "
-             "or set CC to it",
-}
 FLAGS = ("-O3", "-std=c99", "-fPIC", "-fvisibility=hidden", "-shared")
 
 
 def find_compiler(compiler: str | None = None) -> str:
     """Path of the C compiler: ``compiler`` if given, else ``$CC``, else the first of
     cc, gcc, clang on PATH; ExportError naming what to install when there is none."""
-    wanted = compiler or os.environ.get("CC")
-    if wanted:
-        found = shutil.which(wanted)
-        if found is None:
-            raise ExportError(f"C compiler {wanted!r} (from {'compiler=' if compiler else '$CC'})"
-                              " was not found on PATH")
-        return found
-    for name in CANDIDATES:
-        found = shutil.which(name)
-        if found is not None:
-            return found
-    hint = INSTALL_HINT.get(sys.platform, INSTALL_HINT["linux"])
-    raise ExportError(f"no C compiler found (looked for $CC, {', '.join(CANDIDATES)}) to build "
-                      f"the FMU's binary: {hint}; or export the sources only (binary=False, "
-                      "pneumact export fmu --no-binary): an importer can build them")
+    found = compiler_path(compiler)
+    if found is None:
+        reason = missing_compiler(compiler)
+        if not (compiler or os.environ.get("CC")):
+            reason = reason.replace("found (", "found to build the FMU's binary (", 1)
+            reason += ("; or export the sources only (binary=False, pneumact export fmu "
+                       "--no-binary): an importer can build them")
+        raise ExportError(reason)
+    return found
 
 
 def fmi_headers() -> Path:
@@ -84,19 +75,12 @@ def platform_tuple() -> str:
     return f"{architecture}-{folder.rstrip('0123456789').replace('win', 'windows')}"
 
 
-def shared_library_suffix() -> str:
-    return {"darwin": ".dylib", "win32": ".dll"}.get(sys.platform, ".so")
-
-
 def build_binary(sources: list[Path], output: Path, compiler: str | None = None) -> str:
     """Compile ``sources`` into the shared library ``output``; returns the compiler used.
     A failed build raises ExportError with the compiler's own message."""
     cc = find_compiler(compiler)
-    flags = [f for f in FLAGS if not (sys.platform == "win32" and f == "-fPIC")]
-    command = [cc, *flags, "-I", str(fmi_headers()), "-I", str(sources[0].parent),
-               *map(str, sources), "-o", str(output), "-lm"]
-    result = subprocess.run(command, capture_output=True, text=True, check=False)
-    if result.returncode != 0:
-        raise ExportError(f"building the FMU's binary failed ({' '.join(command)}):\n"
-                          f"{result.stderr[-4000:]}")
+    try:
+        compile_library(cc, sources, output, FLAGS, (fmi_headers(), sources[0].parent))
+    except CBuildError as error:
+        raise ExportError(f"building the FMU's binary failed ({error})") from None
     return cc

@@ -91,6 +91,7 @@ class Result(ResultVocabulary):
             "params": getattr(params, "name", "custom"),
             "experiment": experiment.name,
             "solver": f"{type(solver).__name__}(rtol={solver.rtol})",
+            "engine": getattr(prep.kernel, "engine", "numba"),
             "steps": stats.steps,
             "rejected": stats.rejected,
             "rhs_evaluations": stats.rhs_evaluations,

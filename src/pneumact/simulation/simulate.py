@@ -18,6 +18,7 @@ from ..checks import (
     shown,
 )
 from ..core.assembly import Assembly, assemble
+from ..core.c_engine import check_engine, engine_scope
 from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
@@ -277,8 +278,8 @@ def checked_solver(solver, where: str = "simulate") -> Solver:
 
 def compiled(fn, *args):
     """``fn`` compiled (or loaded from the disk cache) for the types of ``args``, so that
-    a timed call measures the run, not the compilation."""
-    if not fn.signatures:
+    a timed call measures the run, not the compilation (a C engine's function is built)."""
+    if not getattr(fn, "signatures", True):
         from numba import typeof
 
         fn.compile(tuple(typeof(a) for a in args))
@@ -337,7 +338,7 @@ def failure(prep: Prepared, solver: Solver, stats: SolverStats, y_end) -> Solver
 
 def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_eval=None,
              y0=None, progress: ProgressCallback | None = None,
-             values: Mapping[str, float] | None = None) -> Result:
+             values: Mapping[str, float] | None = None, engine: str | None = None) -> Result:
     """Simulate ``model`` (an ``Actuator`` or a ``FrictionRig``) under ``experiment``.
 
     Returns a ``Result`` with named, unit-tagged signals at ``t_eval`` (default: the
@@ -348,11 +349,21 @@ def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_e
     this run without building a new parameter set (fitting loops use it; ranges and
     relations are not re-checked). ``y0`` starts the run elsewhere than at the model's
     equilibrium: an array of every state, or state name -> SI value (the others at the
-    equilibrium).
+    equilibrium). ``engine`` runs the model's kernel in C ('c': built once per machine
+    and model with the C compiler), in numba ('numba') or 'auto' (C where a compiler is
+    found and the model translates, else numba with an ``EngineWarning``); None: the
+    ``PNEUMACT_ENGINE`` setting, 'auto' when unset. Both give the same trajectories.
     """
     solver = checked_solver(solver)
     check_progress(progress, "simulate")
     raise_if_stopped()
+    with engine_scope(check_engine(engine, "simulate: engine")):
+        return _simulate(model, experiment, solver, t_eval, y0, progress, values)
+
+
+def _simulate(model, experiment: Experiment, solver: Solver, t_eval, y0,
+              progress: ProgressCallback | None, values: Mapping[str, float] | None
+              ) -> Result:
     prep = prepare(model, experiment, solver, t_eval, y0, values=values)
     n_t = prep.t_out.size
     compiled(getattr(prep.kernel, solver.kernel_function), prep.y0, prep.vector, prep.sig,

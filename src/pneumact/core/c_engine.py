@@ -1,0 +1,339 @@
+"""The C engine: a model's kernel built as a shared library by the C back end.
+
+The numba engine compiles each kernel function with LLVM the first time a machine meets a
+model combination (about 15 s); the C back end (``core.c_source``) writes the same
+functions as C99 from numba's typed IR, and a C compiler builds them in about a second.
+``c_kernel`` gives a kernel that looks like the numba kernel module (its constants,
+every function) but whose entry points — ``derive``, ``initial_state``,
+``state_scales``, ``rhs``, ``jac``, ``outputs`` and the RODAS4 integrator — run in that
+library, called with ctypes (which lets go of the GIL, so threads run rows at once).
+Functions the library does not carry (the explicit integrator, sensitivities, friction
+evaluation) are the numba kernel's.
+
+The library is cached on disk beside the numba kernels, under the kernel's key (its
+generated text, every source it depends on, the numba and Python versions) extended by
+the C back end's own source, this module and the compiler: one build per machine and
+model combination, safe when several processes build it at once (a lock, an atomic
+rename). Which engine runs is chosen by ``engine`` arguments, else ``PNEUMACT_ENGINE``
+(``auto``, ``c`` or ``numba``; default ``auto``: C where a compiler is found and the
+back end translates the model, numba otherwise, with a warning saying why).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import hashlib
+import os
+import re
+import tempfile
+import threading
+import warnings
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from ..errors import ArgumentError, EngineWarning
+from . import codegen
+from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
+from .c_build import shared_library_suffix as _suffix
+from .compile_lock import file_lock
+
+__all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
+           "c_kernel", "check_engine", "current_engine", "engine_kernel",
+           "engine_scope", "engine_setting", "library_path"]
+
+ENGINES = ("auto", "c", "numba")
+ENGINE_VARIABLE = "PNEUMACT_ENGINE"
+#: how the engine's libraries are compiled (no -ffast-math: the same arithmetic as numba)
+FLAGS = ("-O2", "-std=c99", "-fPIC", "-shared")
+#: the functions the library carries
+ENTRY_POINTS = ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
+                "integrate_rodas4")
+PREFIX = "pa_"
+
+_LOCK = threading.RLock()
+_KERNELS: dict[str, CKernel] = {}
+_REFUSED: dict[tuple[str, str | None], str] = {}
+#: the engine a call chose for everything it runs in this thread (None: the setting)
+_SCOPE: ContextVar[str | None] = ContextVar("pneumact_engine", default=None)
+
+
+def check_engine(engine: str | None, where: str = "engine") -> str:
+    """``engine`` (None: the ``PNEUMACT_ENGINE`` setting) as one of ``ENGINES``."""
+    if engine is None:
+        return engine_setting()
+    if not isinstance(engine, str) or engine not in ENGINES:
+        raise ArgumentError(f"{where} = {engine!r}: must be one of {', '.join(ENGINES)}")
+    return engine
+
+
+def engine_setting() -> str:
+    """The engine ``PNEUMACT_ENGINE`` names (``auto`` when unset)."""
+    value = os.environ.get(ENGINE_VARIABLE, "auto").strip().lower() or "auto"
+    if value not in ENGINES:
+        raise ArgumentError(f"{ENGINE_VARIABLE} = {value!r}: must be one of "
+                            f"{', '.join(ENGINES)}")
+    return value
+
+
+@contextmanager
+def engine_scope(engine: str | None) -> Iterator[str]:
+    """Run what the block runs in this thread on ``engine`` (None: as before); yields
+    the engine in force."""
+    token = _SCOPE.set(check_engine(engine)) if engine is not None else None
+    try:
+        yield current_engine()
+    finally:
+        if token is not None:
+            _SCOPE.reset(token)
+
+
+def current_engine() -> str:
+    """The engine in force: the innermost ``engine_scope``, else ``PNEUMACT_ENGINE``."""
+    return _SCOPE.get() or engine_setting()
+
+
+# ------------------------------------------------------------------------ ctypes mirrors
+@functools.cache
+def _array_struct(element: type, ndim: int) -> type[ctypes.Structure]:
+    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
+              ("strides", ctypes.c_int64 * ndim)]
+    return type(f"CArray{ndim}", (ctypes.Structure,), {"_fields_": fields})
+
+
+#: the back end's array struct names -> (numpy dtype, ctypes element)
+_ELEMENTS = {"float64": (np.float64, ctypes.c_double), "int64": (np.int64, ctypes.c_int64),
+             "bool": (np.bool_, ctypes.c_uint8)}
+_SCALARS: dict[str, Any] = {"double": ctypes.c_double, "float": ctypes.c_float,
+                            "int64_t": ctypes.c_int64, "int": ctypes.c_int}
+
+
+class _Arena(ctypes.Structure):
+    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
+                ("failed", ctypes.c_int)]
+
+
+def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]:
+    match = re.fullmatch(r"pa_arr_(\w+?)_(\d+)d", ctype)
+    if match is None or match.group(1) not in _ELEMENTS:
+        raise CBuildError(f"{name}: no ctypes mirror for the C type {ctype}")
+    dtype, element = _ELEMENTS[match.group(1)]
+    ndim = int(match.group(2))
+    struct = _array_struct(element, ndim)
+    size = np.dtype(dtype).itemsize
+
+    def convert(values: Any) -> ctypes.Structure:
+        if not isinstance(values, np.ndarray) or values.dtype != dtype or values.ndim != ndim:
+            raise TypeError(f"{name}: expected a {ndim}-d {np.dtype(dtype).name} array, got "
+                            f"{getattr(values, 'dtype', type(values).__name__)} with "
+                            f"{getattr(values, 'ndim', '?')} dimensions")
+        return struct(values.ctypes.data_as(ctypes.POINTER(element)),
+                      (ctypes.c_int64 * ndim)(*values.shape),
+                      (ctypes.c_int64 * ndim)(*(s // size for s in values.strides)))
+
+    return struct, convert
+
+
+class CFunction:
+    """One entry point of the library, called like the numba kernel function it was
+    translated from (numpy arrays and numbers in, the same result out). Arrays are passed
+    by reference: what the C function writes lands in them, as with numba."""
+
+    def __init__(self, library: ctypes.CDLL, name: str, prototype: str):
+        match = re.fullmatch(r"(\w+) (\w+)\((.*)\);", prototype.strip())
+        if match is None:
+            raise CBuildError(f"cannot read the prototype {prototype!r}")
+        restype, symbol, params = match.groups()
+        self.name = name
+        self._function = getattr(library, symbol)
+        self._free = library.pa_arena_free
+        arguments = [p.strip().rsplit(" ", 1)[0] for p in params.split(",") if p.strip()]
+        self._arena = bool(arguments) and arguments[0].startswith("pa_arena")
+        if self._arena:
+            arguments = arguments[1:]
+        self._converters: list[Callable[[Any], Any]] = []
+        argtypes: list[Any] = [ctypes.POINTER(_Arena)] if self._arena else []
+        for ctype in arguments:
+            if ctype in _SCALARS:
+                argtypes.append(_SCALARS[ctype])
+                self._converters.append(_scalar)
+            else:
+                struct, convert = _array_converter(name, ctype)
+                argtypes.append(struct)
+                self._converters.append(convert)
+        self._function.argtypes = argtypes
+        self._result = self._result_reader(restype)
+
+    def _result_reader(self, restype: str) -> Callable[[Any], Any]:
+        if restype == "void":
+            self._function.restype = None
+            return lambda value: None
+        if restype in _SCALARS:
+            self._function.restype = _SCALARS[restype]
+            return (lambda value: bool(value)) if restype == "int" else (lambda value: value)
+        struct, _ = _array_converter(self.name, restype)
+        self._function.restype = struct
+        dtype = _ELEMENTS[restype.split("_")[2]][0]
+
+        def copy_out(value: Any) -> np.ndarray:  # the array lives in the arena: copy it
+            shape = tuple(value.shape)
+            count = int(np.prod(shape)) if shape else 1
+            flat = np.ctypeslib.as_array(value.data, shape=(max(count, 1),))[:count]
+            strides = tuple(s * np.dtype(dtype).itemsize for s in value.strides)
+            return np.lib.stride_tricks.as_strided(flat, shape, strides).copy()
+
+        return copy_out
+
+    def __call__(self, *args: Any) -> Any:
+        if len(args) != len(self._converters):
+            raise TypeError(f"{self.name}() takes {len(self._converters)} arguments, "
+                            f"{len(args)} given")
+        converted = [convert(a) for convert, a in zip(self._converters, args, strict=True)]
+        if not self._arena:
+            return self._result(self._function(*converted))
+        arena = _Arena()
+        try:
+            value = self._function(ctypes.byref(arena), *converted)
+            if arena.failed:
+                raise MemoryError(f"{self.name}: the C engine could not allocate its work "
+                                  "arrays")
+            return self._result(value)
+        finally:
+            self._free(ctypes.byref(arena))
+
+    def __repr__(self) -> str:
+        return f"<C function {self.name}>"
+
+
+def _scalar(value: Any) -> Any:
+    return value
+
+
+class CKernel:
+    """A kernel whose entry points run in the C library: attributes the library does not
+    carry (constants, other functions) are the numba kernel module's."""
+
+    engine = "c"
+
+    def __init__(self, module: ModuleType, library: Path, header: str):
+        self._module = module
+        self.library_path = library
+        self._library = ctypes.CDLL(str(library))
+        prototypes = {m.group(1): line for line in header.splitlines()
+                      if (m := re.match(rf"\w+ {PREFIX}(\w+)\(", line))}
+        for name in ENTRY_POINTS:
+            if name in prototypes:
+                setattr(self, name, CFunction(self._library, name, prototypes[name]))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._module, name)
+
+    def __repr__(self) -> str:
+        return f"<C kernel {self._module.__name__} ({self.library_path.name})>"
+
+
+#: what a model's kernel is on either engine
+Kernel = ModuleType | CKernel
+
+
+# ------------------------------------------------------------------------------- building
+def _roots(module: ModuleType) -> dict[str, tuple[Callable, tuple]]:
+    from numba.core import types
+
+    f64, vector, matrix = types.float64, types.float64[::1], types.float64[:, ::1]
+    indices = types.int64[::1]
+    run = (f64, f64, vector, vector, vector, indices)
+    signatures = {
+        "derive": (vector,), "initial_state": (f64, f64, vector, vector, indices, vector),
+        "state_scales": (vector, vector), "rhs": (*run, vector), "jac": (*run, matrix),
+        "outputs": (*run, vector),
+        "integrate_rodas4": (vector, vector, vector, indices, vector, vector, f64, vector, f64,
+                             f64, types.int64, matrix, matrix, vector)}
+    return {PREFIX + name: (getattr(module, name), signatures[name]) for name in ENTRY_POINTS}
+
+
+def library_path(spec: codegen.KernelSpec, compiler: str) -> Path:
+    """Where the C library of ``spec`` built by ``compiler`` lives (its name carries the
+    kernel's key extended by the C back end, this module, the compiler and its flags)."""
+    from . import c_source
+
+    digest = hashlib.sha256(codegen.kernel_key(spec).encode())
+    for path in (Path(c_source.__file__), Path(__file__)):
+        digest.update(path.read_bytes())
+    digest.update(f"{compiler} {os.path.getmtime(compiler)} {FLAGS}".encode())
+    return codegen.cache_dir() / f"{codegen.module_name(spec)}-c{digest.hexdigest()[:12]}" \
+        f"{_suffix()}"
+
+
+def _build(module: ModuleType, target: Path, compiler: str) -> str:
+    """Translate the entry points, compile them into ``target`` (atomically) and return
+    the header; the header is written beside it first."""
+    from .c_source import translate
+
+    unit = translate(_roots(module))
+    header = target.with_suffix(".h")
+    folder = target.parent
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".cbuild-") as tmp:
+        source = Path(tmp) / "kernel.c"
+        source.write_text(unit.source, encoding="utf-8")
+        built = Path(tmp) / f"kernel{_suffix()}"
+        compile_library(compiler, [source], built, FLAGS)
+        staged_header = Path(tmp) / "kernel.h"
+        staged_header.write_text(unit.header, encoding="utf-8")
+        os.replace(staged_header, header)
+        os.replace(built, target)
+    return unit.header
+
+
+def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:
+    """The C kernel of ``spec``: loaded from the disk cache, else built (translated and
+    compiled) once per machine. Raises ``CSourceError`` for a construct the back end does
+    not translate, ``CBuildError`` when the compiler is missing or fails."""
+    path = compiler_path(compiler)
+    if path is None:
+        raise CBuildError(missing_compiler(compiler))
+    module = codegen.load(spec)
+    target = library_path(spec, path)
+    with _LOCK:
+        kernel = _KERNELS.get(str(target))
+        if kernel is not None:
+            return kernel
+        header = target.with_suffix(".h")
+        if not (target.exists() and header.exists()):
+            target.parent.mkdir(parents=True, exist_ok=True)
+            with file_lock(target.with_name(f".{target.stem}.lock")):
+                if not (target.exists() and header.exists()):
+                    _build(module, target, path)
+        kernel = CKernel(module, target, header.read_text(encoding="utf-8"))
+        _KERNELS[str(target)] = kernel
+        return kernel
+
+
+def engine_kernel(spec: codegen.KernelSpec, engine: str) -> Kernel:
+    """The kernel of ``spec`` on ``engine`` (``auto``: C when it can, else numba with an
+    ``EngineWarning`` saying why, once per reason)."""
+    engine = check_engine(engine)
+    if engine == "numba":
+        return codegen.load(spec)
+    if engine == "c":
+        return c_kernel(spec)
+    from .c_source import CSourceError
+
+    refusal = (spec.label, os.environ.get("CC"))  # the reason depends on the compiler
+    reason = _REFUSED.get(refusal)
+    if reason is None:
+        try:
+            return c_kernel(spec)
+        except (CSourceError, CBuildError, OSError) as error:
+            reason = _REFUSED[refusal] = str(error).strip().splitlines()[0]
+            warnings.warn(f"the C engine cannot run kernel {spec.label} here ({reason}); the "
+                          f"numba engine runs it (set {ENGINE_VARIABLE}=numba to silence this)",
+                          EngineWarning, stacklevel=3)
+    return codegen.load(spec)
+
