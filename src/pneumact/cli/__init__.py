@@ -125,8 +125,7 @@ app = typer.Typer(
 
 
 #: said before the first compilation the disk cache cannot spare (a cold start)
-COMPILING = ("compiling the model (once on this machine, about a minute; later runs load "
-             "it in seconds)")
+COMPILING = ("compiling the model (once on this machine; later runs load it at once)")
 
 
 def _version(value: bool) -> None:
@@ -139,10 +138,23 @@ def _version(value: bool) -> None:
 def main(
     version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
                                           help="Print the version and exit.")] = False,
+    engine: Annotated[str | None, typer.Option(
+        "--engine", help="Where the model's equations run: 'c' (built once per model with "
+        "the C compiler, seconds), 'numba' (compiled once per model, about a minute) or "
+        "'auto' (C where a compiler is found, else numba). Default: $PNEUMACT_ENGINE, "
+        "else auto.")] = None,
 ) -> None:
     """Pneumatic diaphragm actuators with LuGre friction."""
+    import os
+
+    from pneumact.core.c_engine import ENGINE_VARIABLE, ENGINES
     from pneumact.core.compile_lock import on_first_compile
 
+    if engine is not None:
+        if engine not in ENGINES:
+            raise typer.BadParameter(f"{engine!r} is not one of {', '.join(ENGINES)}",
+                                     param_hint="--engine")
+        os.environ[ENGINE_VARIABLE] = engine  # this process, its threads and its workers
     show_estimates()
     on_first_compile(lambda: err_console.print(COMPILING, style="yellow"))
 

@@ -42,7 +42,7 @@ from ..errors import ArgumentError, EngineWarning
 from . import codegen
 from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
 from .c_build import shared_library_suffix as _suffix
-from .compile_lock import file_lock
+from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
            "c_kernel", "check_engine", "current_engine", "engine_kernel",
@@ -309,6 +309,7 @@ def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:
             target.parent.mkdir(parents=True, exist_ok=True)
             with file_lock(target.with_name(f".{target.stem}.lock")):
                 if not (target.exists() and header.exists()):
+                    announce_build()
                     _build(module, target, path)
         kernel = CKernel(module, target, header.read_text(encoding="utf-8"))
         _KERNELS[str(target)] = kernel

@@ -29,7 +29,7 @@ try:
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["compile_one_process_at_a_time", "file_lock", "on_first_compile"]
+__all__ = ["announce_build", "compile_one_process_at_a_time", "file_lock", "on_first_compile"]
 
 #: lock file -> (descriptor, depth) of the locks this process holds
 _HELD: dict[Path, tuple[int, int]] = {}
@@ -45,6 +45,13 @@ def on_first_compile(notice: Callable[[], None] | None) -> None:
     _NOTICE.clear()
     if notice is not None:
         _NOTICE.append(notice)
+
+
+def announce_build() -> None:
+    """Say (once per process, through ``on_first_compile``'s notice) that a build the disk
+    cache cannot spare starts now: the C engine's, which does not go through numba."""
+    if _NOTICE:
+        _NOTICE.pop()()
 
 
 def _in_disk_cache(dispatcher: Any, sig: Any) -> bool:

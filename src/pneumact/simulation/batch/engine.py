@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ...core.assembly import assemble
+from ...core.c_engine import check_engine
 from ...core.features import FEATURE_UNITS
 from ...errors import ArgumentError, ArgumentTypeError, PneumactError
 from ...experiments.actuator import Experiment
@@ -169,7 +170,8 @@ def check_outputs(model, experiment, features=(), signals=(), *, reference: bool
         raise
 
 
-def _plan(model, experiment, table, features, signals, t_eval, solver, reference, y0):
+def _plan(model, experiment, table, features, signals, t_eval, solver, reference, y0,
+          engine: str = "auto"):
     """(spec, values, runner): the checked batch and its prepared kernel."""
     assembly = assemble(model)
     columns, values = check_table(table, assembly)
@@ -181,7 +183,8 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
                               type(model).__name__)
     t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
     y0 = None if y0 is None else np.asarray(y0, dtype=float)
-    spec = BatchSpec(model, experiment, solver, columns, features, (), t_eval, reference, y0)
+    spec = BatchSpec(model, experiment, solver, columns, features, (), t_eval, reference, y0,
+                     engine)
     runner = ChunkRunner(spec)  # prepares the kernel (and checks the experiment) up front
     spec = replace(spec, signals=check_names("signal", signals or (),
                                              signal_names(model, experiment)))
@@ -260,7 +263,7 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
                    executor: Executor | int | str | None = None,
                    checkpoint: Checkpoint | str | os.PathLike | None = None,
                    progress: ProgressCallback | None = None,
-                   reference=None, y0=None) -> BatchResult:
+                   reference=None, y0=None, engine: str | None = None) -> BatchResult:
     """Simulate ``model`` under ``experiment`` once per row of ``table``.
 
     ``table``: one column per parameter name (SI values), one row per set. ``features``:
@@ -273,7 +276,8 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     (or a folder) makes the batch resumable: ``Checkpoint(folder, resume=True)``
     continues it, ``overwrite=True`` starts it again. ``progress`` is
     called with a ``pneumact.progress.Progress`` (stage "batch", sets done of all, failed
-    sets) after each chunk. ``y0`` fixes the initial state of every run.
+    sets) after each chunk. ``y0`` fixes the initial state of every run. ``engine``: as
+    ``simulate``'s ('c', 'numba', 'auto'; None: ``PNEUMACT_ENGINE``).
     """
     started = _time.perf_counter()
     solver = _checked_solver(solver)
@@ -285,8 +289,9 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     overwrite = checkpoint is not None and checkpoint.overwrite
     chunk_size = executor.chunk_size
     scheduler = executor.scheduler
+    engine = check_engine(engine, "simulate_batch: engine")
     spec, values, runner = _plan(model, experiment, table, features, signals, t_eval, solver,
-                                 reference, y0)
+                                 reference, y0, engine)
     n, n_t = values.shape[0], runner.t_out.size
     check_memory(batch_bytes(n, len(spec.signals), n_t, len(spec.features)),
                  f"simulate_batch: {n} sets x {len(spec.signals)} signals x {n_t} times")

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...core.c_engine import engine_scope
 from ...core.features import FEATURES, N_FEATURES, all_features
 from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
@@ -67,7 +68,8 @@ class ChunkRunner:
 
     def __init__(self, spec: BatchSpec):
         self.spec = spec
-        prep = prepare(spec.model, spec.experiment, spec.solver, spec.t_eval, spec.y0)
+        with engine_scope(spec.engine):
+            prep = prepare(spec.model, spec.experiment, spec.solver, spec.t_eval, spec.y0)
         self.prep = prep
         assembly = prep.assembly
         slot_ptr, slot_idx = assembly.column_slots(spec.columns)

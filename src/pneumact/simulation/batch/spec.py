@@ -39,6 +39,8 @@ class BatchSpec:
     t_eval: np.ndarray | None = None
     reference: tuple[np.ndarray, np.ndarray] | None = None
     y0: np.ndarray | None = None
+    #: the kernel's engine (``core.c_engine``); not in ``describe``: both give the same runs
+    engine: str = "auto"
 
     def describe(self) -> dict[str, Any]:
         """JSON-able description (large arrays hashed) for the manifest and caching."""
