@@ -26,6 +26,7 @@ import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from types import ModuleType
 
 import numpy as np
 
@@ -254,6 +255,11 @@ class Assembly:
                 if kernel is None:
                     kernel = self._kernels[engine] = engine_kernel(self._spec, engine)
         return kernel
+
+    @property
+    def numba_kernel(self) -> ModuleType:
+        """The numba kernel module (what the C back end translates, what the FMU carries)."""
+        return codegen.load(self._spec)
 
     @cached_property
     def _spec(self) -> codegen.KernelSpec:

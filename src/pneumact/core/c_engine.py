@@ -29,7 +29,7 @@ import re
 import tempfile
 import threading
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
@@ -108,8 +108,9 @@ def _array_struct(element: type, ndim: int) -> type[ctypes.Structure]:
 
 
 #: the back end's array struct names -> (numpy dtype, ctypes element)
-_ELEMENTS = {"float64": (np.float64, ctypes.c_double), "int64": (np.int64, ctypes.c_int64),
-             "bool": (np.bool_, ctypes.c_uint8)}
+_ELEMENTS: dict[str, tuple[Any, Any]] = {
+    "float64": (np.float64, ctypes.c_double), "int64": (np.int64, ctypes.c_int64),
+    "bool": (np.bool_, ctypes.c_uint8)}
 _SCALARS: dict[str, Any] = {"double": ctypes.c_double, "float": ctypes.c_float,
                             "int64_t": ctypes.c_int64, "int": ctypes.c_int}
 
@@ -243,7 +244,7 @@ Kernel = ModuleType | CKernel
 
 
 # ------------------------------------------------------------------------------- building
-def _roots(module: ModuleType) -> dict[str, tuple[Callable, tuple]]:
+def _roots(module: ModuleType) -> dict[str, tuple[Callable, Sequence]]:
     from numba.core import types
 
     f64, vector, matrix = types.float64, types.float64[::1], types.float64[:, ::1]
@@ -255,7 +256,8 @@ def _roots(module: ModuleType) -> dict[str, tuple[Callable, tuple]]:
         "outputs": (*run, vector),
         "integrate_rodas4": (vector, vector, vector, indices, vector, vector, f64, vector, f64,
                              f64, types.int64, matrix, matrix, vector)}
-    return {PREFIX + name: (getattr(module, name), signatures[name]) for name in ENTRY_POINTS}
+    return {PREFIX + name: (getattr(module, name), signatures[name]) for name in ENTRY_POINTS
+            if getattr(module, name, None) is not None}  # a friction law alone has no integrator
 
 
 def library_path(spec: codegen.KernelSpec, compiler: str) -> Path:

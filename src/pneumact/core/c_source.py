@@ -609,8 +609,10 @@ class _FunctionWriter:
                 return " * ".join(f"{arr}.shape[{k}]" for k in range(base_type.ndim))
             if expr.attr == "ndim":
                 return str(base_type.ndim)
-        if isinstance(base_type, types.BaseNamedTuple) and expr.attr in base_type.fields:
-            return f"{self.var(expr.value)}.f{base_type.fields.index(expr.attr)}"
+        fields = getattr(base_type, "fields", ()) if isinstance(base_type, types.BaseNamedTuple) \
+            else ()
+        if expr.attr in fields:  # a namedtuple's member
+            return f"{self.var(expr.value)}.f{fields.index(expr.attr)}"
         base = self.objects.get(expr.value.name)
         if base is not None and isinstance(getattr(base, expr.attr, None), int | float):
             return self.literal(getattr(base, expr.attr), self.type_of(target))

@@ -363,7 +363,7 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
         slot_ptr.append(len(slots))
     nominals = [v.nominal for v in variables if v.kind == "state"]
     me, cs = KINDS[kind]
-    kernel = asm.kernel_on("numba")  # the C back end translates the numba kernel
+    kernel = asm.numba_kernel  # the C back end translates the numba kernel
     solver = Rodas4()
     status_text = ", ".join(_c_string(kernel.STATUS_TEXT.get(code, "unknown status"))
                             for code in range(1, max(kernel.STATUS_TEXT) + 1))
@@ -531,7 +531,7 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
         compiler = find_compiler(compiler)
         fmi_headers()
     asm = assemble(fmu_model)
-    kernel = asm.kernel_on("numba")  # the C back end translates the numba kernel
+    kernel = asm.numba_kernel  # the C back end translates the numba kernel
     vec = asm.pack()
     sig, ptr = pack_channels(fmu_model.channels(Constant(0.0)))
     variables = all_variables(fmu_model, asm, kernel, vec, ptr, starts)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.c_engine import Kernel
 from ..io.report import ResultVocabulary, table_writer
 
 if TYPE_CHECKING:
@@ -36,7 +36,7 @@ class SolverStats:
         return self.status == 0
 
     @classmethod
-    def from_info(cls, kernel: ModuleType, info: np.ndarray) -> SolverStats:
+    def from_info(cls, kernel: Kernel, info: np.ndarray) -> SolverStats:
         status = int(info[kernel.INFO_STATUS])
         return cls(status=status,
                    reason="ok" if status == 0 else kernel.STATUS_TEXT.get(status, "unknown"),

@@ -5,7 +5,6 @@ from __future__ import annotations
 import time as _time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from types import ModuleType
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
@@ -18,7 +17,7 @@ from ..checks import (
     shown,
 )
 from ..core.assembly import Assembly, assemble
-from ..core.c_engine import check_engine, engine_scope
+from ..core.c_engine import Kernel, check_engine, engine_scope
 from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
@@ -143,7 +142,7 @@ class Prepared:
     """Everything a kernel call needs, as arrays, with the assembly that made them."""
 
     assembly: Assembly
-    kernel: ModuleType
+    kernel: Kernel
     vector: np.ndarray
     sig: np.ndarray
     ptr: np.ndarray
