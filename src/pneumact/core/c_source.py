@@ -20,6 +20,12 @@ those live in an arena (``pa_arena``) that a function which allocates takes as i
 parameter, down to its entry point; the caller resets the arena between calls (the memory
 is kept) and frees it at the end. Anything else is refused with the construct and the
 function named (``CSourceError``), never translated approximately.
+
+Nothing is compiled to machine code on the way: numba types a call of a compiled
+function by compiling that function, so the functions a root calls are typed through
+typing-only stand-ins of their dispatchers (``_TypingOnly``, in copies of their
+namespaces), each function once per argument types; the C is the same as when numba
+compiles them.
 """
 
 from __future__ import annotations
@@ -338,7 +344,7 @@ class _TypingOnly(registry.CPUDispatcher):
                 self._typed[args] = self._shadows.typed_ir(self.py_func, args)[3]
             except numba.core.errors.ForceLiteralArg as error:  # as Dispatcher.compile does
                 raise error.bind_fold_arguments(
-                    lambda a, k: self._compiler.fold_argument_types(a, k)[1]) from None
+                    lambda a, k: self.fold_argument_types(a, k)[1]) from None
             finally:
                 self._typing.discard(args)
         return None
@@ -832,7 +838,8 @@ class _FunctionWriter:
 
 def translate(roots: dict[str, tuple[Callable, Sequence]]) -> CUnit:
     """C source of the functions ``roots`` (entry name -> (a compiled kernel function
-    or its Python function, numba argument types)) and of everything they call."""
+    or its Python function, numba argument types)) and of everything they call. The
+    functions are typed, not compiled: numba compiles none of them for this."""
     return _translate(roots, _Shadows())
 
 
