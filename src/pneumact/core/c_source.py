@@ -382,8 +382,8 @@ class _Shadows:
         if id(py_func) not in self.functions:
             closure = py_func.__closure__
             if closure is not None:
-                closure = tuple(pytypes.CellType(self.stand_in(c.cell_contents))
-                                if _is_dispatcher(c.cell_contents) else c for c in closure)
+                closure = tuple(pytypes.CellType(self.stand_in(_contents(c)))
+                                if _is_dispatcher(_contents(c)) else c for c in closure)
             namespace = self.namespace(py_func.__globals__)
             if id(py_func) in self.functions:  # rebound meanwhile: it is in that namespace
                 return self.functions[id(py_func)][1]
@@ -419,6 +419,14 @@ class _Shadows:
 
 def _is_dispatcher(value: Any) -> bool:
     return isinstance(value, registry.CPUDispatcher) and not isinstance(value, _TypingOnly)
+
+
+def _contents(cell: Any) -> Any:
+    """What a closure cell holds (None for an empty cell)."""
+    try:
+        return cell.cell_contents
+    except ValueError:
+        return None
 
 
 class _FunctionWriter:
