@@ -7,6 +7,7 @@
   and step counts equal the numba kernel's (a change to the C side's step control fails
   here).
 - A step the integrator cannot finish is fmi2Error with the reason, the state kept.
+- Translating a kernel to C compiles none of its functions with numba (they are typed).
 - ``pneumact export fmu --kind --fmi``; a wrong kind or version is refused.
 - FMI 3.0 from the same C: FMPy's validation passes, its CS run is the FMI 2.0 one's, its
   ME run agrees with pa.simulate; the sources alone build from the FMI 3.0 build
@@ -18,6 +19,7 @@ from __future__ import annotations
 import ctypes
 import shutil
 import subprocess
+import sys
 import zipfile
 
 import numpy as np
@@ -174,6 +176,34 @@ def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
     assert info[kernel.INFO_STEPS] > 100
     for c_values, values in ((c_end, end), (c_states, states), (c_outputs, outputs)):
         assert np.allclose(c_values, values, rtol=ref.FMU_KERNEL_RTOL, atol=0)
+
+
+TRANSLATE_FRESH = """
+import sys, warnings
+warnings.simplefilter("ignore")
+import pneumact as pa
+from numba.core.registry import CPUDispatcher
+from pneumact.core.assembly import assemble
+from pneumact.core.c_source import translate
+from pneumact.export.fmu import kernel_roots
+kernel = assemble(pa.Actuator(pa.load_params("vgt-paper"), valve=pa.PressureRegulator())).kernel
+unit = translate(kernel_roots(kernel, False, cosimulation=True))
+compiled = sorted(f"{m.__name__}.{n}" for m in list(sys.modules.values())
+                  if getattr(m, "__name__", "").startswith("pneumact")
+                  for n, v in vars(m).items() if isinstance(v, CPUDispatcher) and v.signatures)
+print(len(unit.source), compiled)
+"""
+
+
+def test_translating_a_kernel_compiles_none_of_its_functions():
+    """A fresh process translates the regulator's kernel and its integrator to C: no
+    function of the kernel, of its templates or of the component modules has a compiled
+    overload afterwards (numba's disk cache is not even read: nothing is compiled), so
+    a first translation costs numba's typing, not its code generation."""
+    run = subprocess.run([sys.executable, "-c", TRANSLATE_FRESH], capture_output=True,
+                         text=True, check=True, timeout=600)
+    size, compiled = run.stdout.strip().split(" ", 1)
+    assert int(size) > 100_000 and compiled == "[]"
 
 
 def test_a_failed_step_is_an_error_with_the_reason(cosimulation, tmp_path):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import re
 import shutil
 import subprocess
 
@@ -19,7 +20,7 @@ import pytest
 from numba import njit
 from numba.core import types
 
-from pneumact.core.c_source import Arena, CSourceError, translate
+from pneumact.core.c_source import Arena, CSourceError, _Shadows, _translate, translate
 
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler (install gcc or clang)")
@@ -194,3 +195,86 @@ def test_allocations_views_and_constants_are_python_s(tmp_path):
 def test_an_allocation_it_does_not_know_is_refused():
     with pytest.raises(CSourceError, match=r"ones.*a call of"):
         translate({"c_ones": (ones, (I64,))})
+
+
+# -- typing without compiling ------------------------------------------------------------
+# Functions no other test calls: numba has compiled none of them when the test starts.
+@njit
+def _twice(x):
+    return 2.0 * x
+
+
+@njit(inline="always")
+def _inlined_step(x, k):
+    return _twice(x) + k  # a call in an inlined function: in the inlined code
+
+
+def _closing_over(callee):
+    @njit
+    def through_closure(x):
+        return callee(x) - 1.0  # a compiled function in a closure cell
+    return through_closure
+
+
+_from_closure = _closing_over(_twice)
+
+
+@njit
+def typed_not_compiled(x, n):
+    total = 0.0
+    for k in range(n):
+        total += _inlined_step(x, k)
+    return total + _from_closure(x) + _pair(n, 3)[1]
+
+
+def test_what_a_root_calls_is_typed_not_compiled(tmp_path):
+    """numba types a call of a compiled function by compiling it; the translation types
+    the functions a root calls with stand-ins instead: the root, the function it calls,
+    one inlined into it, and one in a closure are left without a compiled overload, and
+    the C still computes what numba does."""
+    fresh = (typed_not_compiled, _inlined_step, _twice, _from_closure)
+    assert [f.signatures for f in fresh] == [[]] * len(fresh)
+    unit = translate({"c_typed": (typed_not_compiled, (F64, I64))})
+    assert [f.signatures for f in fresh] == [[]] * len(fresh)
+    (tmp_path / "unit.c").write_text(unit.source)
+    subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(tmp_path / "unit.so"),
+                    str(tmp_path / "unit.c"), "-lm"], check=True)
+    lib = ctypes.CDLL(str(tmp_path / "unit.so"))
+    lib.c_typed.restype = ctypes.c_double
+    for x, n in ((1.5, 4), (-0.25, 7), (3.0, 0)):
+        assert lib.c_typed(ctypes.c_double(x), ctypes.c_int64(n)) == typed_not_compiled(x, n)
+
+
+def _same_code(source: str) -> str:
+    """``source`` without what numba numbers process-wide: the IR variable names in the C
+    variables' names (``v12_name`` -> ``v12``) and the block labels (renumbered in order
+    of appearance)."""
+    source = re.sub(r"\bv(\d+)_\w+", r"v\1", source)
+    labels: dict[str, int] = {}
+    return re.sub(r"\bL(\d+)\b",
+                  lambda m: f"L{labels.setdefault(m.group(1), len(labels))}", source)
+
+
+@njit(inline="always")
+def _inlined_pair(a, b):
+    return _pair(a + 1, b)
+
+
+@njit
+def with_inlined(a, b):
+    q, r = _inlined_pair(a, b)
+    return q + _pair(q, b)[1] * 10 + r
+
+
+def test_the_stand_ins_give_the_code_that_compiling_the_callees_gives():
+    """The same C, function for function, whether the callees are typed by stand-ins or
+    compiled by numba (what the back end did before the stand-ins: it compiles them, so
+    the functions here are not those of the test before)."""
+    roots = {"c_integer": (integer_semantics, (I64, I64)),
+             "c_pair": (_pair, (I64, I64)),  # a root that another calls: one C function
+             "c_inlined": (with_inlined, (I64, I64)),
+             "c_last": (last_and_sum, (types.float64[::1],)),
+             "c_allocating": (allocating, (types.float64[::1], types.none))}
+    typed = translate(roots).source
+    compiled = _translate(roots, _Shadows(enabled=False)).source
+    assert _same_code(typed) == _same_code(compiled)

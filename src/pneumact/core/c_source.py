@@ -20,6 +20,12 @@ those live in an arena (``pa_arena``) that a function which allocates takes as i
 parameter, down to its entry point; the caller resets the arena between calls (the memory
 is kept) and frees it at the end. Anything else is refused with the construct and the
 function named (``CSourceError``), never translated approximately.
+
+Nothing is compiled to machine code on the way: numba types a call of a compiled
+function by compiling that function, so the functions a root calls are typed through
+typing-only stand-ins of their dispatchers (``_TypingOnly``, in copies of their
+namespaces), each function once per argument types; the C is the same as when numba
+compiles them.
 """
 
 from __future__ import annotations
@@ -30,13 +36,14 @@ import itertools
 import math
 import operator
 import re
+import types as pytypes
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numba
 import numpy as np
-from numba.core import ir, registry, types
+from numba.core import ir, registry, sigutils, types
 from numba.core.compiler import CompilerBase, DefaultPassBuilder, Flags, compile_extra
 from numba.core.compiler_machinery import FunctionPass, PassManager, register_pass
 from numba.core.typed_passes import AnnotateTypes
@@ -163,7 +170,8 @@ class _Function:
 
 
 class _Translator:
-    def __init__(self):
+    def __init__(self, shadows: _Shadows):
+        self.shadows = shadows
         self.structs: dict[object, tuple[str, str]] = {}
         self.functions: dict[tuple, _Function] = {}
         self.order: list[tuple] = []
@@ -291,18 +299,134 @@ class _TypedIR(CompilerBase):
 
 def _typed_ir(py_func: Callable, argtypes: tuple):
     """numba's typed IR of ``py_func`` for ``argtypes`` (blocks, variable types, call
-    signatures, the function's signature). A kernel's cached dispatchers keep no IR, so
-    the function is typed afresh; what it calls is typed through those dispatchers."""
+    signatures, the function's signature), typed afresh: a kernel's cached dispatchers
+    keep no IR. A TypingError is left as it is (``_Shadows.typed_ir`` names it)."""
     target = registry.cpu_target
     flags = Flags()
     # a function may return an array it allocates (the integrator's state)
     flags.nrt = True  # type: ignore[misc, assignment]  # numba's Flags declare options so
-    try:
-        annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
-                                   argtypes, None, flags, {}, pipeline_class=_TypedIR)
-    except numba.core.errors.TypingError as error:
-        raise CSourceError(f"{py_func.__qualname__}{argtypes}: {error}") from error
+    annotation, typed = compile_extra(target.typing_context, target.target_context, py_func,
+                                      argtypes, None, flags, {}, pipeline_class=_TypedIR)
     return annotation.blocks, annotation.typemap, annotation.calltypes, typed
+
+
+class _TypingOnly(registry.CPUDispatcher):
+    """The stand-in of a compiled function while one ``translate`` types what it calls.
+
+    numba types a call of a dispatcher by compiling the dispatcher for the argument
+    types (``Dispatcher.get_call_template`` calls ``compile``, then offers the
+    signatures of its overloads): machine code for every function a kernel calls, most
+    of the time a translation takes. This subclass's ``compile`` only types the
+    function (``_Shadows.typed_ir``, no lowering) and records the signature, which is
+    what the call template offers; nothing is compiled and the original dispatcher is
+    left as it was. Its ``py_func`` is the original's function rebound to a copy of its
+    globals in which compiled functions are stand-ins too (``_Shadows.function``), so
+    what it calls, and what an ``inline="always"`` function inlined into it calls, is
+    typed the same way."""
+
+    def __init__(self, original: Any, py_func: Callable, shadows: _Shadows):
+        super().__init__(py_func, locals=dict(original.locals),
+                         targetoptions=dict(original.targetoptions))
+        self.original = original
+        self._shadows = shadows
+        self._typed: dict[tuple, Any] = {}  # argument types -> signature
+        self._typing: set[tuple] = set()
+
+    def compile(self, sig):
+        args, _ = sigutils.normalize_signature(sig)
+        args = tuple(args)
+        if args not in self._typed:
+            if args in self._typing:
+                raise CSourceError(f"{self.py_func.__qualname__} calls itself; the C back "
+                                   "end does not type recursive functions")
+            self._typing.add(args)
+            try:
+                self._typed[args] = self._shadows.typed_ir(self.py_func, args)[3]
+            except numba.core.errors.ForceLiteralArg as error:  # as Dispatcher.compile does
+                raise error.bind_fold_arguments(
+                    lambda a, k: self.fold_argument_types(a, k)[1]) from None
+            finally:
+                self._typing.discard(args)
+        return None
+
+    @property
+    def nopython_signatures(self):
+        return list(self._typed.values())
+
+
+class _Shadows:
+    """The typing of one ``translate``: each compiled function's stand-in
+    (``_TypingOnly``), each namespace's copy that holds the stand-ins, and each function's
+    typed IR per argument types, typed once (the stand-in types a callee for its caller's
+    typing; the C writer reads the same IR). With ``enabled`` False functions are typed
+    in their own globals, and numba compiles what they call (the way before stand-ins:
+    the tests compare the two)."""
+
+    def __init__(self, enabled: bool = True):
+        self.enabled = enabled
+        self.dispatchers: dict[int, tuple[Any, _TypingOnly]] = {}  # id -> (original, shadow)
+        self.namespaces: dict[int, tuple[dict, dict]] = {}  # id -> (original, copy)
+        self.functions: dict[int, tuple[Callable, Callable]] = {}  # id -> (original, rebound)
+        self.typed: dict[tuple, tuple] = {}
+
+    def typed_ir(self, py_func: Callable, argtypes: tuple) -> tuple:
+        key = (py_func, argtypes)
+        if key not in self.typed:
+            self.typed[key] = _typed_ir(py_func, argtypes)
+        return self.typed[key]
+
+    def function(self, py_func: Callable) -> Callable:
+        """``py_func`` rebound to the copy of its globals that holds stand-ins."""
+        if not self.enabled or not isinstance(py_func, pytypes.FunctionType):
+            return py_func
+        if id(py_func) not in self.functions:
+            closure = py_func.__closure__
+            if closure is not None:
+                closure = tuple(pytypes.CellType(self.stand_in(_contents(c)))
+                                if _is_dispatcher(_contents(c)) else c for c in closure)
+            namespace = self.namespace(py_func.__globals__)
+            if id(py_func) in self.functions:  # rebound meanwhile: it is in that namespace
+                return self.functions[id(py_func)][1]
+            rebound = pytypes.FunctionType(py_func.__code__, namespace, py_func.__name__,
+                                           py_func.__defaults__, closure)
+            rebound.__qualname__ = py_func.__qualname__
+            rebound.__module__ = py_func.__module__
+            rebound.__doc__ = py_func.__doc__
+            rebound.__kwdefaults__ = py_func.__kwdefaults__
+            rebound.__dict__.update(py_func.__dict__)
+            self.functions[id(py_func)] = (py_func, rebound)
+            self.functions[id(rebound)] = (rebound, rebound)
+        return self.functions[id(py_func)][1]
+
+    def namespace(self, original: dict) -> dict:
+        """The copy of a namespace in which every compiled function is its stand-in."""
+        if id(original) not in self.namespaces:
+            copy = dict(original)
+            self.namespaces[id(original)] = (original, copy)
+            for name, value in original.items():
+                if _is_dispatcher(value):
+                    copy[name] = self.stand_in(value)
+        return self.namespaces[id(original)][1]
+
+    def stand_in(self, dispatcher: Any) -> Any:
+        if id(dispatcher) not in self.dispatchers:
+            py_func = self.function(dispatcher.py_func)
+            if id(dispatcher) not in self.dispatchers:  # else made meanwhile, for its module
+                shadow = _TypingOnly(dispatcher, py_func, self)
+                self.dispatchers[id(dispatcher)] = (dispatcher, shadow)
+        return self.dispatchers[id(dispatcher)][1]
+
+
+def _is_dispatcher(value: Any) -> bool:
+    return isinstance(value, registry.CPUDispatcher) and not isinstance(value, _TypingOnly)
+
+
+def _contents(cell: Any) -> Any:
+    """What a closure cell holds (None for an empty cell)."""
+    try:
+        return cell.cell_contents
+    except ValueError:
+        return None
 
 
 class _FunctionWriter:
@@ -312,7 +436,11 @@ class _FunctionWriter:
         self.unit = unit
         self.py_func = py_func
         self.where = f"{py_func.__module__}.{py_func.__qualname__}"
-        self.blocks, self.typemap, self.calltypes, self.signature = _typed_ir(py_func, argtypes)
+        try:
+            typed = unit.shadows.typed_ir(py_func, argtypes)
+        except numba.core.errors.TypingError as error:
+            raise CSourceError(f"{py_func.__qualname__}{argtypes}: {error}") from error
+        self.blocks, self.typemap, self.calltypes, self.signature = typed
         self.out = out
         self.names: dict[str, str] = {}
         self.objects: dict[str, object] = {}  # variables bound to a function or module
@@ -680,7 +808,10 @@ class _FunctionWriter:
         if isinstance(fn, numba.core.registry.CPUDispatcher):
             args = [self.coerce(a, t) for a, t in zip(expr.args, signature.args, strict=True)
                     if self.unit.ctype(t) is not None]
-            callee = self.unit.function(fn.py_func, signature.args)
+            # a stand-in's function is typed already; a dispatcher that is no stand-in (one
+            # reached otherwise than as a global) was compiled by numba: its function is
+            # rebound, so that it is one C function with what reaches it as a stand-in
+            callee = self.unit.function(self.unit.shadows.function(fn.py_func), signature.args)
             if callee.arena:
                 self.out.arena = True
                 args.insert(0, "pa_mem")
@@ -725,10 +856,15 @@ class _FunctionWriter:
 
 def translate(roots: dict[str, tuple[Callable, Sequence]]) -> CUnit:
     """C source of the functions ``roots`` (entry name -> (a compiled kernel function
-    or its Python function, numba argument types)) and of everything they call."""
-    unit = _Translator()
+    or its Python function, numba argument types)) and of everything they call. The
+    functions are typed, not compiled: numba compiles none of them for this."""
+    return _translate(roots, _Shadows())
+
+
+def _translate(roots: dict[str, tuple[Callable, Sequence]], shadows: _Shadows) -> CUnit:
+    unit = _Translator(shadows)
     for entry, (function, argtypes) in roots.items():
-        py_func = getattr(function, "py_func", function)
+        py_func = shadows.function(getattr(function, "py_func", function))
         unit.entry(entry, unit.function(py_func, argtypes))
     return unit.unit()
 
