@@ -134,7 +134,8 @@ class _State(ctypes.Structure):
 def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
     """The FMU's model.c (its integrator translated from core/integrators.py), built here
     and called on a whole regulator cycle, gives the numba kernel's run: the same step
-    counts, states and outputs (bit-equal on x86-64 with gcc -O3, the FMU's flags)."""
+    counts, states and outputs (bit-equal on x86-64 with gcc -O3 -fno-tree-vectorize, the FMU's
+    flags)."""
     model, fmu = cosimulation["regulator"]
     source = zipfile.ZipFile(fmu.path).read("sources/model.c")
     (tmp_path / "model.c").write_bytes(source)

@@ -52,8 +52,9 @@ ENGINES = ("auto", "c", "numba")
 ENGINE_VARIABLE = "PNEUMACT_ENGINE"
 #: how the engine's libraries are compiled: no -ffast-math and ISO C (no contraction into
 #: fused multiply-adds), so the arithmetic is numba's; no -march=native, so a cache shared by
-#: machines with different CPUs stays valid (-O3: 1.02x numba's time per batch row, -O2 1.26x)
-FLAGS = ("-O3", "-std=c99", "-fPIC", "-shared")
+#: machines with different CPUs stays valid (-O3: 1.02x numba's time per batch row, -O2 1.26x);
+#: -fno-tree-vectorize as the FMU's (export/compiler.py: faster triangular solves)
+FLAGS = ("-O3", "-fno-tree-vectorize", "-std=c99", "-fPIC", "-shared")
 #: the functions the library carries
 ENTRY_POINTS = ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
                 "integrate_rodas4")

@@ -51,7 +51,14 @@ def lu_det_sign(a, piv, n):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def lu_solve(a, piv, b, n):  # pragma: no cover - compiled
-    """Solve in place with the factors of ``lu_factor``."""
+    """Solve in place with the factors of ``lu_factor``.
+
+    A zero factor is skipped, as ``lu_factor`` skips a zero multiplier: subtracting its
+    product changes nothing but the sign of a zero (and a NaN where b holds an infinity,
+    which the caller finds non-finite in that entry anyway). The systems of the stiff
+    friction laws are sparse (a GMS block's states couple only to the velocity), and each
+    row of the back substitution waits for the row below it: the rows' dependency chains
+    were most of a Co-Simulation step's time."""
     for k in range(n):
         p = piv[k]
         if p != k:
@@ -61,10 +68,14 @@ def lu_solve(a, piv, b, n):  # pragma: no cover - compiled
     for i in range(n):
         s = b[i]
         for j in range(i):
-            s -= a[i, j] * b[j]
+            f = a[i, j]
+            if f != 0.0:
+                s -= f * b[j]
         b[i] = s
     for i in range(n - 1, -1, -1):
         s = b[i]
         for j in range(i + 1, n):
-            s -= a[i, j] * b[j]
+            f = a[i, j]
+            if f != 0.0:
+                s -= f * b[j]
         b[i] = s * a[i, i]
