@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumact.core.linalg import lu_det_sign, lu_factor, lu_solve
 from pneumact.core.c_engine import FLAGS as ENGINE_FLAGS
+from pneumact.core.linalg import lu_det_sign, lu_factor, lu_solve
 from pneumact.export.compiler import FLAGS
 
 
