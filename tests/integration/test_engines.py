@@ -60,6 +60,21 @@ def test_the_c_engine_follows_numba(name):
     assert worst <= ref.ENGINE_AGREEMENT, (name, worst)
 
 
+@needs_compiler
+def test_sensitivities_are_the_same_on_both_engines():
+    """Forward sensitivities (their own library, built on first use) equal numba's, the
+    states' and the derived outputs' alike."""
+    model, experiment = _models()["command"]
+    runs = {engine: pa.simulate_sensitivities(model, experiment, ["sigma0", "Fc"],
+                                              engine=engine) for engine in ("c", "numba")}
+    kernel = assemble(model).kernel_on("c")
+    assert "integrate_rodas4_sens" in vars(kernel)  # the C function, not numba's
+    for signal in ("position", "velocity", "pressure", "friction"):
+        a, b = runs["c"][signal], runs["numba"][signal]
+        span = np.maximum(np.abs(b).max(axis=0), np.finfo(float).tiny)
+        assert np.max(np.abs(a - b) / span) <= ref.ENGINE_AGREEMENT, signal
+
+
 def test_an_unknown_engine_is_refused_naming_the_choices(monkeypatch):
     model, experiment = _models()["source"]
     with pytest.raises(ArgumentError, match=r"engine = 'fast'.*auto, c, numba"):

@@ -55,9 +55,11 @@ ENGINE_VARIABLE = "PNEUMACT_ENGINE"
 #: machines with different CPUs stays valid (-O3: 1.02x numba's time per batch row, -O2 1.26x);
 #: -fno-tree-vectorize as the FMU's (export/compiler.py: faster triangular solves)
 FLAGS = ("-O3", "-fno-tree-vectorize", "-std=c99", "-fPIC", "-shared")
-#: the functions the library carries
-ENTRY_POINTS = ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
-                "integrate_rodas4")
+#: the functions the libraries carry: one library per group, built on the group's first use
+GROUPS = {"run": ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
+                  "integrate_rodas4"),
+          "sensitivities": ("integrate_rodas4_sens", "output_sensitivities")}
+_GROUP_OF = {name: group for group, names in GROUPS.items() for name in names}
 PREFIX = "pa_"
 
 _LOCK = threading.RLock()
@@ -220,26 +222,58 @@ def _scalar(value: Any) -> Any:
 
 
 class CKernel:
-    """A kernel whose entry points run in the C library: attributes the library does not
-    carry (constants, other functions) are the numba kernel module's."""
+    """A kernel whose entry points run in C libraries: ``run``'s (everything a run needs)
+    at once, ``sensitivities``' on first use (a plain run does not wait for them);
+    attributes no library carries (constants, other functions) are the numba kernel
+    module's, as are a group's functions where the back end cannot translate them (with
+    an ``EngineWarning``)."""
 
     engine = "c"
 
-    def __init__(self, module: ModuleType, library: Path, header: str):
+    def __init__(self, module: ModuleType, spec: codegen.KernelSpec, compiler: str):
         self._module = module
-        self.library_path = library
-        self._library = ctypes.CDLL(str(library))
-        prototypes = {m.group(1): line for line in header.splitlines()
-                      if (m := re.match(rf"\w+ {PREFIX}(\w+)\(", line))}
-        for name in ENTRY_POINTS:
-            if name in prototypes:
-                setattr(self, name, CFunction(self._library, name, prototypes[name]))
+        self._spec = spec
+        self._compiler = compiler
+        self._groups: dict[str, Path | None] = {}
+        self._load("run")  # raises: without it the C engine cannot run the model
+
+    def _load(self, group: str) -> None:
+        with _LOCK:
+            if group in self._groups:
+                return
+            library, header = _library(self._module, self._spec, self._compiler, group)
+            handle = ctypes.CDLL(str(library))
+            prototypes = {m.group(1): line for line in header.splitlines()
+                          if (m := re.match(rf"\w+ {PREFIX}(\w+)\(", line))}
+            for name in GROUPS[group]:
+                if name in prototypes:
+                    setattr(self, name, CFunction(handle, name, prototypes[name]))
+            self._groups[group] = library
+
+    @property
+    def library_path(self) -> Path | None:
+        """The library of the ``run`` group."""
+        return self._groups.get("run")
 
     def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):  # not set yet (or a protocol lookup): not the module's
+            raise AttributeError(name)
+        group = _GROUP_OF.get(name)
+        if group is not None and group not in self.__dict__.get("_groups", {group: None}):
+            from .c_source import CSourceError
+
+            try:
+                self._load(group)
+                return self.__dict__[name]
+            except (CSourceError, CBuildError, OSError) as error:
+                self._groups[group] = None
+                reason = str(error).strip().splitlines()[0]
+                warnings.warn(f"the C engine cannot run {group} of kernel {self._spec.label} "
+                              f"here ({reason}); numba runs them", EngineWarning, stacklevel=2)
         return getattr(self._module, name)
 
     def __repr__(self) -> str:
-        return f"<C kernel {self._module.__name__} ({self.library_path.name})>"
+        return f"<C kernel {self._module.__name__}>"
 
 
 #: what a model's kernel is on either engine
@@ -247,77 +281,87 @@ Kernel = ModuleType | CKernel
 
 
 # ------------------------------------------------------------------------------- building
-def _roots(module: ModuleType) -> dict[str, tuple[Callable, Sequence]]:
+def _roots(module: ModuleType, group: str) -> dict[str, tuple[Callable, Sequence]]:
     from numba.core import types
 
     f64, vector, matrix = types.float64, types.float64[::1], types.float64[:, ::1]
-    indices = types.int64[::1]
+    indices, cube = types.int64[::1], types.float64[:, :, ::1]
     run = (f64, f64, vector, vector, vector, indices)
+    integrate = (vector, vector, vector, indices, vector, vector, f64, vector, f64, f64,
+                 types.int64, matrix, matrix, vector)
+    directions = (indices, indices, vector)
     signatures = {
         "derive": (vector,), "initial_state": (f64, f64, vector, vector, indices, vector),
         "state_scales": (vector, vector), "rhs": (*run, vector), "jac": (*run, matrix),
-        "outputs": (*run, vector),
-        "integrate_rodas4": (vector, vector, vector, indices, vector, vector, f64, vector, f64,
-                             f64, types.int64, matrix, matrix, vector)}
-    return {PREFIX + name: (getattr(module, name), signatures[name]) for name in ENTRY_POINTS
+        "outputs": (*run, vector), "integrate_rodas4": integrate,
+        "integrate_rodas4_sens": (*integrate, *directions, types.boolean[::1], matrix, cube),
+        "output_sensitivities": (vector, vector, matrix, cube, vector, vector, indices,
+                                 *directions, cube)}
+    return {PREFIX + name: (getattr(module, name), signatures[name]) for name in GROUPS[group]
             if getattr(module, name, None) is not None}  # a friction law alone has no integrator
 
 
-def library_path(spec: codegen.KernelSpec, compiler: str) -> Path:
-    """Where the C library of ``spec`` built by ``compiler`` lives (its name carries the
-    kernel's key extended by the C back end, this module, the compiler and its flags)."""
+def library_path(spec: codegen.KernelSpec, compiler: str, group: str = "run") -> Path:
+    """Where the C library of ``spec``'s ``group`` built by ``compiler`` lives (its name
+    carries the kernel's key extended by the C back end, this module, the compiler and
+    its flags)."""
     from . import c_source
 
     digest = hashlib.sha256(codegen.kernel_key(spec).encode())
     for path in (Path(c_source.__file__), Path(__file__)):
         digest.update(path.read_bytes())
     digest.update(f"{compiler} {os.path.getmtime(compiler)} {FLAGS}".encode())
+    tail = "" if group == "run" else f"-{group}"
     return codegen.cache_dir() / f"{codegen.module_name(spec)}-c{digest.hexdigest()[:12]}" \
-        f"{_suffix()}"
+        f"{tail}{_suffix()}"
 
 
-def _build(module: ModuleType, target: Path, compiler: str) -> str:
-    """Translate the entry points, compile them into ``target`` (atomically) and return
-    the header; the header is written beside it first."""
+def _build(module: ModuleType, group: str, target: Path, compiler: str) -> None:
+    """Translate ``group``'s entry points and compile them into ``target``, its header
+    beside it (both atomically, the header first)."""
     from .c_source import translate
 
-    unit = translate(_roots(module))
-    header = target.with_suffix(".h")
-    folder = target.parent
-    with tempfile.TemporaryDirectory(dir=folder, prefix=".cbuild-") as tmp:
+    unit = translate(_roots(module, group))
+    with tempfile.TemporaryDirectory(dir=target.parent, prefix=".cbuild-") as tmp:
         source = Path(tmp) / "kernel.c"
         source.write_text(unit.source, encoding="utf-8")
         built = Path(tmp) / f"kernel{_suffix()}"
         compile_library(compiler, [source], built, FLAGS)
         staged_header = Path(tmp) / "kernel.h"
         staged_header.write_text(unit.header, encoding="utf-8")
-        os.replace(staged_header, header)
+        os.replace(staged_header, target.with_suffix(".h"))
         os.replace(built, target)
-    return unit.header
+
+
+def _library(module: ModuleType, spec: codegen.KernelSpec, compiler: str, group: str
+             ) -> tuple[Path, str]:
+    """(library, header text) of ``spec``'s ``group``: from the disk cache, else built
+    once per machine (several processes at once build it once)."""
+    target = library_path(spec, compiler, group)
+    header = target.with_suffix(".h")
+    if not (target.exists() and header.exists()):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with file_lock(target.with_name(f".{target.stem}.lock")):
+            if not (target.exists() and header.exists()):
+                announce_build()
+                _build(module, group, target, compiler)
+    return target, header.read_text(encoding="utf-8")
 
 
 def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:
-    """The C kernel of ``spec``: loaded from the disk cache, else built (translated and
-    compiled) once per machine. Raises ``CSourceError`` for a construct the back end does
-    not translate, ``CBuildError`` when the compiler is missing or fails."""
+    """The C kernel of ``spec``: its libraries loaded from the disk cache, else built
+    (translated and compiled) once per machine. Raises ``CSourceError`` for a construct
+    the back end does not translate, ``CBuildError`` when the compiler is missing or
+    fails."""
     path = compiler_path(compiler)
     if path is None:
         raise CBuildError(missing_compiler(compiler))
     module = codegen.load(spec)
-    target = library_path(spec, path)
+    key = str(library_path(spec, path))
     with _LOCK:
-        kernel = _KERNELS.get(str(target))
-        if kernel is not None:
-            return kernel
-        header = target.with_suffix(".h")
-        if not (target.exists() and header.exists()):
-            target.parent.mkdir(parents=True, exist_ok=True)
-            with file_lock(target.with_name(f".{target.stem}.lock")):
-                if not (target.exists() and header.exists()):
-                    announce_build()
-                    _build(module, target, path)
-        kernel = CKernel(module, target, header.read_text(encoding="utf-8"))
-        _KERNELS[str(target)] = kernel
+        kernel = _KERNELS.get(key)
+        if kernel is None:
+            kernel = _KERNELS[key] = CKernel(module, spec, path)
         return kernel
 
 

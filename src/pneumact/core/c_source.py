@@ -698,6 +698,8 @@ class _FunctionWriter:
             return f"{self.var(expr.value)}.second"
         if op == "getattr":
             return self.attribute(target, expr)
+        if op == "null":  # a placeholder numba assigns before a variable's real value
+            return f"(({self.unit.ctype(self.type_of(target))}){{0}})"
         raise self.fail(f"the expression {expr!r}")
 
     def binary(self, fn, lhs: ir.Var, rhs: ir.Var, result) -> str:

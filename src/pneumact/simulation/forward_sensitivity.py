@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.c_engine import check_engine, engine_scope
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
 from ..progress import raise_if_stopped
@@ -163,16 +164,23 @@ def initial_sensitivity(prep: Prepared, names: Sequence[str]) -> np.ndarray:
 
 
 def simulate_sensitivities(model, experiment, parameters: Sequence[str], solver=None, *,
-                           t_eval=None, y0=None, values=None) -> SensitivityResult:
+                           t_eval=None, y0=None, values=None,
+                           engine: str | None = None) -> SensitivityResult:
     """Simulate and integrate ∂y/∂θ for ``parameters`` (any parameters of the model).
 
     Only the RODAS4 solver carries sensitivities. With ``y0`` given, the start does not
     depend on the parameters (∂y0/∂θ = 0). ``values`` overrides parameter values for
-    this run, as in ``simulate``.
+    this run and ``engine`` chooses where it runs, as in ``simulate``.
     """
+    raise_if_stopped()
+    with engine_scope(check_engine(engine, "simulate_sensitivities: engine")):
+        return _sensitivities(model, experiment, parameters, solver, t_eval, y0, values)
+
+
+def _sensitivities(model, experiment, parameters: Sequence[str], solver, t_eval, y0,
+                   values) -> SensitivityResult:
     from ..parameters import catalogue
 
-    raise_if_stopped()
     solver = Rodas4() if solver is None else solver
     if solver.kernel_function != "integrate_rodas4":
         raise ParameterError(f"sensitivities need the Rodas4 solver, got "
