@@ -237,7 +237,7 @@ class _Beside:
         self.jobs = jobs
         self.futures: dict = {}
         self.pool = None
-        if not (worker and BESIDE) or len(os.sched_getaffinity(0)) < 2:
+        if not (worker and BESIDE) or _cpus() < 2:
             return
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
@@ -281,6 +281,13 @@ class _Beside:
 
     def __exit__(self, *exc) -> None:
         self.close(stop=bool(self.futures))
+
+
+def _cpus() -> int:
+    """The CPUs this process may run on."""
+    if hasattr(os, "sched_getaffinity"):  # not on macOS or Windows
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
 
 
 #: Whether ``reproduce`` runs its independent jobs in a worker process (``_Beside``).
