@@ -329,7 +329,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     sizes = Sizes.quick() if quick else Sizes.full()
     sections = iter(range(len(SECTIONS)))
     beside = _Beside({"identification_richer": (_richer_rows, (params, sizes, seed)),
-                      "global_across": (_global_across, (params, sizes, seed))},
+                      "global_across": (_global_across, (params, sizes, seed, True))},
                      worker=not quick)  # quick: the jobs cost less than starting a worker
 
     def step(label: str) -> None:
@@ -844,7 +844,9 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _B
         src = sa.src(problem, evaluate, sizes.src_n, seed)
         sobol, convergence = sobol_by_convergence(problem, evaluate, sizes.sobol_min_n,
                                                   sizes.sobol_n, seed)
-    across = beside.result("global_across")
+    order = [c.label for c in sa.conditions(sizes.periods, valves=GLOBAL_VALVES)]
+    across = _joined([_global_across(params, sizes, seed, slow=False),
+                      beside.result("global_across")], order)
     ranking = ranking_table(src, sobol)
     parts.report.heading("Sensitivity: which parameters matter")
     parts.report.text(
@@ -898,18 +900,44 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _B
     return across
 
 
-def _global_across(params, sizes: Sizes, seed: int):
-    """SRC² of the loop width across conditions (the sensitivity section's last study;
-    a job of ``_Beside``)."""
+def _global_across(params, sizes: Sizes, seed: int, slow: bool):
+    """SRC² of the loop width across conditions (the sensitivity section's last study)
+    at the ``slow`` cycles (periods from ``GLOBAL_SLOW_FROM`` s, a job of ``_Beside``)
+    or the others (run here: they balance the two processes' work). Each condition is a
+    study of its own with the same seed, so the two parts are the whole study split."""
     from . import sensitivity as sa
     from .models import Actuator
 
+    periods = [p for p in sizes.periods if (p >= GLOBAL_SLOW_FROM) == slow]
+    if not periods:
+        return None
     with warnings.catch_warnings():  # small samples: their warnings go in the table
         warnings.simplefilter("ignore", sa.SensitivityWarning)
         return sa.across_conditions(Actuator(params),
-                                    sa.conditions(sizes.periods, valves=GLOBAL_VALVES), "src",
+                                    sa.conditions(periods, valves=GLOBAL_VALVES), "src",
                                     features=["loop_width_pressure"], n=sizes.condition_n,
                                     seed=seed)
+
+
+#: The cycle period [s] from which SRC² across conditions runs beside the sections.
+GLOBAL_SLOW_FROM = 40.0
+
+
+def _joined(parts: list, order: list[str]):
+    """One ``ConditionStudy`` of studies over parts of the conditions, in the order of the
+    condition labels ``order``."""
+    from .sensitivity.operating import ConditionStudy
+
+    parts = [part for part in parts if part is not None]
+    rank = {label: i for i, label in enumerate(order)}
+    conditions = pd.concat([part.conditions for part in parts], ignore_index=True)
+    place = np.argsort([rank[label] for label in conditions["condition"]], kind="stable")
+    results = [result for part in parts for result in part.results]
+    indices = pd.concat([part.indices for part in parts], ignore_index=True)
+    indices = indices.iloc[np.argsort([rank[label] for label in indices["condition"]],
+                                      kind="stable")].reset_index(drop=True)
+    return ConditionStudy(parts[0].method, conditions.iloc[place].reset_index(drop=True),
+                          indices, [results[i] for i in place])
 
 
 #: Sobol's sample is large enough when every ST interval (95 %) is at most this wide:

@@ -129,3 +129,28 @@ def test_jobs_beside_stop_with_the_block():
         with _Beside({"slow": (sum, (range(10 ** 9),))}) as beside:
             raise RuntimeError("a section failed")
     assert beside.pool is None
+
+
+def test_global_study_split_between_the_processes_is_the_whole_study(vgt):
+    """SRC² across conditions in two parts (the slow cycles beside the sections, the
+    others here) joins into the study of all the conditions at once."""
+    import dataclasses
+    import warnings
+
+    from pneumact import sensitivity as sa
+    from pneumact.models import Actuator
+    from pneumact.reproduction import GLOBAL_VALVES, Sizes, _global_across, _joined
+
+    params = vgt
+    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14)
+    conditions = sa.conditions(sizes.periods, valves=GLOBAL_VALVES)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sa.SensitivityWarning)
+        whole = sa.across_conditions(Actuator(params), conditions, "src",
+                                     features=["loop_width_pressure"], n=14, seed=0)
+    joined = _joined([_global_across(params, sizes, 0, slow=True),
+                      _global_across(params, sizes, 0, slow=False)],
+                     [c.label for c in conditions])
+    pd.testing.assert_frame_equal(joined.conditions, whole.conditions)
+    pd.testing.assert_frame_equal(joined.indices, whole.indices)
+    assert len(joined.results) == len(conditions)
