@@ -33,10 +33,11 @@
 (and runs fewer richer campaigns, saying which it left out); every figure is still
 produced.
 
-On a machine with more than one CPU the two parts that depend on no other section, the
-identification on the richer models' campaigns and SRC² across conditions, run in one
-spawned worker process beside the other sections (``_Beside``): the same calls with the
-same seeds, so the same numbers; only their wall time overlaps the rest.
+On a machine with more than one CPU the full mode runs two parts that depend on no other
+section, the identification on the richer models' campaigns and SRC² across conditions at
+the slower cycles (``GLOBAL_SLOW_FROM``), in one spawned worker process beside the other
+sections (``_Beside``): the same calls with the same seeds, so the same numbers; only
+their wall time overlaps the rest.
 """
 
 from __future__ import annotations
@@ -279,8 +280,8 @@ class _Beside:
     def __enter__(self) -> _Beside:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close(stop=bool(self.futures))
+    def __exit__(self, kind, *exc) -> None:
+        self.close(stop=kind is not None or bool(self.futures))  # a failure, Ctrl-C
 
 
 def _cpus() -> int:
