@@ -32,6 +32,12 @@
 ``quick=True`` shrinks the campaign, the conditions and the samples for the test suite
 (and runs fewer richer campaigns, saying which it left out); every figure is still
 produced.
+
+On a machine with more than one CPU the full mode runs two parts that depend on no other
+section, the identification on the richer models' campaigns and SRC² across conditions at
+the slower cycles (``GLOBAL_SLOW_FROM``), in one spawned worker process beside the other
+sections (``_Beside``): the same calls with the same seeds, so the same numbers; only
+their wall time overlaps the rest.
 """
 
 from __future__ import annotations
@@ -207,6 +213,88 @@ class _Parts:
         self.report.image(png, caption)
 
 
+def _beside_worker_start() -> None:
+    """A ``_Beside`` worker: Ctrl-C is the parent's to handle (it stops the worker), and
+    on Linux the worker ends with its parent."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+class _Beside:
+    """Jobs ``{name: (function, args)}`` that no section's result feeds, run one after
+    another in one spawned worker process while the sections run here (where more than
+    one CPU is available; ``worker`` and ``BESIDE``); ``result(name)`` waits for one.
+    Without a worker (one CPU, or the worker could not start or died) a job runs here
+    when its result is asked for. Leaving the ``with`` block stops the worker."""
+
+    def __init__(self, jobs: dict[str, tuple[Callable, tuple]], worker: bool = True) -> None:
+        self.jobs = jobs
+        self.futures: dict = {}
+        self.pool = None
+        if not (worker and BESIDE) or _cpus() < 2:
+            return
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        try:
+            self.pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=_beside_worker_start)
+            self.futures = {name: self.pool.submit(job, *args)
+                            for name, (job, args) in jobs.items()}
+        except OSError:
+            self.close()
+
+    def result(self, name: str):
+        """The job's result (its exception raised here), once it is done."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        future = self.futures.pop(name, None)
+        if future is not None:
+            try:
+                result = future.result()
+            except BrokenProcessPool:
+                self.close(stop=True)
+            else:
+                if not self.futures:  # the last job: the worker is done
+                    self.close()
+                return result
+        job, args = self.jobs[name]
+        return job(*args)
+
+    def close(self, stop: bool = False) -> None:
+        """Let the worker go (``stop``: end it first, its jobs unfinished)."""
+        pool, self.pool, self.futures = self.pool, None, {}
+        if pool is not None:
+            if stop:
+                for process in list((getattr(pool, "_processes", None) or {}).values()):
+                    process.terminate()
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> _Beside:
+        return self
+
+    def __exit__(self, kind, *exc) -> None:
+        self.close(stop=kind is not None or bool(self.futures))  # a failure, Ctrl-C
+
+
+def _cpus() -> int:
+    """The CPUs this process may run on."""
+    if hasattr(os, "sched_getaffinity"):  # not on macOS or Windows
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+#: Whether ``reproduce`` runs its independent jobs in a worker process (``_Beside``).
+BESIDE = True
+
+
 def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = False,
               params="vgt-paper", seed: int = 0, call: str = "",
               progress: ProgressCallback | None = None,
@@ -241,6 +329,9 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
     sections = iter(range(len(SECTIONS)))
+    beside = _Beside({"identification_richer": (_richer_rows, (params, sizes, seed)),
+                      "global_across": (_global_across, (params, sizes, seed, True))},
+                     worker=not quick)  # quick: the jobs cost less than starting a worker
 
     def step(label: str) -> None:
         notify(progress, label, next(sections), len(SECTIONS))
@@ -251,24 +342,25 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     parts = _Parts(report)
     _introduction(report, params, sizes, quick)
     headline_at = len(report.blocks)  # the statements' verdicts lead: filled in at the end
-    step("Table I")
-    _table_one(parts, params, [text for text in passivity if text])
-    step("pneumatics")
-    _pneumatics(parts, params)
-    step("Figs. 2 and 3")
-    effects, friction_floor = _friction_figures(parts, params, sizes)
-    step("Fig. 5")
-    oat = _loops_figure(parts, params)
-    step("Fig. 5 across conditions")
-    across, loop_floor = _loops_across_conditions(parts, params, sizes)
-    step("identification")
-    identified = _identification(parts, params, sizes, seed)
-    bias = _eq13(parts, params, sizes)
-    step("Fig. 6")
-    _validation(parts, params, identified, sizes, seed)
-    _seal_friction(parts, seal_data)
-    step("sensitivity")
-    global_study = _sensitivity(parts, params, oat, sizes, seed)
+    with beside:
+        step("Table I")
+        _table_one(parts, params, [text for text in passivity if text])
+        step("pneumatics")
+        _pneumatics(parts, params)
+        step("Figs. 2 and 3")
+        effects, friction_floor = _friction_figures(parts, params, sizes)
+        step("Fig. 5")
+        oat = _loops_figure(parts, params)
+        step("Fig. 5 across conditions")
+        across, loop_floor = _loops_across_conditions(parts, params, sizes)
+        step("identification")
+        identified = _identification(parts, params, sizes, seed, beside)
+        bias = _eq13(parts, params, sizes)
+        step("Fig. 6")
+        _validation(parts, params, identified, sizes, seed)
+        _seal_friction(parts, seal_data)
+        step("sensitivity")
+        global_study = _sensitivity(parts, params, oat, sizes, seed, beside)
     step("statements")
     summary = _statements(parts, across, global_study, effects, bias, loop_floor,
                           friction_floor)
@@ -740,7 +832,7 @@ def _richer_figure(results: dict):
     return fig
 
 
-def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
+def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _Beside):
     from . import sensitivity as sa
     from .experiments import CommandCycle
     from .models import Actuator, CommandValve
@@ -753,10 +845,9 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
         src = sa.src(problem, evaluate, sizes.src_n, seed)
         sobol, convergence = sobol_by_convergence(problem, evaluate, sizes.sobol_min_n,
                                                   sizes.sobol_n, seed)
-        across = sa.across_conditions(Actuator(params),
-                                      sa.conditions(sizes.periods, valves=GLOBAL_VALVES), "src",
-                                      features=["loop_width_pressure"],
-                                      n=sizes.condition_n, seed=seed)
+    order = [c.label for c in sa.conditions(sizes.periods, valves=GLOBAL_VALVES)]
+    across = _joined([_global_across(params, sizes, seed, slow=False),
+                      beside.result("global_across")], order)
     ranking = ranking_table(src, sobol)
     parts.report.heading("Sensitivity: which parameters matter")
     parts.report.text(
@@ -808,6 +899,46 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int):
     parts.table("global_by_condition", table, "SRC² of the loop width per condition, with "
                                               "the regression's R²")
     return across
+
+
+def _global_across(params, sizes: Sizes, seed: int, slow: bool):
+    """SRC² of the loop width across conditions (the sensitivity section's last study)
+    at the ``slow`` cycles (periods from ``GLOBAL_SLOW_FROM`` s, a job of ``_Beside``)
+    or the others (run here: they balance the two processes' work). Each condition is a
+    study of its own with the same seed, so the two parts are the whole study split."""
+    from . import sensitivity as sa
+    from .models import Actuator
+
+    periods = [p for p in sizes.periods if (p >= GLOBAL_SLOW_FROM) == slow]
+    if not periods:
+        return None
+    with warnings.catch_warnings():  # small samples: their warnings go in the table
+        warnings.simplefilter("ignore", sa.SensitivityWarning)
+        return sa.across_conditions(Actuator(params),
+                                    sa.conditions(periods, valves=GLOBAL_VALVES), "src",
+                                    features=["loop_width_pressure"], n=sizes.condition_n,
+                                    seed=seed)
+
+
+#: The cycle period [s] from which SRC² across conditions runs beside the sections.
+GLOBAL_SLOW_FROM = 40.0
+
+
+def _joined(parts: list, order: list[str]):
+    """One ``ConditionStudy`` of studies over parts of the conditions, in the order of the
+    condition labels ``order``."""
+    from .sensitivity.operating import ConditionStudy
+
+    parts = [part for part in parts if part is not None]
+    rank = {label: i for i, label in enumerate(order)}
+    conditions = pd.concat([part.conditions for part in parts], ignore_index=True)
+    place = np.argsort([rank[label] for label in conditions["condition"]], kind="stable")
+    results = [result for part in parts for result in part.results]
+    indices = pd.concat([part.indices for part in parts], ignore_index=True)
+    indices = indices.iloc[np.argsort([rank[label] for label in indices["condition"]],
+                                      kind="stable")].reset_index(drop=True)
+    return ConditionStudy(parts[0].method, conditions.iloc[place].reset_index(drop=True),
+                          indices, [results[i] for i in place])
 
 
 #: Sobol's sample is large enough when every ST interval (95 %) is at most this wide:
@@ -1146,7 +1277,7 @@ def _fig2(params):
     return fig
 
 
-def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
+def _identification(parts: _Parts, params, sizes: Sizes, seed: int, beside: _Beside):
     from .identification import Noise, identify_paper, paper_campaign, synthetic_campaign
 
     tests = paper_campaign(params, speeds=sizes.ramp_speeds, sweep_period=sizes.sweep_period)
@@ -1177,7 +1308,7 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
                      "Stage (d) zoomed on its fitted window: the position in µm from where "
                      "it rests at the window's start, measured (dots) and fitted (line), "
                      "and the residual")
-    _identification_richer(parts, params, sizes, seed)
+    _identification_richer(parts, sizes, beside.result("identification_richer"))
     return identified
 
 
@@ -1185,18 +1316,13 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
 IDENTIFIED_SHOWN = ("F0", "k", "Fc", "Fs", "vs", "sigma0", "sigma1", "sigma2")
 
 
-def _identification_richer(parts: _Parts, params, sizes: Sizes, seed: int
-                           ) -> pd.DataFrame:
+def _identification_richer(parts: _Parts, sizes: Sizes, rows: list[dict]) -> pd.DataFrame:
     """Section III.2 on campaigns made by richer models (``RICHER_CASES``): what
     ``identify_paper`` says on each (its verdict, the errors against the values the
     records were made with, the faults it names). The model identified stays Table I's
     (LuGre δ = 1, isothermal, an ideal sensor): the procedure as the paper gives it.
-    The cases run one after another: two at a time on threads took 1.9-3.5× the CPU
-    time (97-185 s against 52 s on 2 cores)."""
-    from .identification import paper_campaign
-
-    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
-    skipped = [case for case, _ in RICHER_CASES[1:] if case not in cases]
+    ``rows``: ``_richer_rows``, run beside the other sections (``_Beside``)."""
+    skipped = [case for case, _ in RICHER_CASES[1:] if case not in sizes.richer_identification]
     speeds = sizes.richer_ramp_speeds
     parts.report.text(
         "The same procedure on campaigns made by richer models than the one it identifies "
@@ -1209,10 +1335,6 @@ def _identification_richer(parts: _Parts, params, sizes: Sizes, seed: int
     if skipped:
         parts.report.note(f"Quick mode: not run on {', '.join(skipped)} (pneumact "
                           "reproduce without --quick runs every case).")
-    tests = paper_campaign(params, speeds=speeds, sweep_period=sizes.richer_sweep_period)
-    with warnings.catch_warnings():  # its findings go in the table, not on stderr
-        warnings.simplefilter("ignore")
-        rows = [identify_richer(params, case, tests, seed) for case in cases]
     table = pd.DataFrame(rows, columns=["records made by", "identified",
                                         *(f"{n} error %" for n in IDENTIFIED_SHOWN),
                                         "truth outside 95 % interval", "faults named"])
@@ -1225,6 +1347,21 @@ def _identification_richer(parts: _Parts, params, sizes: Sizes, seed: int
         parts.report.text("What changes against the self-consistent case above: "
                           + "; ".join(_what_changes(row) for row in rows) + ".")
     return table
+
+
+def _richer_rows(params, sizes: Sizes, seed: int) -> list[dict]:
+    """The rows of the richer campaigns' table (``identify_richer`` on each case of
+    ``sizes.richer_identification``, in ``RICHER_CASES``' order; a job of ``_Beside``).
+    The cases run one after another: two at a time on threads took 1.9-3.5× the CPU
+    time (97-185 s against 52 s on 2 cores)."""
+    from .identification import paper_campaign
+
+    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
+    tests = paper_campaign(params, speeds=sizes.richer_ramp_speeds,
+                           sweep_period=sizes.richer_sweep_period)
+    with warnings.catch_warnings():  # its findings go in the table, not on stderr
+        warnings.simplefilter("ignore")
+        return [identify_richer(params, case, tests, seed) for case in cases]
 
 
 def _what_changes(row: dict) -> str:

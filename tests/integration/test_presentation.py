@@ -27,19 +27,30 @@ def drawn(monkeypatch):
     visible axes' widths in pixels at the dpi it was drawn at."""
     from matplotlib.figure import Figure
 
-    seen: list[tuple[str, float, list[float]]] = []
-    savefig = Figure.savefig
+    import pneumact.plotting
 
-    def spy(fig, target, *args, dpi=None, **kw):
-        savefig(fig, target, *args, dpi=dpi, **kw)
+    seen: list[tuple[str, float, list[float]]] = []
+    savefig, tight_png = Figure.savefig, pneumact.plotting._tight_png
+
+    def record(fig, name: str, dpi) -> None:
         scale = (dpi or fig.dpi) / fig.dpi
         widths = [ax.get_window_extent().width * scale for ax in fig.axes
                   if ax.get_visible()]
-        name = str(getattr(target, "name", target)) if not hasattr(target, "getvalue") \
-            else fig.axes[0].get_title() or "(bytes)"
         seen.append((name, fig.get_figwidth() * (dpi or fig.dpi), widths))
 
+    def spy(fig, target, *args, dpi=None, **kw):
+        savefig(fig, target, *args, dpi=dpi, **kw)
+        record(fig, str(getattr(target, "name", target)) if not hasattr(target, "getvalue")
+               else fig.axes[0].get_title() or "(bytes)", dpi)
+
+    def spy_tight(fig, dpi):  # write_png's one-draw PNG (savefig where it declines)
+        png = tight_png(fig, dpi)
+        if png is not None:
+            record(fig, fig.axes[0].get_title() or "(drawn once)", dpi)
+        return png
+
     monkeypatch.setattr(Figure, "savefig", spy)
+    monkeypatch.setattr(pneumact.plotting, "_tight_png", spy_tight)
     return seen
 
 
@@ -323,14 +334,22 @@ def test_sensitivity_oat_writes_its_loops_with_zooms(tmp_path, drawn, monkeypatc
     parameter's whole loop, its break-away and its reversal (issue #42)."""
     from matplotlib.figure import Figure
 
+    import pneumact.plotting
+
     titles: list[str] = []
-    savefig = Figure.savefig  # the spy of ``drawn``: keep it, note the panel titles
+    # the spies of ``drawn``: keep them, note the panel titles
+    savefig, tight_png = Figure.savefig, pneumact.plotting._tight_png
 
     def with_titles(fig, target, *args, **kw):
         titles.extend(ax.get_title() for ax in fig.axes)
         return savefig(fig, target, *args, **kw)
 
+    def tight_with_titles(fig, dpi):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        return tight_png(fig, dpi)
+
     monkeypatch.setattr(Figure, "savefig", with_titles)
+    monkeypatch.setattr(pneumact.plotting, "_tight_png", tight_with_titles)
     monkeypatch.chdir(tmp_path)
     result = runner.invoke(app, ["sensitivity", "oat", "--out", "oat"])
     assert result.exit_code == 0, result.output

@@ -1,8 +1,12 @@
 """Parts of the reproduction on known answers: Sobol's sample size chosen by the
 convergence check (and each doubling runs only the new runs), fitted friction lines
-drawn per direction (never through v = 0)."""
+drawn per direction (never through v = 0), the jobs run in a worker process beside the
+sections (the same results as run here, errors raised here)."""
 
 from __future__ import annotations
+
+import math
+import operator
 
 import matplotlib
 import numpy as np
@@ -13,6 +17,7 @@ import reference as ref
 from pneumact.identification import Estimates, StageResult
 from pneumact.reproduction import (
     SOBOL_TARGET_WIDTH,
+    _Beside,
     sobol_by_convergence,
     sobol_converged,
 )
@@ -100,3 +105,52 @@ def test_stage_fit_on_one_sign_is_one_line(x):
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+@pytest.mark.parametrize("worker", [True, False])
+def test_jobs_beside_the_sections_give_what_they_give_here(worker):
+    """A worker process (when more than one CPU) or, without one, here: the same
+    results, a job's error raised where its result is asked for, the worker let go
+    once its last result is taken."""
+    jobs = {"sum": (operator.add, (2, 3)), "factorial": (math.factorial, (20,)),
+            "bad": (math.factorial, (-1,))}
+    with _Beside(jobs, worker=worker) as beside:
+        assert beside.result("sum") == 5
+        with pytest.raises(ValueError, match="negative"):
+            beside.result("bad")
+        assert beside.result("factorial") == math.factorial(20)
+        assert beside.pool is None and not beside.futures
+        assert beside.result("sum") == 5  # asked again: run here
+
+
+def test_jobs_beside_stop_with_the_block():
+    """Leaving the block with jobs unfinished (a section failed) ends the worker."""
+    with pytest.raises(RuntimeError, match="a section failed"):
+        with _Beside({"slow": (sum, (range(10 ** 9),))}) as beside:
+            raise RuntimeError("a section failed")
+    assert beside.pool is None
+
+
+def test_global_study_split_between_the_processes_is_the_whole_study(vgt):
+    """SRC² across conditions in two parts (the slow cycles beside the sections, the
+    others here) joins into the study of all the conditions at once."""
+    import dataclasses
+    import warnings
+
+    from pneumact import sensitivity as sa
+    from pneumact.models import Actuator
+    from pneumact.reproduction import GLOBAL_VALVES, Sizes, _global_across, _joined
+
+    params = vgt
+    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14)
+    conditions = sa.conditions(sizes.periods, valves=GLOBAL_VALVES)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sa.SensitivityWarning)
+        whole = sa.across_conditions(Actuator(params), conditions, "src",
+                                     features=["loop_width_pressure"], n=14, seed=0)
+    joined = _joined([_global_across(params, sizes, 0, slow=True),
+                      _global_across(params, sizes, 0, slow=False)],
+                     [c.label for c in conditions])
+    pd.testing.assert_frame_equal(joined.conditions, whole.conditions)
+    pd.testing.assert_frame_equal(joined.indices, whole.indices)
+    assert len(joined.results) == len(conditions)
