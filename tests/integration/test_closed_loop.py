@@ -58,13 +58,13 @@ def test_every_controller_calls_the_plant_kernel_of_an_open_loop_run(canudas):
     from pneumact.simulation import assemble
 
     rig = pa.FrictionRig(canudas, pa.LuGre(), drive="force")
-    plant = assemble(rig).kernel
+    plant = assemble(rig).numba_kernel
     for controller in (PID(kp=1.0), PID(kp=1.0, kd=1.0, derivative="error"),
                        PID(kp=1.0, sample_time=0.01)):
         loop = ClosedLoop(rig, controller)
         spec = assemble(loop).kernel_spec()
         assert codegen.module_name(assemble(rig).kernel_spec()) in spec.source()
-        kernel = assemble(loop).kernel
+        kernel = assemble(loop).numba_kernel
         for name in ("rhs", "jac", "param_jac", "outputs", "initial_state", "project"):
             assert getattr(kernel, f"plant_{name}") is getattr(plant, name)
 

@@ -187,7 +187,8 @@ from numba.core.registry import CPUDispatcher
 from pneumact.core.assembly import assemble
 from pneumact.core.c_source import translate
 from pneumact.export.fmu import kernel_roots
-kernel = assemble(pa.Actuator(pa.load_params("vgt-paper"), valve=pa.PressureRegulator())).kernel
+actuator = pa.Actuator(pa.load_params("vgt-paper"), valve=pa.PressureRegulator())
+kernel = assemble(actuator).numba_kernel
 unit = translate(kernel_roots(kernel, False, cosimulation=True))
 compiled = sorted(f"{m.__name__}.{n}" for m in list(sys.modules.values())
                   if getattr(m, "__name__", "").startswith("pneumact")
