@@ -22,7 +22,7 @@ from pneumact.control import PID, ClosedLoop
 from pneumact.core.assembly import assemble
 from pneumact.core.c_engine import CKernel, engine_kernel
 from pneumact.errors import ArgumentError, EngineWarning
-from pneumact.experiments import SetpointStep
+from pneumact.experiments import SetpointStep, Sine
 
 pytestmark = pytest.mark.integration
 
@@ -38,13 +38,15 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
                       pa.PressureCycle(**short)),
         "gms": (pa.Actuator(load_quietly("vgt-paper-gms4"), friction=pa.GMS(4)),
                 pa.PressureCycle(**short)),
+        "rig": (pa.FrictionRig(load_quietly("canudas1995"), drive="velocity"),
+                pa.Experiment(Sine(0.01, 0.5), "velocity", 4.0, n_points=801)),
         "loop": (ClosedLoop(rig, PID(kp=3.0, ki=4.0, kd=6.0, derivative="velocity")),
                  SetpointStep(0.0, 5.0, 0.0, 10.0, 1001)),
     }
 
 
 @needs_compiler
-@pytest.mark.parametrize("name", ["source", "command", "regulator", "gms", "loop"])
+@pytest.mark.parametrize("name", ["source", "command", "regulator", "gms", "rig", "loop"])
 def test_the_c_engine_follows_numba(name):
     """Every signal of the C engine's run equals numba's to 1e-12 of its range."""
     model, experiment = _models()[name]
