@@ -14,6 +14,7 @@ import math
 import re
 import shutil
 import subprocess
+from collections import namedtuple
 
 import numpy as np
 import pytest
@@ -57,6 +58,21 @@ def write_rows(out):
             out[i, j] = i * 10 + j if i != j else -1.0
 
 
+Bounds = namedtuple("Bounds", ["low", "high"])
+
+
+@njit
+def _bounds(x):
+    return Bounds(x - 1.0, x + 3.0)
+
+
+@njit
+def rounding_and_records(x):
+    """Python's round (half to even, an int) and a namedtuple built and read by name."""
+    b = _bounds(x)
+    return round(x) * 1000.0 + b.high - 2.0 * b.low
+
+
 @njit
 def raising(x):
     if x < 0:
@@ -86,7 +102,8 @@ def library(tmp_path_factory):
     unit = translate({"c_integer": (integer_semantics, (I64, I64)),
                       "c_float": (float_semantics, (F64, F64)),
                       "c_last": (last_and_sum, (types.float64[::1],)),
-                      "c_rows": (write_rows, (types.float64[:, ::1],))})
+                      "c_rows": (write_rows, (types.float64[:, ::1],)),
+                      "c_rounding": (rounding_and_records, (F64,))})
     folder = tmp_path_factory.mktemp("c")
     (folder / "unit.c").write_text(unit.source)
     subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(folder / "unit.so"),
@@ -95,6 +112,7 @@ def library(tmp_path_factory):
     lib.c_integer.restype = ctypes.c_int64
     lib.c_float.restype = ctypes.c_double
     lib.c_last.restype = ctypes.c_double
+    lib.c_rounding.restype = ctypes.c_double
     return lib
 
 
@@ -106,6 +124,11 @@ def test_integer_floor_division_and_modulo_are_python_s(library, a, b):
 @pytest.mark.parametrize(("x", "y"), [(7.5, 2.0), (-7.5, 2.0), (7.5, -2.0), (0.25, 3.0)])
 def test_float_arithmetic_is_python_s(library, x, y):
     assert library.c_float(ctypes.c_double(x), ctypes.c_double(y)) == float_semantics(x, y)
+
+
+@pytest.mark.parametrize("x", [0.5, 1.5, 2.5, -0.5, -1.5, 2.4999, 7.0, -3.75])
+def test_round_and_namedtuples_are_python_s(library, x):
+    assert library.c_rounding(ctypes.c_double(x)) == rounding_and_records(x)
 
 
 def test_negative_indices_loops_and_math(library):

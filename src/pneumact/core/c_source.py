@@ -835,6 +835,10 @@ class _FunctionWriter:
                      for a, m in zip(expr.args, _members(t), strict=True)
                      if self.unit.ctype(m) is not None]
             return f"(({self.unit.ctype(t)}){{{', '.join(items)}}})"
+        if fn is builtins.round and len(args) == 1:  # numba: llvm.rint (half to even), to int
+            if isinstance(types.unliteral(self.type_of(expr.args[0])), types.Integer):
+                return args[0]
+            return f"(({self.unit.ctype(types.unliteral(self.type_of(target)))})rint({args[0]}))"
         if fn is builtins.int:
             return f"((int64_t)({args[0]}))"
         if fn is builtins.float:
