@@ -136,3 +136,23 @@ def test_the_command_line_chooses_the_engine(tmp_path, monkeypatch):
     assert good.exit_code == 0, good.output
     assert (tmp_path / "run" / "simulation.csv").is_file()
     assert os.environ["PNEUMACT_ENGINE"] == "numba"
+
+
+@needs_compiler
+def test_a_model_the_back_end_cannot_translate_runs_on_numba_naming_the_construct(
+        monkeypatch, tmp_path):
+    """'auto' falls back to numba with the construct the C back end refused; 'c' raises it."""
+    from pneumact.core import c_source
+    from pneumact.core.c_source import CSourceError
+
+    def refuse(roots):
+        raise CSourceError("kernel.rhs: the C back end does not translate a call of <gamma>")
+
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))  # nothing built yet
+    monkeypatch.setattr(c_source, "translate", refuse)
+    model, experiment = _models()["source"]
+    with pytest.warns(EngineWarning, match=r"does not translate a call of <gamma>"):
+        run = pa.simulate(model, experiment, engine="auto")
+    assert run.meta["engine"] == "numba"
+    with pytest.raises(CSourceError, match="<gamma>"):
+        pa.simulate(_models()["source"][0], experiment, engine="c")

@@ -64,7 +64,7 @@ PREFIX = "pa_"
 
 _LOCK = threading.RLock()
 _KERNELS: dict[str, CKernel] = {}
-_REFUSED: dict[tuple[str, str | None], str] = {}
+_REFUSED: dict[tuple[str, str | None, str], str] = {}
 #: the engine a call chose for everything it runs in this thread (None: the setting)
 _SCOPE: ContextVar[str | None] = ContextVar("pneumact_engine", default=None)
 
@@ -375,7 +375,8 @@ def engine_kernel(spec: codegen.KernelSpec, engine: str) -> Kernel:
         return c_kernel(spec)
     from .c_source import CSourceError
 
-    refusal = (spec.label, os.environ.get("CC"))  # the reason depends on the compiler
+    # the reason depends on the compiler and on what the cache holds
+    refusal = (spec.label, os.environ.get("CC"), str(codegen.cache_dir()))
     reason = _REFUSED.get(refusal)
     if reason is None:
         try:
