@@ -23,7 +23,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ..errors import ParameterError
 from ..parameters.catalogue import ParameterSpec, declare
@@ -76,6 +75,8 @@ def first_order_lag(time: np.ndarray, values: np.ndarray, tau: float) -> np.ndar
         a = np.exp(-h / tau)
         c1 = 1.0 - tau / h * (1.0 - a)  # weight of the new sample
         c0 = (1.0 - a) - c1  # of the previous one
+        from scipy.signal import lfilter  # here: scipy.signal costs 1.5 s to import
+
         first = values[:1]
         lagged = lfilter([c1, c0], [1.0, -a], values - first, axis=0)
         return lagged + first
