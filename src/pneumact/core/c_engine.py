@@ -22,7 +22,6 @@ back end translates the model, numba otherwise, with a warning saying why).
 from __future__ import annotations
 
 import ctypes
-import functools
 import hashlib
 import os
 import re
@@ -42,6 +41,7 @@ from ..errors import ArgumentError, EngineWarning
 from . import codegen
 from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
 from .c_build import shared_library_suffix as _suffix
+from .c_source import Arena, array_struct
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
@@ -105,13 +105,6 @@ def current_engine() -> str:
 
 
 # ------------------------------------------------------------------------ ctypes mirrors
-@functools.cache
-def _array_struct(element: type, ndim: int) -> type[ctypes.Structure]:
-    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
-    return type(f"CArray{ndim}", (ctypes.Structure,), {"_fields_": fields})
-
-
 #: the back end's array struct names -> (numpy dtype, ctypes element)
 _ELEMENTS: dict[str, tuple[Any, Any]] = {
     "float64": (np.float64, ctypes.c_double), "int64": (np.int64, ctypes.c_int64),
@@ -120,18 +113,13 @@ _SCALARS: dict[str, Any] = {"double": ctypes.c_double, "float": ctypes.c_float,
                             "int64_t": ctypes.c_int64, "int": ctypes.c_int}
 
 
-class _Arena(ctypes.Structure):
-    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
-                ("failed", ctypes.c_int)]
-
-
 def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]:
     match = re.fullmatch(r"pa_arr_(\w+?)_(\d+)d", ctype)
     if match is None or match.group(1) not in _ELEMENTS:
         raise CBuildError(f"{name}: no ctypes mirror for the C type {ctype}")
     dtype, element = _ELEMENTS[match.group(1)]
     ndim = int(match.group(2))
-    struct = _array_struct(element, ndim)
+    struct = array_struct(element, ndim)
     size = np.dtype(dtype).itemsize
 
     def convert(values: Any) -> ctypes.Structure:
@@ -164,7 +152,7 @@ class CFunction:
         if self._arena:
             arguments = arguments[1:]
         self._converters: list[Callable[[Any], Any]] = []
-        argtypes: list[Any] = [ctypes.POINTER(_Arena)] if self._arena else []
+        argtypes: list[Any] = [ctypes.POINTER(Arena)] if self._arena else []
         for ctype in arguments:
             if ctype in _SCALARS:
                 argtypes.append(_SCALARS[ctype])
@@ -203,7 +191,7 @@ class CFunction:
         converted = [convert(a) for convert, a in zip(self._converters, args, strict=True)]
         if not self._arena:
             return self._result(self._function(*converted))
-        arena = _Arena()
+        arena = Arena()
         try:
             value = self._function(ctypes.byref(arena), *converted)
             if arena.failed:

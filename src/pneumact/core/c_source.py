@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import builtins
 import ctypes
+import functools
 import itertools
 import math
 import operator
@@ -49,7 +50,7 @@ from numba.core.compiler_machinery import FunctionPass, PassManager, register_pa
 from numba.core.typed_passes import AnnotateTypes
 from numba.core.typing.templates import signature
 
-__all__ = ["Arena", "CSourceError", "CUnit", "c_array", "translate"]
+__all__ = ["Arena", "CSourceError", "CUnit", "array_struct", "c_array", "translate"]
 
 
 class CSourceError(RuntimeError):
@@ -886,15 +887,22 @@ class Arena(ctypes.Structure):
                 ("failed", ctypes.c_int)]
 
 
+@functools.cache
+def array_struct(element: type, ndim: int) -> type[ctypes.Structure]:
+    """The ctypes mirror of the back end's ``ndim``-d array struct of ``element`` (one
+    class per kind, made once)."""
+    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
+              ("strides", ctypes.c_int64 * ndim)]
+    return type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
+
+
 def c_array(values: np.ndarray) -> ctypes.Structure:
     """The back end's array struct of ``values`` (float64 or int64, any ndim): data,
     shape[ndim], strides[ndim] in elements; it points into ``values``, which must
     outlive the call."""
     element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
     ndim = values.ndim
-    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
-    struct = type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
+    struct = array_struct(element, ndim)
     return struct(values.ctypes.data_as(ctypes.POINTER(element)),
                   (ctypes.c_int64 * ndim)(*values.shape),
                   (ctypes.c_int64 * ndim)(*[n // values.itemsize for n in values.strides]))
