@@ -79,6 +79,103 @@ def test_sensitivities_are_the_same_on_both_engines():
         assert np.max(np.abs(a - b) / span) <= ref.ENGINE_AGREEMENT, signal
 
 
+def _loops(rng: np.random.Generator, count: int):
+    """Records of every shape the features meet: loops at several speeds and noise
+    levels, quantised pressures, a position that never moves, a few samples."""
+    for k in range(count):
+        n = int(rng.integers(3, 1500))
+        t = np.cumsum(rng.uniform(1e-3, 1e-2, n))
+        p = 1e4 * np.sin(t * rng.uniform(0.5, 5.0) + rng.uniform(0, 20)) \
+            + rng.normal(0, rng.choice([0.0, 10.0, 1e3]), n)
+        if k % 5 == 1:
+            p = np.round(p, -3)
+        x = np.cumsum(rng.normal(0, 1e-4, n)) + (p - p.mean()) * 1e-7 * rng.choice([1, -1])
+        if k % 7 == 0:
+            x = np.zeros(n)
+        yield t, p, x, np.gradient(x, t) if n > 1 else x
+
+
+@needs_compiler
+def test_the_shared_functions_on_c_are_numba_s_bit_for_bit():
+    """Signal evaluation and every loop feature (``core.c_common``: the library all models
+    share on the C engine) return numba's values exactly, NaNs where numba's are."""
+    from pneumact.core import features
+    from pneumact.core.c_common import common_functions
+    from pneumact.core.features import N_FEATURES
+
+    c = common_functions()
+    for t, p, x, v in _loops(np.random.default_rng(ref.FAMILY_SEED), 60):
+        ref_t, ref_x = t[::3].copy(), x[::3] + 1e-6
+        for has_pressure in (True, False):
+            for has_reference in (True, False):
+                a, b = np.zeros(N_FEATURES), np.ones(N_FEATURES)
+                args = (t, x, v, p, has_pressure, ref_t, ref_x, has_reference)
+                features.all_features(*args, a)
+                c["all_features"](*args, b)
+                np.testing.assert_array_equal(a, b)
+        for name in ("breakaway", "loop_width_pressure", "loop_width_position", "loop_area",
+                     "presliding_travel"):
+            assert np.array_equal(getattr(features, f"_{name}")(p, x), c[name](p, x),
+                                  equal_nan=True), name
+        assert np.array_equal(features._sliding_speed(t, p, x), c["sliding_speed"](t, p, x),
+                              equal_nan=True)
+        np.testing.assert_array_equal(features._turning_points(p), c["turning_points"](p))
+        threshold = 0.1 * features._stroke(x) + 1e-9
+        assert np.array_equal(features._motion_onset(p, x, threshold),
+                              c["motion_onset"](p, x, threshold), equal_nan=True)
+
+
+@needs_compiler
+def test_signals_evaluate_the_same_on_both_engines():
+    """A signal of every kind of term (ramps, a sine, jumps) read on either engine."""
+    from pneumact.core.c_engine import engine_scope
+    from pneumact.core.signals import PiecewiseLinear, Step
+    from pneumact.core.signals import Sine as SineTerm
+
+    signal = PiecewiseLinear([0.0, 1.0, 1.0, 3.0], [0.0, 2.0, -1.0, 4.0]) \
+        + 0.5 * SineTerm(0.3, 1.7, t_start=0.4, t_stop=3.1) + Step(2.2, 0.0, 1.5)
+    grid = np.linspace(-1.0, 4.0, 2001)
+    with engine_scope("c"):
+        on_c = signal.evaluate(grid)
+    with engine_scope("numba"):
+        on_numba = signal.evaluate(grid)
+    np.testing.assert_array_equal(on_c[0], on_numba[0])
+    np.testing.assert_array_equal(on_c[1], on_numba[1])
+
+
+@needs_compiler
+def test_a_warm_run_on_c_never_starts_numba(tmp_path):
+    """A run on C and its summary, in a process of its own whose libraries are built: no
+    numba function is compiled or loaded from numba's cache (each would start numba's
+    compiler, about a second; issue 43's warm command)."""
+    import subprocess
+    import sys
+
+    script = """
+import sys, warnings
+import numpy as np
+import pneumact as pa
+from numba.core.dispatcher import Dispatcher
+warnings.simplefilter("ignore")
+model = pa.Actuator(pa.load_params("vgt-paper"), valve=pa.CommandValve())
+run = pa.simulate(model, pa.CommandCycle(period=4.0, n_points=801), engine="c")
+summary = run.summary()
+assert np.isfinite(summary["stroke"]), summary
+used = sorted(f"{name}.{key}" for name, module in list(sys.modules.items())
+              if name.startswith("pneumact") for key, value in vars(module).items()
+              if isinstance(value, Dispatcher) and value.overloads)
+print("USED", used)
+"""
+    env = {**os.environ, "PNEUMACT_ENGINE": "c"}
+    first = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                           text=True, timeout=600)
+    assert first.returncode == 0, first.stderr  # builds what is not built yet
+    second = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                            text=True, timeout=600)
+    assert second.returncode == 0, second.stderr
+    assert "USED []" in second.stdout, second.stdout
+
+
 def test_an_unknown_engine_is_refused_naming_the_choices(monkeypatch):
     model, experiment = _models()["source"]
     with pytest.raises(ArgumentError, match=r"engine = 'fast'.*auto, c, numba"):

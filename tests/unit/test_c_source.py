@@ -74,6 +74,22 @@ def rounding_and_records(x):
 
 
 @njit
+def _weighted(view):
+    total = 1000.0 * view.shape[0]
+    for i in range(view.shape[0]):
+        total += view[i] * (i + 1)
+    return total
+
+
+@njit
+def slices(values, a, b, c):
+    """Python's slices of a 1-d array (bounds negative, past the end, None; steps both
+    ways): each view's length and items, weighted so that order and length count."""
+    return (_weighted(values[a:b]) + 1e4 * _weighted(values[:b]) + 1e8 * _weighted(values[a:])
+            + 1e12 * _weighted(values[a:b:c]) + 1e16 * _weighted(values[::c]))
+
+
+@njit
 def raising(x):
     if x < 0:
         raise ValueError("negative")
@@ -103,7 +119,8 @@ def library(tmp_path_factory):
                       "c_float": (float_semantics, (F64, F64)),
                       "c_last": (last_and_sum, (types.float64[::1],)),
                       "c_rows": (write_rows, (types.float64[:, ::1],)),
-                      "c_rounding": (rounding_and_records, (F64,))})
+                      "c_rounding": (rounding_and_records, (F64,)),
+                      "c_slices": (slices, (types.float64[::1], I64, I64, I64))})
     folder = tmp_path_factory.mktemp("c")
     (folder / "unit.c").write_text(unit.source)
     subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(folder / "unit.so"),
@@ -113,6 +130,7 @@ def library(tmp_path_factory):
     lib.c_float.restype = ctypes.c_double
     lib.c_last.restype = ctypes.c_double
     lib.c_rounding.restype = ctypes.c_double
+    lib.c_slices.restype = ctypes.c_double
     return lib
 
 
@@ -134,6 +152,15 @@ def test_round_and_namedtuples_are_python_s(library, x):
 def test_negative_indices_loops_and_math(library):
     values = np.array([0.5, -1.25, 3.0, 2.5])
     assert library.c_last(array(values)) == last_and_sum(values)
+
+
+def test_slices_are_python_s(library):
+    values = np.array([0.5, -1.25, 3.0, 2.5, 7.0])
+    for a in range(-7, 8):
+        for b in range(-7, 8):
+            for c in (-3, -2, -1, 1, 2, 3):
+                assert library.c_slices(array(values), a, b, c) == slices(values, a, b, c), \
+                    (a, b, c)
 
 
 def test_two_dimensional_arrays_are_row_major(library):

@@ -45,8 +45,9 @@ from .c_source import Arena, array_struct
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
-           "c_kernel", "check_engine", "current_engine", "engine_kernel",
-           "engine_scope", "engine_setting", "library_path"]
+           "c_kernel", "cached_library", "check_engine", "current_engine", "engine_kernel",
+           "engine_scope", "engine_setting", "library_functions", "library_path",
+           "sources_digest"]
 
 ENGINES = ("auto", "c", "numba")
 ENGINE_VARIABLE = "PNEUMACT_ENGINE"
@@ -229,13 +230,12 @@ class CKernel:
         with _LOCK:
             if group in self._groups:
                 return
-            library, header = _library(self._module, self._spec, self._compiler, group)
-            handle = ctypes.CDLL(str(library))
-            prototypes = {m.group(1): line for line in header.splitlines()
-                          if (m := re.match(rf"\w+ {PREFIX}(\w+)\(", line))}
-            for name in GROUPS[group]:
-                if name in prototypes:
-                    setattr(self, name, CFunction(handle, name, prototypes[name]))
+            target = library_path(self._spec, self._compiler, group)
+            library, header = cached_library(
+                target, self._compiler, lambda: _roots(self._module, group))
+            for name, function in library_functions(library, header).items():
+                if name in GROUPS[group]:
+                    setattr(self, name, function)
             self._groups[group] = library
 
     @property
@@ -293,23 +293,19 @@ def library_path(spec: codegen.KernelSpec, compiler: str, group: str = "run") ->
     """Where the C library of ``spec``'s ``group`` built by ``compiler`` lives (its name
     carries the kernel's key extended by the C back end, this module, the compiler and
     its flags)."""
-    from . import c_source
-
-    digest = hashlib.sha256(codegen.kernel_key(spec).encode())
-    for path in (Path(c_source.__file__), Path(__file__)):
-        digest.update(path.read_bytes())
-    digest.update(f"{compiler} {os.path.getmtime(compiler)} {FLAGS}".encode())
+    key = hashlib.sha256(codegen.kernel_key(spec).encode()).hexdigest()
+    digest = hashlib.sha256(f"{key} {sources_digest(compiler=compiler)}".encode())
     tail = "" if group == "run" else f"-{group}"
     return codegen.cache_dir() / f"{codegen.module_name(spec)}-c{digest.hexdigest()[:12]}" \
         f"{tail}{_suffix()}"
 
 
-def _build(module: ModuleType, group: str, target: Path, compiler: str) -> None:
-    """Translate ``group``'s entry points and compile them into ``target``, its header
+def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: str) -> None:
+    """Translate the entry points ``roots`` and compile them into ``target``, its header
     beside it (both atomically, the header first)."""
     from .c_source import translate
 
-    unit = translate(_roots(module, group))
+    unit = translate(roots)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".cbuild-") as tmp:
         source = Path(tmp) / "kernel.c"
         source.write_text(unit.source, encoding="utf-8")
@@ -321,19 +317,41 @@ def _build(module: ModuleType, group: str, target: Path, compiler: str) -> None:
         os.replace(built, target)
 
 
-def _library(module: ModuleType, spec: codegen.KernelSpec, compiler: str, group: str
-             ) -> tuple[Path, str]:
-    """(library, header text) of ``spec``'s ``group``: from the disk cache, else built
-    once per machine (several processes at once build it once)."""
-    target = library_path(spec, compiler, group)
+def cached_library(target: Path, compiler: str,
+                   roots: Callable[[], dict[str, tuple[Callable, Sequence]]]
+                   ) -> tuple[Path, str]:
+    """(library, header text) at ``target``: from the disk cache, else ``roots()`` (entry
+    name -> (function, numba argument types)) translated and built by ``compiler`` once
+    per machine (several processes at once build it once)."""
     header = target.with_suffix(".h")
     if not (target.exists() and header.exists()):
         target.parent.mkdir(parents=True, exist_ok=True)
         with file_lock(target.with_name(f".{target.stem}.lock")):
             if not (target.exists() and header.exists()):
                 announce_build()
-                _build(module, group, target, compiler)
+                _build(roots(), target, compiler)
     return target, header.read_text(encoding="utf-8")
+
+
+def library_functions(library: Path, header: str) -> dict[str, CFunction]:
+    """The entry points of a built ``library`` (declared in its ``header``), by their
+    names without the ``pa_`` prefix."""
+    handle = ctypes.CDLL(str(library))
+    prototypes = {m.group(1): line for line in header.splitlines()
+                  if (m := re.match(rf"\w+ {PREFIX}(\w+)\(", line))}
+    return {name: CFunction(handle, name, line) for name, line in prototypes.items()}
+
+
+def sources_digest(*paths: Path, compiler: str) -> str:
+    """A digest of the sources a library is translated from, the C back end, this module,
+    the compiler (its path and date) and the flags: a library's cache name."""
+    from . import c_source
+
+    digest = hashlib.sha256()
+    for path in (*paths, Path(c_source.__file__), Path(__file__)):
+        digest.update(path.read_bytes())
+    digest.update(f"{compiler} {os.path.getmtime(compiler)} {FLAGS}".encode())
+    return digest.hexdigest()[:12]
 
 
 def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:

@@ -116,6 +116,31 @@ static inline int64_t pa_ipow(int64_t a, int64_t n) {
 }
 static inline double pa_sign(double x) { return (x > 0.0) - (x < 0.0); }
 static inline int64_t pa_index(int64_t i, int64_t n) { return i < 0 ? i + n : i; }
+
+/* a slice a:b:c (has_start, has_stop: not None) and where it falls in n items (Python's
+   rules: negative bounds count from the end, bounds clipped; a step of 0 is refused by
+   numba before it gets here) */
+typedef struct { int64_t start, stop, step; int has_start, has_stop; } pa_slice;
+typedef struct { int64_t start, length; } pa_span;
+static inline int64_t pa_clip(int64_t i, int64_t n, int64_t lo, int64_t hi) {
+    if (i < 0) i += n;
+    return i < lo ? lo : (i > hi ? hi : i);
+}
+static inline pa_span pa_slice_span(pa_slice s, int64_t n) {
+    pa_span out;
+    int64_t start, stop;
+    if (s.step > 0) {
+        start = s.has_start ? pa_clip(s.start, n, 0, n) : 0;
+        stop = s.has_stop ? pa_clip(s.stop, n, 0, n) : n;
+        out.length = stop > start ? (stop - start + s.step - 1) / s.step : 0;
+    } else {
+        start = s.has_start ? pa_clip(s.start, n, -1, n - 1) : n - 1;
+        stop = s.has_stop ? pa_clip(s.stop, n, -1, n - 1) : -1;
+        out.length = start > stop ? (start - stop - s.step - 1) / (-s.step) : 0;
+    }
+    out.start = start;
+    return out;
+}
 """ + ARENA_TYPES + r"""
 /* the arena: arrays a function allocates (np.empty, np.zeros, np.full, .copy()) live
    until the arena is reset or freed by whoever called the entry point; a reset keeps the
@@ -200,6 +225,8 @@ class _Translator:
             return "pa_range"
         if isinstance(t, types.Pair):
             return "pa_pair"
+        if isinstance(t, types.SliceType):
+            return "pa_slice"
         if isinstance(t, types.NoneType | types.Omitted | types.Function | types.Dispatcher
                       | types.Module | types.NumberClass | types.Dummy):
             return None
@@ -765,6 +792,8 @@ class _FunctionWriter:
             return f"{self.var(value)}.f{k}" if k in kept else "0"
         if isinstance(t, types.Array):
             it = self.type_of(index)
+            if isinstance(it, types.SliceType):
+                return self.slice_view(value, index)
             count = len(it) if isinstance(it, types.BaseTuple) else 1
             if count < t.ndim:
                 return self.view(value, index, count)
@@ -782,6 +811,32 @@ class _FunctionWriter:
         shape = ", ".join(f"{arr}.shape[{k}]" for k in kept)
         strides = ", ".join(f"{arr}.strides[{k}]" for k in kept)
         return f"(({view}){{{arr}.data + {offset}, {{{shape}}}, {{{strides}}}}})"
+
+    def slice_view(self, array: ir.Var, index: ir.Var) -> str:
+        """``array[a:b:c]`` of a 1-d array: the view onto those items, sharing the data."""
+        t = self.type_of(array)
+        if t.ndim != 1:
+            raise self.fail(f"slicing a {t.ndim}-d array")
+        arr, span = self.var(array), f"pa_slice_span({self.var(index)}, {self.var(array)}.shape[0])"
+        view = self.unit._array(types.Array(t.dtype, 1, "A"))
+        return (f"(({view}){{{arr}.data + {span}.start * {arr}.strides[0], {{{span}.length}}, "
+                f"{{{arr}.strides[0] * {self.var(index)}.step}}}})")
+
+    def slice(self, args: Sequence[ir.Var]) -> str:
+        """``slice(a, b[, c])`` (what ``x[a:b:c]`` calls), None bounds flagged."""
+        bounds = []
+        for k, a in enumerate([*args, None, None][:3]):
+            none = a is None or isinstance(self.type_of(a), types.NoneType | types.Omitted)
+            if none:
+                bounds.append(("1" if k == 2 else "0", "0"))
+            elif isinstance(self.type_of(a), types.Optional):
+                raise self.fail("a slice bound that may be None")
+            else:
+                bounds.append((self.var(a), "1"))
+        if len(args) == 1:  # slice(b): a stop alone
+            bounds = [("0", "0"), bounds[0], ("1", "0")]
+        (start, has_start), (stop, has_stop), (step, _) = bounds
+        return f"((pa_slice){{{start}, {stop}, {step}, {has_start}, {has_stop}}})"
 
     def element(self, array: ir.Var, index: ir.Var) -> str:
         t = self.type_of(array)
@@ -848,6 +903,8 @@ class _FunctionWriter:
             return f"(({self.unit.ctype(types.unliteral(self.type_of(target)))})({args[0]}))"
         if fn is builtins.bool:
             return f"(({args[0]}) != 0)"
+        if fn is builtins.slice:
+            return self.slice(expr.args)
         if fn is builtins.range:
             start, stop, step = ({1: ["0", args[0], "1"], 2: [*args, "1"], 3: args}[len(args)])
             return f"((pa_range){{{start}, {stop}, {step}}})"

@@ -106,9 +106,9 @@ def _span(x):  # pragma: no cover - compiled
     """(min, max) of x."""
     lo = x[0]
     hi = x[0]
-    for value in x:
-        lo = min(lo, value)
-        hi = max(hi, value)
+    for i in range(x.shape[0]):
+        lo = min(lo, x[i])
+        hi = max(hi, x[i])
     return lo, hi
 
 
@@ -477,10 +477,18 @@ def _reference(ref_time, ref_position) -> tuple[np.ndarray, np.ndarray]:
 
 
 # --------------------------------------------------------------------------- public API
+def _on_engine(function):
+    """``function`` on the engine in force (``core.c_common``: on C, its translation in
+    the library every model shares)."""
+    from .c_common import on_engine
+
+    return on_engine(function)
+
+
 def stroke(position) -> float:
     """Travel of the record: max − min of the position [m]."""
     (x,) = _signals(position=position)
-    return float(_stroke(x))
+    return float(_on_engine(_stroke)(x))
 
 
 def breakaway_pressure(time, pressure, position) -> float:
@@ -494,7 +502,7 @@ def breakaway_pressure(time, pressure, position) -> float:
     σ2·v at the branch's sliding speed: (F0 + Fc)/A_d when v ≫ vs. NaN without a
     complete loop. ``time`` is accepted for a uniform signature."""
     _, p, x = _signals(time=time, pressure=pressure, position=position)
-    return float(_breakaway(p, x))
+    return float(_on_engine(_breakaway)(p, x))
 
 
 def motion_onset_pressure(time, pressure, position, threshold: float) -> float:
@@ -507,7 +515,7 @@ def motion_onset_pressure(time, pressure, position, threshold: float) -> float:
     _, p, x = _signals(time=time, pressure=pressure, position=position)
     if not (np.isfinite(threshold) and threshold > 0):
         raise DataError(f"threshold = {threshold} m; must be a finite length > 0")
-    return float(_motion_onset(p, x, float(threshold)))
+    return float(_on_engine(_motion_onset)(p, x, float(threshold)))
 
 
 def sliding_speed(time, pressure, position) -> float:
@@ -515,7 +523,7 @@ def sliding_speed(time, pressure, position) -> float:
     (the window of the break-away line): the speed the loop's friction is measured at;
     divide by vs to say in which regime of the Stribeck curve the loop lies."""
     t, p, x = _signals(time=time, pressure=pressure, position=position)
-    return float(_sliding_speed(t, p, x))
+    return float(_on_engine(_sliding_speed)(t, p, x))
 
 
 def presliding_travel(pressure, position) -> float:
@@ -523,7 +531,7 @@ def presliding_travel(pressure, position) -> float:
     back by half the loop width, i.e. while the friction swings from its sliding level to
     zero: the presliding compliance of the corner (for LuGre about (g/σ0)·ln 2)."""
     p, x = _signals(pressure=pressure, position=position)
-    return float(_presliding_travel(p, x))
+    return float(_on_engine(_presliding_travel)(p, x))
 
 
 def loop_width_pressure(pressure, position) -> float:
@@ -533,7 +541,7 @@ def loop_width_pressure(pressure, position) -> float:
     friction Fc on area A this is 2·Fc/A; for LuGre sliding steadily at speed v it is
     2·(g(v) + σ2·v)/A, which is 2·Fc/A only while v ≫ vs (see ``sliding_speed``)."""
     p, x = _signals(pressure=pressure, position=position)
-    return float(_loop_width_pressure(p, x))
+    return float(_on_engine(_loop_width_pressure)(p, x))
 
 
 def loop_width_profile(pressure, position, positions=None) -> np.ndarray:
@@ -564,14 +572,14 @@ def loop_width_position(pressure, position) -> float:
     (grid over the middle 60 % of the pressure range both branches cover). For Coulomb
     friction Fc and spring stiffness k this is 2·Fc/k (2·F_slide(v)/k in general)."""
     p, x = _signals(pressure=pressure, position=position)
-    return float(_loop_width_position(p, x))
+    return float(_on_engine(_loop_width_position)(p, x))
 
 
 def loop_area(pressure, position) -> float:
     """|∮ p dx| [Pa·m] of the last complete loop (shoelace formula, closed by a straight
     segment from its end back to its start): the friction work per cycle divided by A."""
     p, x = _signals(pressure=pressure, position=position)
-    return float(_loop_area(p, x))
+    return float(_on_engine(_loop_area)(p, x))
 
 
 def _errors(time, position, ref_time, ref_position) -> tuple[float, float]:
@@ -600,15 +608,15 @@ def turning_points(time, pressure, position) -> np.ndarray:
     of the pressure beyond 10 % of its range, and the last sample (the cuts every loop
     feature uses)."""
     _, p, _ = _signals(time=time, pressure=pressure, position=position)
-    return _turning_points(p)
+    return _on_engine(_turning_points)(p)
 
 
 def hysteresis_summary(time, pressure, position) -> dict[str, float]:
     """The hysteresis features of one record, SI (units in ``FEATURE_UNITS``)."""
     t, p, x = _signals(time=time, pressure=pressure, position=position)
     out = np.full(N_FEATURES, np.nan)
-    out[F_STROKE] = _stroke(x)
-    _pressure_features(t, p, x, out)
+    out[F_STROKE] = _on_engine(_stroke)(x)
+    _on_engine(_pressure_features)(t, p, x, out)
     names = ("stroke", *PRESSURE_FEATURES)
     return {name: float(out[FEATURES.index(name)]) for name in names}
 

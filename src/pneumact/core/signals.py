@@ -140,7 +140,9 @@ class Signal:
         s = np.atleast_1d(np.asarray(t, dtype=np.float64))
         value = np.empty_like(s)
         slope = np.empty_like(s)
-        _eval_many(self.encode(), np.zeros(1, dtype=np.int64), 0, s, value, slope)
+        from .c_common import on_engine
+
+        on_engine(_eval_many)(self.encode(), np.zeros(1, dtype=np.int64), 0, s, value, slope)
         if np.ndim(t) == 0:
             return value[0], slope[0]
         return value, slope

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...core.c_common import on_engine
 from ...core.c_engine import engine_scope
 from ...core.features import FEATURES, N_FEATURES, all_features
 from ...errors import ArgumentError
@@ -70,6 +71,8 @@ class ChunkRunner:
         self.spec = spec
         with engine_scope(spec.engine):
             prep = prepare(spec.model, spec.experiment, spec.solver, spec.t_eval, spec.y0)
+            #: the features of a row, on the batch's engine (numba or the common C library)
+            self.all_features = on_engine(all_features) if spec.features else all_features
         self.prep = prep
         assembly = prep.assembly
         slot_ptr, slot_idx = assembly.column_slots(spec.columns)
@@ -209,8 +212,8 @@ class ChunkRunner:
         has_pressure = bool(pressure[0] >= 0)
         p = column(*pressure) if has_pressure else x
         values = np.empty(N_FEATURES)
-        all_features(self.prep.t_out, x, v, p, has_pressure, self.ref_t, self.ref_x,
-                     self.ref_t.shape[0] >= 2, values)
+        self.all_features(self.prep.t_out, x, v, p, has_pressure, self.ref_t, self.ref_x,
+                          self.ref_t.shape[0] >= 2, values)
         return values
 
 
