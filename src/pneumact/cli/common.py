@@ -61,6 +61,7 @@ class Valve(StrEnum):
     source = "source"
     command = "command"
     regulator = "regulator"
+    iso6358 = "iso6358"
 
 
 class Chamber(StrEnum):
