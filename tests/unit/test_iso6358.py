@@ -156,3 +156,17 @@ def test_the_default_conductance_matches_the_orifice_area(vgt):
 
     for name in ("iso_C_res", "iso_C_atm"):  # the catalogue's default: this C, 3 digits
         assert catalogue()[name].default == pytest.approx(conductance, rel=5e-3)
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"iso_b": 0.9995}, r"iso_b = 0.9995: must be < r_lin = 0.999"),
+    ({"r_lin": 1.0}, r"r_lin = 1: must be < 1"),
+    ({"iso_m": 0.0}, r"iso_m = 0: must be > 0"),
+    ({"iso_b": -0.1}, r"iso_b = -0.1: must be >= 0"),
+    ({"iso_C_atm": -1e-9}, r"iso_C_atm = -1e-09 m\^3/\(s\*Pa\): must be >= 0"),
+])
+def test_impossible_iso_values_are_refused_naming_field_value_and_limit(vgt, change, message):
+    import pneumact as pa
+
+    with pytest.raises(pa.ParameterError, match=message):
+        vgt.replace(**change)
