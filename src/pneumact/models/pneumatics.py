@@ -55,7 +55,7 @@ declare(
       "fully open", 2.99e-9, 0.0, False, 1e-3, group="valve", plausible=(0.0, 1e-6)),
     P("iso_b", "", "ISO 6358 critical back-pressure ratio b (choked for p_down/p_up <= b)",
       0.528, 0.0, False, 1.0, group="valve", plausible=(0.05, 0.7)),
-    P("iso_m", "", "ISO 6358-3 subsonic index m (0.5: the ellipse of ISO 6358-1)", 0.5, 0.0,
+    P("iso_m", "", "ISO 6358 subsonic index m (0.5: the ellipse of ISO 6358:1989)", 0.5, 0.0,
       True, 1.0, group="valve", plausible=(0.2, 1.0)),
 )
 declare_relation(("r_lin",), lambda r_lin: r_lin < 1.0,
