@@ -175,6 +175,15 @@ FLOW_ROUND_OFF_RTOL = 1e-14  # Φ and choked flow: the same formula evaluated tw
 TEXTBOOK_CRITICAL_RATIO = 0.528  # r_c of air, as textbooks print it ...
 TEXTBOOK_DIGITS = 1e-3  # ... to three digits
 LAMINAR_CONDUCTANCE_RTOL = 1e-6  # ṁ/Δp constant on the laminar branch (linear in Δp)
+
+# ---------------------------------------------------------------- ISO 6358 flow (issue 41)
+ISO_RHO0 = 1.185  # kg/m³: ISO 6358-1's reference density (ANR, ISO 8778)
+ISO_T0 = 293.15  # K: ISO 6358-1's reference temperature (20 °C)
+ISO_FORMULA_RTOL = 1e-13  # kernel vs the closed form written again in the test: round-off
+ISO_FD_RTOL = 1e-6  # central differences at relative step 1e-6, error × scale per flow
+# the ISO ellipse with b = 0.528, m = 0.5 against the isentropic Φ/Φ* of the orifice law at
+# the same choked flow (conductance_of_area): an approximation, not an identity
+ISO_VS_ORIFICE_RTOL = 5e-3  # of the choked flow, over 0 ≤ r ≤ 0.99 (measured 1.7e-3)
 ZERO_WIDTH_PA = 1e-9  # Pa: a loop of zero width, up to round-off on ~1e5 Pa values
 BREAKAWAY_INTERPOLATION_RTOL = 1e-9  # linear interpolation between samples, exact in theory
 IO_ROUND_TRIP_RTOL = 1e-15  # ms -> s conversion on reading: one multiplication

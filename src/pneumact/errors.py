@@ -53,6 +53,11 @@ class ArgumentTypeError(ArgumentError, TypeError):
     """An argument has the wrong type; the message says which type was expected."""
 
 
+class ComponentError(PneumactError, ValueError):
+    """A model's components do not fit together: two claim one role, or bind one kernel
+    function or constant name (the message names both components and the clash)."""
+
+
 class SolverError(PneumactError, RuntimeError):
     """The integrator failed (step size underflow, non-finite state)."""
 

@@ -56,11 +56,18 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
-def test_command_valve_runs(tmp_path):
-    result = invoke("simulate", "--valve", "command", "--t-end", SHORT_T_END,
+@pytest.mark.parametrize("valve", ["command", "iso6358"])
+def test_command_valve_runs(tmp_path, valve):
+    """Both command-driven valves run the command cycle; --low, which sets a pressure
+    cycle, is refused with either."""
+    result = invoke("simulate", "--valve", valve, "--t-end", SHORT_T_END,
                     "--out", str(tmp_path))
     assert result.exit_code == 0, result.output
     assert set(SIM_COLUMNS) <= set(header(tmp_path / "simulation.csv"))
+    refused = invoke("simulate", "--valve", valve, "--low", "30", "--out",
+                     str(tmp_path / "low"))
+    assert refused.exit_code == EXIT_CHECK_FAILED
+    assert f"with --valve {valve} the default cycle is the command" in refused.output
 
 
 def test_pressure_input_csv(tmp_path):

@@ -2,7 +2,8 @@
 
 Issue 43: ``pa.simulate(..., engine="c" | "numba" | "auto")`` and ``PNEUMACT_ENGINE``; the C
 engine's library is the C back end's translation of the same kernel functions, so the two
-engines must agree to rounding (here: bit for bit, or 1e-12 relative where noted).
+engines must agree to rounding (here: bit for bit, or 1e-12 relative where noted), the
+ISO 6358 valve of issue 41 included.
 """
 
 from __future__ import annotations
@@ -38,6 +39,8 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
         "command": (pa.Actuator(vgt, valve=pa.CommandValve()), pa.CommandCycle(**short)),
         "regulator": (pa.Actuator(vgt, valve=pa.PressureRegulator()),
                       pa.PressureCycle(**short)),
+        "iso6358": (pa.Actuator(vgt.replace(iso_b=0.3, iso_m=0.6), valve=pa.Iso6358Valve()),
+                    pa.CommandCycle(**short)),
         "gms": (pa.Actuator(load_quietly("vgt-paper-gms4"), friction=pa.GMS(4)),
                 pa.PressureCycle(**short)),
         "rig": (pa.FrictionRig(load_quietly("canudas1995"), drive="velocity"),
@@ -48,7 +51,8 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
 
 
 @needs_compiler
-@pytest.mark.parametrize("name", ["source", "command", "regulator", "gms", "rig", "loop"])
+@pytest.mark.parametrize("name", ["source", "command", "regulator", "iso6358", "gms", "rig",
+                                  "loop"])
 def test_the_c_engine_follows_numba(name):
     """Every signal of the C engine's run equals numba's to 1e-12 of its range."""
     model, experiment = _models()[name]

@@ -19,6 +19,7 @@ from pneumact.models import (
     CommandValve,
     CoulombViscous,
     FrictionRig,
+    Iso6358Valve,
     LuGre,
     PressureRegulator,
     PressureSource,
@@ -114,16 +115,22 @@ def test_actuator_pressure_source_jacobian(friction, vgt):
 PRESSURES = (20e3, 55e3, 85e3, 99.99e3)  # choked, subsonic, near-laminar, laminar inflow
 
 
-def test_actuator_command_valve_jacobian(vgt):
-    model = Actuator(vgt, friction=LuGre(), valve=CommandValve())
+# the ISO 6358 valve with b and m of a datasheet (not the orifice-like defaults)
+ISO_DATASHEET = {"iso_b": 0.3, "iso_m": 0.6, "r_lin": 0.995, "iso_C_atm": 4e-9}
+
+
+@pytest.mark.parametrize("valve", [CommandValve(), Iso6358Valve()], ids=lambda v: v.prefix)
+def test_actuator_command_valve_jacobian(valve, vgt):
+    params = vgt.replace(**ISO_DATASHEET) if isinstance(valve, Iso6358Valve) else vgt
+    model = Actuator(params, friction=LuGre(), valve=valve)
     for command in (0.2, 0.5, 0.9):
         experiment = Experiment(Constant(command), "command", t_end=1.0)
         prep = prepare(model, experiment, Rodas4())
         for x, v, z in MECHANICAL_STATES:
             for p in PRESSURES:
                 y = np.array([x, v, z, p])
-                _fd_check(prep, 0.3, 0.5, y, f"command u={command}")
-                _param_fd_check(prep, 0.3, 0.5, y, f"command u={command}")
+                _fd_check(prep, 0.3, 0.5, y, f"{valve.prefix} u={command}")
+                _param_fd_check(prep, 0.3, 0.5, y, f"{valve.prefix} u={command}")
 
 
 def test_actuator_pressure_regulator_jacobian(vgt):

@@ -61,6 +61,14 @@ class Valve(StrEnum):
     source = "source"
     command = "command"
     regulator = "regulator"
+    iso6358 = "iso6358"
+
+
+def command_driven(valve: Valve) -> bool:
+    """Whether ``--valve`` names a valve its command u drives (command, iso6358)."""
+    from pneumact.models import VALVES
+
+    return VALVES[valve.value].drive == "command"
 
 
 class Chamber(StrEnum):
@@ -95,7 +103,8 @@ ParamsOption = Annotated[str, typer.Option(
     "--params", help="Parameter set: a shipped name or a .toml file.")]
 ValveOption = Annotated[Valve, typer.Option(
     help="source: prescribed pressure; command: valve command u in [0, 1]; regulator: "
-         "pressure set-point.")]
+         "pressure set-point; iso6358: the command valve with ISO 6358 flows (iso_C_res, "
+         "iso_C_atm, iso_b, iso_m).")]
 FrictionOption = Annotated[Friction, typer.Option(help="Friction model.")]
 ChamberOption = Annotated[Chamber, typer.Option(help="Chamber gas law (behind a valve).")]
 ExponentOption = Annotated[float, typer.Option(
@@ -111,7 +120,7 @@ TEndOption = Annotated[float | None, typer.Option(
                     "to stop the input.")]
 LowOption = Annotated[float | None, typer.Option(
     "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
-                  "not with --valve command or --input-csv).")]
+                  "not with --valve command, iso6358 or --input-csv).")]
 InputOption = Annotated[Path | None, typer.Option(
     "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
@@ -201,10 +210,11 @@ def check_model_options(options: ModelOptions) -> None:
         if options.input_csv is not None:
             raise ArgumentError("--low sets the default pressure cycle, which --input-csv "
                                 "replaces; drop one of them")
-        if options.valve is Valve.command:
+        if command_driven(options.valve):
             raise ArgumentError("--low sets the lowest pressure of the default pressure "
-                                "cycle; with --valve command the default cycle is the "
-                                "command 0 -> 1 -> 0, which has no pressure to set")
+                                f"cycle; with --valve {options.valve.value} the default "
+                                "cycle is the command 0 -> 1 -> 0, which has no pressure "
+                                "to set")
     if options.t_end is not None:
         check_range("--t-end", options.t_end, 0.0, unit="s", low_open=True)
     check_range("--rtol", options.rtol, 1e-14, 1.0, high_open=True)
@@ -282,7 +292,7 @@ def build_experiment(options: ModelOptions, params):
             experiment = experiment.with_duration(options.t_end)
         return experiment
     period = DEFAULT_PERIOD if options.t_end is None else options.t_end
-    if options.valve is Valve.command:
+    if command_driven(options.valve):
         return pa.CommandCycle(0.0, 1.0, period=period)
     p_atm_kpa = params["p_atm"] * 1e-3
     low = DEFAULT_LOW_PRESSURE * 1e-3 if options.low_kpa is None else options.low_kpa

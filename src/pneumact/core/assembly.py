@@ -30,7 +30,7 @@ from types import ModuleType
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ComponentError, ParameterError
 from . import codegen
 from .c_engine import Kernel, current_engine, engine_kernel
 from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
@@ -57,6 +57,7 @@ class Assembly:
         self.model = model
         self._kernels: dict[str, Kernel] = {}
         self.parts: tuple[Part, ...] = tuple(model.parts())
+        refuse_duplicates(self.parts, self.describe())
         self.template: str = model.template
         entries: list[Slot] = []
         self.block_ranges: dict[str, tuple[int, int]] = {}
@@ -269,6 +270,29 @@ class Assembly:
 _ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _LOCK = threading.Lock()
 _KERNEL_LOCK = threading.RLock()  # building a kernel (one at a time in this process)
+
+
+def part_name(part: Part) -> str:
+    """A component as a message names it: its label, else its role."""
+    return part.label or part.role
+
+
+def refuse_duplicates(parts: Sequence[Part], model: str) -> None:
+    """One ComponentError, naming both components, if two of ``parts`` have one role or
+    bind one kernel name (a function or a constant: one namespace, the generated
+    module's): the kernel would otherwise silently take the last one's."""
+    claims: dict[tuple[bool, str], int] = {}
+    for index, part in enumerate(parts):
+        names = [("role", part.role)]
+        names += [("kernel function", name) for name in part.functions]
+        names += [("kernel constant", name) for name in part.constants]
+        for what, name in names:
+            first = claims.setdefault((what == "role", name), index)
+            if first != index:
+                raise ComponentError(
+                    f"{model}: components {part_name(parts[first])!r} and "
+                    f"{part_name(part)!r} both claim the {what} {name!r}; a role and a "
+                    f"kernel name each belong to one component of a model")
 
 
 def output_constant(name: str) -> str:

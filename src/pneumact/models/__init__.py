@@ -19,16 +19,26 @@ from .pneumatics import (
     ChamberLaw,
     Isothermal,
     Polytropic,
+    conductance_of_area,
     flow_function_values,
+    iso6358_mass_flow,
     orifice_mass_flow,
 )
 from .rig import FrictionRig
-from .valves import VALVES, CommandValve, PressureRegulator, PressureSource, Valve
+from .valves import (
+    VALVES,
+    CommandValve,
+    Iso6358Valve,
+    PressureRegulator,
+    PressureSource,
+    Valve,
+)
 
 __all__ = [
     "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
     "CommandValve", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig",
-    "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap",
-    "Valve", "flow_function_values", "friction_law", "friction_models", "input_signal",
-    "orifice_mass_flow", "valve_for_signal"
+    "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource",
+    "StribeckMap", "Valve", "conductance_of_area", "flow_function_values", "friction_law",
+    "friction_models", "input_signal", "iso6358_mass_flow", "orifice_mass_flow",
+    "valve_for_signal"
 ]

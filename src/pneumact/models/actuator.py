@@ -53,7 +53,8 @@ class Actuator:
                      "pa.StribeckMap()"))
         set_(self, "valve", as_instance(
             "valve", self.valve, Valve, where="Actuator",
-            examples="pa.PressureSource(), pa.CommandValve() or pa.PressureRegulator()"))
+            examples="pa.PressureSource(), pa.CommandValve(), pa.PressureRegulator() or "
+                     "pa.Iso6358Valve()"))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Actuator",
             examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))

@@ -23,7 +23,7 @@ INPUT_SIGNALS: dict[str, str] = {
 #: setpoint, pressure, command the record carries, the model's valve changed to the one
 #: it drives), ``model`` (the model's own valve, whose input the record must carry), or
 #: one signal name.
-INPUTS = ("auto", "model", *INPUT_SIGNALS.values())
+INPUTS = ("auto", "model", *dict.fromkeys(INPUT_SIGNALS.values()))
 DEFAULT_INPUT = "auto"
 
 
@@ -38,4 +38,4 @@ def valve_for_signal(signal: str) -> Valve:
         if cls.input_signal == signal:
             return cls()
     raise DataError(f"no valve is driven by a record's {signal!r}; the input signals are "
-                    f"{', '.join(INPUT_SIGNALS.values())}")
+                    f"{', '.join(dict.fromkeys(INPUT_SIGNALS.values()))}")

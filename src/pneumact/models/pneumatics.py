@@ -48,6 +48,21 @@ declare(
     P("A_atm", "m^2", "max effective area atmosphere -> chamber", None, 0.0, False, 1.0,
       group="valve", plausible=(0.0, 1e-2)),
 )
+declare(
+    P("iso_C_res", "m^3/(s*Pa)", "ISO 6358 sonic conductance chamber -> vacuum reservoir, "
+      "valve fully open", 2.99e-9, 0.0, False, 1e-3, group="valve", plausible=(0.0, 1e-6)),
+    P("iso_C_atm", "m^3/(s*Pa)", "ISO 6358 sonic conductance atmosphere -> chamber, valve "
+      "fully open", 2.99e-9, 0.0, False, 1e-3, group="valve", plausible=(0.0, 1e-6)),
+    P("iso_b", "", "ISO 6358 critical back-pressure ratio b (choked for p_down/p_up <= b)",
+      0.528, 0.0, False, 1.0, group="valve", plausible=(0.05, 0.7)),
+    P("iso_m", "", "ISO 6358 subsonic index m (0.5: the ellipse of ISO 6358:1989)", 0.5, 0.0,
+      True, 1.0, group="valve", plausible=(0.2, 1.0)),
+)
+declare_relation(("r_lin",), lambda r_lin: r_lin < 1.0,
+                 lambda r_lin: "must be < 1 (the laminar branch spans r_lin <= r <= 1)")
+declare_relation(("iso_b", "r_lin"), lambda b, r_lin: b < r_lin,
+                 lambda b, r_lin: f"must be < r_lin = {r_lin:g} (the ISO 6358 flow turns "
+                                  "laminar at r_lin, above the choked range r <= b)")
 declare_relation(("p_res", "p_atm"), lambda p_res, p_atm: p_res < p_atm,
                  lambda p_res, p_atm: f"must be < p_atm = {p_atm:g} Pa (the vacuum reservoir "
                                       "is below atmospheric pressure)")
@@ -232,6 +247,105 @@ def orifice_mass_flow(p_upstream, p_downstream, area: float, params) -> np.ndarr
     out = np.empty(p1.size)
     _orifice_many(p1, p2, float(area), pv, out)
     return out
+
+
+# --------------------------------------------------------------------------- ISO 6358
+#: ISO 6358 reference conditions (ISO 8778, ANR): the density and temperature that the
+#: sonic conductance C of a datasheet refers to.
+ISO_RHO0 = 1.185  # kg/m³
+ISO_T0 = 293.15  # K
+
+
+@njit(cache=True)
+def iso_subsonic(r, b, m):  # pragma: no cover - compiled
+    """φ = (1 − x²)^m with x = (r − b)/(1 − b), and dφ/dr, dφ/db, dφ/dm (b < r < 1)."""
+    span = 1.0 - b
+    x = (r - b) / span
+    base = 1.0 - x * x
+    phi = base ** m
+    dphi_dx = -2.0 * m * x * phi / base
+    return (phi, dphi_dx / span, dphi_dx * (r - 1.0) / (span * span),
+            phi * math.log(base))
+
+
+@njit(cache=True)
+def iso_phi(r, b, m, r_lam):  # pragma: no cover - compiled
+    """ISO 6358 φ(r) and its partials (∂/∂r, ∂/∂b, ∂/∂m, ∂/∂r_lam): 1 when choked (r ≤ b),
+    the subsonic ellipse up to r_lam, then linear in 1 − r, equal to the ellipse at r_lam
+    (the laminar correction: a finite slope at r = 1)."""
+    if r <= b:
+        return 1.0, 0.0, 0.0, 0.0, 0.0
+    if r < r_lam:
+        phi, d_r, d_b, d_m = iso_subsonic(r, b, m)
+        return phi, d_r, d_b, d_m, 0.0
+    phi_lam, slope_lam, db_lam, dm_lam = iso_subsonic(r_lam, b, m)
+    width = 1.0 - r_lam
+    gap = (1.0 - r) / width
+    return (phi_lam * gap, -phi_lam / width, db_lam * gap, dm_lam * gap,
+            gap * (slope_lam + phi_lam / width))
+
+
+@njit(cache=True)
+def iso_flow(p1, p2, b, m, r_lam, temperature):  # pragma: no cover - compiled
+    """ISO 6358 mass flow [kg/s] per unit sonic conductance [m³/(s·Pa)] from side 1 to
+    side 2, and its partials (∂/∂p1, ∂/∂p2); negative when the flow goes from 2 to 1."""
+    sign = 1.0
+    if p1 < p2:
+        p1, p2 = p2, p1
+        sign = -1.0
+    if p1 <= 0.0:
+        return 0.0, 0.0, 0.0
+    scale = ISO_RHO0 * math.sqrt(ISO_T0 / temperature)
+    r = p2 / p1
+    phi, d_r, _, _, _ = iso_phi(r, b, m, r_lam)
+    q, d_up, d_down = scale * p1 * phi, scale * (phi - r * d_r), scale * d_r
+    if sign > 0.0:
+        return q, d_up, d_down
+    return -q, -d_down, -d_up
+
+
+@njit(cache=True)
+def iso_flow_params(p1, p2, b, m, r_lam, temperature):  # pragma: no cover - compiled
+    """Partials of ``iso_flow`` (per unit conductance) with respect to b, m, r_lam and the
+    upstream temperature."""
+    sign = 1.0
+    if p1 < p2:
+        p1, p2 = p2, p1
+        sign = -1.0
+    if p1 <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    scale = sign * ISO_RHO0 * math.sqrt(ISO_T0 / temperature) * p1
+    phi, _, d_b, d_m, d_lam = iso_phi(p2 / p1, b, m, r_lam)
+    return scale * d_b, scale * d_m, scale * d_lam, -0.5 * scale * phi / temperature
+
+
+@njit(cache=True)
+def _iso_many(p1, p2, conductance, b, m, r_lam, temperature, out):  # pragma: no cover
+    for i in range(p1.shape[0]):
+        out[i] = conductance * iso_flow(p1[i], p2[i], b, m, r_lam, temperature)[0]
+
+
+def iso6358_mass_flow(p_upstream, p_downstream, conductance: float, params) -> np.ndarray:
+    """ISO 6358 mass flow [kg/s] through a component of sonic conductance ``conductance``
+    [m³/(s·Pa)] for arrays of pressures [Pa]; b, m, the laminar ratio r_lin and the
+    upstream temperature T from ``params`` (``iso_b``, ``iso_m``, ``r_lin``, ``T``)."""
+    p1, p2 = np.broadcast_arrays(np.atleast_1d(np.asarray(p_upstream, dtype=np.float64)),
+                                 np.asarray(p_downstream, dtype=np.float64))
+    p1, p2 = p1.ravel().copy(), p2.ravel().copy()
+    out = np.empty(p1.size)
+    _iso_many(p1, p2, float(conductance), float(params["iso_b"]), float(params["iso_m"]),
+              float(params["r_lin"]), float(params["T"]), out)
+    return out
+
+
+def conductance_of_area(area: float, params) -> float:
+    """The sonic conductance C [m³/(s·Pa)] whose choked ISO 6358 flow equals the orifice
+    law's through effective area ``area`` [m²] at the gas temperature:
+    C·ρ0·sqrt(T0/T) = A·sqrt(γ/(R·T))·Φ*, i.e. C = A·Φ*·sqrt(γ/R)/(ρ0·sqrt(T0))."""
+    gamma = float(params["gamma"])
+    phi_choked = (2.0 / (gamma + 1.0)) ** ((gamma + 1.0) / (2.0 * (gamma - 1.0)))
+    return area * phi_choked * math.sqrt(gamma / float(params["R"])) / (
+        ISO_RHO0 * math.sqrt(ISO_T0))
 
 
 # --------------------------------------------------------------------------- chamber laws

@@ -45,10 +45,13 @@ from .pneumatics import (
     PN_PHI_CHOKED,
     PN_PRES,
     PN_R,
+    PN_RLIN,
     PN_T,
     PN_V0,
     ChamberLaw,
     Isothermal,
+    iso_flow,
+    iso_flow_params,
     orifice_of,
     orifice_params_of,
 )
@@ -66,6 +69,12 @@ declare(
 SOURCE_BLOCK = Block()
 COMMAND_BLOCK = CHAMBER_BLOCK
 REGULATOR_BLOCK = CHAMBER_BLOCK + Block.of("reg_kp", "reg_ti", "reg_tau")
+ISO_BLOCK = CHAMBER_BLOCK + Block.of("iso_C_res", "iso_C_atm", "iso_b", "iso_m")
+IS_CRES = ISO_BLOCK.index("iso_C_res")
+IS_CATM = ISO_BLOCK.index("iso_C_atm")
+IS_B = ISO_BLOCK.index("iso_b")
+IS_M = ISO_BLOCK.index("iso_m")
+ISO_SIZE = len(ISO_BLOCK)
 RG_KP = REGULATOR_BLOCK.index("reg_kp")
 RG_TI = REGULATOR_BLOCK.index("reg_ti")
 RG_TAU = REGULATOR_BLOCK.index("reg_tau")
@@ -79,6 +88,7 @@ ST_INTEGRAL = 2
 SOURCE_PRESSURE_STATE = -1
 COMMAND_PRESSURE_STATE = ST_PRESSURE
 REGULATOR_PRESSURE_STATE = ST_PRESSURE
+ISO_PRESSURE_STATE = ST_PRESSURE
 
 #: Bisection steps of the equilibrium searches (interval shrinks by 2^-60).
 EQUILIBRIUM_ITERATIONS = 60
@@ -208,23 +218,27 @@ def _chamber_params(x, v, pressure, u, p, o, sig, ptr, g, row):  # pragma: no co
 
 
 @njit(cache=True)
-def _net_flow(pressure, u, p, o, sig, ptr):  # pragma: no cover - compiled
-    q_in, q_out, _, _ = _valve_flows(pressure, u, p, o, sig, ptr)
+def _net_flow(pressure, u, p, o, sig, ptr, iso):  # pragma: no cover - compiled
+    """ṁ_in − ṁ_out at opening u: orifice law, or ISO 6358 if ``iso``."""
+    if iso:
+        q_in, q_out, _, _ = _iso_valve_flows(pressure, u, p, o, sig, ptr)
+    else:
+        q_in, q_out, _, _ = _valve_flows(pressure, u, p, o, sig, ptr)
     return q_in - q_out
 
 
 @njit(cache=True)
-def _bisect_pressure(u, p, o, sig, ptr):  # pragma: no cover - compiled
+def _bisect_pressure(u, p, o, sig, ptr, iso):  # pragma: no cover - compiled
     """Chamber pressure in [p_res, p_atm] where the net flow vanishes at opening u (the net
     flow falls as the pressure rises); an end of the interval if it has one sign there."""
     lo, hi = p[o + PN_PRES], p[o + PN_PATM]
-    if _net_flow(lo, u, p, o, sig, ptr) <= 0.0:
+    if _net_flow(lo, u, p, o, sig, ptr, iso) <= 0.0:
         return lo
-    if _net_flow(hi, u, p, o, sig, ptr) >= 0.0:
+    if _net_flow(hi, u, p, o, sig, ptr, iso) >= 0.0:
         return hi
     for _ in range(EQUILIBRIUM_ITERATIONS):
         mid = 0.5 * (lo + hi)
-        if _net_flow(mid, u, p, o, sig, ptr) > 0.0:
+        if _net_flow(mid, u, p, o, sig, ptr, iso) > 0.0:
             lo = mid
         else:
             hi = mid
@@ -232,16 +246,16 @@ def _bisect_pressure(u, p, o, sig, ptr):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _bisect_opening(pressure, p, o, sig, ptr):  # pragma: no cover - compiled
+def _bisect_opening(pressure, p, o, sig, ptr, iso):  # pragma: no cover - compiled
     """Opening u in [0, 1] that holds ``pressure`` (the net flow falls as u rises)."""
     lo, hi = 0.0, 1.0
-    if _net_flow(pressure, lo, p, o, sig, ptr) <= 0.0:
+    if _net_flow(pressure, lo, p, o, sig, ptr, iso) <= 0.0:
         return lo
-    if _net_flow(pressure, hi, p, o, sig, ptr) >= 0.0:
+    if _net_flow(pressure, hi, p, o, sig, ptr, iso) >= 0.0:
         return hi
     for _ in range(EQUILIBRIUM_ITERATIONS):
         mid = 0.5 * (lo + hi)
-        if _net_flow(pressure, mid, p, o, sig, ptr) > 0.0:
+        if _net_flow(pressure, mid, p, o, sig, ptr, iso) > 0.0:
             lo = mid
         else:
             hi = mid
@@ -293,7 +307,7 @@ def command_flows(t, ts, x, v, y, s, p, o, sig, ptr):  # pragma: no cover - comp
 def command_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
     """Rest pressure of the chamber at the initial command (net flow zero)."""
     u = min(max(channel_eval(sig, ptr, CH_DRIVE, t, ts)[0], 0.0), 1.0)
-    p0 = _bisect_pressure(u, p, o, sig, ptr)
+    p0 = _bisect_pressure(u, p, o, sig, ptr, False)
     y0[s + ST_PRESSURE] = p0
     return p0
 
@@ -301,6 +315,113 @@ def command_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - com
 @njit(cache=True)
 def command_scales(p, o, out, s):  # pragma: no cover - compiled
     out[s + ST_PRESSURE] = p[o + PN_PATM]
+
+
+# ------------------------------------------------------------------ ISO 6358 valve
+@njit(cache=True, inline="always")
+def _iso_gas(p, o):  # pragma: no cover - compiled
+    """(b, m, r_lam, T) of the ISO 6358 block."""
+    return p[o + IS_B], p[o + IS_M], p[o + PN_RLIN], p[o + PN_T]
+
+
+@njit(cache=True, inline="always")
+def _iso_valve_flows(pressure, u, p, o, sig, ptr):  # pragma: no cover - compiled
+    """Flows at opening u through two ISO 6358 paths whose conductances follow the area
+    maps: (ṁ_in, ṁ_out, ∂ṁ/∂p, ∂ṁ/∂u); ṁ = ṁ_in − ṁ_out."""
+    m_res, dm_res = map_eval(sig, ptr, CH_MAP_RES, u)
+    m_atm, dm_atm = map_eval(sig, ptr, CH_MAP_ATM, u)
+    c_res = p[o + IS_CRES] * m_res
+    c_atm = p[o + IS_CATM] * m_atm
+    b, m, r_lam, temperature = _iso_gas(p, o)
+    q_in, _, dqin_dp = iso_flow(p[o + PN_PATM], pressure, b, m, r_lam, temperature)
+    q_out, dqout_dp, _ = iso_flow(pressure, p[o + PN_PRES], b, m, r_lam, temperature)
+    dq_dp = c_atm * dqin_dp - c_res * dqout_dp
+    dq_du = p[o + IS_CATM] * dm_atm * q_in - p[o + IS_CRES] * dm_res * q_out
+    return c_atm * q_in, c_res * q_out, dq_dp, dq_du
+
+
+@njit(cache=True)
+def _iso_chamber_params(x, v, pressure, u, p, o, sig, ptr, g, row):  # pragma: no cover
+    """g[row, o + k] = ∂ṗ/∂p_k for the ISO valve's block entries k (the orifice entries
+    of the chamber block, A_res, A_atm and the flow constants, do not enter)."""
+    m_res = map_eval(sig, ptr, CH_MAP_RES, u)[0]
+    m_atm = map_eval(sig, ptr, CH_MAP_ATM, u)[0]
+    p_atm, p_res = p[o + PN_PATM], p[o + PN_PRES]
+    b, m, r_lam, temperature = _iso_gas(p, o)
+    q_in, dqin_dpatm, _ = iso_flow(p_atm, pressure, b, m, r_lam, temperature)
+    q_out, _, dqout_dpres = iso_flow(pressure, p_res, b, m, r_lam, temperature)
+    in_b, in_m, in_lam, in_t = iso_flow_params(p_atm, pressure, b, m, r_lam, temperature)
+    out_b, out_m, out_lam, out_t = iso_flow_params(pressure, p_res, b, m, r_lam,
+                                                   temperature)
+    c_res = p[o + IS_CRES] * m_res
+    c_atm = p[o + IS_CATM] * m_atm
+    mdot = c_atm * q_in - c_res * q_out
+    ad, v0, n, rt = _chamber(p, o)
+    vol = v0 - ad * x
+    inner = rt * mdot + pressure * ad * v
+    k = n / vol * rt  # ∂ṗ/∂ṁ
+    for i in range(ISO_SIZE):
+        g[row, o + i] = 0.0
+    g[row, o + PN_AD] = n * x / (vol * vol) * inner + n / vol * pressure * v
+    g[row, o + PN_V0] = -n / (vol * vol) * inner
+    g[row, o + PN_PATM] = k * c_atm * dqin_dpatm
+    g[row, o + PN_PRES] = -k * c_res * dqout_dpres
+    g[row, o + PN_R] = n / vol * temperature * mdot
+    g[row, o + PN_T] = n / vol * p[o + PN_R] * mdot + k * (c_atm * in_t - c_res * out_t)
+    g[row, o + PN_N] = inner / vol
+    g[row, o + PN_RLIN] = k * (c_atm * in_lam - c_res * out_lam)
+    g[row, o + IS_CRES] = -k * m_res * q_out
+    g[row, o + IS_CATM] = k * m_atm * q_in
+    g[row, o + IS_B] = k * (c_atm * in_b - c_res * out_b)
+    g[row, o + IS_M] = k * (c_atm * in_m - c_res * out_m)
+
+
+iso_pressure = command_pressure
+iso_scales = command_scales
+
+
+@njit(cache=True, inline="always")
+def iso_rates(t, ts, x, v, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    pressure = y[s + ST_PRESSURE]
+    q_in, q_out, _, _ = _iso_valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    dydt[s + ST_PRESSURE] = chamber_rate(x, v, pressure, q_in - q_out, ad, v0, n, rt)
+
+
+@njit(cache=True, inline="always")
+def iso_partials(t, ts, x, v, y, s, p, o, sig, ptr, jac, cx, cv):  # pragma: no cover
+    u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    pressure = y[s + ST_PRESSURE]
+    q_in, q_out, dq_dp, _ = _iso_valve_flows(pressure, u, p, o, sig, ptr)
+    ad, v0, n, rt = _chamber(p, o)
+    d_x, d_v, d_p, _ = chamber_jac(x, v, pressure, q_in - q_out, dq_dp, ad, v0, n, rt)
+    row = s + ST_PRESSURE
+    jac[row, cx] = d_x
+    jac[row, cv] = d_v
+    jac[row, row] = d_p
+
+
+@njit(cache=True)
+def iso_params(t, ts, x, v, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    _iso_chamber_params(x, v, y[s + ST_PRESSURE], u, p, o, sig, ptr, g, s + ST_PRESSURE)
+
+
+@njit(cache=True, inline="always")
+def iso_flows(t, ts, x, v, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    u = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+    q_in, q_out, _, _ = _iso_valve_flows(y[s + ST_PRESSURE], u, p, o, sig, ptr)
+    return u, q_in, q_out
+
+
+@njit(cache=True)
+def iso_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """Rest pressure of the chamber at the initial command (net ISO flow zero)."""
+    u = min(max(channel_eval(sig, ptr, CH_DRIVE, t, ts)[0], 0.0), 1.0)
+    p0 = _bisect_pressure(u, p, o, sig, ptr, True)
+    y0[s + ST_PRESSURE] = p0
+    return p0
 
 
 # ------------------------------------------------------------------ pressure regulator
@@ -396,7 +517,7 @@ def regulator_equilibrium(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - c
     flows; the integral state equals that opening (zero error)."""
     p_set = channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
     p0 = min(max(p_set, p[o + PN_PRES]), p[o + PN_PATM])
-    u0 = _bisect_opening(p0, p, o, sig, ptr)
+    u0 = _bisect_opening(p0, p, o, sig, ptr, False)
     y0[s + ST_PRESSURE] = p0
     y0[s + ST_OPENING] = u0
     y0[s + ST_INTEGRAL] = u0
@@ -524,6 +645,18 @@ class PressureRegulator(CommandValve):
     cli_name: ClassVar[str] = "regulator"
 
 
+@dataclass(frozen=True)
+class Iso6358Valve(CommandValve):
+    """The command valve with each path's flow as ISO 6358 gives it from a datasheet's
+    sonic conductance C (``iso_C_res``, ``iso_C_atm``, fully open) and critical
+    back-pressure ratio b (``iso_b``), with the ISO 6358-3 subsonic index m (``iso_m``)
+    and the laminar branch above r_lin; the area maps scale the conductances against u."""
+
+    prefix: ClassVar[str] = "iso"
+    block: ClassVar[Block] = ISO_BLOCK
+    cli_name: ClassVar[str] = "iso6358"
+
+
 #: ``--valve`` choices of the command line.
-VALVES: dict[str, type[Valve]] = {cls.cli_name: cls for cls in (PressureSource, CommandValve,
-                                                                PressureRegulator)}
+VALVES: dict[str, type[Valve]] = {cls.cli_name: cls for cls in (
+    PressureSource, CommandValve, PressureRegulator, Iso6358Valve)}

@@ -25,7 +25,8 @@ import pandas as pd
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
 from ..io.report import NotebookDisplay
-from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS, valve_for_signal
+from ..models import VALVES
+from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS
 from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
 from .metrics import METRIC_NAMES, autocorrelation, error_metrics
@@ -45,10 +46,10 @@ ALL_RECORDS = "all records"
 
 
 def _can_drive(record: Record) -> str:
-    carried = [s for s in INPUT_SIGNALS.values() if s in record]
+    carried = [s for s in dict.fromkeys(INPUT_SIGNALS.values()) if s in record]
     if not carried:
         return "it carries none of setpoint, pressure, command, so it can drive no valve"
-    valves = [f"{valve_for_signal(s).name} (--valve {c})" for c, s in INPUT_SIGNALS.items()
+    valves = [f"{VALVES[c].__name__} (--valve {c})" for c, s in INPUT_SIGNALS.items()
               if s in carried]
     return f"it carries {', '.join(carried)}, so it can drive {' or '.join(valves)}"
 
