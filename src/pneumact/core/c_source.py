@@ -825,9 +825,9 @@ class _FunctionWriter:
     def slice(self, args: Sequence[ir.Var]) -> str:
         """``slice(a, b[, c])`` (what ``x[a:b:c]`` calls), None bounds flagged."""
         bounds = []
-        for k, a in enumerate([*args, None, None][:3]):
-            none = a is None or isinstance(self.type_of(a), types.NoneType | types.Omitted)
-            if none:
+        for k in range(3):
+            a = args[k] if k < len(args) else None
+            if a is None or isinstance(self.type_of(a), types.NoneType | types.Omitted):
                 bounds.append(("1" if k == 2 else "0", "0"))
             elif isinstance(self.type_of(a), types.Optional):
                 raise self.fail("a slice bound that may be None")
