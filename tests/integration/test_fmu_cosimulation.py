@@ -105,6 +105,16 @@ def test_a_tenth_of_a_millisecond_step_too(cosimulation, case):
     _steps_like_pa_simulate(cosimulation, case, ref.CS_SHORTEST_STEP, experiment)
 
 
+def test_the_iso_6358_valve_exports_too(tmp_path):
+    """A valve added after the export was written (issue 41's ISO 6358 valve, with a
+    datasheet's b and m) needs nothing of the export: its CS FMU steps like pa.simulate."""
+    params = load_quietly("vgt-paper").replace({"iso_b": 0.3, "iso_m": 0.6})
+    model = pa.Actuator(params, valve=pa.Iso6358Valve())
+    fmu = pa.export_fmu(model, tmp_path / "iso.fmu", kind="cs")
+    _steps_like_pa_simulate({"iso": (model, fmu)}, "iso", ref.CS_STEPS[0],
+                            pa.CommandCycle(period=10.0))
+
+
 def _steps_like_pa_simulate(cosimulation, case: str, step: float,
                             experiment: pa.Experiment) -> None:
     model, fmu = cosimulation[case]
