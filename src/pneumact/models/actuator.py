@@ -93,7 +93,7 @@ class Actuator:
         the order a record's input is chosen: a logged set-point, a pressure, a command."""
         from .inputs import INPUT_SIGNALS
 
-        return tuple(INPUT_SIGNALS.values())
+        return tuple(dict.fromkeys(INPUT_SIGNALS.values()))
 
     def driven_by(self, signal: str) -> Actuator:
         """This actuator behind the valve that a record's ``signal`` drives."""
