@@ -22,7 +22,7 @@ from ..errors import ExperimentError
 
 QUANTITIES = {
     "pressure": "Pa", "command": "1", "force": "N", "velocity": "m/s", "position": "m",
-    "spring": "m",
+    "spring": "m", "spool": "1",
 }
 
 

@@ -123,6 +123,10 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
         raise ExperimentError(f"{what}: its command spans {low:g} to {high:g}; a valve "
                               "command must stay within [0, 1] (0 vents the chamber, 1 "
                               "opens it to the reservoir)")
+    elif expected == "spool" and (low < -1.0 or high > 1.0):
+        raise ExperimentError(f"{what}: its spool command spans {low:g} to {high:g}; a 5/3 "
+                              "valve's command must stay within [-1, 1] (1 extends, -1 "
+                              "retracts, 0 closes the centre)")
     elif expected == "position":
         stroke = model_stroke(model)
         if stroke is not None and (low < 0.0 or high > stroke):
