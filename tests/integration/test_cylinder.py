@@ -194,3 +194,20 @@ def test_valve_command_outside_its_range_is_refused(cylinder_set):
     experiment = pa.Experiment(Constant(1.5), "spool", 1.0)
     with pytest.raises(pa.ExperimentError, match=r"\[-1, 1\]"):
         pa.simulate(pa.Cylinder(cylinder_set), experiment)
+
+
+@pytest.mark.parametrize(("field", "value", "allowed"), [
+    ("d_rod", 0.04, "must be < D_bore"), ("p_supply", 0.9e5, "must be > p_atm"),
+    ("valve_leak", 2.0, "must be <= 1"), ("D_bore", 0.0, "must be > 0")])
+def test_impossible_cylinders_are_refused(field, value, allowed, cylinder_set):
+    """A rod wider than the bore, a supply below the atmosphere, a leakage above the
+    valve's own conductance, no bore: one error naming the field, value and range."""
+    with pytest.raises(pa.ParameterError, match=allowed) as err:
+        cylinder_set.replace(**{field: value})
+    assert f"{field} = {value:g}" in str(err.value)
+
+
+def test_a_set_without_a_cylinder_is_refused(vgt):
+    """A diaphragm actuator's set lacks the bore, rod, dead volumes, supply and valve."""
+    with pytest.raises(pa.ParameterError, match="lacks D_bore, d_rod"):
+        pa.Cylinder(vgt)
