@@ -39,8 +39,8 @@ from .valves import (
 __all__ = [
     "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
     "CommandValve", "CoulombViscous", "Cylinder", "Dahl", "ElastoPlastic", "FrictionModel",
-    "FrictionRig", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource",
-    "StribeckMap", "Valve", "conductance_of_area", "flow_function_values", "friction_law",
-    "friction_models", "input_signal", "iso6358_mass_flow", "orifice_mass_flow",
-    "valve_for_signal"
+    "FrictionRig", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator",
+    "PressureSource", "StribeckMap", "Valve", "conductance_of_area", "flow_function_values",
+    "friction_law", "friction_models", "input_signal", "iso6358_mass_flow",
+    "orifice_mass_flow", "valve_for_signal"
 ]
