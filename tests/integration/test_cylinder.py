@@ -3,8 +3,9 @@
 Each chamber's mass balance (its right-hand side at any state, and ∫ṁ dt along a run),
 the closed chambers' polytropic law against p0·(V0/V)^n, the static force balance at rest
 against the closed-form rest position of two isothermal gas springs, and the valve's flows
-against the ISO 6358 law written out here, at choked and subsonic ratios. One kernel
-(LuGre): the chamber law and the parameters are values, not compile-time choices.
+against the ISO 6358 law written out here, at choked and subsonic ratios. Two kernels
+(LuGre, the spool ideal or lagged): the chamber law and the parameters are values, not
+compile-time choices.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from scipy.optimize import brentq
 import pneumact as pa
 from conftest import load_quietly
 from pneumact.core.signals import Constant, Sine
+from pneumact.experiments import SpoolStep
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
 from reference import (
@@ -27,6 +29,7 @@ from reference import (
     CYLINDER_POLYTROPIC_RTOL,
     CYLINDER_REST_POSITION_ATOL,
     CYLINDER_RTOL,
+    CYLINDER_SPOOL_LAG_ATOL,
     CYLINDER_STATIC_RTOL,
     CYLINDER_VALVE_FLOW_RTOL,
     ISO_RHO0,
@@ -211,3 +214,17 @@ def test_a_set_without_a_cylinder_is_refused(vgt):
     """A diaphragm actuator's set lacks the bore, rod, dead volumes, supply and valve."""
     with pytest.raises(pa.ParameterError, match="lacks D_bore, d_rod"):
         pa.Cylinder(vgt)
+
+
+def test_the_lagged_spool_follows_its_first_order_law(cylinder_set):
+    """Cylinder(spool_lag=True): after a step of its command the spool moves as
+    u(t) = u1 + (u0 − u1)·exp(−(t − t_step)/τ), and the piston starts later than behind an
+    ideal spool."""
+    experiment = SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=0.4, n_points=3001)
+    lagged = pa.simulate(pa.Cylinder(cylinder_set, spool_lag=True), experiment, SOLVER)
+    ideal = pa.simulate(pa.Cylinder(cylinder_set), experiment, SOLVER)
+    tau, t = cylinder_set["spool_tau"], lagged.time
+    expected = np.where(t < 0.1, -1.0, 0.5 - 1.5 * np.exp(-(t - 0.1) / tau))
+    assert np.abs(lagged["spool"] - expected).max() <= CYLINDER_SPOOL_LAG_ATOL
+    started = [run.time[np.argmax(run["position"] > 1e-3)] for run in (lagged, ideal)]
+    assert started[0] > started[1]

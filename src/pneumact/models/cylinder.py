@@ -56,6 +56,9 @@ declare(
       plausible=(1e-10, 1e-6)),
     P("valve_leak", "", "mid-position leakage of each path of the 5/3 valve, as a fraction "
       "of valve_C", 0.0, 0.0, False, 1.0, group="cylinder", plausible=(0.0, 0.1)),
+    P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
+      "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(1e-5, 1.0)),
 )
 declare_relation(("d_rod", "D_bore"), lambda rod, bore: rod < bore,
                  lambda rod, bore: f"must be < D_bore = {bore:g} m (the rod passes "
@@ -210,6 +213,22 @@ def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def chamber_flow_slopes(u, pa, pb, p, o):  # pragma: no cover - compiled
+    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (the slope from above at u = 0; none
+    beyond ±1, where the spool is on its stop)."""
+    if u > 1.0 or u < -1.0:
+        return 0.0, 0.0
+    c = p[o + CY_C]
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    if u >= 0.0:  # supply → A and B → exhaust open with u
+        return (c * iso_flow(p_sup, pa, b, m, r_lam, temperature)[0],
+                -c * iso_flow(pb, p_exh, b, m, r_lam, temperature)[0])
+    return (c * iso_flow(pa, p_exh, b, m, r_lam, temperature)[0],
+            -c * iso_flow(p_sup, pb, b, m, r_lam, temperature)[0])
+
+
+@njit(cache=True)
 def chamber_volumes(x, p, o):  # pragma: no cover - compiled
     """(V_a, V_b) at piston position x."""
     return (p[o + CY_VDA] + p[o + CY_AA] * x,
@@ -309,23 +328,134 @@ def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # prag
     g[row_b, o + CY_XMAX] = -rate_b / vol_b * area_b
 
 
+# ------------------------------------------------------------------ the spool: direct or lagged
+#: the lagged spool's block and its local state; the direct spool has neither
+LAG_BLOCK = Block.of("spool_tau")
+LG_TAU = LAG_BLOCK.index("spool_tau")
+DIRECT_SPOOL_STATE = -1
+LAGGED_SPOOL_STATE = 0
+
+
+@njit(cache=True, inline="always")
+def spool_target(t, ts, sig, ptr):  # pragma: no cover - compiled
+    """The spool command clipped to the spool's travel [−1, 1]."""
+    return min(max(spool_command(t, ts, sig, ptr), -1.0), 1.0)
+
+
+@njit(cache=True, inline="always")
+def direct_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool follows its command at once."""
+    return spool_target(t, ts, sig, ptr)
+
+
+@njit(cache=True, inline="always")
+def lagged_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool's position is its state."""
+    return y[s + LAGGED_SPOOL_STATE]
+
+
+@njit(cache=True, inline="always")
+def direct_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True, inline="always")
+def lagged_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    """du/dt = (u_command − u)/τ."""
+    dydt[s + LAGGED_SPOOL_STATE] = (spool_target(t, ts, sig, ptr)
+                                    - y[s + LAGGED_SPOOL_STATE]) / p[o + LG_TAU]
+
+
+@njit(cache=True)
+def direct_partials(p, o, jac, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_partials(p, o, jac, s):  # pragma: no cover - compiled
+    jac[s + LAGGED_SPOOL_STATE, s + LAGGED_SPOOL_STATE] = -1.0 / p[o + LG_TAU]
+
+
+@njit(cache=True)
+def direct_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    tau = p[o + LG_TAU]
+    g[s + LAGGED_SPOOL_STATE, o + LG_TAU] = -(spool_target(t, ts, sig, ptr)
+                                              - y[s + LAGGED_SPOOL_STATE]) / (tau * tau)
+
+
+@njit(cache=True)
+def direct_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """At rest on the initial command."""
+    y0[s + LAGGED_SPOOL_STATE] = spool_target(t, ts, sig, ptr)
+
+
+@njit(cache=True)
+def direct_project(y, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_project(y, s):  # pragma: no cover - compiled
+    """The spool stays within its travel (the exact lag of a clipped command does)."""
+    y[s + LAGGED_SPOOL_STATE] = min(max(y[s + LAGGED_SPOOL_STATE], -1.0), 1.0)
+
+
+@njit(cache=True)
+def direct_scales(out, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_scales(out, s):  # pragma: no cover - compiled
+    out[s + LAGGED_SPOOL_STATE] = 1.0
+
+
+_SPOOL_FUNCTIONS = ("position", "rates", "partials", "params", "start", "project", "scales")
+
+
+def spool_part(lagged: bool) -> Part:
+    """The 5/3 valve's spool: following its command at once, or with a first-order lag
+    ``spool_tau`` (a state)."""
+    kind = "lagged" if lagged else "direct"
+    return Part(role="valve", block=LAG_BLOCK if lagged else Block(),
+                states=(StateSpec("spool_position", "1"),) if lagged else (),
+                functions={f"spool_{name}": f"{__name__}:{kind}_{name}"
+                           for name in _SPOOL_FUNCTIONS},
+                constants={"SPOOL_STATE": f"{__name__}:{kind.upper()}_SPOOL_STATE"},
+                label=f"5/3 valve, {'spool lag' if lagged else 'ideal spool'}",
+                key=f"spool_{kind}")
+
+
 @dataclass(frozen=True, eq=False)
 class Cylinder:
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
     chambers; ``load`` an external force F_load(t) [N] against extension (zero by
-    default)."""
+    default); ``spool_lag`` makes the spool follow its command with the time constant
+    ``spool_tau`` (a state) instead of at once."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
+    spool_lag: bool = False
     template: ClassVar[str] = "pneumact.models.cylinder_template"
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
-                     chamber: ChamberLaw = ..., load: Signal | None = ...) -> None: ...
+                     chamber: ChamberLaw = ..., load: Signal | None = ...,
+                     spool_lag: bool = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance, check_type
@@ -343,6 +473,7 @@ class Cylinder:
         if self.load is not None:
             check_type("load", self.load, Signal, where="Cylinder",
                        what="a Signal (e.g. pa.experiments.Step(...)) or None")
+        check_type("spool_lag", self.spool_lag, bool, where="Cylinder", what="True or False")
         self.params.require(self.required, "Cylinder")
 
     @property
@@ -399,8 +530,8 @@ class Cylinder:
             role="cylinder", block=CYLINDER_BLOCK,
             states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
-            settings=self.chamber.settings(), label="double-acting cylinder, 5/3 valve")
-        return cylinder, self.friction.part()
+            settings=self.chamber.settings(), label="double-acting cylinder")
+        return cylinder, self.friction.part(), spool_part(self.spool_lag)
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         load = self.load if self.load is not None else Constant(0.0)
@@ -408,4 +539,4 @@ class Cylinder:
 
     def describe(self) -> str:
         return (f"Cylinder(friction={self.friction!r}, "
-                f"chamber={type(self.chamber).__name__})")
+                f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag})")

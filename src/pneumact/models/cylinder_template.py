@@ -1,8 +1,9 @@
 """Model template: the double-acting cylinder behind a 5/3 proportional valve.
 
-States are [position, velocity, pressure_a, pressure_b | friction states], the parameter
-vector is [cylinder block | friction block]; the generator binds the friction law.
-The equations are ``models.cylinder``'s.
+States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
+position when it lags], the parameter vector is [cylinder block | friction block | spool
+block]; the generator binds the friction law and the spool (``spool_*``, direct or
+lagged). The equations are ``models.cylinder``'s.
 """
 
 from pneumact.core import kernel
@@ -16,6 +17,7 @@ from pneumact.models.cylinder import (
     CY_R,
     CY_T,
     CY_XMAX,
+    chamber_flow_slopes,
     chamber_flows,
     chamber_row,
     chamber_volumes,
@@ -25,20 +27,23 @@ from pneumact.models.cylinder import (
     end_stop_guards,
     piston_force,
     rest_pressures,
-    spool_command,
 )
 from pneumact.models.mechanics import load_against_time, rest_position
 
 # --- bound by the generator --------------------------------------------------------------
 friction_rates = friction_force = friction_partials = friction_param_partials = None
 friction_project = friction_scales = friction_store = friction_store_partials = None
+spool_position = spool_rates = spool_partials = spool_params = spool_start = None
+spool_project = spool_scales = None
+SPOOL_STATE = -1
 NSTATE = 5
-CYLINDER_LO = CYLINDER_HI = FRICTION_LO = FRICTION_HI = 0
+CYLINDER_LO = CYLINDER_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
 S_PRESSURE_A = 2
 S_PRESSURE_B = 3
 S_FRICTION = 4
+S_VALVE = 5
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool", "mass_flow_a",
@@ -47,6 +52,12 @@ OUTPUT_UNITS = ("N", "N", "N", "N", "1", "kg/s", "kg/s")
 #: generated from OUTPUT_NAMES (the assembly's layout): NOUT and OUT_<NAME>
 NOUT = OUT_FRICTION = OUT_PRESSURE_FORCE = OUT_STOP_FORCE = OUT_LOAD = OUT_SPOOL = None
 OUT_MASS_FLOW_A = OUT_MASS_FLOW_B = None
+
+
+@kernel()
+def _spool(t, ts, y, prm, sig, ptr):
+    """The spool's position u: its command, or its lagged state."""
+    return spool_position(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
 
 
 @kernel()
@@ -67,13 +78,14 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
     v = y[S_VELOCITY]
     f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
     accel, rate_a, rate_b = cylinder_rates(
-        x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], spool_command(t, ts, sig, ptr), f_fric,
+        x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], _spool(t, ts, y, prm, sig, ptr), f_fric,
         load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
     dydt[S_POSITION] = v
     dydt[S_VELOCITY] = accel
     dydt[S_PRESSURE_A] = rate_a
     dydt[S_PRESSURE_B] = rate_b
     friction_store(z_rates, dydt, S_FRICTION)
+    spool_rates(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
 
 
 @kernel()
@@ -89,8 +101,8 @@ def jac(t, ts, y, prm, sig, ptr, out):
     n, rt = prm[o + CY_N], prm[o + CY_R] * prm[o + CY_T]
     _, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
     _, _, ds_dx, ds_dv = piston_force(x, v, pa, pb, prm, o)
-    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(spool_command(t, ts, sig, ptr), pa, pb,
-                                                     prm, o)
+    u = _spool(t, ts, y, prm, sig, ptr)
+    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(u, pa, pb, prm, o)
     vol_a, vol_b = chamber_volumes(x, prm, o)
     out[S_POSITION, S_VELOCITY] = 1.0
     out[S_VELOCITY, S_POSITION] = ds_dx / m
@@ -106,6 +118,11 @@ def jac(t, ts, y, prm, sig, ptr, out):
     out[S_PRESSURE_B, S_POSITION] = d_x
     out[S_PRESSURE_B, S_VELOCITY] = d_v
     out[S_PRESSURE_B, S_PRESSURE_B] = d_p
+    if SPOOL_STATE >= 0:  # the flows follow the lagged spool
+        dma_du, dmb_du = chamber_flow_slopes(u, pa, pb, prm, o)
+        out[S_PRESSURE_A, S_VALVE + SPOOL_STATE] = n / vol_a * rt * dma_du
+        out[S_PRESSURE_B, S_VALVE + SPOOL_STATE] = n / vol_b * rt * dmb_du
+    spool_partials(prm, VALVE_LO, out, S_VALVE)
 
 
 @kernel()
@@ -121,8 +138,9 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     f_fric = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, prm, CYLINDER_LO)
     net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
-    cylinder_params(x, v, pa, pb, spool_command(t, ts, sig, ptr), net, prm, CYLINDER_LO, g,
+    cylinder_params(x, v, pa, pb, _spool(t, ts, y, prm, sig, ptr), net, prm, CYLINDER_LO, g,
                     S_VELOCITY, S_PRESSURE_A, S_PRESSURE_B)
+    spool_params(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
     friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
     m = prm[CYLINDER_LO + CY_M]
     for k in range(FRICTION_LO, FRICTION_HI):  # the friction force enters as −F/m
@@ -134,7 +152,7 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     """Derived signals at one instant, in the order of OUTPUT_NAMES."""
     x = y[S_POSITION]
     v = y[S_VELOCITY]
-    u = spool_command(t, ts, sig, ptr)
+    u = _spool(t, ts, y, prm, sig, ptr)
     f_press, f_stop, _, _ = piston_force(x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
                                          CYLINDER_LO)
     mdot_a, _, mdot_b, _ = chamber_flows(u, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
@@ -143,7 +161,7 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_PRESSURE_FORCE] = f_press
     out[OUT_STOP_FORCE] = f_stop
     out[OUT_LOAD] = load_against_time(t, ts, sig, ptr)
-    out[OUT_SPOOL] = min(max(u, -1.0), 1.0)
+    out[OUT_SPOOL] = u
     out[OUT_MASS_FLOW_A] = mdot_a
     out[OUT_MASS_FLOW_B] = mdot_b
 
@@ -164,7 +182,8 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     for i in range(NSTATE):
         y0[i] = 0.0
     o = CYLINDER_LO
-    pa, pb = rest_pressures(spool_command(t, ts, sig, ptr), prm, o)
+    spool_start(t, ts, prm, VALVE_LO, sig, ptr, y0, S_VALVE)
+    pa, pb = rest_pressures(_spool(t, ts, y0, prm, sig, ptr), prm, o)
     f_press = piston_force(0.0, 0.0, pa, pb, prm, o)[0]
     net0 = f_press - load_against_time(t, ts, sig, ptr)
     y0[S_POSITION] = rest_position(net0, 0.0, prm[o + CY_KSTOP], prm[o + CY_XMAX])
@@ -174,17 +193,20 @@ def initial_state(t, ts, prm, sig, ptr, y0):
 
 @kernel()
 def project(prm, y):
-    """Back onto the friction law's bounds the exact dynamics never leave."""
+    """Back onto the bounds the exact dynamics never leave: the friction law's, the
+    spool's travel."""
     friction_project(prm, FRICTION_LO, y, S_FRICTION)
+    spool_project(y, S_VALVE)
 
 
 @kernel()
 def state_scales(prm, out):
-    """Typical magnitudes: the stroke, 10 strokes per second, the supply pressure, and
-    the friction law's own."""
+    """Typical magnitudes: the stroke, 10 strokes per second, the supply pressure, the
+    friction law's own and the spool's travel."""
     x_max = prm[CYLINDER_LO + CY_XMAX]
     out[S_POSITION] = x_max
     out[S_VELOCITY] = 10.0 * x_max
     out[S_PRESSURE_A] = prm[CYLINDER_LO + CY_PSUP]
     out[S_PRESSURE_B] = prm[CYLINDER_LO + CY_PSUP]
     friction_scales(prm, FRICTION_LO, out, S_FRICTION)
+    spool_scales(out, S_VALVE)
