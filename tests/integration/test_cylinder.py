@@ -228,3 +228,11 @@ def test_the_lagged_spool_follows_its_first_order_law(cylinder_set):
     assert np.abs(lagged["spool"] - expected).max() <= CYLINDER_SPOOL_LAG_ATOL
     started = [run.time[np.argmax(run["position"] > 1e-3)] for run in (lagged, ideal)]
     assert started[0] > started[1]
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"after": 1.5}, r"after = 1.5: must be in \[-1, 1\]"),
+    ({"t_step": 0.0}, "t_step"), ({"t_step": 0.5, "t_end": 0.4}, "t_end = 0.4 s")])
+def test_impossible_spool_steps_are_refused(kwargs, message):
+    with pytest.raises(pa.ExperimentError, match=message):
+        SpoolStep(**kwargs)

@@ -199,7 +199,7 @@ def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
-    """Net mass flows into A and B at spool command u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
+    """Net mass flows into A and B at spool position u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
     ṁ_b, ∂ṁ_b/∂p_b)."""
     fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
     c = p[o + CY_C]
