@@ -688,3 +688,31 @@ FEATURES_SLOW_EXCESS_PERCENT = 11.8
 #: the C engine against numba: largest difference of any output signal over its range (the
 #: C back end translates numba's typed IR, so the runs agree to rounding; measured 0.0)
 ENGINE_AGREEMENT = 1e-12
+
+# ------------------------------------------------------------- the cylinder (issue 41, item 4)
+#: Rodas4 rtol of the cylinder's invariant checks: errors ≪ the tolerances below
+CYLINDER_RTOL = 1e-10
+#: ∫ṁ dt (Simpson on 40 001 points over 1 s) against the change of p·V/(R·T) of each
+#: chamber, relative to that change's range (measured 6e-10 for A, 2.6e-8 for B)
+CYLINDER_MASS_BALANCE_RTOL = 1e-7
+#: d(p·V)/dt = R·T·ṁ at any state of the right-hand side: round-off only
+CYLINDER_MASS_RATE_RTOL = 1e-12
+#: a closed chamber's p against p0·(V0/V)^n along the motion, relative to p0 (measured
+#: 1e-10 isothermal and adiabatic)
+CYLINDER_POLYTROPIC_RTOL = 1e-7
+#: at rest, the pressure force against the load, relative to the load (measured 3e-14),
+#: and the rest position against the closed form of two isothermal gas springs [m]
+CYLINDER_STATIC_RTOL = 1e-9
+CYLINDER_REST_POSITION_ATOL = 1e-9
+#: the lagged spool against 1 − exp(−t/τ) after a step (Rodas4 at CYLINDER_RTOL; measured
+#: 2e-10)
+CYLINDER_SPOOL_LAG_ATOL = 1e-7
+#: the 5/3 valve's flows against the closed-form ISO 6358 law: round-off only
+CYLINDER_VALVE_FLOW_RTOL = 1e-12
+#: ISO 6358 reference conditions (ISO 8778, ANR), written out again for the closed form
+ISO_RHO0 = 1.185  # kg/m³
+ISO_T0 = 293.15  # K
+#: the command line's cylinder run (in 50 chunks, for its progress display) against one
+#: API run at the default rtol 1e-6: the step sequences differ, the trajectories by the
+#: integration error, relative to each signal's range (measured 1.5e-6)
+CLI_CHUNKED_RUN_RTOL = 1e-5

@@ -56,6 +56,31 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
+def test_simulate_the_cylinder_writes_its_step_response(tmp_path):
+    """--model cylinder: the shipped cylinder set, a spool step, the API's run as CSV."""
+    import numpy as np
+    import pandas as pd
+
+    import pneumact as pa
+    from conftest import load_quietly
+    from reference import CLI_CHUNKED_RUN_RTOL
+
+    out = tmp_path / "cylinder"
+    result = invoke("simulate", "--model", "cylinder", "--chamber", "adiabatic", "--t-end",
+                    "0.5", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    assert "95 % of the stroke" in result.stdout
+    assert (out / "response.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    frame = pd.read_csv(out / "simulation.csv")
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), chamber=pa.Adiabatic()),
+                      pa.experiments.SpoolStep(t_end=0.5))
+    for name, unit in (("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")):
+        cli = frame[f"{name} [{unit}]"].to_numpy()  # run in chunks (its progress): rtol apart
+        assert np.abs(cli - api[name]).max() <= CLI_CHUNKED_RUN_RTOL * np.ptp(api[name]), name
+    refused = invoke("simulate", "--model", "cylinder", "--valve", "command")
+    assert refused.exit_code != 0 and "own 5/3 valve" in refused.output
+
+
 @pytest.mark.parametrize("valve", ["command", "iso6358"])
 def test_command_valve_runs(tmp_path, valve):
     """Both command-driven valves run the command cycle; --low, which sets a pressure

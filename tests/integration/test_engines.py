@@ -3,7 +3,7 @@
 Issue 43: ``pa.simulate(..., engine="c" | "numba" | "auto")`` and ``PNEUMACT_ENGINE``; the C
 engine's library is the C back end's translation of the same kernel functions, so the two
 engines must agree to rounding (here: bit for bit, or 1e-12 relative where noted), the
-ISO 6358 valve of issue 41 included.
+ISO 6358 valve and the double-acting cylinder of issue 41 included.
 """
 
 from __future__ import annotations
@@ -43,6 +43,9 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
                     pa.CommandCycle(**short)),
         "gms": (pa.Actuator(load_quietly("vgt-paper-gms4"), friction=pa.GMS(4)),
                 pa.PressureCycle(**short)),
+        "cylinder": (pa.Cylinder(load_quietly("iso15552-32"), chamber=pa.Adiabatic(),
+                                 load=Sine(30.0, 2.0, offset=50.0)),
+                     pa.Experiment(Sine(0.6, 1.0, phase=-1.5), "spool", 2.0, n_points=801)),
         "rig": (pa.FrictionRig(load_quietly("canudas1995"), drive="velocity"),
                 pa.Experiment(Sine(0.01, 0.5), "velocity", 4.0, n_points=801)),
         "loop": (ClosedLoop(rig, PID(kp=3.0, ki=4.0, kd=6.0, derivative="velocity")),
@@ -51,8 +54,8 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
 
 
 @needs_compiler
-@pytest.mark.parametrize("name", ["source", "command", "regulator", "iso6358", "gms", "rig",
-                                  "loop"])
+@pytest.mark.parametrize("name", ["source", "command", "regulator", "iso6358", "gms",
+                                  "cylinder", "rig", "loop"])
 def test_the_c_engine_follows_numba(name):
     """Every signal of the C engine's run equals numba's to 1e-12 of its range."""
     model, experiment = _models()[name]

@@ -12,12 +12,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import load_quietly
 from pneumact.core.signals import Constant, PiecewiseLinear, Ramp
 from pneumact.experiments.actuator import Experiment
 from pneumact.models import (
     Actuator,
+    Adiabatic,
     CommandValve,
     CoulombViscous,
+    Cylinder,
     FrictionRig,
     Iso6358Valve,
     LuGre,
@@ -43,7 +46,7 @@ MECHANICAL_STATES = [
 ]
 
 
-def _fd_check(prep, t, ts, y, label):
+def _fd_check(prep, t, ts, y, label, state_scales=STATE_SCALES):
     kernel, prm, sig, ptr = prep.kernel, prep.vector, prep.sig, prep.ptr
     n = y.size
     analytic = np.zeros((n, n))
@@ -51,14 +54,14 @@ def _fd_check(prep, t, ts, y, label):
     numeric = np.zeros((n, n))
     f_plus, f_minus = np.empty(n), np.empty(n)
     for j in range(n):
-        h = JAC_FD_REL_STEP * max(abs(y[j]), STATE_SCALES[j])
+        h = JAC_FD_REL_STEP * max(abs(y[j]), state_scales[j])
         y_plus, y_minus = y.copy(), y.copy()
         y_plus[j] += h
         y_minus[j] -= h
         kernel.rhs(t, ts, y_plus, prm, sig, ptr, f_plus)
         kernel.rhs(t, ts, y_minus, prm, sig, ptr, f_minus)
         numeric[:, j] = (f_plus - f_minus) / (2.0 * h)
-    scales = STATE_SCALES[:n]
+    scales = state_scales[:n]
     row_size = np.max(np.abs(numeric * scales), axis=1, keepdims=True) + 1e-300
     error = np.abs(analytic - numeric) * scales / row_size
     worst = np.unravel_index(np.argmax(error), error.shape)
@@ -158,3 +161,31 @@ def test_friction_rig_spring_drive_jacobian(friction, canudas):
         y = np.array([x, v, *([z] if friction.states else [])])
         _fd_check(prep, 3.0, 5.0, y, friction.kernel)
         _param_fd_check(prep, 3.0, 5.0, y, friction.kernel)
+
+
+# the cylinder's states [x m, v m/s, p_a Pa, p_b Pa, z m, spool position]; (x, v, z)
+# mid-stroke both ways, presliding, and inside both end stops pushing out; (p_a, p_b)
+# choked and subsonic
+CYLINDER_SCALES = np.array([1e-3, 1e-2, 1e4, 1e4, 1e-5, 1.0])
+CYLINDER_MECHANICAL = [(0.05, 0.4, 5e-5), (0.15, -0.3, -6e-5), (0.1, 1e-4, 2e-5),
+                       (-1e-6, -1e-3, -2e-5), (0.200001, 1e-3, 2e-5)]
+CYLINDER_PRESSURES = [(1.3e5, 6.5e5), (5.2e5, 2.4e5), (3.5e5, 3.5e5)]
+
+
+@pytest.mark.parametrize("spool_lag", [False, True], ids=["ideal spool", "spool lag"])
+def test_cylinder_jacobian(spool_lag):
+    """The double-acting cylinder behind its 5/3 valve (both spool directions, the closed
+    centre with its leakage; the spool at once or lagged, a state off its command), a
+    load against time, adiabatic chambers."""
+    params = load_quietly("iso15552-32").replace(iso_b=0.25, iso_m=0.6)
+    model = Cylinder(params, chamber=Adiabatic(), load=Ramp(0.0, 80.0, duration=1.0),
+                     spool_lag=spool_lag)
+    for u in (0.45, -0.8, 0.0):
+        prep = prepare(model, Experiment(Constant(u), "spool", t_end=1.0), Rodas4())
+        for x, v, z in CYLINDER_MECHANICAL:
+            for pa, pb in CYLINDER_PRESSURES:
+                spool = [0.6 * u - 0.2] if spool_lag else []  # off its command, not 0
+                y = np.array([x, v, pa, pb, z, *spool])
+                label = f"cylinder u={u}"
+                _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
+                _param_fd_check(prep, 0.3, 0.5, y, label)

@@ -29,7 +29,8 @@ _CONTROL = ("pneumact.control:ClosedLoop", "pneumact.control:PID", "pneumact.con
 
 #: command (its words joined by spaces) -> the API it calls and the objects it builds
 API: dict[str, tuple[str, ...]] = {
-    "simulate": ("pneumact.simulation:simulate", *_MODEL, *_EXPERIMENT),
+    "simulate": ("pneumact.simulation:simulate", *_MODEL, *_EXPERIMENT,
+                 "pneumact.models:Cylinder", "pneumact.experiments:SpoolStep"),
     "simulate-batch": ("pneumact.simulation.batch:simulate_batch", *_MODEL, *_EXPERIMENT),
     "campaign": ("pneumact.identification:design_campaign",
                  "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),

@@ -232,6 +232,46 @@ def build_model(options: ModelOptions, params=None):
                             chamber=build_chamber(options.chamber, options.exponent))
 
 
+#: the parameter set of ``--model cylinder`` when --params keeps the actuator's default
+CYLINDER_SET = "iso15552-32"
+#: the default spool step's duration [s] (the spool steps at 0.1 s)
+CYLINDER_T_END = 1.0
+
+
+def build_cylinder(options: ModelOptions, params=None):
+    """(parameter set, Cylinder) the options describe: --params (iso15552-32 in place of
+    the actuator's default set), the friction and chamber laws; its own 5/3 valve."""
+    from dataclasses import replace
+
+    from pneumact.models import Cylinder
+
+    if options.valve is not DEFAULT_VALVE:
+        raise ArgumentError(f"--valve {options.valve.value} is the actuator's valve; --model "
+                            "cylinder has its own 5/3 valve (a spool command u in [-1, 1]): "
+                            "drop --valve")
+    if options.low_kpa is not None:
+        raise ArgumentError("--low is the actuator's pressure cycle; --model cylinder steps "
+                            "its valve's spool: drop --low")
+    check_model_options(replace(options, valve=Valve.command))  # a valve feeds its chambers
+    name = CYLINDER_SET if options.params == ModelOptions.params else options.params
+    params = load_quietly(name) if params is None else params
+    friction = friction_of(options)
+    _check_friction_parameters(friction, params, options)
+    return params, Cylinder(params, friction=friction,
+                            chamber=build_chamber(options.chamber, options.exponent))
+
+
+def cylinder_experiment(options: ModelOptions, params):
+    """The input CSV (a spool column), or a spool step from -1 to 0.5 at 0.1 s lasting
+    --t-end (default 1 s)."""
+    import pneumact as pa
+
+    if options.input_csv is not None:
+        return build_experiment(options, params)
+    t_end = CYLINDER_T_END if options.t_end is None else options.t_end
+    return pa.experiments.SpoolStep(t_end=t_end)
+
+
 def _check_friction_parameters(friction, params, options: ModelOptions) -> None:
     """A set without the law's own parameters (GMS's blocks) is refused naming the shipped
     sets that have them and everything the given set has."""

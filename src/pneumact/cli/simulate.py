@@ -1,7 +1,9 @@
-"""``pneumact simulate``: one run of the actuator; CSV, hysteresis plot and a summary."""
+"""``pneumact simulate``: one run of the actuator (CSV, hysteresis plot and a summary) or of
+the double-acting cylinder (CSV, step response plot and a summary)."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -28,8 +30,10 @@ from pneumact.cli.common import (
     RtolOption,
     TEndOption,
     ValveOption,
+    build_cylinder,
     build_experiment,
     build_model,
+    cylinder_experiment,
     fmt,
     out_console,
     run_with_progress,
@@ -39,8 +43,20 @@ from pneumact.cli.common import (
 )
 
 
+class ModelKind(StrEnum):
+    actuator = "actuator"
+    cylinder = "cylinder"
+
+
+ModelOption = Annotated[ModelKind, typer.Option(
+    "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
+                    "double-acting cylinder behind its 5/3 valve (--params default "
+                    "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
+
+
 def simulate(
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     out: Annotated[Path, typer.Option(help="Output directory (simulation.csv, "
                                            "hysteresis.png).")] = Path("pneumact-out"),
     input_csv: InputOption = None,
@@ -54,7 +70,8 @@ def simulate(
     low: LowOption = None,
     rtol: RtolOption = 1e-6,
 ) -> None:
-    """Simulate the actuator; write simulation.csv (SI) and hysteresis.png."""
+    """Simulate the actuator (write simulation.csv in SI and hysteresis.png) or the
+    cylinder (simulation.csv and response.png)."""
     with user_errors():
         import pneumact as pa
         from pneumact.simulation.simulate import check_drive
@@ -64,6 +81,9 @@ def simulate(
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
                                elements=elements)
+        if model is ModelKind.cylinder:
+            _simulate_cylinder(options, out)
+            return
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)
@@ -122,6 +142,56 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
         *_motion_rows(result),
         ("solver steps", str(result.meta.get("steps", "n/a")), ""),
         ("wall time", fmt(result.meta.get("wall_time_s", float("nan")), 3), "s"),
+    ]
+    for row in rows:
+        table.add_row(*row)
+    out_console.print(table)
+    for path in written:
+        out_console.print(f"wrote {path}")
+
+
+def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
+    """One run of the cylinder: simulation.csv, response.png and its summary."""
+    import pneumact as pa
+    from pneumact.simulation.simulate import check_drive
+
+    parameter_set, cylinder = build_cylinder(options)
+    experiment = cylinder_experiment(options, parameter_set)
+    check_drive(cylinder, experiment)
+    result = run_with_progress(lambda report: pa.simulate(
+        cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
+    use_agg()
+    import matplotlib.pyplot as plt
+
+    from pneumact.plotting import plot_time_series, save_figure
+
+    figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
+                                       "pressure_b"])
+    try:
+        written = write_outputs(out, {
+            "simulation.csv": result.save,
+            "response.png": lambda path: save_figure(figure, path),
+        })
+    finally:
+        plt.close(figure)
+    _print_cylinder_summary(result, float(parameter_set["x_max"]), written)
+
+
+def _print_cylinder_summary(result, stroke: float, written) -> None:
+    """Travel, top speeds, when 95 % of the stroke is first reached, the end pressures."""
+    table = Table(title="pneumact simulate --model cylinder", show_header=True)
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    position, velocity = result["position"], result["velocity"]
+    reached = result.time[position >= 0.95 * stroke]
+    rows = [
+        ("travel", f"{fmt(position.min() * 1e3)} to {fmt(position.max() * 1e3)}", "mm"),
+        ("top speed out / in", f"{fmt(velocity.max())} / {fmt(-velocity.min())}", "m/s"),
+        ("95 % of the stroke first at", fmt(reached[0]) if reached.size else "never", "s"),
+        ("p_a, p_b at the end", f"{fmt(result['pressure_a'][-1] * 1e-3)}, "
+                                f"{fmt(result['pressure_b'][-1] * 1e-3)}", "kPa abs"),
+        ("solver steps", str(result.meta.get("steps", "n/a")), ""),
     ]
     for row in rows:
         table.add_row(*row)

@@ -1,4 +1,5 @@
-"""Experiments: what is applied to the actuator or the friction rig, and for how long."""
+"""Experiments: what is applied to the actuator, the cylinder or the friction rig, and for
+how long."""
 
 from ..core.signals import Constant, PiecewiseLinear, Ramp, Signal, Sine, Step, Triangle
 from .actuator import (
@@ -6,6 +7,7 @@ from .actuator import (
     CommandCycle,
     Experiment,
     PressureCycle,
+    SpoolStep,
     from_csv,
     from_record,
     from_samples,
@@ -15,5 +17,6 @@ from .setpoints import SetpointProfile, SetpointRamp, SetpointStep, SetpointTabl
 __all__ = [
     "QUANTITIES", "CommandCycle", "Constant", "Experiment", "PiecewiseLinear", "PressureCycle",
     "Ramp", "SetpointProfile", "SetpointRamp", "SetpointStep", "SetpointTable",
-    "Signal", "Sine", "Step", "Triangle", "from_csv", "from_record", "from_samples",
+    "Signal", "Sine", "SpoolStep", "Step", "Triangle", "from_csv", "from_record",
+    "from_samples",
 ]

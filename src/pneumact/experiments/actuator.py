@@ -17,12 +17,12 @@ from ..checks import (
     check_range,
     check_type,
 )
-from ..core.signals import PiecewiseLinear, Signal, Triangle
+from ..core.signals import PiecewiseLinear, Signal, Step, Triangle
 from ..errors import ExperimentError
 
 QUANTITIES = {
     "pressure": "Pa", "command": "1", "force": "N", "velocity": "m/s", "position": "m",
-    "spring": "m",
+    "spring": "m", "spool": "1",
 }
 
 
@@ -138,3 +138,20 @@ def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:
     name, time, values = read_signal_csv(path, p_atm=p_atm)
     quantity = "pressure" if name == "setpoint" else name
     return from_samples(time, values, quantity, name=f"{Path(path).name}")
+
+
+def SpoolStep(before: float = -1.0, after: float = 0.5, t_step: float = 0.1,
+              t_end: float = 1.0, n_points: int = 2001) -> Experiment:
+    """Step of a 5/3 valve's spool command from ``before`` to ``after`` at ``t_step`` [s]
+    (u ∈ [−1, 1]; the default holds a cylinder retracted, then extends it at half
+    opening): the cylinder's step response."""
+    for label, value in (("before", before), ("after", after)):
+        check_range(label, value, -1.0, 1.0, where="SpoolStep", error=ExperimentError,
+                    hint="a 5/3 valve's spool command: 1 extends, -1 retracts, 0 closes")
+    check_positive("t_step", t_step, unit="s", where="SpoolStep", error=ExperimentError)
+    if not t_end > t_step:
+        raise ExperimentError(f"SpoolStep: t_end = {t_end:g} s: must be > t_step = "
+                              f"{t_step:g} s")
+    check_int("n_points", n_points, minimum=2, where="SpoolStep", error=ExperimentError)
+    return Experiment(Step(t_step, before, after), "spool", t_end, n_points=n_points,
+                      name="SpoolStep")

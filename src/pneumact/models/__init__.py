@@ -1,6 +1,8 @@
-"""Models: friction laws, chamber and valves, the assembled actuator and the test rig."""
+"""Models: friction laws, chamber and valves, the assembled actuator, the double-acting
+cylinder and the test rig."""
 
 from .actuator import Actuator
+from .cylinder import Cylinder
 from .friction import (
     GMS,
     BoucWen,
@@ -36,9 +38,9 @@ from .valves import (
 
 __all__ = [
     "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
-    "CommandValve", "CoulombViscous", "Dahl", "ElastoPlastic", "FrictionModel", "FrictionRig",
-    "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator", "PressureSource",
-    "StribeckMap", "Valve", "conductance_of_area", "flow_function_values", "friction_law",
-    "friction_models", "input_signal", "iso6358_mass_flow", "orifice_mass_flow",
-    "valve_for_signal"
+    "CommandValve", "CoulombViscous", "Cylinder", "Dahl", "ElastoPlastic", "FrictionModel",
+    "FrictionRig", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator",
+    "PressureSource", "StribeckMap", "Valve", "conductance_of_area", "flow_function_values",
+    "friction_law", "friction_models", "input_signal", "iso6358_mass_flow",
+    "orifice_mass_flow", "valve_for_signal"
 ]

@@ -39,6 +39,7 @@ DECLARING_MODULES = (
     "pneumact.models.pneumatics",
     "pneumact.models.valves",
     "pneumact.models.rig",
+    "pneumact.models.cylinder",
     "pneumact.models.controllers",
     "pneumact.models.sensors",
 )

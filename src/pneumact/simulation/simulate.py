@@ -38,8 +38,8 @@ __all__ = ["Model", "Prepared", "check_drive", "check_experiment", "check_model"
 
 @runtime_checkable
 class Model(Protocol):
-    """What the simulation asks of a model: an ``Actuator``, a ``FrictionRig`` or a
-    ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
+    """What the simulation asks of a model: an ``Actuator``, a ``FrictionRig``, a
+    ``Cylinder`` or a ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
 
     ``drive_quantity`` is what the experiment's signal is (pressure, command, force,
     position...); ``input_signal`` the record signal that drives the model (a regulator's
@@ -88,12 +88,12 @@ class Model(Protocol):
 
 
 def check_model(model, where: str = "simulate") -> None:
-    """``model`` must be a model (an Actuator, a FrictionRig, a ClosedLoop)."""
+    """``model`` must be a model (an Actuator, a FrictionRig, a Cylinder, a ClosedLoop)."""
     if not isinstance(model, Model):
         raise ArgumentTypeError(
             f"{where}: model = {shown(model)}: must be a model, e.g. pa.Actuator(params), "
-            f"pa.FrictionRig(params) or pneumact.control.ClosedLoop(...), not "
-            f"{type(model).__name__}")
+            f"pa.FrictionRig(params), pa.Cylinder(params) or pneumact.control.ClosedLoop(...), "
+            f"not {type(model).__name__}")
 
 
 def check_experiment(experiment, where: str = "simulate") -> None:
@@ -123,6 +123,10 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
         raise ExperimentError(f"{what}: its command spans {low:g} to {high:g}; a valve "
                               "command must stay within [0, 1] (0 vents the chamber, 1 "
                               "opens it to the reservoir)")
+    elif expected == "spool" and (low < -1.0 or high > 1.0):
+        raise ExperimentError(f"{what}: its spool command spans {low:g} to {high:g}; a 5/3 "
+                              "valve's command must stay within [-1, 1] (1 extends, -1 "
+                              "retracts, 0 closes the centre)")
     elif expected == "position":
         stroke = model_stroke(model)
         if stroke is not None and (low < 0.0 or high > stroke):
@@ -338,7 +342,8 @@ def failure(prep: Prepared, solver: Solver, stats: SolverStats, y_end) -> Solver
 def simulate(model, experiment: Experiment, solver: Solver | None = None, *, t_eval=None,
              y0=None, progress: ProgressCallback | None = None,
              values: Mapping[str, float] | None = None, engine: str | None = None) -> Result:
-    """Simulate ``model`` (an ``Actuator`` or a ``FrictionRig``) under ``experiment``.
+    """Simulate ``model`` (an ``Actuator``, a ``FrictionRig`` or a ``Cylinder``) under
+    ``experiment``.
 
     Returns a ``Result`` with named, unit-tagged signals at ``t_eval`` (default: the
     experiment's uniform output grid). ``progress`` is called with a

@@ -1,0 +1,542 @@
+"""A double-acting pneumatic cylinder fed by a 5/3 proportional valve (issue 41, item 4).
+
+    m·dv/dt = (p_a − p_atm)·A_a − (p_b − p_atm)·A_b − F_f − F_load(t) + F_stop(x, v)
+    dp_a/dt = n/V_a·(R·T·ṁ_a − p_a·A_a·v),   V_a = V_dead_a + A_a·x
+    dp_b/dt = n/V_b·(R·T·ṁ_b + p_b·A_b·v),   V_b = V_dead_b + A_b·(x_max − x)
+
+x ∈ [0, x_max] is the rod's extension from the cap-end stop; chamber A is the cap side
+(A_a = π·D²/4), chamber B the rod side (A_b = π·(D² − d²)/4); the atmosphere acts on
+the rod's cross-section A_a − A_b. The end stops are the Hunt–Crossley contacts of
+``models.mechanics``. The spool command u ∈ [−1, 1] of the closed-centre 5/3 valve opens
+supply → A and B → exhaust for u > 0, supply → B and A → exhaust for u < 0; each path
+is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(|u| + valve_leak)
+on its open side and valve_C·valve_leak on its closed one (the mid-position leakage that
+keeps a chamber's pressure defined at u = 0). The chamber law (isothermal, adiabatic,
+polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ.
+
+The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, ClassVar
+
+from numba import njit
+
+from ..core.channels import CH_DRIVE, in_order
+from ..core.component import Block, Part, StateSpec
+from ..core.signals import Constant, Signal, channel_eval
+from ..parameters.catalogue import ParameterSpec, declare, declare_relation
+from .friction import FrictionModel, LuGre
+from .mechanics import stop_force, stop_force_params
+from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
+
+if TYPE_CHECKING:
+    from ..parameters.files import ParameterSetLike
+    from ..parameters.parameter_set import ParameterSet
+
+P = ParameterSpec
+declare(
+    P("D_bore", "m", "cylinder bore (piston diameter)", None, 0.0, True, 2.0,
+      group="cylinder", plausible=(2e-3, 0.5)),
+    P("d_rod", "m", "piston rod diameter (0: a rodless, equal-area piston)", None, 0.0,
+      False, 2.0, group="cylinder", plausible=(0.0, 0.2)),
+    P("V_dead_a", "m^3", "dead volume of the cap-side chamber A at x = 0 (end cap, port, "
+      "tubing to the valve)", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(1e-8, 1e-2)),
+    P("V_dead_b", "m^3", "dead volume of the rod-side chamber B at x = x_max (end cap, "
+      "port, tubing to the valve)", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(1e-8, 1e-2)),
+    P("p_supply", "Pa", "supply pressure of the 5/3 valve (absolute)", None, 0.0, True, 1e8,
+      group="cylinder", plausible=(1.5e5, 1.6e6)),
+    P("valve_C", "m^3/(s*Pa)", "ISO 6358 sonic conductance of each path of the 5/3 valve, "
+      "spool fully open (|u| = 1)", None, 0.0, False, 1e-3, group="cylinder",
+      plausible=(1e-10, 1e-6)),
+    P("valve_leak", "", "mid-position leakage of each path of the 5/3 valve, as a fraction "
+      "of valve_C", 0.0, 0.0, False, 1.0, group="cylinder", plausible=(0.0, 0.1)),
+    P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
+      "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(1e-5, 1.0)),
+)
+declare_relation(("d_rod", "D_bore"), lambda rod, bore: rod < bore,
+                 lambda rod, bore: f"must be < D_bore = {bore:g} m (the rod passes "
+                                   "through the piston)")
+declare_relation(("p_supply", "p_atm"), lambda supply, atm: supply > atm,
+                 lambda supply, atm: f"must be > p_atm = {atm:g} Pa (the supply drives "
+                                     "air into the chambers)")
+
+CYLINDER_BLOCK = Block.of(
+    "m", "D_bore", "d_rod", "x_max", "V_dead_a", "V_dead_b", "p_atm", "p_supply",
+    "valve_C", "valve_leak", "iso_b", "iso_m", "r_lin", "gamma", "R", "T", "k_stop",
+    "c_stop",
+    settings=("chamber_n_offset", "chamber_n_gamma"),
+    derived=("n_poly", "area_a", "area_b"),
+)
+CY_M = CYLINDER_BLOCK.index("m")
+CY_BORE = CYLINDER_BLOCK.index("D_bore")
+CY_ROD = CYLINDER_BLOCK.index("d_rod")
+CY_XMAX = CYLINDER_BLOCK.index("x_max")
+CY_VDA = CYLINDER_BLOCK.index("V_dead_a")
+CY_VDB = CYLINDER_BLOCK.index("V_dead_b")
+CY_PATM = CYLINDER_BLOCK.index("p_atm")
+CY_PSUP = CYLINDER_BLOCK.index("p_supply")
+CY_C = CYLINDER_BLOCK.index("valve_C")
+CY_LEAK = CYLINDER_BLOCK.index("valve_leak")
+CY_B = CYLINDER_BLOCK.index("iso_b")
+CY_MEXP = CYLINDER_BLOCK.index("iso_m")
+CY_RLIN = CYLINDER_BLOCK.index("r_lin")
+CY_GAMMA = CYLINDER_BLOCK.index("gamma")
+CY_R = CYLINDER_BLOCK.index("R")
+CY_T = CYLINDER_BLOCK.index("T")
+CY_KSTOP = CYLINDER_BLOCK.index("k_stop")
+CY_CSTOP = CYLINDER_BLOCK.index("c_stop")
+CY_N_OFFSET = CYLINDER_BLOCK.index("chamber_n_offset")
+CY_N_GAMMA = CYLINDER_BLOCK.index("chamber_n_gamma")
+CY_N = CYLINDER_BLOCK.index("n_poly")
+CY_AA = CYLINDER_BLOCK.index("area_a")
+CY_AB = CYLINDER_BLOCK.index("area_b")
+CYLINDER_SIZE = len(CYLINDER_BLOCK)
+QUARTER_PI = 0.25 * math.pi
+#: Bisection steps of a chamber's rest pressure (the interval shrinks by 2^-60).
+REST_ITERATIONS = 60
+
+
+@njit(cache=True)
+def derive_cylinder(p, o):  # pragma: no cover - compiled
+    """The piston areas and the polytropic index from the block's values and settings."""
+    bore = p[o + CY_BORE]
+    rod = p[o + CY_ROD]
+    p[o + CY_AA] = QUARTER_PI * bore * bore
+    p[o + CY_AB] = QUARTER_PI * (bore * bore - rod * rod)
+    p[o + CY_N] = p[o + CY_N_OFFSET] + p[o + CY_N_GAMMA] * p[o + CY_GAMMA]
+
+
+@njit(cache=True)
+def spool_fractions(u, leak):  # pragma: no cover - compiled
+    """Openings of the four paths as fractions of valve_C at spool command u (clipped to
+    [−1, 1]): (supply → A, A → exhaust, supply → B, B → exhaust)."""
+    spool = min(max(u, -1.0), 1.0)
+    extend = max(spool, 0.0) + leak
+    retract = max(-spool, 0.0) + leak
+    return extend, retract, retract, extend
+
+
+@njit(cache=True)
+def chamber_inflow(pressure, p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                   temperature):  # pragma: no cover - compiled
+    """Net mass flow [kg/s] into a chamber at ``pressure``, filled from the supply through
+    conductance ``c_fill`` and vented to the exhaust through ``c_vent``: (ṁ, ∂ṁ/∂p,
+    ∂ṁ/∂p_supply, ∂ṁ/∂p_exhaust, flow per unit c_fill, flow per unit c_vent)."""
+    q_in, dqin_dsup, dqin_dp = iso_flow(p_supply, pressure, b, m, r_lam, temperature)
+    q_out, dqout_dp, dqout_dexh = iso_flow(pressure, p_exhaust, b, m, r_lam, temperature)
+    return (c_fill * q_in - c_vent * q_out, c_fill * dqin_dp - c_vent * dqout_dp,
+            c_fill * dqin_dsup, -c_vent * dqout_dexh, q_in, q_out)
+
+
+@njit(cache=True)
+def chamber_inflow_params(pressure, p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                          temperature):  # pragma: no cover - compiled
+    """(∂ṁ/∂b, ∂ṁ/∂m, ∂ṁ/∂r_lam, ∂ṁ/∂T) of ``chamber_inflow`` at fixed conductances."""
+    in_b, in_m, in_lam, in_t = iso_flow_params(p_supply, pressure, b, m, r_lam, temperature)
+    out_b, out_m, out_lam, out_t = iso_flow_params(pressure, p_exhaust, b, m, r_lam,
+                                                   temperature)
+    return (c_fill * in_b - c_vent * out_b, c_fill * in_m - c_vent * out_m,
+            c_fill * in_lam - c_vent * out_lam, c_fill * in_t - c_vent * out_t)
+
+
+@njit(cache=True)
+def chamber_pressure_rate(pressure, volume, volume_rate, mdot, n, rt):  # pragma: no cover
+    """dp/dt = n/V·(R·T·ṁ − p·dV/dt) of a chamber of volume V changing at dV/dt."""
+    return n / volume * (rt * mdot - pressure * volume_rate)
+
+
+@njit(cache=True)
+def rest_pressure(p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                  temperature):  # pragma: no cover - compiled
+    """The pressure in [p_exhaust, p_supply] at which a closed chamber's net inflow
+    vanishes (it falls as the pressure rises); the exhaust pressure if no path is open."""
+    lo, hi = p_exhaust, p_supply
+    if chamber_inflow(lo, p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                      temperature)[0] <= 0.0:
+        return lo
+    if chamber_inflow(hi, p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                      temperature)[0] >= 0.0:
+        return hi
+    for _ in range(REST_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        if chamber_inflow(mid, p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
+                          temperature)[0] > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def rest_pressures(u, p, o):  # pragma: no cover - compiled
+    """(p_a, p_b) at which each chamber's flows balance at spool command u."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    c = p[o + CY_C]
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    return (rest_pressure(p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam, temperature),
+            rest_pressure(p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam, temperature))
+
+
+@njit(cache=True)
+def end_stop_guards(x, p, o):  # pragma: no cover - compiled
+    """x and x_max − x: where the end-stop force switches on (> 0 off the stops)."""
+    return x, p[o + CY_XMAX] - x
+
+
+@njit(cache=True, inline="always")
+def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
+    """The experiment's spool command u (the drive channel)."""
+    return channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
+
+
+@njit(cache=True)
+def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
+    """Net mass flows into A and B at spool position u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
+    ṁ_b, ∂ṁ_b/∂p_b)."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    c = p[o + CY_C]
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    flow_a = chamber_inflow(pa, p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam,
+                            temperature)
+    flow_b = chamber_inflow(pb, p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam,
+                            temperature)
+    return flow_a[0], flow_a[1], flow_b[0], flow_b[1]
+
+
+@njit(cache=True)
+def chamber_flow_slopes(u, pa, pb, p, o):  # pragma: no cover - compiled
+    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (the slope from above at u = 0; none
+    beyond ±1, where the spool is on its stop)."""
+    if u > 1.0 or u < -1.0:
+        return 0.0, 0.0
+    c = p[o + CY_C]
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    if u >= 0.0:  # supply → A and B → exhaust open with u
+        return (c * iso_flow(p_sup, pa, b, m, r_lam, temperature)[0],
+                -c * iso_flow(pb, p_exh, b, m, r_lam, temperature)[0])
+    return (c * iso_flow(pa, p_exh, b, m, r_lam, temperature)[0],
+            -c * iso_flow(p_sup, pb, b, m, r_lam, temperature)[0])
+
+
+@njit(cache=True)
+def chamber_volumes(x, p, o):  # pragma: no cover - compiled
+    """(V_a, V_b) at piston position x."""
+    return (p[o + CY_VDA] + p[o + CY_AA] * x,
+            p[o + CY_VDB] + p[o + CY_AB] * (p[o + CY_XMAX] - x))
+
+
+@njit(cache=True)
+def piston_force(x, v, pa, pb, p, o):  # pragma: no cover - compiled
+    """Pressure force (p_a − p_atm)·A_a − (p_b − p_atm)·A_b and the end stops' force,
+    with the stops' partials (∂x, ∂v)."""
+    p_atm = p[o + CY_PATM]
+    pressure = (pa - p_atm) * p[o + CY_AA] - (pb - p_atm) * p[o + CY_AB]
+    f_stop, ds_dx, ds_dv = stop_force(x, v, p[o + CY_KSTOP], p[o + CY_CSTOP],
+                                      p[o + CY_XMAX])
+    return pressure, f_stop, ds_dx, ds_dv
+
+
+@njit(cache=True)
+def cylinder_rates(x, v, pa, pb, u, f_fric, f_load, p, o):  # pragma: no cover - compiled
+    """(dv/dt, dp_a/dt, dp_b/dt)."""
+    mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
+    f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
+    return ((f_press - f_fric - f_load + f_stop) / p[o + CY_M],
+            chamber_pressure_rate(pa, vol_a, p[o + CY_AA] * v, mdot_a, n, rt),
+            chamber_pressure_rate(pb, vol_b, -p[o + CY_AB] * v, mdot_b, n, rt))
+
+
+@njit(cache=True)
+def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
+                rt):  # pragma: no cover - compiled
+    """(∂ṗ/∂x, ∂ṗ/∂v, ∂ṗ/∂p) of a chamber whose volume changes with x at dvol_dx and
+    whose volume rate is dvol_dv·v."""
+    rate = chamber_pressure_rate(pressure, volume, dvol_dv * v, mdot, n, rt)
+    return (-rate / volume * dvol_dx, -n / volume * pressure * dvol_dv,
+            n / volume * (rt * dmdot_dp - dvol_dv * v))
+
+
+@njit(cache=True)
+def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, c, p, o,
+                   g):  # pragma: no cover - compiled
+    """g[row, o + k] = ∂ṗ/∂θ_k of one chamber for the flow entries of the block (the
+    volume's entries are the caller's): valve_C, valve_leak, p_supply, p_atm, iso_b,
+    iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions."""
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    n, r_gas = p[o + CY_N], p[o + CY_R]
+    rt = r_gas * temperature
+    mdot, _, d_sup, d_exh, q_in, q_out = chamber_inflow(
+        pressure, p_sup, p_exh, c * u_fill, c * u_vent, b, m, r_lam, temperature)
+    d_b, d_m, d_lam, d_t = chamber_inflow_params(pressure, p_sup, p_exh, c * u_fill,
+                                                 c * u_vent, b, m, r_lam, temperature)
+    k = n / volume * rt  # ∂ṗ/∂ṁ
+    g[row, o + CY_C] = k * (u_fill * q_in - u_vent * q_out)
+    g[row, o + CY_LEAK] = k * c * (q_in - q_out)
+    g[row, o + CY_PSUP] = k * d_sup
+    g[row, o + CY_PATM] = k * d_exh
+    g[row, o + CY_B] = k * d_b
+    g[row, o + CY_MEXP] = k * d_m
+    g[row, o + CY_RLIN] = k * d_lam
+    g[row, o + CY_R] = n / volume * temperature * mdot
+    g[row, o + CY_T] = n / volume * r_gas * mdot + k * d_t
+    g[row, o + CY_N] = (rt * mdot - pressure * vol_rate) / volume
+
+
+@njit(cache=True)
+def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # pragma: no cover
+    """The cylinder block's columns of ∂f/∂θ: the velocity row (dv/dt = net/m) and both
+    chambers' rows (``g`` zeroed by the caller)."""
+    m_mass = p[o + CY_M]
+    p_atm = p[o + CY_PATM]
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    dks, dcs, dxmax = stop_force_params(x, v, p[o + CY_KSTOP], p[o + CY_CSTOP],
+                                        p[o + CY_XMAX])
+    g[row_v, o + CY_M] = -net / (m_mass * m_mass)
+    g[row_v, o + CY_AA] = (pa - p_atm) / m_mass
+    g[row_v, o + CY_AB] = (p_atm - pb) / m_mass
+    g[row_v, o + CY_PATM] = (area_b - area_a) / m_mass
+    g[row_v, o + CY_KSTOP] = dks / m_mass
+    g[row_v, o + CY_CSTOP] = dcs / m_mass
+    g[row_v, o + CY_XMAX] = dxmax / m_mass
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    c = p[o + CY_C]
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    n = p[o + CY_N]
+    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, c, p, o, g)
+    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, c, p, o, g)
+    mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
+    rt = p[o + CY_R] * p[o + CY_T]
+    rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
+    rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)
+    g[row_a, o + CY_VDA] = -rate_a / vol_a
+    g[row_a, o + CY_AA] = -rate_a / vol_a * x - n / vol_a * pa * v
+    g[row_b, o + CY_VDB] = -rate_b / vol_b
+    g[row_b, o + CY_AB] = -rate_b / vol_b * (p[o + CY_XMAX] - x) + n / vol_b * pb * v
+    g[row_b, o + CY_XMAX] = -rate_b / vol_b * area_b
+
+
+# ------------------------------------------------------------------ the spool: direct or lagged
+#: the lagged spool's block and its local state; the direct spool has neither
+LAG_BLOCK = Block.of("spool_tau")
+LG_TAU = LAG_BLOCK.index("spool_tau")
+DIRECT_SPOOL_STATE = -1
+LAGGED_SPOOL_STATE = 0
+
+
+@njit(cache=True, inline="always")
+def spool_target(t, ts, sig, ptr):  # pragma: no cover - compiled
+    """The spool command clipped to the spool's travel [−1, 1]."""
+    return min(max(spool_command(t, ts, sig, ptr), -1.0), 1.0)
+
+
+@njit(cache=True, inline="always")
+def direct_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool follows its command at once."""
+    return spool_target(t, ts, sig, ptr)
+
+
+@njit(cache=True, inline="always")
+def lagged_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool's position is its state."""
+    return y[s + LAGGED_SPOOL_STATE]
+
+
+@njit(cache=True, inline="always")
+def direct_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True, inline="always")
+def lagged_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    """du/dt = (u_command − u)/τ."""
+    dydt[s + LAGGED_SPOOL_STATE] = (spool_target(t, ts, sig, ptr)
+                                    - y[s + LAGGED_SPOOL_STATE]) / p[o + LG_TAU]
+
+
+@njit(cache=True)
+def direct_partials(p, o, jac, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_partials(p, o, jac, s):  # pragma: no cover - compiled
+    jac[s + LAGGED_SPOOL_STATE, s + LAGGED_SPOOL_STATE] = -1.0 / p[o + LG_TAU]
+
+
+@njit(cache=True)
+def direct_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    tau = p[o + LG_TAU]
+    g[s + LAGGED_SPOOL_STATE, o + LG_TAU] = -(spool_target(t, ts, sig, ptr)
+                                              - y[s + LAGGED_SPOOL_STATE]) / (tau * tau)
+
+
+@njit(cache=True)
+def direct_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """At rest on the initial command."""
+    y0[s + LAGGED_SPOOL_STATE] = spool_target(t, ts, sig, ptr)
+
+
+@njit(cache=True)
+def direct_project(y, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_project(y, s):  # pragma: no cover - compiled
+    """The spool stays within its travel (the exact lag of a clipped command does)."""
+    y[s + LAGGED_SPOOL_STATE] = min(max(y[s + LAGGED_SPOOL_STATE], -1.0), 1.0)
+
+
+@njit(cache=True)
+def direct_scales(out, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def lagged_scales(out, s):  # pragma: no cover - compiled
+    out[s + LAGGED_SPOOL_STATE] = 1.0
+
+
+_SPOOL_FUNCTIONS = ("position", "rates", "partials", "params", "start", "project", "scales")
+
+
+def spool_part(lagged: bool) -> Part:
+    """The 5/3 valve's spool: following its command at once, or with a first-order lag
+    ``spool_tau`` (a state)."""
+    kind = "lagged" if lagged else "direct"
+    return Part(role="valve", block=LAG_BLOCK if lagged else Block(),
+                states=(StateSpec("spool_position", "1"),) if lagged else (),
+                functions={f"spool_{name}": f"{__name__}:{kind}_{name}"
+                           for name in _SPOOL_FUNCTIONS},
+                constants={"SPOOL_STATE": f"{__name__}:{kind.upper()}_SPOOL_STATE"},
+                label=f"5/3 valve, {'spool lag' if lagged else 'ideal spool'}",
+                key=f"spool_{kind}")
+
+
+@dataclass(frozen=True, eq=False)
+class Cylinder:
+    """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
+    friction law on its piston, driven through a closed-centre 5/3 proportional valve by
+    a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
+    chambers; ``load`` an external force F_load(t) [N] against extension (zero by
+    default); ``spool_lag`` makes the spool follow its command with the time constant
+    ``spool_tau`` (a state) instead of at once."""
+
+    params: ParameterSet
+    friction: FrictionModel = field(default_factory=LuGre)
+    chamber: ChamberLaw = field(default_factory=Isothermal)
+    load: Signal | None = None
+    spool_lag: bool = False
+    template: ClassVar[str] = "pneumact.models.cylinder_template"
+
+    if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
+        def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
+                     chamber: ChamberLaw = ..., load: Signal | None = ...,
+                     spool_lag: bool = ...) -> None: ...
+
+    def __post_init__(self):
+        from ..checks import as_instance, check_type
+        from ..parameters.files import as_parameter_set
+
+        set_ = object.__setattr__
+        set_(self, "params", as_parameter_set(self.params, "Cylinder"))
+        set_(self, "friction", as_instance(
+            "friction", self.friction, FrictionModel, where="Cylinder",
+            examples="pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
+                     "pa.StribeckMap()"))
+        set_(self, "chamber", as_instance(
+            "chamber", self.chamber, ChamberLaw, where="Cylinder",
+            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
+        if self.load is not None:
+            check_type("load", self.load, Signal, where="Cylinder",
+                       what="a Signal (e.g. pa.experiments.Step(...)) or None")
+        check_type("spool_lag", self.spool_lag, bool, where="Cylinder", what="True or False")
+        self.params.require(self.required, "Cylinder")
+
+    @property
+    def sensitivity_refusal(self) -> str | None:
+        """Why forward sensitivities are refused: the friction law's reason, if any."""
+        return self.friction.sensitivity_refusal
+
+    # -- the model protocol (``simulation.Model``) -----------------------------------------
+    @property
+    def drive_quantity(self) -> str:
+        return "spool"
+
+    @property
+    def input_signal(self) -> str:
+        """The record signal that drives it: the valve's spool command."""
+        return "spool"
+
+    @property
+    def input_signals(self) -> tuple[str, ...]:
+        return ("spool",)
+
+    def driven_by(self, signal: str) -> Cylinder:
+        """This cylinder, when ``signal`` is its spool command (its only input)."""
+        from ..errors import DataError
+
+        if signal != "spool":
+            raise DataError(f"a Cylinder is driven by a record's spool command, not its "
+                            f"{signal}")
+        return self
+
+    @property
+    def plant_kind(self) -> str:
+        return "spool"
+
+    @property
+    def drive_label(self) -> str:
+        return "5/3 valve"
+
+    @property
+    def stroke(self) -> float | None:
+        """x_max [m]: positions beyond it are impossible."""
+        return float(self.params["x_max"])
+
+    def breakpoints(self, bp, channels, t_start: float, t_end: float):
+        """The experiment's breakpoints (a load's corners are added by the simulation)."""
+        return bp
+
+    @property
+    def required(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(p for part in self.parts() for p in part.block.parameters))
+
+    def parts(self) -> tuple[Part, ...]:
+        cylinder = Part(
+            role="cylinder", block=CYLINDER_BLOCK,
+            states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
+                    StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
+            settings=self.chamber.settings(), label="double-acting cylinder")
+        return cylinder, self.friction.part(), spool_part(self.spool_lag)
+
+    def channels(self, drive: Signal) -> list[Signal | None]:
+        load = self.load if self.load is not None else Constant(0.0)
+        return in_order({"drive": drive, "load_t": load})
+
+    def describe(self) -> str:
+        return (f"Cylinder(friction={self.friction!r}, "
+                f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag})")

@@ -1,0 +1,212 @@
+"""Model template: the double-acting cylinder behind a 5/3 proportional valve.
+
+States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
+position when it lags], the parameter vector is [cylinder block | friction block | spool
+block]; the generator binds the friction law and the spool (``spool_*``, direct or
+lagged). The equations are ``models.cylinder``'s.
+"""
+
+from pneumact.core import kernel
+from pneumact.models.cylinder import (
+    CY_AA,
+    CY_AB,
+    CY_KSTOP,
+    CY_M,
+    CY_N,
+    CY_PSUP,
+    CY_R,
+    CY_T,
+    CY_XMAX,
+    chamber_flow_slopes,
+    chamber_flows,
+    chamber_row,
+    chamber_volumes,
+    cylinder_params,
+    cylinder_rates,
+    derive_cylinder,
+    end_stop_guards,
+    piston_force,
+    rest_pressures,
+)
+from pneumact.models.mechanics import load_against_time, rest_position
+
+# --- bound by the generator --------------------------------------------------------------
+friction_rates = friction_force = friction_partials = friction_param_partials = None
+friction_project = friction_scales = friction_store = friction_store_partials = None
+spool_position = spool_rates = spool_partials = spool_params = spool_start = None
+spool_project = spool_scales = None
+SPOOL_STATE = -1
+NSTATE = 5
+CYLINDER_LO = CYLINDER_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
+S_POSITION = 0
+S_VELOCITY = 1
+S_PRESSURE_A = 2
+S_PRESSURE_B = 3
+S_FRICTION = 4
+S_VALVE = 5
+# ------------------------------------------------------------------------------------------
+
+OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool", "mass_flow_a",
+                "mass_flow_b")
+OUTPUT_UNITS = ("N", "N", "N", "N", "1", "kg/s", "kg/s")
+#: generated from OUTPUT_NAMES (the assembly's layout): NOUT and OUT_<NAME>
+NOUT = OUT_FRICTION = OUT_PRESSURE_FORCE = OUT_STOP_FORCE = OUT_LOAD = OUT_SPOOL = None
+OUT_MASS_FLOW_A = OUT_MASS_FLOW_B = None
+
+
+@kernel()
+def _spool(t, ts, y, prm, sig, ptr):
+    """The spool's position u: its command, or its lagged state."""
+    return spool_position(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+
+
+@kernel()
+def derive(prm):
+    """The piston areas and the polytropic index (after any change of a value)."""
+    derive_cylinder(prm, CYLINDER_LO)
+
+
+@kernel()
+def model_velocity(t, ts, y, prm, sig, ptr):
+    """The piston's velocity (what a friction law's events read)."""
+    return y[S_VELOCITY]
+
+
+@kernel()
+def rhs(t, ts, y, prm, sig, ptr, dydt):
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
+    accel, rate_a, rate_b = cylinder_rates(
+        x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], _spool(t, ts, y, prm, sig, ptr), f_fric,
+        load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
+    dydt[S_POSITION] = v
+    dydt[S_VELOCITY] = accel
+    dydt[S_PRESSURE_A] = rate_a
+    dydt[S_PRESSURE_B] = rate_b
+    friction_store(z_rates, dydt, S_FRICTION)
+    spool_rates(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
+
+
+@kernel()
+def jac(t, ts, y, prm, sig, ptr, out):
+    """Analytic Jacobian ∂f/∂y (``out`` is zeroed by the caller)."""
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    pa = y[S_PRESSURE_A]
+    pb = y[S_PRESSURE_B]
+    o = CYLINDER_LO
+    m = prm[o + CY_M]
+    area_a, area_b = prm[o + CY_AA], prm[o + CY_AB]
+    n, rt = prm[o + CY_N], prm[o + CY_R] * prm[o + CY_T]
+    _, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
+    _, _, ds_dx, ds_dv = piston_force(x, v, pa, pb, prm, o)
+    u = _spool(t, ts, y, prm, sig, ptr)
+    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(u, pa, pb, prm, o)
+    vol_a, vol_b = chamber_volumes(x, prm, o)
+    out[S_POSITION, S_VELOCITY] = 1.0
+    out[S_VELOCITY, S_POSITION] = ds_dx / m
+    out[S_VELOCITY, S_VELOCITY] = (ds_dv - df_dv) / m
+    out[S_VELOCITY, S_PRESSURE_A] = area_a / m
+    out[S_VELOCITY, S_PRESSURE_B] = -area_b / m
+    friction_store_partials(z_partials, out, S_FRICTION, S_VELOCITY, S_VELOCITY, m)
+    d_x, d_v, d_p = chamber_row(pa, vol_a, area_a, area_a, v, mdot_a, dma_dpa, n, rt)
+    out[S_PRESSURE_A, S_POSITION] = d_x
+    out[S_PRESSURE_A, S_VELOCITY] = d_v
+    out[S_PRESSURE_A, S_PRESSURE_A] = d_p
+    d_x, d_v, d_p = chamber_row(pb, vol_b, -area_b, -area_b, v, mdot_b, dmb_dpb, n, rt)
+    out[S_PRESSURE_B, S_POSITION] = d_x
+    out[S_PRESSURE_B, S_VELOCITY] = d_v
+    out[S_PRESSURE_B, S_PRESSURE_B] = d_p
+    if SPOOL_STATE >= 0:  # the flows follow the lagged spool
+        dma_du, dmb_du = chamber_flow_slopes(u, pa, pb, prm, o)
+        out[S_PRESSURE_A, S_VALVE + SPOOL_STATE] = n / vol_a * rt * dma_du
+        out[S_PRESSURE_B, S_VALVE + SPOOL_STATE] = n / vol_b * rt * dmb_du
+    spool_partials(prm, VALVE_LO, out, S_VALVE)
+
+
+@kernel()
+def param_jac(t, ts, y, prm, sig, ptr, g, needed):
+    """g[a, k] = ∂f_a/∂prm[k] (NSTATE × vector size)."""
+    for a in range(NSTATE):
+        for k in range(g.shape[1]):
+            g[a, k] = 0.0
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    pa = y[S_PRESSURE_A]
+    pb = y[S_PRESSURE_B]
+    f_fric = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
+    f_press, f_stop, _, _ = piston_force(x, v, pa, pb, prm, CYLINDER_LO)
+    net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
+    cylinder_params(x, v, pa, pb, _spool(t, ts, y, prm, sig, ptr), net, prm, CYLINDER_LO, g,
+                    S_VELOCITY, S_PRESSURE_A, S_PRESSURE_B)
+    spool_params(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
+    friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
+    m = prm[CYLINDER_LO + CY_M]
+    for k in range(FRICTION_LO, FRICTION_HI):  # the friction force enters as −F/m
+        g[S_VELOCITY, k] = -g[S_VELOCITY, k] / m
+
+
+@kernel()
+def outputs(t, ts, y, prm, sig, ptr, out):
+    """Derived signals at one instant, in the order of OUTPUT_NAMES."""
+    x = y[S_POSITION]
+    v = y[S_VELOCITY]
+    u = _spool(t, ts, y, prm, sig, ptr)
+    f_press, f_stop, _, _ = piston_force(x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
+                                         CYLINDER_LO)
+    mdot_a, _, mdot_b, _ = chamber_flows(u, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
+                                         CYLINDER_LO)
+    out[OUT_FRICTION] = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
+    out[OUT_PRESSURE_FORCE] = f_press
+    out[OUT_STOP_FORCE] = f_stop
+    out[OUT_LOAD] = load_against_time(t, ts, sig, ptr)
+    out[OUT_SPOOL] = u
+    out[OUT_MASS_FLOW_A] = mdot_a
+    out[OUT_MASS_FLOW_B] = mdot_b
+
+
+@kernel()
+def switch_guards(t, ts, y, prm, sig, ptr, out):
+    """Guards of the right-hand side's kinks, > 0 away from them: the end stops. Returns
+    how many."""
+    out[0], out[1] = end_stop_guards(y[S_POSITION], prm, CYLINDER_LO)
+    return 2
+
+
+@kernel()
+def initial_state(t, ts, prm, sig, ptr, y0):
+    """At rest, each chamber at the pressure where its flows balance at the initial spool
+    command (the exhaust's when no path is open), the piston on the stop that the
+    resulting force presses it against (the cap end when it is zero)."""
+    for i in range(NSTATE):
+        y0[i] = 0.0
+    o = CYLINDER_LO
+    spool_start(t, ts, prm, VALVE_LO, sig, ptr, y0, S_VALVE)
+    pa, pb = rest_pressures(_spool(t, ts, y0, prm, sig, ptr), prm, o)
+    f_press = piston_force(0.0, 0.0, pa, pb, prm, o)[0]
+    net0 = f_press - load_against_time(t, ts, sig, ptr)
+    y0[S_POSITION] = rest_position(net0, 0.0, prm[o + CY_KSTOP], prm[o + CY_XMAX])
+    y0[S_PRESSURE_A] = pa
+    y0[S_PRESSURE_B] = pb
+
+
+@kernel()
+def project(prm, y):
+    """Back onto the bounds the exact dynamics never leave: the friction law's, the
+    spool's travel."""
+    friction_project(prm, FRICTION_LO, y, S_FRICTION)
+    spool_project(y, S_VALVE)
+
+
+@kernel()
+def state_scales(prm, out):
+    """Typical magnitudes: the stroke, 10 strokes per second, the supply pressure, the
+    friction law's own and the spool's travel."""
+    x_max = prm[CYLINDER_LO + CY_XMAX]
+    out[S_POSITION] = x_max
+    out[S_VELOCITY] = 10.0 * x_max
+    out[S_PRESSURE_A] = prm[CYLINDER_LO + CY_PSUP]
+    out[S_PRESSURE_B] = prm[CYLINDER_LO + CY_PSUP]
+    friction_scales(prm, FRICTION_LO, out, S_FRICTION)
+    spool_scales(out, S_VALVE)
