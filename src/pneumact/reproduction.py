@@ -33,11 +33,14 @@
 (and runs fewer richer campaigns, saying which it left out); every figure is still
 produced.
 
-On a machine with more than one CPU the full mode runs two parts that depend on no other
-section, the identification on the richer models' campaigns and SRC² across conditions at
-the slower cycles (``GLOBAL_SLOW_FROM``), in one spawned worker process beside the other
-sections (``_Beside``): the same calls with the same seeds, so the same numbers; only
-their wall time overlaps the rest.
+On a machine with more than one CPU the work is split over one spawned worker process
+beside the main one (``_Beside``): the full mode's worker runs two parts that depend on no
+other section, the identification on the richer models' campaigns and SRC² across
+conditions at the slower cycles (``Sizes.global_apart_from``); the quick mode's runs whole
+sections that need no other's result (``INDEPENDENT``, ``Sizes.apart``: Figs. 2, 3 and 5,
+Fig. 5 across conditions and the pneumatics, figures included). Each section writes into
+parts of its own, joined in the report's order at the end: the same calls with the same
+seeds, so the same numbers, tables and figures; only their wall time overlaps.
 """
 
 from __future__ import annotations
@@ -78,6 +81,9 @@ FIG3_AMPLITUDE_VS = 10.0
 FIG3_PERIOD = 2.0
 #: The lowest speed of the identification's sliding stage, in units of vs (5 mm/s).
 STAGE_B_LOWEST_VS = 10.0
+#: The cycle period [s] from which SRC² across conditions runs beside the sections (in
+#: the full mode's worker: ``Sizes.global_apart_from``).
+GLOBAL_SLOW_FROM = 40.0
 #: the sections ``reproduce`` reports progress on, in order
 SECTIONS = ("Table I", "pneumatics", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
             "identification", "Fig. 6", "sensitivity", "statements", "writing")
@@ -113,6 +119,8 @@ class Sizes:
     #: the sections (``INDEPENDENT``) a worker process runs beside the others, in the
     #: order it runs them (``_Beside``; the full mode's worker has jobs of its own)
     apart: tuple[str, ...] = ()
+    #: the cycle period [s] from which SRC² across conditions runs in the worker
+    global_apart_from: float = GLOBAL_SLOW_FROM
 
     @classmethod
     def full(cls) -> Sizes:
@@ -127,7 +135,8 @@ class Sizes:
                    ("source", "command"), 32, (2.0, 10.0, 100.0),
                    fast_source_periods=(1.0,), sobol_min_n=8, richer_identification=(),
                    richer_cases=("self-consistent", "δ = 2", "5 µm steps, 5 ms lag"),
-                   apart=("Fig. 5", "Figs. 2 and 3", "Fig. 5 across conditions"))
+                   apart=("Fig. 5", "Figs. 2 and 3", "Fig. 5 across conditions",
+                          "pneumatics"), global_apart_from=np.inf)
 
 
 @dataclass(eq=False)
@@ -364,7 +373,8 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     done: dict[str, tuple[_Parts, object]] = {}
     with _Beside(jobs) as beside:
 
-        def section(name: str, run: Callable[[_Parts], object] | None = None):
+        def section(name: str,
+                    run: Callable[[_Parts, ParameterSet, Sizes], object] | None = None):
             """The section's value: run here into parts of its own, or taken from the
             worker (``sizes.apart``); its parts join the report in ``SECTIONS`` order."""
             if name not in done:
@@ -387,12 +397,13 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
             _validation(own, params, identified, sizes, seed), _seal_friction(own, seal_data)))
         global_study = section("sensitivity", lambda own, *_: _sensitivity(
             own, params, lambda: section("Fig. 5"), sizes, seed, beside))
-        effects, friction_floor = section("Figs. 2 and 3")
-        across, loop_floor = section("Fig. 5 across conditions")
-    for name in SECTIONS:
-        if name in done:
-            parts.extend(done[name][0])
+        for name in sizes.apart:
+            section(name)
+    for name in SECTIONS[:SECTIONS.index("statements")]:
+        parts.extend(done[name][0])
     notify(progress, "statements", len(done), len(SECTIONS))
+    (effects, friction_floor), (across, loop_floor) = (
+        done["Figs. 2 and 3"][1], done["Fig. 5 across conditions"][1])
     summary = _statements(parts, across, global_study, effects, bias, loop_floor,
                           friction_floor)
     _lead_with(report, headline_at, summary)
@@ -961,13 +972,13 @@ def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes,
 
 def _global_across(params, sizes: Sizes, seed: int, slow: bool):
     """SRC² of the loop width across conditions (the sensitivity section's last study)
-    at the ``slow`` cycles (periods from ``GLOBAL_SLOW_FROM`` s, a job of ``_Beside``)
+    at the ``slow`` cycles (periods from ``sizes.global_apart_from``, a job of ``_Beside``)
     or the others (run here: they balance the two processes' work). Each condition is a
     study of its own with the same seed, so the two parts are the whole study split."""
     from . import sensitivity as sa
     from .models import Actuator
 
-    periods = [p for p in sizes.periods if (p >= GLOBAL_SLOW_FROM) == slow]
+    periods = [p for p in sizes.periods if (p >= sizes.global_apart_from) == slow]
     if not periods:
         return None
     with warnings.catch_warnings():  # small samples: their warnings go in the table
@@ -978,8 +989,6 @@ def _global_across(params, sizes: Sizes, seed: int, slow: bool):
                                     seed=seed)
 
 
-#: The cycle period [s] from which SRC² across conditions runs beside the sections.
-GLOBAL_SLOW_FROM = 40.0
 
 
 def _joined(parts: list, order: list[str]):

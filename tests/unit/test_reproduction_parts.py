@@ -142,7 +142,8 @@ def test_global_study_split_between_the_processes_is_the_whole_study(vgt):
     from pneumact.reproduction import GLOBAL_VALVES, Sizes, _global_across, _joined
 
     params = vgt
-    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14)
+    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14,
+                                global_apart_from=40.0)
     conditions = sa.conditions(sizes.periods, valves=GLOBAL_VALVES)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sa.SensitivityWarning)
