@@ -52,7 +52,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -361,7 +361,8 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
-    jobs = {name: (_section_apart, (name, params, sizes)) for name in sizes.apart}
+    jobs: dict[str, tuple[Callable, tuple]] = {
+        name: (_section_apart, (name, params, sizes)) for name in sizes.apart}
     jobs["identification_richer"] = (_richer_rows, (params, sizes, seed))
     jobs["global_across"] = (_global_across, (params, sizes, seed, True))
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
@@ -374,7 +375,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     with _Beside(jobs) as beside:
 
         def section(name: str,
-                    run: Callable[[_Parts, ParameterSet, Sizes], object] | None = None):
+                    run: Callable[[_Parts, ParameterSet, Sizes], Any] | None = None) -> Any:
             """The section's value: run here into parts of its own, or taken from the
             worker (``sizes.apart``); its parts join the report in ``SECTIONS`` order."""
             if name not in done:
@@ -391,19 +392,24 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
         for name in INDEPENDENT:
             if name not in sizes.apart:
                 section(name)
-        identified, bias = section("identification", lambda own, *_: (
-            _identification(own, params, sizes, seed, beside), _eq13(own, params, sizes)))
-        section("Fig. 6", lambda own, *_: (
-            _validation(own, params, identified, sizes, seed), _seal_friction(own, seal_data)))
+        def identification(own: _Parts, *_) -> tuple:
+            return _identification(own, params, sizes, seed, beside), _eq13(own, params, sizes)
+
+        def validation(own: _Parts, *_) -> None:
+            _validation(own, params, identified, sizes, seed)
+            _seal_friction(own, seal_data)
+
+        identified, bias = section("identification", identification)
+        section("Fig. 6", validation)
         global_study = section("sensitivity", lambda own, *_: _sensitivity(
             own, params, lambda: section("Fig. 5"), sizes, seed, beside))
         for name in sizes.apart:
             section(name)
+        effects, friction_floor = section("Figs. 2 and 3")
+        across, loop_floor = section("Fig. 5 across conditions")
     for name in SECTIONS[:SECTIONS.index("statements")]:
         parts.extend(done[name][0])
     notify(progress, "statements", len(done), len(SECTIONS))
-    (effects, friction_floor), (across, loop_floor) = (
-        done["Figs. 2 and 3"][1], done["Fig. 5 across conditions"][1])
     summary = _statements(parts, across, global_study, effects, bias, loop_floor,
                           friction_floor)
     _lead_with(report, headline_at, summary)
