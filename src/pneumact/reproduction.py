@@ -392,6 +392,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
         for name in INDEPENDENT:
             if name not in sizes.apart:
                 section(name)
+
         def identification(own: _Parts, *_) -> tuple:
             return _identification(own, params, sizes, seed, beside), _eq13(own, params, sizes)
 
