@@ -1428,9 +1428,11 @@ def _richer_rows(params, sizes: Sizes, seed: int) -> list[dict]:
     ``sizes.richer_identification``, in ``RICHER_CASES``' order; a job of ``_Beside``).
     The cases run one after another: two at a time on threads took 1.9-3.5× the CPU
     time (97-185 s against 52 s on 2 cores)."""
+    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
+    if not cases:  # the quick mode: nor the identification's imports in the worker (1.2 s)
+        return []
     from .identification import paper_campaign
 
-    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
     tests = paper_campaign(params, speeds=sizes.richer_ramp_speeds,
                            sweep_period=sizes.richer_sweep_period)
     with warnings.catch_warnings():  # its findings go in the table, not on stderr

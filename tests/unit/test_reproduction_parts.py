@@ -183,3 +183,19 @@ def test_a_section_run_in_the_worker_joins_the_report_as_run_here(vgt):
     headings = [b for b in whole.blocks if b.kind == "heading"]
     assert [b.anchor for b in headings] == ["s1", "s2"]
     assert len(whole.blocks) == 1 + len(apart.report.blocks)
+
+
+def test_the_quick_mode_runs_no_richer_campaign_and_imports_nothing_for_it():
+    """The quick mode runs no richer campaign: its worker's job returns no rows without
+    importing the identification (1.2 s of CPU in the worker's lane)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, warnings; warnings.simplefilter('ignore'); "
+            "from pneumact.parameters import load_params; "
+            "from pneumact.reproduction import Sizes, _richer_rows; "
+            "assert _richer_rows(load_params('vgt-paper'), Sizes.quick(), 0) == []; "
+            "print('pneumact.identification' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "False"
