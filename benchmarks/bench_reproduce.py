@@ -8,11 +8,13 @@ the one the README quotes.
 
 ``--sections`` instead runs ``reproduce()`` once in this process and prints, per section,
 the wall and CPU time (this process's threads and its children) it took: where the time
-goes (``--seal-data DIR`` adds the real seal section, ``--quick`` the quick mode). The
-full mode runs two jobs in a worker process beside the sections; its CPU time is counted
-where the worker is let go (the sensitivity section) and also shown on its own ("in the
-worker"): the rest is the main process's, and on two idle cores the wall time is about
-the larger of the two.
+goes (``--seal-data DIR`` adds the real seal section, ``--quick`` the quick mode). Both
+modes run part of their work in a worker process beside the sections (the full mode two
+jobs, the quick mode whole sections: ``reproduction.Sizes.apart``); its CPU time is
+counted where the worker is let go (the section whose result is taken last) and also
+shown on its own ("in the worker"): the rest is the main process's, and on two idle cores
+the wall time is about the larger of the two. A section the worker makes is listed where
+its result is taken, after the sections made here.
 
 Run (after ``pip install -e .``, or with ``PYTHONPATH=src`` from the repository root):
     python benchmarks/bench_reproduce.py [--repeats 3] [--quick-only]

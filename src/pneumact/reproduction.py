@@ -33,11 +33,14 @@
 (and runs fewer richer campaigns, saying which it left out); every figure is still
 produced.
 
-On a machine with more than one CPU the full mode runs two parts that depend on no other
-section, the identification on the richer models' campaigns and SRC² across conditions at
-the slower cycles (``GLOBAL_SLOW_FROM``), in one spawned worker process beside the other
-sections (``_Beside``): the same calls with the same seeds, so the same numbers; only
-their wall time overlaps the rest.
+On a machine with more than one CPU the work is split over one spawned worker process
+beside the main one (``_Beside``): the full mode's worker runs two parts that depend on no
+other section, the identification on the richer models' campaigns and SRC² across
+conditions at the slower cycles (``Sizes.global_apart_from``); the quick mode's runs whole
+sections that need no other's result (``INDEPENDENT``, ``Sizes.apart``: Figs. 2, 3 and 5,
+Fig. 5 across conditions and the pneumatics, figures included). Each section writes into
+parts of its own, joined in the report's order at the end: the same calls with the same
+seeds, so the same numbers, tables and figures; only their wall time overlaps.
 """
 
 from __future__ import annotations
@@ -49,7 +52,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -78,6 +81,9 @@ FIG3_AMPLITUDE_VS = 10.0
 FIG3_PERIOD = 2.0
 #: The lowest speed of the identification's sliding stage, in units of vs (5 mm/s).
 STAGE_B_LOWEST_VS = 10.0
+#: The cycle period [s] from which SRC² across conditions runs beside the sections (in
+#: the full mode's worker: ``Sizes.global_apart_from``).
+GLOBAL_SLOW_FROM = 40.0
 #: the sections ``reproduce`` reports progress on, in order
 SECTIONS = ("Table I", "pneumatics", "Figs. 2 and 3", "Fig. 5", "Fig. 5 across conditions",
             "identification", "Fig. 6", "sensitivity", "statements", "writing")
@@ -110,6 +116,11 @@ class Sizes:
                                               "5 µm steps, 5 ms lag")
     richer_ramp_speeds: tuple[float, ...] = (2e-4, 1e-3, 5e-3, 2e-2)
     richer_sweep_period: float = 30.0
+    #: the sections (``INDEPENDENT``) a worker process runs beside the others, in the
+    #: order it runs them (``_Beside``; the full mode's worker has jobs of its own)
+    apart: tuple[str, ...] = ()
+    #: the cycle period [s] from which SRC² across conditions runs in the worker
+    global_apart_from: float = GLOBAL_SLOW_FROM
 
     @classmethod
     def full(cls) -> Sizes:
@@ -123,7 +134,9 @@ class Sizes:
         return cls((2e-4, 1e-3, 5e-3, 2e-2), 30.0, 64, 32, (20.0, 320.0),
                    ("source", "command"), 32, (2.0, 10.0, 100.0),
                    fast_source_periods=(1.0,), sobol_min_n=8, richer_identification=(),
-                   richer_cases=("self-consistent", "δ = 2", "5 µm steps, 5 ms lag"))
+                   richer_cases=("self-consistent", "δ = 2", "5 µm steps, 5 ms lag"),
+                   apart=("Fig. 5", "Figs. 2 and 3", "Fig. 5 across conditions",
+                          "pneumatics"), global_apart_from=np.inf)
 
 
 @dataclass(eq=False)
@@ -193,7 +206,8 @@ class Reproduction(NotebookDisplay):
 
 @dataclass(eq=False)
 class _Parts:
-    """Tables, figures and report blocks gathered along the way."""
+    """Tables, figures and report blocks gathered along the way (a section's own, made
+    in a worker, travel back as one: their writers are plain functions of their data)."""
 
     report: Report
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
@@ -201,7 +215,7 @@ class _Parts:
 
     def table(self, name: str, frame: pd.DataFrame, caption: str, index: bool = False):
         self.tables[name] = frame
-        self.writers[f"{name}.csv"] = lambda p: frame.to_csv(p, index=index)
+        self.writers[f"{name}.csv"] = functools.partial(_write_csv, frame, index)
         self.report.table(frame, caption, index=index)
 
     def figure(self, name: str, make, caption: str):
@@ -209,8 +223,27 @@ class _Parts:
         from .io.report import figure_png
 
         png = figure_png(make(), dpi=120)
-        self.writers[f"{name}.png"] = lambda p: Path(p).write_bytes(png)
+        self.writers[f"{name}.png"] = functools.partial(_write_bytes, png)
         self.report.image(png, caption)
+
+    def extend(self, section: _Parts) -> None:
+        """Append a section's blocks (its headings numbered in this report), tables and
+        files."""
+        for block in section.report.blocks:
+            if block.kind == "heading":
+                self.report.heading(block.content)
+            else:
+                self.report.blocks.append(block)
+        self.tables.update(section.tables)
+        self.writers.update(section.writers)
+
+
+def _write_csv(frame: pd.DataFrame, index: bool, path: Path) -> None:
+    frame.to_csv(path, index=index)
+
+
+def _write_bytes(data: bytes, path: Path) -> None:
+    Path(path).write_bytes(data)
 
 
 def _beside_worker_start() -> None:
@@ -328,49 +361,88 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
-    sections = iter(range(len(SECTIONS)))
-    beside = _Beside({"identification_richer": (_richer_rows, (params, sizes, seed)),
-                      "global_across": (_global_across, (params, sizes, seed, True))},
-                     worker=not quick)  # quick: the jobs cost less than starting a worker
-
-    def step(label: str) -> None:
-        notify(progress, label, next(sections), len(SECTIONS))
-
+    jobs: dict[str, tuple[Callable, tuple]] = {
+        name: (_section_apart, (name, params, sizes)) for name in sizes.apart}
+    jobs["identification_richer"] = (_richer_rows, (params, sizes, seed))
+    jobs["global_across"] = (_global_across, (params, sizes, seed, True))
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
                     call=call or f"pneumact.reproduce(quick={quick}, seed={seed})",
                     parameters=params)
     parts = _Parts(report)
     _introduction(report, params, sizes, quick)
     headline_at = len(report.blocks)  # the statements' verdicts lead: filled in at the end
-    with beside:
-        step("Table I")
-        _table_one(parts, params, [text for text in passivity if text])
-        step("pneumatics")
-        _pneumatics(parts, params)
-        step("Figs. 2 and 3")
-        effects, friction_floor = _friction_figures(parts, params, sizes)
-        step("Fig. 5")
-        oat = _loops_figure(parts, params)
-        step("Fig. 5 across conditions")
-        across, loop_floor = _loops_across_conditions(parts, params, sizes)
-        step("identification")
-        identified = _identification(parts, params, sizes, seed, beside)
-        bias = _eq13(parts, params, sizes)
-        step("Fig. 6")
-        _validation(parts, params, identified, sizes, seed)
-        _seal_friction(parts, seal_data)
-        step("sensitivity")
-        global_study = _sensitivity(parts, params, oat, sizes, seed, beside)
-    step("statements")
+    done: dict[str, tuple[_Parts, object]] = {}
+    with _Beside(jobs) as beside:
+
+        def section(name: str,
+                    run: Callable[[_Parts, ParameterSet, Sizes], Any] | None = None) -> Any:
+            """The section's value: run here into parts of its own, or taken from the
+            worker (``sizes.apart``); its parts join the report in ``SECTIONS`` order."""
+            if name not in done:
+                notify(progress, name, len(done), len(SECTIONS))
+                if name in sizes.apart:
+                    done[name] = beside.result(name)
+                else:
+                    own = _Parts(Report(name))
+                    done[name] = own, (run or INDEPENDENT[name])(own, params, sizes)
+            return done[name][1]
+
+        section("Table I", lambda own, *_: _table_one(own, params,
+                                                      [text for text in passivity if text]))
+        for name in INDEPENDENT:
+            if name not in sizes.apart:
+                section(name)
+
+        def identification(own: _Parts, *_) -> tuple:
+            return _identification(own, params, sizes, seed, beside), _eq13(own, params, sizes)
+
+        def validation(own: _Parts, *_) -> None:
+            _validation(own, params, identified, sizes, seed)
+            _seal_friction(own, seal_data)
+
+        identified, bias = section("identification", identification)
+        section("Fig. 6", validation)
+        global_study = section("sensitivity", lambda own, *_: _sensitivity(
+            own, params, lambda: section("Fig. 5"), sizes, seed, beside))
+        for name in sizes.apart:
+            section(name)
+        effects, friction_floor = section("Figs. 2 and 3")
+        across, loop_floor = section("Fig. 5 across conditions")
+    for name in SECTIONS[:SECTIONS.index("statements")]:
+        parts.extend(done[name][0])
+    notify(progress, "statements", len(done), len(SECTIONS))
     summary = _statements(parts, across, global_study, effects, bias, loop_floor,
                           friction_floor)
     _lead_with(report, headline_at, summary)
-    step("writing")
+    notify(progress, "writing", len(done) + 1, len(SECTIONS))
     parts.writers["index.html"] = report.write
     files = write_files(out_dir, parts.writers)
     notify(progress, "done", len(SECTIONS), len(SECTIONS))
     return Reproduction(Path(out_dir), files, parts.tables, time.perf_counter() - started,
                         quick, identified.parameters)
+
+
+#: The sections that need no other section's result: each ``(parts, params, sizes)``,
+#: in the report's order; a worker may run them (``Sizes.apart``).
+INDEPENDENT: dict[str, Callable[[_Parts, ParameterSet, Sizes], object]] = {
+    "pneumatics": lambda parts, params, sizes: _pneumatics(parts, params),
+    "Figs. 2 and 3": lambda parts, params, sizes: _friction_figures(parts, params, sizes),
+    "Fig. 5": lambda parts, params, sizes: _loops_figure(parts, params),
+    "Fig. 5 across conditions": lambda parts, params, sizes: _loops_across_conditions(
+        parts, params, sizes),
+}
+
+
+def _section_apart(name: str, params, sizes: Sizes) -> tuple[_Parts, object]:
+    """An ``INDEPENDENT`` section into parts of its own (a job of ``_Beside``): its
+    blocks, tables and figures, and its value."""
+    import matplotlib
+
+    from .io.report import Report
+
+    matplotlib.use("Agg")
+    own = _Parts(Report(name))
+    return own, INDEPENDENT[name](own, params, sizes)
 
 
 # --------------------------------------------------------------------------- sections
@@ -832,7 +904,11 @@ def _richer_figure(results: dict):
     return fig
 
 
-def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _Beside):
+def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes, seed: int,
+                 beside: _Beside):
+    """Global indices, their convergence and SRC² across conditions; ``oat()`` gives
+    Fig. 5's one-at-a-time study (asked for where its table goes: it may come from the
+    worker)."""
     from . import sensitivity as sa
     from .experiments import CommandCycle
     from .models import Actuator, CommandValve
@@ -868,7 +944,7 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _B
         parts.report.note(f"{', '.join(crowded)}: three or more parameters share a rank "
                           "group: the intervals are too wide to rank them at this sample "
                           "size; the ranking says only which group leads.")
-    parts.table("oat_ranking", oat_ranking_table(oat),
+    parts.table("oat_ranking", oat_ranking_table(oat()),
                 "One at a time at the paper's amounts (σ0 ±50 %, σ1 ±68 %, σ2 ±90 %, Fs "
                 "±16 %, Fc ±15.36 %, vs ±50 %): unequal amounts, so not a ranking of "
                 "sensitivity (|Δ| of each feature against the nominal run, SI)")
@@ -903,13 +979,13 @@ def _sensitivity(parts: _Parts, params, oat, sizes: Sizes, seed: int, beside: _B
 
 def _global_across(params, sizes: Sizes, seed: int, slow: bool):
     """SRC² of the loop width across conditions (the sensitivity section's last study)
-    at the ``slow`` cycles (periods from ``GLOBAL_SLOW_FROM`` s, a job of ``_Beside``)
+    at the ``slow`` cycles (periods from ``sizes.global_apart_from``, a job of ``_Beside``)
     or the others (run here: they balance the two processes' work). Each condition is a
     study of its own with the same seed, so the two parts are the whole study split."""
     from . import sensitivity as sa
     from .models import Actuator
 
-    periods = [p for p in sizes.periods if (p >= GLOBAL_SLOW_FROM) == slow]
+    periods = [p for p in sizes.periods if (p >= sizes.global_apart_from) == slow]
     if not periods:
         return None
     with warnings.catch_warnings():  # small samples: their warnings go in the table
@@ -920,8 +996,6 @@ def _global_across(params, sizes: Sizes, seed: int, slow: bool):
                                     seed=seed)
 
 
-#: The cycle period [s] from which SRC² across conditions runs beside the sections.
-GLOBAL_SLOW_FROM = 40.0
 
 
 def _joined(parts: list, order: list[str]):
@@ -1354,9 +1428,11 @@ def _richer_rows(params, sizes: Sizes, seed: int) -> list[dict]:
     ``sizes.richer_identification``, in ``RICHER_CASES``' order; a job of ``_Beside``).
     The cases run one after another: two at a time on threads took 1.9-3.5× the CPU
     time (97-185 s against 52 s on 2 cores)."""
+    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
+    if not cases:  # the quick mode: nor the identification's imports in the worker (1.2 s)
+        return []
     from .identification import paper_campaign
 
-    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
     tests = paper_campaign(params, speeds=sizes.richer_ramp_speeds,
                            sweep_period=sizes.richer_sweep_period)
     with warnings.catch_warnings():  # its findings go in the table, not on stderr

@@ -123,6 +123,10 @@ def quick_cli(tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(reproduction, "reproduce", keep)
         patch.setattr(report, "figure_png", labels_then_png)
+        # every figure drawn in this process, where the spy above sees it (the quick
+        # mode's worker would draw some: tests/unit/test_reproduction_parts.py holds a
+        # section made there to the same blocks, figures and tables as made here)
+        patch.setattr(reproduction, "BESIDE", False)
         patch.chdir(folder)
         result = CliRunner().invoke(app, ["reproduce", "--quick", "--out", "paper"])
     assert result.exit_code == 0, result.output

@@ -142,7 +142,8 @@ def test_global_study_split_between_the_processes_is_the_whole_study(vgt):
     from pneumact.reproduction import GLOBAL_VALVES, Sizes, _global_across, _joined
 
     params = vgt
-    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14)
+    sizes = dataclasses.replace(Sizes.quick(), periods=(5.0, 40.0), condition_n=14,
+                                global_apart_from=40.0)
     conditions = sa.conditions(sizes.periods, valves=GLOBAL_VALVES)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sa.SensitivityWarning)
@@ -154,3 +155,47 @@ def test_global_study_split_between_the_processes_is_the_whole_study(vgt):
     pd.testing.assert_frame_equal(joined.conditions, whole.conditions)
     pd.testing.assert_frame_equal(joined.indices, whole.indices)
     assert len(joined.results) == len(conditions)
+
+
+def test_a_section_run_in_the_worker_joins_the_report_as_run_here(vgt):
+    """An independent section (``Sizes.apart``) made in the worker process comes back
+    with the same blocks, figures (PNG bytes), tables and files as made here, and joins
+    the report with its heading numbered there."""
+    import pickle
+
+    from pneumact.io.report import Report
+    from pneumact.reproduction import Sizes, _Parts, _section_apart
+
+    matplotlib.use("Agg")
+    name, sizes = "pneumatics", Sizes.quick()
+    with _Beside({name: (_section_apart, (name, vgt, sizes))}) as beside:
+        apart, _ = beside.result(name)
+    here, _ = _section_apart(name, vgt, sizes)
+    assert apart.report.blocks == here.report.blocks
+    assert sorted(apart.writers) == sorted(here.writers) and apart.writers
+    assert pickle.dumps(apart.writers) == pickle.dumps(here.writers)
+    for table, frame in here.tables.items():
+        pd.testing.assert_frame_equal(apart.tables[table], frame)
+    whole = _Parts(Report("whole")).report
+    whole.heading("before")
+    joined = _Parts(whole)
+    joined.extend(apart)
+    headings = [b for b in whole.blocks if b.kind == "heading"]
+    assert [b.anchor for b in headings] == ["s1", "s2"]
+    assert len(whole.blocks) == 1 + len(apart.report.blocks)
+
+
+def test_the_quick_mode_runs_no_richer_campaign_and_imports_nothing_for_it():
+    """The quick mode runs no richer campaign: its worker's job returns no rows without
+    importing the identification (1.2 s of CPU in the worker's lane)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, warnings; warnings.simplefilter('ignore'); "
+            "from pneumact.parameters import load_params; "
+            "from pneumact.reproduction import Sizes, _richer_rows; "
+            "assert _richer_rows(load_params('vgt-paper'), Sizes.quick(), 0) == []; "
+            "print('pneumact.identification' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "False"
