@@ -716,3 +716,18 @@ ISO_T0 = 293.15  # K
 #: API run at the default rtol 1e-6: the step sequences differ, the trajectories by the
 #: integration error, relative to each signal's range (measured 1.5e-6)
 CLI_CHUNKED_RUN_RTOL = 1e-5
+
+# ------------------------------------------------- the cylinder in a closed loop (issue 41, 5)
+#: the position step of the cylinder's loop tests [m] and its settling band (a fraction of
+#: the step, loop_metrics' default)
+CYLINDER_LOOP_STEP = 0.02
+CYLINDER_LOOP_BAND = 0.02
+#: the loop's command against kp·e − kd·v − kdp·Δp written out from the run's own signals
+#: (clipped to the spool's travel): states and outputs are each interpolated between the
+#: steps, so they differ by the interpolation (measured 4.2e-7 at rtol 1e-6; a wrong sign
+#: or area of the pressure term moves the command by > 0.05)
+CYLINDER_LAW_ATOL = 1e-5
+#: the pressure feedback must take at least this many %-points off the overshoot of the
+#: loop without it (kp 100 1/m, kd 0.5 s/m: measured 22.1 % without, 15.1 % at kdp 1e-6 1/Pa,
+#: 2.95 % at 3e-6)
+CYLINDER_DAMPING_MIN_POINTS = 10.0
