@@ -731,3 +731,12 @@ CYLINDER_LAW_ATOL = 1e-5
 #: loop without it (kp 100 1/m, kd 0.5 s/m: measured 22.1 % without, 15.1 % at kdp 1e-6 1/Pa,
 #: 2.95 % at 3e-6)
 CYLINDER_DAMPING_MIN_POINTS = 10.0
+#: the linearised cylinder (LuGre, presliding, mid-stroke at the spool command that balances
+#: the chambers): each chamber's pneumatic stiffness −m·A[v, p]·A[p, v] against n·p·A²/V
+#: (round-off: measured 1e-15); the mechanical pole pair against the roots of
+#: m·s² + (σ1 + σ2)·s + σ0 + k_a + k_b, which leave out the valve's leakage flows
+#: (measured 9.9e-6 relative); the eigenvalues against those of a central-difference
+#: Jacobian of the right-hand side, relative to the largest (measured 1.8e-13)
+CYLINDER_STIFFNESS_RTOL = 1e-12
+CYLINDER_MECHANICAL_POLES_RTOL = 1e-4
+CYLINDER_FD_EIGENVALUES_RTOL = 1e-8

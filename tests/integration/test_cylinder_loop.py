@@ -12,8 +12,8 @@ import pytest
 import pneumact as pa
 import reference as ref
 from conftest import load_quietly
-from pneumact.control import PID, ClosedLoop, loop_metrics
-from pneumact.errors import ParameterError
+from pneumact.control import PID, ClosedLoop, linearise, loop_metrics
+from pneumact.errors import ExperimentError, ParameterError
 from pneumact.experiments import SetpointStep
 
 pytestmark = pytest.mark.integration
@@ -99,3 +99,90 @@ def test_a_kinematic_rig_has_no_input_to_control():
     rig = pa.FrictionRig(load_quietly("canudas1995"), drive="velocity")
     with pytest.raises(ParameterError, match="kinematic drive has no input"):
         ClosedLoop(rig, PID(kp=1.0))
+
+
+# ------------------------------------------------------------------------ linearisation
+POSITION = 0.1
+
+
+@pytest.fixture(scope="module")
+def linear(cylinder):
+    """The cylinder linearised mid-stroke at the spool command that balances its chambers
+    (LuGre in presliding: the bristle is a spring σ0 with damping σ1 + σ2)."""
+    balanced = ClosedLoop(cylinder, state_feedback(0.0)).holding_input(POSITION)
+    return linearise(cylinder, balanced, position=POSITION)
+
+
+def _chamber_stiffness(params, linear):
+    """n·p·A²/V of each chamber at the point (isothermal: n = 1)."""
+    bore, rod = float(params["D_bore"]), float(params["d_rod"])
+    area_a, area_b = np.pi * bore**2 / 4, np.pi * (bore**2 - rod**2) / 4
+    volume_a = float(params["V_dead_a"]) + area_a * POSITION
+    volume_b = float(params["V_dead_b"]) + area_b * (float(params["x_max"]) - POSITION)
+    point = linear.operating_point
+    return (point["pressure_a"] * area_a**2 / volume_a,
+            point["pressure_b"] * area_b**2 / volume_b)
+
+
+def test_the_balanced_point_is_an_equilibrium(linear, cylinder):
+    assert linear.operating_point["position"] == POSITION
+    force_left = abs(linear.rates[linear.state_names.index("velocity")]) * cylinder.params["m"]
+    assert force_left < 1e-6  # N: the spool command balances the chambers
+    assert "pressure a" in linear.statement and "pressure b" in linear.statement
+
+
+def test_each_chamber_is_a_gas_spring_n_p_a2_over_v(linear, cylinder):
+    """Through the chamber (∂ṗ/∂v) and back on the piston (∂v̇/∂p): −m·A[v, p]·A[p, v]
+    is the chamber's pneumatic stiffness n·p·A²/V."""
+    names = linear.state_names
+    iv = names.index("velocity")
+    mass = float(cylinder.params["m"])
+    for chamber, closed_form in zip(("pressure_a", "pressure_b"),
+                                    _chamber_stiffness(cylinder.params, linear), strict=True):
+        ip = names.index(chamber)
+        stiffness = -mass * linear.A[iv, ip] * linear.A[ip, iv]
+        assert stiffness == pytest.approx(closed_form, rel=ref.CYLINDER_STIFFNESS_RTOL)
+
+
+def test_the_piston_rings_on_bristle_and_gas_springs(linear, cylinder):
+    """The oscillating pole pair: m·s² + (σ1 + σ2)·s + σ0 + k_a + k_b = 0 (the valve's
+    leakage, left out, moves it little)."""
+    params = cylinder.params
+    stiffness = float(params["sigma0"]) + sum(_chamber_stiffness(params, linear))
+    roots = np.sort_complex(np.roots([float(params["m"]),
+                                      float(params["sigma1"]) + float(params["sigma2"]),
+                                      stiffness]))
+    poles = linear.poles()
+    pair = np.sort_complex(poles[np.abs(poles.imag) > 0])
+    assert pair.size == 2
+    assert np.max(np.abs(pair - roots)) < ref.CYLINDER_MECHANICAL_POLES_RTOL * abs(roots[0])
+
+
+def test_the_eigenvalues_are_those_of_a_difference_jacobian(linear, cylinder):
+    from pneumact.core.assembly import assemble
+    from pneumact.core.signals import Constant, pack_channels
+
+    assembly = assemble(cylinder)
+    kernel, vector = assembly.kernel, assembly.pack()
+    sig, ptr = pack_channels(cylinder.channels(Constant(linear.operating_point["spool"])))
+    y = np.array([linear.operating_point[n] for n in linear.state_names])
+    jacobian = np.empty((y.size, y.size))
+    for j in range(y.size):
+        step = 1e-6 * max(abs(y[j]), linear.state_scales[j])
+        rates = []
+        for sign in (1.0, -1.0):
+            moved = y.copy()
+            moved[j] += sign * step
+            f = np.empty(y.size)
+            kernel.rhs(0.0, 0.0, moved, vector, sig, ptr, f)
+            rates.append(f)
+        jacobian[:, j] = (rates[0] - rates[1]) / (2.0 * step)
+    expected = np.sort_complex(np.linalg.eigvals(jacobian))
+    found = np.sort_complex(linear.poles())
+    worst = np.max(np.abs(found - expected)) / np.max(np.abs(expected))
+    assert worst < ref.CYLINDER_FD_EIGENVALUES_RTOL
+
+
+def test_a_position_beyond_the_stroke_is_refused(cylinder):
+    with pytest.raises(ExperimentError, match=r"position = 0.5; allowed: .*\[0, 0.2\]"):
+        linearise(cylinder, 0.0, position=0.5)
