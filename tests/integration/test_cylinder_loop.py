@@ -186,3 +186,25 @@ def test_the_eigenvalues_are_those_of_a_difference_jacobian(linear, cylinder):
 def test_a_position_beyond_the_stroke_is_refused(cylinder):
     with pytest.raises(ExperimentError, match=r"position = 0.5; allowed: .*\[0, 0.2\]"):
         linearise(cylinder, 0.0, position=0.5)
+
+
+# ----------------------------------------------------------------------------- summary
+def test_a_cylinder_run_summarises_its_move(cylinder):
+    """Result.summary() of a cylinder (here in a loop, which summarises as its plant):
+    the move from the first position to the last, its overshoot as loop_metrics measures
+    it, the top speeds as the velocity's extremes."""
+    target = 0.18  # the loop starts at rest on the rod-end stop (0.2 m): a 20 mm move in
+    loop = ClosedLoop(cylinder, state_feedback(0.0))
+    run = pa.simulate(loop, SetpointStep(target, target, t_step=0.0, t_end=1.0))
+    summary = run.summary()
+    x = run["position"]
+    assert summary["start_position"] == x[0] and summary["final_position"] == x[-1]
+    assert summary["travel"] == pytest.approx(target - float(cylinder.params["x_max"]),
+                                              abs=ref.CYLINDER_LOOP_BAND * 0.02)
+    metrics = loop_metrics(run, start=x[0], target=x[-1], t_step=0.0)
+    assert metrics.overshoot > 0.1  # % : it does overshoot (0.86 % measured)
+    assert summary["overshoot"] == pytest.approx(
+        metrics.overshoot / 100.0 * abs(summary["travel"]), rel=ref.CYLINDER_SUMMARY_RTOL)
+    assert summary["position_range"] >= abs(summary["travel"]) + summary["overshoot"] - 1e-15
+    assert summary["top_speed_in"] == -run["velocity"].min() > 0.0
+    assert summary["top_speed_out"] == max(0.0, run["velocity"].max())

@@ -198,6 +198,11 @@ class ClosedLoop:
         return self.plant.stroke
 
     @property
+    def summary_kind(self) -> str:
+        """Its runs summarise as its plant's do."""
+        return self.plant.summary_kind
+
+    @property
     def required(self) -> tuple[str, ...]:
         return self.plant.required
 

@@ -119,6 +119,9 @@ class Actuator:
         set-point in [p_res, p_atm], a prescribed pressure > 0)."""
         return self.valve.input_range(self.params)
 
+    #: what ``Result.summary()`` computes of its runs: the pressure-position hysteresis
+    summary_kind: ClassVar[str] = "hysteresis"
+
     #: no chamber pair whose pressure difference a controller could feed back
     pressure_feedback: ClassVar[bool] = False
 

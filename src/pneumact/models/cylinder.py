@@ -517,6 +517,9 @@ class Cylinder:
         """The spool command u ∈ [−1, 1]."""
         return -1.0, 1.0
 
+    #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
+    summary_kind: ClassVar[str] = "motion"
+
     #: two chambers: a controller may feed back the pressure difference the piston
     #: feels, ``pressure_feedback`` of its template ((p_a − p_atm) − (p_b − p_atm)·A_b/A_a)
     pressure_feedback: ClassVar[bool] = True

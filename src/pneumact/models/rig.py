@@ -185,6 +185,9 @@ class FrictionRig:
         """A force (or a prescribed motion) is unbounded."""
         return -math.inf, math.inf
 
+    #: what ``Result.summary()`` computes of its runs: the mass's motion
+    summary_kind: ClassVar[str] = "motion"
+
     #: no chambers: nothing for a pressure feedback to read
     pressure_feedback: ClassVar[bool] = False
 
