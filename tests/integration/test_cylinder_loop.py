@@ -208,3 +208,16 @@ def test_a_cylinder_run_summarises_its_move(cylinder):
     assert summary["position_range"] >= abs(summary["travel"]) + summary["overshoot"] - 1e-15
     assert summary["top_speed_in"] == -run["velocity"].min() > 0.0
     assert summary["top_speed_out"] == max(0.0, run["velocity"].max())
+
+
+def test_a_state_feedback_survives_its_gains_file(tmp_path):
+    """kdp is a gain like the others: written with its unit, read back."""
+    from pneumact.control import load_gains, write_gains
+
+    controller = state_feedback(KDPS[-1])
+    path = write_gains(controller, tmp_path / "gains.toml",
+                       units=controller.parameter_units("1"))
+    assert 'kdp = "1/Pa"' in path.read_text()
+    back = load_gains(path, command_unit="1")
+    assert back.parameters() == controller.parameters()
+    assert (back.kdp, back.derivative) == (controller.kdp, "velocity")
