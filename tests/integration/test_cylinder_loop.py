@@ -221,3 +221,20 @@ def test_a_state_feedback_survives_its_gains_file(tmp_path):
     back = load_gains(path, command_unit="1")
     assert back.parameters() == controller.parameters()
     assert (back.kdp, back.derivative) == (controller.kdp, "velocity")
+
+
+def test_a_rig_run_summarises_its_motion_too():
+    """A rig driven at v = a·sin(2πft) from rest at 0: x = a/(2πf)·(1 − cos 2πft), so its
+    range is a/(πf) and its top speeds a both ways."""
+    from pneumact.experiments import Sine
+
+    amplitude, frequency = 0.01, 0.5
+    rig = pa.FrictionRig(load_quietly("canudas1995"), drive="velocity")
+    run = pa.simulate(rig, pa.Experiment(Sine(amplitude, frequency), "velocity", 4.0,
+                                         n_points=801))
+    summary = run.summary()
+    assert summary["position_range"] == pytest.approx(amplitude / (np.pi * frequency),
+                                                      rel=ref.RIG_MOTION_RTOL)
+    assert summary["top_speed_out"] == pytest.approx(amplitude, rel=ref.RIG_MOTION_RTOL)
+    assert summary["top_speed_in"] == pytest.approx(amplitude, rel=ref.RIG_MOTION_RTOL)
+    assert abs(summary["travel"]) < ref.RIG_MOTION_RTOL * amplitude  # two whole periods
