@@ -105,7 +105,8 @@ class ClosedLoop:
                 "would be lost); close the loop around a plant with another friction law")
         if self.disturbance is not None and kind != "force":
             raise ParameterError("ClosedLoop: disturbance is a force on a rig's mass; an "
-                                 "actuator takes its loads as Actuator(load=...)")
+                                 "actuator or a cylinder takes its loads as "
+                                 "Actuator(load=...) or Cylinder(load=...)")
         kdp = self.controller.settings()["kdp"]
         if kdp != 0.0 and not self.plant.pressure_feedback:
             raise ParameterError(
@@ -302,7 +303,8 @@ class ClosedLoop:
                       hi: float | None = None, *, values: Mapping[str, float] | None = None
                       ) -> float:
         """The constant controller output that holds the plant at rest at ``position``
-        (friction unloaded), by bisection on the plant's static equilibrium; default
+        (friction unloaded), by bisection on the plant's static equilibrium (a cylinder's:
+        the spool command at which its chambers balance, which holds any position); default
         bracket: the controller's limits within the plant's input range. ``values``:
         plant parameters changed for this answer (an uncertainty sample)."""
         from scipy.optimize import brentq
