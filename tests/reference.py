@@ -716,3 +716,34 @@ ISO_T0 = 293.15  # K
 #: API run at the default rtol 1e-6: the step sequences differ, the trajectories by the
 #: integration error, relative to each signal's range (measured 1.5e-6)
 CLI_CHUNKED_RUN_RTOL = 1e-5
+
+# ------------------------------------------------- the cylinder in a closed loop (issue 41, 5)
+#: the position step of the cylinder's loop tests [m] and its settling band (a fraction of
+#: the step, loop_metrics' default)
+CYLINDER_LOOP_STEP = 0.02
+CYLINDER_LOOP_BAND = 0.02
+#: the loop's command against kp·e − kd·v − kdp·Δp written out from the run's own signals
+#: (clipped to the spool's travel): states and outputs are each interpolated between the
+#: steps, so they differ by the interpolation (measured 4.2e-7 at rtol 1e-6; a wrong sign
+#: or area of the pressure term moves the command by > 0.05)
+CYLINDER_LAW_ATOL = 1e-5
+#: the pressure feedback must take at least this many %-points off the overshoot of the
+#: loop without it (kp 100 1/m, kd 0.5 s/m: measured 22.1 % without, 15.1 % at kdp 1e-6 1/Pa,
+#: 2.95 % at 3e-6)
+CYLINDER_DAMPING_MIN_POINTS = 10.0
+#: the linearised cylinder (LuGre, presliding, mid-stroke at the spool command that balances
+#: the chambers): each chamber's pneumatic stiffness −m·A[v, p]·A[p, v] against n·p·A²/V
+#: (round-off: measured 1e-15); the mechanical pole pair against the roots of
+#: m·s² + (σ1 + σ2)·s + σ0 + k_a + k_b, which leave out the valve's leakage flows
+#: (measured 9.9e-6 relative); the eigenvalues against those of a central-difference
+#: Jacobian of the right-hand side, relative to the largest (measured 1.8e-13)
+CYLINDER_STIFFNESS_RTOL = 1e-12
+CYLINDER_MECHANICAL_POLES_RTOL = 1e-4
+CYLINDER_FD_EIGENVALUES_RTOL = 1e-8
+#: Result.summary()'s overshoot of a cylinder loop's move against loop_metrics' (in % of the
+#: same move): two codes of one definition, round-off only
+CYLINDER_SUMMARY_RTOL = 1e-12
+#: a velocity-driven rig's motion summary against its closed form (the prescribed motion is
+#: integrated at rtol 1e-6 and sampled at 801 points: the peaks fall on samples; measured
+#: 4e-12 on the range, 1.2e-8 and 1.6e-7 on the top speeds out and in)
+RIG_MOTION_RTOL = 1e-6

@@ -39,7 +39,6 @@ from ..core.signals import Constant, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import QUANTITIES, Experiment
 from ..io.report import ResultVocabulary
-from ..models.actuator import Actuator
 from .plants import input_kind, input_range
 
 if TYPE_CHECKING:
@@ -149,17 +148,32 @@ def _friction_words(plant) -> str:
             f"with damping {label} = {damping:g} N·s/m")
 
 
-def _where(plant, y, names) -> str:
+def _where(plant, y, names, units) -> str:
+    """The point in words: the position (on a stop, where the plant has a stroke) and
+    every pressure state."""
     x = y[names.index("position")]
     text = f"position {x * 1e3:.6g} mm"
-    if isinstance(plant, Actuator):
+    stroke = plant.stroke
+    if stroke is not None:
         if x < 0.0:
             text += " (on the rest stop)"
-        elif x > float(plant.params["x_max"]):
+        elif x > stroke:
             text += " (on the far end stop)"
-    if "pressure" in names:
-        text += f", pressure {y[names.index('pressure')] * 1e-3:.6g} kPa"
+    for name, unit, value in zip(names, units, y, strict=True):
+        if unit == "Pa":
+            text += f", {name.replace('_', ' ')} {value * 1e-3:.6g} kPa"
     return text
+
+
+def _place(plant, y, names, position) -> None:
+    """Move the rest state to ``position`` [m] within the plant's stroke (the other
+    states as at rest: a cylinder's chambers at their balanced pressures)."""
+    stroke = plant.stroke
+    top = math.inf if stroke is None else stroke
+    if not (isinstance(position, int | float | np.floating) and 0.0 <= position <= top):
+        raise ExperimentError(f"linearise: position = {position!r}; allowed: a position "
+                              f"[m] in [0, {top:g}]")
+    y[names.index("position")] = float(position)
 
 
 @dataclass(frozen=True, eq=False)
@@ -314,11 +328,16 @@ class LinearPlant(ResultVocabulary):
 
 
 def linearise(plant, input_value: float, *, regime: str = "presliding",
-              velocity: float | None = None,
+              velocity: float | None = None, position: float | None = None,
               outputs: Sequence[str] = ("position",)) -> LinearPlant:
-    """The plant (an ``Actuator`` behind any valve, or a ``FrictionRig(drive="force")``)
-    linearised under the constant input ``input_value`` (command [0, 1], pressure [Pa]
-    or force [N]).
+    """The plant (an ``Actuator`` behind any valve, a ``Cylinder`` or a
+    ``FrictionRig(drive="force")``) linearised under the constant input ``input_value``
+    (command [0, 1], spool command [−1, 1], pressure [Pa] or force [N]).
+
+    ``position`` [m]: the point's position instead of the rest's (the other states as at
+    rest); an equilibrium where the input balances the forces there (a cylinder at the
+    spool command that balances its chambers, any position), else ``rates`` shows the
+    acceleration left.
 
     ``regime``: ``"presliding"`` (the static equilibrium, v = 0) or ``"sliding"`` (steady
     sliding at ``velocity`` [m/s], non-zero, its sign the direction; a motion, not an
@@ -355,6 +374,8 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     n = len(names)
     y = np.empty(n)
     kernel.initial_state(T_POINT, T_POINT, vec, sig, ptr, y)
+    if position is not None:
+        _place(plant, y, names, position)
     iv = names.index("velocity")
     friction_states = list(assembly.role_states("friction"))
     friction_words = _friction_words(plant)
@@ -363,7 +384,8 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     if regime == "presliding":
         _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
-                     f"(v = 0, friction at rest: {friction_words}); {_where(plant, y, names)}.")
+                     f"(v = 0, friction at rest: {friction_words}); "
+                     f"{_where(plant, y, names, assembly.state_units)}.")
     else:
         assert velocity is not None  # regime 'sliding' checked it above
         v = float(velocity)
@@ -373,7 +395,8 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
         steady = f": {steady}" if steady else ""
         statement = (f"Linearised about steady sliding at v = {v:g} m/s (friction states at "
                      f"their steady values{steady}) under {applied}, from "
-                     f"{_where(plant, y, names)}: a motion, not an equilibrium (the position "
+                     f"{_where(plant, y, names, assembly.state_units)}: a motion, not an "
+                     "equilibrium (the position "
                      "moves at v), with the friction entering through its "
                      "local slopes ∂F/∂v, ∂F/∂z there.")
     a = np.zeros((n, n))

@@ -23,8 +23,9 @@ from ..core.signals import Constant, Signal
 from ..errors import ExperimentError, ParameterError
 from ..models.actuator import Actuator
 from ..models.controllers import Controller, LuGreObserver, StaticCompensation
+from ..models.cylinder import Cylinder
 from ..models.rig import FrictionRig
-from .plants import input_kind, input_range
+from .plants import CONTROLLABLE, input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
@@ -61,8 +62,11 @@ def _check_samples(period: float, t_start: float, t_end: float) -> None:
 
 @dataclass(frozen=True, eq=False)
 class ClosedLoop:
-    """``plant`` (an ``Actuator`` behind any valve, or a ``FrictionRig`` with a force
-    drive) under ``controller`` (``PID`` or ``Cascade``), as one model.
+    """``plant`` (an ``Actuator`` behind any valve, a ``Cylinder`` through its spool
+    command, or a ``FrictionRig`` with a force drive) under ``controller`` (``PID`` or
+    ``Cascade``), as one model. Behind a cylinder, ``PID(..., derivative="velocity",
+    kdp=...)`` is the servo-pneumatic state feedback on position, velocity and the
+    chambers' pressure difference; give it ``u_min=-1, u_max=1``, the spool's travel.
 
     ``bias``: the plant input (controller units) the controller's terms add to, and the
     input the plant rests under at the start (``holding_input`` finds the one that holds
@@ -73,7 +77,7 @@ class ClosedLoop:
     for a pressure-driven actuator; a command valve has no static one, give it).
     """
 
-    plant: Actuator | FrictionRig
+    plant: Actuator | Cylinder | FrictionRig
     controller: Controller
     bias: float = 0.0
     drive_gain: float = 1.0
@@ -101,7 +105,14 @@ class ClosedLoop:
                 "would be lost); close the loop around a plant with another friction law")
         if self.disturbance is not None and kind != "force":
             raise ParameterError("ClosedLoop: disturbance is a force on a rig's mass; an "
-                                 "actuator takes its loads as Actuator(load=...)")
+                                 "actuator or a cylinder takes its loads as "
+                                 "Actuator(load=...) or Cylinder(load=...)")
+        kdp = self.controller.settings()["kdp"]
+        if kdp != 0.0 and not self.plant.pressure_feedback:
+            raise ParameterError(
+                f"ClosedLoop: kdp = {kdp!r} feeds back a pressure difference, which "
+                f"{self.plant.describe()} does not have; allowed: kdp = 0, or a plant with "
+                "two chambers (a Cylinder)")
         needs_gain = self.controller.has(StaticCompensation) or self.controller.has(
             LuGreObserver)
         if needs_gain and self._compensation_gain() is None:
@@ -133,7 +144,7 @@ class ClosedLoop:
 
     @property
     def plant_kind(self) -> str:
-        """What the plant's input is: ``force``, ``pressure`` or ``command``."""
+        """What the plant's input is: ``force``, ``pressure``, ``command`` or ``spool``."""
         return input_kind(self.plant, "ClosedLoop")
 
     @property
@@ -143,7 +154,7 @@ class ClosedLoop:
 
     @property
     def input_unit(self) -> str:
-        return {"force": "N", "pressure": "Pa", "command": "1"}[self.plant_kind]
+        return CONTROLLABLE[self.plant_kind]
 
     @property
     def command_unit(self) -> str:
@@ -188,6 +199,11 @@ class ClosedLoop:
         return self.plant.stroke
 
     @property
+    def summary_kind(self) -> str:
+        """Its runs summarise as its plant's do."""
+        return self.plant.summary_kind
+
+    @property
     def required(self) -> tuple[str, ...]:
         return self.plant.required
 
@@ -225,11 +241,10 @@ class ClosedLoop:
         return self.feedforward is not None or self.disturbance is not None
 
     def kernel_constants(self) -> dict[str, object]:
-        plant: dict[str, object] = {}
-        if isinstance(self.plant, Actuator):  # a rig has no compile-time switches
-            plant.update(self.plant.kernel_constants())
+        plant: dict[str, object] = dict(self.plant.kernel_constants())
         n_plant_out = len(self._plant_module().OUTPUT_NAMES)
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
+                "PRESSURE_FEEDBACK": self.plant.pressure_feedback,
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),
                 "HAS_JUMPS": self.controller.sampled, "PRIVATE_INPUTS": True,
                 "HAS_LOOP_INPUTS": self.has_loop_inputs}
@@ -288,7 +303,8 @@ class ClosedLoop:
                       hi: float | None = None, *, values: Mapping[str, float] | None = None
                       ) -> float:
         """The constant controller output that holds the plant at rest at ``position``
-        (friction unloaded), by bisection on the plant's static equilibrium; default
+        (friction unloaded), by bisection on the plant's static equilibrium (a cylinder's:
+        the spool command at which its chambers balance, which holds any position); default
         bracket: the controller's limits within the plant's input range. ``values``:
         plant parameters changed for this answer (an uncertainty sample)."""
         from scipy.optimize import brentq

@@ -565,7 +565,7 @@ def _toml(value: object) -> str:
 #: the tables and keys of a gains file
 GAINS_FILE_KEYS = ("format", "controller", "specs", "options", "gains", "units")
 #: the gains each controller takes when it is made (the others are set afterwards)
-_MADE_WITH = {"PID": ("kp", "ki", "kd"), "Cascade": ("kx", "kv", "ki")}
+_MADE_WITH = {"PID": ("kp", "ki", "kd", "kdp"), "Cascade": ("kx", "kv", "ki")}
 
 
 def load_gains(path: str | os.PathLike, command_unit: str | None = None) -> Controller:

@@ -174,7 +174,8 @@ def exportable(model) -> Actuator:
     """The actuator the FMU runs: ``model`` with an external-force input channel."""
     if not isinstance(model, Actuator):
         raise ArgumentError(f"export_fmu: model = {type(model).__name__}; an FMU is exported "
-                            "from a pa.Actuator (a friction rig or closed loop is not yet)")
+                            "from a pa.Actuator (a friction rig, a cylinder or a closed loop "
+                            "is not yet: docs/fmu-export.md)")
     if model.load is not None:
         raise ArgumentError("export_fmu: the actuator has a load against time; in the FMU the "
                             "external force is an input: export it without load= and drive "

@@ -114,6 +114,18 @@ class Actuator:
         return self.valve.name
 
     @property
+    def input_range(self) -> tuple[float, float]:
+        """The values its input takes (its valve's: a command in [0, 1], a regulator's
+        set-point in [p_res, p_atm], a prescribed pressure > 0)."""
+        return self.valve.input_range(self.params)
+
+    #: what ``Result.summary()`` computes of its runs: the pressure-position hysteresis
+    summary_kind: ClassVar[str] = "hysteresis"
+
+    #: no chamber pair whose pressure difference a controller could feed back
+    pressure_feedback: ClassVar[bool] = False
+
+    @property
     def stroke(self) -> float | None:
         """x_max [m]: set-points and measured positions beyond it are impossible."""
         return float(self.params["x_max"])

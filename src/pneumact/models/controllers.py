@@ -35,7 +35,7 @@ CONTROL_BLOCK = Block.of(settings=(
     "velocity_ff", "sample_time", "action", "drive_gain", "bias", "comp_gain",
     "ff_fc", "ff_fs", "ff_vs", "ff_delta", "ff_vsmooth", "dither_amplitude",
     "dither_frequency", "obs_sigma0", "obs_sigma1", "obs_sigma2", "obs_fc", "obs_fs",
-    "obs_vs", "obs_gain", "derivative_mode", "anti_windup_mode", "cascade_mode"))
+    "obs_vs", "obs_gain", "derivative_mode", "anti_windup_mode", "cascade_mode", "kdp"))
 CT = {name: CONTROL_BLOCK.index(name) for name in CONTROL_BLOCK.names}
 CT_KP, CT_KI, CT_KD = CT["kp"], CT["ki"], CT["kd"]
 CT_TF, CT_TT, CT_UMIN, CT_UMAX = CT["filter_time"], CT["tracking_time"], CT["u_min"], CT["u_max"]
@@ -49,6 +49,7 @@ CT_OBS_FC, CT_OBS_FS, CT_OBS_VS, CT_OBS_K = (CT["obs_fc"], CT["obs_fs"], CT["obs
                                              CT["obs_gain"])
 CT_DERIVATIVE, CT_ANTI_WINDUP = CT["derivative_mode"], CT["anti_windup_mode"]
 CT_CASCADE = CT["cascade_mode"]
+CT_KDP = CT["kdp"]
 
 #: The block's entries a controller may read as *parameters* (batches, studies, fits and
 #: sensitivities vary them by name), with the catalogue's unit for a controller output
@@ -60,6 +61,9 @@ declare(
     P("ki", "1/(m*s)", "integral gain (controller output per metre-second of error; a "
       "cascade's: per metre)", None, 0.0, group="controller"),
     P("kd", "s/m", "derivative gain (controller output per m/s)", None, 0.0,
+      group="controller"),
+    P("kdp", "1/Pa", "pressure-difference feedback gain (controller output per pascal of "
+      "the piston's pressure force per cap area, a cylinder's)", None, 0.0,
       group="controller"),
     P("kv", "s/m", "cascade: inner velocity gain (controller output per m/s)", None, 0.0,
       group="controller"),
@@ -84,7 +88,7 @@ declare(
 )
 
 #: the entries a controller may read as parameters (the rest are always settings)
-TUNABLE = ("kp", "ki", "kd", "filter_time", "tracking_time", "kx", "velocity_ff", "ff_fc",
+TUNABLE = ("kp", "ki", "kd", "kdp", "filter_time", "tracking_time", "kx", "velocity_ff", "ff_fc",
            "ff_fs", "dither_amplitude", "dither_frequency", "obs_gain")
 
 #: derivative options -> the ``derivative_mode`` setting the kernel reads
@@ -351,6 +355,7 @@ class Controller:
 
         x = position_unit
         units = {"kp": per(f"1/{x}"), "ki": per(f"1/({x}*s)"), "kd": per(f"s/{x}"),
+                 "kdp": per("1/Pa"),
                  "kv": per(f"s/{x}"), "kx": "1/s", "filter_time": "s", "tracking_time": "s",
                  "velocity_ff": per(f"s/{x}"), "ff_fc": "N", "ff_fs": "N",
                  "dither_amplitude": command_unit, "dither_frequency": "Hz",
@@ -425,34 +430,42 @@ class PID(Controller):
     steps; the default), ``"error"`` (the same filter on e), ``"velocity"`` (D = −Kd·v,
     the measured velocity, as in Canudas de Wit et al. 1995) or ``"none"``.
     ``filter_time`` Tf [s] is the derivative filter's time constant.
+
+    ``kdp``: pressure-difference feedback, −kdp·Δp with Δp the pressure force of a
+    cylinder's piston per cap area, (p_a − p_atm) − (p_b − p_atm)·A_b/A_a. With
+    ``derivative="velocity"`` this is the classic servo-pneumatic state feedback
+    u = kp·(r − x) − kd·v − kdp·Δp (+ ki·∫e dt); only a plant with two chambers (a
+    ``Cylinder``) has a Δp to feed back.
     """
 
     kp: float = 0.0
     ki: float = 0.0
     kd: float = 0.0
+    kdp: float = 0.0
     derivative: str = "measurement"
     filter_time: float = 1e-3
 
     def __post_init__(self):
         super().__post_init__()
-        _gains("PID", kp=self.kp, ki=self.ki, kd=self.kd)
+        _gains("PID", kp=self.kp, ki=self.ki, kd=self.kd, kdp=self.kdp)
         _choice("PID", "derivative", self.derivative, DERIVATIVES)
         _positive("PID", filter_time=self.filter_time)
         if self.kd == 0.0 and self.derivative != "none":
             object.__setattr__(self, "derivative", "none")
 
     def gain_names(self) -> tuple[str, ...]:
+        pressure = ("kdp",) if self.kdp else ()
         if self.derivative == "none":
-            return ("kp", "ki")
+            return ("kp", "ki", *pressure)
         if self.filtered_derivative:
-            return ("kp", "ki", "kd", "filter_time")
-        return ("kp", "ki", "kd")
+            return ("kp", "ki", "kd", *pressure, "filter_time")
+        return ("kp", "ki", "kd", *pressure)
 
     def gain_settings(self) -> dict[str, float]:
         ti = self.kp / self.ki if self.ki and self.kp else 0.0
         td = self.kd / self.kp if self.kp else 0.0
-        return {"kp": self.kp, "ki": self.ki, "kd": self.kd, "filter_time": self.filter_time,
-                "tracking_time": self._tracking(ti, td)}
+        return {"kp": self.kp, "ki": self.ki, "kd": self.kd, "kdp": self.kdp,
+                "filter_time": self.filter_time, "tracking_time": self._tracking(ti, td)}
 
 
 @dataclass(frozen=True, kw_only=True)

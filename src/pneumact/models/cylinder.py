@@ -513,6 +513,22 @@ class Cylinder:
         return "5/3 valve"
 
     @property
+    def input_range(self) -> tuple[float, float]:
+        """The spool command u ∈ [−1, 1]."""
+        return -1.0, 1.0
+
+    #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
+    summary_kind: ClassVar[str] = "motion"
+
+    #: two chambers: a controller may feed back the pressure difference the piston
+    #: feels, ``pressure_feedback`` of its template ((p_a − p_atm) − (p_b − p_atm)·A_b/A_a)
+    pressure_feedback: ClassVar[bool] = True
+
+    def kernel_constants(self) -> dict[str, object]:
+        """The cylinder has no compile-time switches beyond its parts."""
+        return {}
+
+    @property
     def stroke(self) -> float | None:
         """x_max [m]: positions beyond it are impossible."""
         return float(self.params["x_max"])

@@ -13,6 +13,7 @@ from pneumact.models.cylinder import (
     CY_KSTOP,
     CY_M,
     CY_N,
+    CY_PATM,
     CY_PSUP,
     CY_R,
     CY_T,
@@ -164,6 +165,16 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_SPOOL] = u
     out[OUT_MASS_FLOW_A] = mdot_a
     out[OUT_MASS_FLOW_B] = mdot_b
+
+
+@kernel()
+def pressure_feedback(y, prm):
+    """The pressure difference the piston feels, its pressure force per cap area:
+    (p_a − p_atm) − (p_b − p_atm)·A_b/A_a [Pa] (zero where the chambers balance with
+    no load), what the servo-pneumatic state feedback reads (a closed loop calls it)."""
+    o = CYLINDER_LO
+    p_atm = prm[o + CY_PATM]
+    return (y[S_PRESSURE_A] - p_atm) - (y[S_PRESSURE_B] - p_atm) * prm[o + CY_AB] / prm[o + CY_AA]
 
 
 @kernel()

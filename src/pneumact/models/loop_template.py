@@ -1,10 +1,13 @@
-"""Model template: a closed loop, a plant (actuator or friction rig) under a controller.
+"""Model template: a closed loop, a plant (actuator, cylinder or friction rig) under a
+controller.
 
 The plant's own template is bound under the prefix ``plant_`` (``codegen.Child``): its
 states come first in the loop's state vector and its functions read them where they
 always do. The controller (``pneumact.models.controllers``; states after the plant's,
 settings in the ``controller`` block) computes the plant's input from the position
-set-point (channel CH_SETPOINT), the measured position and velocity and its own states.
+set-point (channel CH_SETPOINT), the measured position and velocity, a cylinder's
+pressure difference (``plant_pressure_feedback``, under PRESSURE_FEEDBACK) and its own
+states.
 Before every call of a plant function the loop writes that input into the plant's
 drive channel, a one-point channel of this run's own input buffer: the plant's code
 reads its input exactly as in an open-loop run.
@@ -44,6 +47,7 @@ from pneumact.models.controllers import (
     CT_FF_VSMOOTH,
     CT_GAIN,
     CT_KD,
+    CT_KDP,
     CT_KI,
     CT_KP,
     CT_KX,
@@ -65,6 +69,11 @@ from pneumact.models.controllers import (
 # --- bound by the generator --------------------------------------------------------------
 plant_rhs = plant_jac = plant_param_jac = plant_outputs = plant_initial_state = None
 plant_project = plant_state_scales = plant_derive = None
+#: a plant with two chambers defines it (a cylinder): the pressure difference its piston
+#: feels, read under PRESSURE_FEEDBACK only
+plant_pressure_feedback = None
+OPTIONAL_FUNCTIONS = ("plant_pressure_feedback",)
+PRESSURE_FEEDBACK = False
 NSTATE = 4
 NPARAM = 0
 NOUT = None  # generated: the plant's outputs and the loop's
@@ -133,9 +142,9 @@ def _static_ff(rdot, prm):
 
 
 @kernel()
-def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
-    """The control law at one instant (a ``LawValue``), from the measured x, v and the
-    controller's states."""
+def _law(t, ts, x, v, dp, integral, filt, zhat, prm, sig, ptr):
+    """The control law at one instant (a ``LawValue``), from the measured x, v, the
+    plant's pressure difference dp (zero without one) and the controller's states."""
     c = CONTROLLER_LO
     r, rdot = channel_eval(sig, ptr, CH_SETPOINT, t, ts)
     e = r - x
@@ -154,6 +163,7 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
             terms += prm[c + CT_KD] * (q - filt) / prm[c + CT_TF]
         elif derivative == 3.0:
             terms -= prm[c + CT_KD] * v
+    terms -= prm[c + CT_KDP] * dp
     act = prm[c + CT_ACTION]
     u = prm[c + CT_BIAS] + act * terms
     if HAS_LOOP_INPUTS:
@@ -183,12 +193,21 @@ def _law(t, ts, x, v, integral, filt, zhat, prm, sig, ptr):
 
 
 @kernel()
+def _pressure_difference(y, prm):
+    """The plant's pressure difference for the state feedback (zero without two
+    chambers)."""
+    if PRESSURE_FEEDBACK:
+        return plant_pressure_feedback(y, prm)
+    return 0.0
+
+
+@kernel()
 def _states_law(t, ts, y, prm, sig, ptr):
     """The continuous law read from the state vector."""
     filt = y[S_DERIVATIVE_FILTER] if FILTERED_DERIVATIVE else 0.0
     zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
-    return _law(t, ts, y[S_POSITION], y[S_VELOCITY], y[S_CONTROL_INTEGRAL], filt, zhat, prm,
-                sig, ptr)
+    return _law(t, ts, y[S_POSITION], y[S_VELOCITY], _pressure_difference(y, prm),
+                y[S_CONTROL_INTEGRAL], filt, zhat, prm, sig, ptr)
 
 
 @kernel()
@@ -401,7 +420,8 @@ def jump(t, ts, y, prm, sig, ptr):
         y[S_LAST_POSITION] = x
     filt = y[S_DERIVATIVE_FILTER] if FILTERED_DERIVATIVE else 0.0
     zhat = y[S_FRICTION_ESTIMATE_BRISTLE] if OBSERVER else 0.0
-    law = _law(t, ts, x, v, y[S_CONTROL_INTEGRAL], filt, zhat, prm, sig, ptr)
+    law = _law(t, ts, x, v, _pressure_difference(y, prm), y[S_CONTROL_INTEGRAL], filt, zhat,
+               prm, sig, ptr)
     y[S_HELD_COMMAND] = law.output
     y[S_CONTROL_INTEGRAL] += period * law.integrator_rate
     if FILTERED_DERIVATIVE:

@@ -9,6 +9,7 @@ offset ``o`` of the vector ``p``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
@@ -178,6 +179,21 @@ class FrictionRig:
     @property
     def drive_label(self) -> str:
         return f"{self.drive} drive"
+
+    @property
+    def input_range(self) -> tuple[float, float]:
+        """A force (or a prescribed motion) is unbounded."""
+        return -math.inf, math.inf
+
+    #: what ``Result.summary()`` computes of its runs: the mass's motion
+    summary_kind: ClassVar[str] = "motion"
+
+    #: no chambers: nothing for a pressure feedback to read
+    pressure_feedback: ClassVar[bool] = False
+
+    def kernel_constants(self) -> dict[str, object]:
+        """A rig has no compile-time switches."""
+        return {}
 
     @property
     def stroke(self) -> float | None:

@@ -23,6 +23,7 @@ functions (``chamber_rate``, ``orifice``): see ``models.friction`` on why.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -562,6 +563,10 @@ class Valve:
         """Area maps against the command (reservoir, atmosphere); None when unused."""
         return None, None
 
+    def input_range(self, params) -> tuple[float, float]:
+        """The values its input takes: a prescribed pressure, any positive one."""
+        return 0.0, math.inf
+
     @property
     def required(self) -> tuple[str, ...]:
         return self.block.parameters
@@ -628,6 +633,10 @@ class CommandValve(Valve):
         return (self.reservoir_map or _linear_map(True),
                 self.atmosphere_map or _linear_map(False))
 
+    def input_range(self, params) -> tuple[float, float]:
+        """The command u ∈ [0, 1]."""
+        return 0.0, 1.0
+
 
 @dataclass(frozen=True)
 class PressureRegulator(CommandValve):
@@ -643,6 +652,10 @@ class PressureRegulator(CommandValve):
     drive: ClassVar[str] = "pressure"
     input_signal: ClassVar[str] = "setpoint"
     cli_name: ClassVar[str] = "regulator"
+
+    def input_range(self, params) -> tuple[float, float]:
+        """A set-point in [p_res, p_atm] (it is clipped there)."""
+        return float(params["p_res"]), float(params["p_atm"])
 
 
 @dataclass(frozen=True)

@@ -97,6 +97,7 @@ class Result(ResultVocabulary):
             "rhs_evaluations": stats.rhs_evaluations,
             "jacobian_evaluations": stats.jacobian_evaluations,
             "wall_time_s": wall,
+            "summary": assembly.model.summary_kind,
         }
         components = {part.role: part.label for part in assembly.parts if part.label}
         return cls(np.asarray(prep.t_out, dtype=float).copy(), signals, units, meta,
@@ -156,10 +157,11 @@ class Result(ResultVocabulary):
 
     # -- analysis and plots --------------------------------------------------------------
     def summary(self) -> dict[str, float]:
-        """Stroke, loop widths and break-away pressure (see ``pneumact.analysis``)."""
-        from ..core.features import hysteresis_summary
-
-        return hysteresis_summary(self.time, self["pressure"], self["position"])
+        """The features the model names (its ``summary_kind``), SI: an actuator's stroke,
+        loop widths and break-away pressure (see ``pneumact.analysis``); a cylinder's or
+        a rig's motion (``motion_summary``)."""
+        kind = self.meta.get("summary", "hysteresis")  # a result made before the kinds
+        return SUMMARIES[kind](self)
 
     def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:
         """signals.csv (header ``name [unit]``), parameters.csv, signals.png and
@@ -196,3 +198,31 @@ class Result(ResultVocabulary):
     def __repr__(self) -> str:
         return (f"Result({len(self.time)} samples over {self.time[0]:g}..{self.time[-1]:g} s, "
                 f"signals={self.names})")
+
+
+def hysteresis_features(result: Result) -> dict[str, float]:
+    """Stroke, loop widths and break-away pressure of a pressure-position record."""
+    from ..core.features import hysteresis_summary
+
+    return hysteresis_summary(result.time, result["pressure"], result["position"])
+
+
+def motion_summary(result: Result) -> dict[str, float]:
+    """A move from the first position to the last, SI: ``start_position``,
+    ``final_position``, ``travel`` (final − start), ``overshoot`` (the farthest the
+    position went past the final one in the direction of travel, ≥ 0; past the start's
+    side when there is no travel), ``position_range`` (max − min), ``top_speed_out`` and
+    ``top_speed_in`` (the largest velocity towards larger and smaller x, ≥ 0)."""
+    x, v = result["position"], result["velocity"]
+    start, final = float(x[0]), float(x[-1])
+    travel = final - start
+    direction = 1.0 if travel >= 0.0 else -1.0
+    return {"start_position": start, "final_position": final, "travel": travel,
+            "overshoot": max(0.0, float(np.max(direction * (x - final)))),
+            "position_range": float(np.ptp(x)),
+            "top_speed_out": max(0.0, float(np.max(v))),
+            "top_speed_in": max(0.0, float(-np.min(v)))}
+
+
+#: a model's ``summary_kind`` -> what ``Result.summary()`` computes
+SUMMARIES = {"hysteresis": hysteresis_features, "motion": motion_summary}

@@ -47,7 +47,9 @@ class Model(Protocol):
     ``input_signals`` every record signal it can be driven by, and ``driven_by(signal)``
     the same model driven by one of them (an actuator behind another valve);
     ``plant_kind`` what its input acts on (pressure, command, force...); ``stroke`` the
-    end of its travel (None: unbounded)."""
+    end of its travel (None: unbounded); ``summary_kind`` the features its
+    ``Result.summary()`` computes (``simulation.result.SUMMARIES``: an actuator's
+    hysteresis, a cylinder's or a rig's motion)."""
 
     @property
     def sensitivity_refusal(self) -> str | None:
@@ -76,6 +78,9 @@ class Model(Protocol):
 
     @property
     def stroke(self) -> float | None: ...
+
+    @property
+    def summary_kind(self) -> str: ...
 
     def parts(self) -> tuple[Part, ...]: ...
 
