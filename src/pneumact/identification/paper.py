@@ -522,6 +522,15 @@ class PaperIdentification(ResultVocabulary):
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
 
+    def next_round(self, spread: float = 0.5, ramps: int = 10, number: int = 2):
+        """The bench tests of the next round, designed from this result
+        (``identification.rounds.next_round``: its estimates where they have an interval,
+        the prior's values elsewhere, each named in the plan's notes; ``spread``: this
+        round's prior's). Identify both rounds' records together from ``plan.prior``."""
+        from .rounds import next_round
+
+        return next_round(self, spread, ramps, number)
+
     def _fallback(self, name: str, values: dict[str, float]) -> tuple[float, str]:
         """The value a parameter that is not identified takes in the partial set, and
         its source: the prior's, except a static friction below the set's Coulomb
@@ -938,6 +947,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     from ..parameters import as_parameter_set
 
     records = as_records(records, "identify_paper")
+    _check_unique_names(records)
     params = as_parameter_set(params, "identify_paper")
     if "x_max" in params:  # positions in % labelled [mm] (83 mm on a 20 mm stroke)
         for record in records:
@@ -1098,6 +1108,17 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                 "joint_failed": joint_failed,
                                 "pressure_side": side, "sensors": sensors,
                                 "regulator": regulator})
+
+
+def _check_unique_names(records: Sequence[Record]) -> None:
+    """Records are told apart by their names (the fit's weights, the records left out):
+    two of one name, as two rounds of one plan give, would be taken for one."""
+    names = [Path(r.source).name for r in records]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise DataError(f"identify_paper: records = {', '.join(twice)} appear more than once; "
+                        "each record needs a name of its own (a second round's tests end in "
+                        "_round2: PaperIdentification.next_round)")
 
 
 def _with_bench(identified, side, sensors: pd.DataFrame):
