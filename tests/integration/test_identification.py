@@ -167,6 +167,16 @@ def test_staged_procedure_names_missing_tests(campaign, start):
         identify_paper([r for r in campaign if r.meta["kind"] != "presliding"], start)
 
 
+def test_two_records_of_one_name_are_refused(campaign, start):
+    """Two rounds of one plan give records of one name; the fit tells records apart by
+    name (issue 38), so it refuses them and names the record."""
+    sweep = campaign[0]
+    again = Record.from_arrays(sweep.time, {**sweep.signals, "position": sweep["position"]
+                                            + 1e-6}, sweep.units, sweep.source, sweep.meta)
+    with pytest.raises(DataError, match="records = sweep appear more than once"):
+        identify_paper([*campaign, again], start)
+
+
 def test_fit_from_fifty_percent_off_converges(vgt, clean_presliding):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     for sign in (1, -1):

@@ -13,6 +13,7 @@ import reference as ref
 from pneumact.errors import ExperimentError
 from pneumact.identification import design_campaign
 from pneumact.identification.bench import smoothing_window
+from pneumact.identification.campaign import GUESSED
 from pneumact.identification.diagnostics import (
     IDENTIFIED_HALF_WIDTH,
     POORLY_HALF_WIDTH,
@@ -115,6 +116,33 @@ def test_the_plan_is_a_table_in_bench_units(vgt):
     assert table.loc["sweep", "from [kPa abs]"] == pytest.approx(vgt["p_atm"] * 1e-3)
     corners = plan.breakpoints("presliding")
     assert list(corners.columns) == ["time [s]", "pressure [kPa abs]"]
+
+
+def test_a_spread_per_parameter_sizes_only_what_it_names(vgt):
+    """A second round knows some values better (issue 38): one spread per parameter; the
+    same spread for all is the scalar's plan, a narrower vs moves the ramps towards it."""
+    wide = design_campaign(vgt, spread=0.5, ramps=4)
+    same = design_campaign(vgt, spread=dict.fromkeys(GUESSED, 0.5), ramps=4)
+    assert wide.speeds == same.speeds and wide.spread == same.spread == 0.5
+    narrow = design_campaign(vgt, spread={"vs": 0.1}, ramps=4)
+    slowest = min(v for t, v in narrow.speeds.items() if t.startswith("ramp"))
+    assert slowest == pytest.approx(vgt["vs"] * 0.9 / 3, rel=0.05)
+    assert narrow.spreads["vs"] == 0.1 and narrow.spreads["Fc"] == 0.5
+    with pytest.raises(ExperimentError, match=r"spread\['Fs'\] = 1.2"):
+        design_campaign(vgt, spread={"Fs": 1.2})
+    with pytest.raises(ExperimentError, match="spread names mass"):
+        design_campaign(vgt, spread={"mass": 0.1})
+
+
+def test_a_slowest_ramp_and_a_suffix_for_a_second_round(vgt):
+    plan = design_campaign(vgt, ramps=4, slowest=5e-3, suffix="_round2")
+    ramps = {t: v for t, v in plan.speeds.items() if t.startswith("ramp")}
+    assert min(ramps.values()) == pytest.approx(5e-3)
+    assert plan.speeds["sweep_round2"] >= 5e-3 * 0.99  # the sweep slides as fast
+    assert all(t.name.endswith("_round2") for t in plan.tests)
+    assert {t.kind for t in plan.tests} == {"sweep", "ramp", "presliding"}
+    with pytest.raises(ExperimentError, match="slowest = -1"):
+        design_campaign(vgt, slowest=-1.0)
 
 
 # --------------------------------------------------------------------------- covariance
