@@ -298,6 +298,12 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
         warnings.simplefilter("ignore", PassivityWarning)
         written = pa.load_params(tmp_path / "ident" / "identified.toml")
     assert "prior" in written.info["vs"].source  # what is not identified says so
+    # a second round designed from the partial set (issue 38), its tests named apart
+    result = runner.invoke(app, ["campaign", "--plan", "--params", "ident/identified.toml",
+                                 "--round", "2", "--out", "plan2"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "plan2" / "setpoint_presliding_round2.csv").exists()
+    assert not (tmp_path / "plan2" / "setpoint_presliding.csv").exists()
     result = runner.invoke(app, ["identify", "paper", "fast", "--partial", "--staged-only",
                                  "--out", "ident2"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
