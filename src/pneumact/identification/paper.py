@@ -1168,8 +1168,8 @@ def _beyond_the_prior(estimates: Estimates, prior, spread: float) -> list[Diagno
                 "warning", "prior", f"{name} = {value:.4g} is {100 * off:+.0f} % from the "
                 f"prior's {prior[name]:.4g}, beyond its ±{100 * spread:.0f} %: the tests "
                 "were designed for another actuator", "design a second round from these "
-                "estimates: pneumact campaign --plan --params identified.toml "
-                "(design_campaign(ident.parameter_set(partial=True)))"))
+                "estimates: ident.next_round() (pneumact campaign --plan --params "
+                "identified.toml --round 2)"))
     return out
 
 

@@ -108,7 +108,8 @@ def next_round(ident: PaperIdentification, spread: float = DEFAULT_SPREAD,
         raise ParameterError(f"next_round: number = {number}; a next round is round 2 or "
                              "later")
     chosen, spreads, roles = design_set(ident, spread)
-    speeds, without = steady_speeds(ident, ident.staged_parameters or chosen, spread)
+    staged = ident.staged_parameters if ident.staged_parameters is not None else chosen
+    speeds, without = steady_speeds(ident, staged, spread)
     default = design_campaign(chosen, spreads, ramps)
     designed_slowest = min(v for t, v in default.speeds.items() if t.startswith("ramp"))
     slowest = None
