@@ -166,6 +166,11 @@ REGULATOR_MARGIN = 0.5
 #: plausible Fs/A_d, the friction swings within ±0.85·Fs whatever the true Fs within
 #: ±50 % of the prior: below break-away.
 PRESLIDING_STEP = 0.35
+#: The reversal before the steps is at most this fraction of the guessed Fs/A_d, however
+#: well Fs is known: the friction at the stop is the sliding level Fc (Fs/Fc up to 2), and
+#: a reversal by 0.9·Fs from it sent a second round's steps (designed for Fs ±10 %) into
+#: breaking away backwards (93 µm of sliding on a family actuator).
+MAX_REVERSAL = 0.5
 
 
 @dataclass(frozen=True)
@@ -434,7 +439,9 @@ def design_campaign(prior, spread: float | Mapping[str, float] = 0.5,
     hold = float(np.clip(10 * decay, 0.1, 1.0))
     sample_rate = float(np.clip(max(20 / period_stuck, 10 / rise), 2000.0, 20000.0))
     step = PRESLIDING_STEP * fs / area
-    reversal = fs * lo("Fs") / area  # unloads the friction towards 0 whatever Fs within the spread
+    # unloads the friction towards 0 whatever Fs within the spread; never by more than
+    # half the guessed Fs: the friction at the stop is Fc, as low as half of Fs
+    reversal = fs * min(lo("Fs"), MAX_REVERSAL) / area
     points = [(0, p_atm), (0.2, p_atm), (1.5, mid), (0.3, mid), (0.02, mid + reversal),
               (0.3, mid + reversal)]
     for sign in (1, -2, 2, -2, 1):
