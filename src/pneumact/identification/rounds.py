@@ -9,10 +9,10 @@ friction: ramps that stick-slip give no steady segment, and stages (b, c) cannot
   identified with a finite interval), its spread the interval's relative half-width
   (at least ``MIN_ROUND_SPREAD``); every other value stays the prior's, with the prior's
   spread: an estimate without an interval is not known, so the plan does not lean on it;
-- where some of the first round's ramps gave no steady segment and the slowest steady
-  sliding it saw is more than ``STICK_SLIP_GAP`` times the slowest ramp the new design
-  asks for, the ramps start at that speed instead: the slower ones stick-slipped and
-  would again (the actuator, not the prior, decides stick-slip);
+- where Fs and vs are not both identified, some of the first round's ramps slower than
+  its slowest steady sliding gave no steady segment, and that speed is more than ``STICK_SLIP_GAP`` times the slowest ramp
+  the new design asks for, the ramps start at that speed instead: the slower ones
+  stick-slipped and would again (the actuator, not the prior, decides stick-slip);
 - every test's name ends in ``_round<N>``, so that the records of both rounds can be
   identified together (``identify_paper`` refuses two records of one name).
 
@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from .paper import PaperIdentification
 
 __all__ = ["MIN_ROUND_SPREAD", "STICK_SLIP_GAP", "design_set", "next_round",
-           "steady_speeds"]
+           "stick_slip_limit"]
 
 #: The narrowest spread a second round is designed for: an identified value's 95 %
 #: interval is ±2.5 %, but the plan keeps margins for the value being off by more.
@@ -87,17 +87,23 @@ def design_set(ident: PaperIdentification, spread: float = DEFAULT_SPREAD
     return chosen, spreads, roles
 
 
-def steady_speeds(ident: PaperIdentification, params, spread: float
-                  ) -> tuple[np.ndarray, int]:
-    """(the speeds [m/s] of the first round's steady sliding segments on its ramps, how
-    many of its ramps gave none)."""
+def stick_slip_limit(ident: PaperIdentification, params, spread: float
+                     ) -> tuple[float, int]:
+    """(the slowest steady sliding speed [m/s] of the first round's ramps, how many of its
+    ramps are slower and gave no steady segment); (0, 0) when none is. A slower ramp is a
+    longer one: a designed ramp's duration falls with its speed."""
     from .paper import record_kind
 
     creep = presliding_range(params) / max(1.0 - spread, 0.1)
-    found = [np.abs(steady_segments(r, params, presliding_range=creep)["velocity"])
-             .to_numpy() for r in ident.records if record_kind(r) == "ramp"]
-    speeds = [s for s in found if s.size]
-    return (np.concatenate(speeds) if speeds else np.zeros(0)), len(found) - len(speeds)
+    ramps = [(float(r.time[-1] - r.time[0]),
+              np.abs(steady_segments(r, params, presliding_range=creep)["velocity"])
+              .to_numpy()) for r in ident.records if record_kind(r) == "ramp"]
+    steady = [(duration, float(v.min())) for duration, v in ramps if v.size]
+    if not steady:
+        return 0.0, 0
+    longest, slowest = min(steady, key=lambda pair: pair[1])
+    stuck = sum(1 for duration, v in ramps if not v.size and duration > longest)
+    return (slowest, stuck) if stuck else (0.0, 0)
 
 
 def next_round(ident: PaperIdentification, spread: float = DEFAULT_SPREAD,
@@ -109,13 +115,14 @@ def next_round(ident: PaperIdentification, spread: float = DEFAULT_SPREAD,
                              "later")
     chosen, spreads, roles = design_set(ident, spread)
     staged = ident.staged_parameters if ident.staged_parameters is not None else chosen
-    speeds, without = steady_speeds(ident, staged, spread)
+    steady, stuck = stick_slip_limit(ident, staged, spread)
     default = design_campaign(chosen, spreads, ramps)
     designed_slowest = min(v for t, v in default.speeds.items() if t.startswith("ramp"))
     slowest = None
-    if without and speeds.size and speeds.min() > STICK_SLIP_GAP * designed_slowest:
+    known = roles["Fs"] == roles["vs"] == "identified"  # eq. 12 needs no slower ramps
+    if stuck and not known and steady > STICK_SLIP_GAP * designed_slowest:
         fastest = max(v for t, v in default.speeds.items() if t.startswith("ramp"))
-        slowest = float(min(speeds.min(), fastest / 4))
+        slowest = float(min(steady, fastest / 4))
     plan = design_campaign(chosen, spreads, ramps, slowest=slowest,
                            suffix=f"_round{number}")
     notes = [f"designed from round 1: {_listed(roles, 'identified')} identified; "
@@ -123,7 +130,7 @@ def next_round(ident: PaperIdentification, spread: float = DEFAULT_SPREAD,
              f"{_listed(roles, 'prior')} the prior's values, not identified"]
     if slowest is not None:
         notes.append(f"ramps from {slowest * 1e3:.3g} mm/s, the slowest steady sliding of "
-                     f"round 1 ({without} of its ramps gave no steady segment), not from "
+                     f"round 1 ({stuck} slower ramps gave no steady segment), not from "
                      f"{designed_slowest * 1e3:.3g} mm/s: slower ramps stick-slip")
     return CampaignPlan(plan.tests, plan.purposes, plan.speeds, plan.prior, plan.spread,
                         [*notes, *plan.notes], plan.spreads)
