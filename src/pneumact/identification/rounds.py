@@ -10,9 +10,10 @@ friction: ramps that stick-slip give no steady segment, and stages (b, c) cannot
   (at least ``MIN_ROUND_SPREAD``); every other value stays the prior's, with the prior's
   spread: an estimate without an interval is not known, so the plan does not lean on it;
 - where Fs and vs are not both identified, some of the first round's ramps slower than
-  its slowest steady sliding gave no steady segment, and that speed is more than ``STICK_SLIP_GAP`` times the slowest ramp
-  the new design asks for, the ramps start at that speed instead: the slower ones
-  stick-slipped and would again (the actuator, not the prior, decides stick-slip);
+  its slowest steady sliding gave no steady segment, and that speed is more than
+  ``STICK_SLIP_GAP`` times the slowest ramp the new design asks for, the ramps start at
+  that speed instead: the slower ones stick-slipped and would again (the actuator, not
+  the prior, decides stick-slip);
 - every test's name ends in ``_round<N>``, so that the records of both rounds can be
   identified together (``identify_paper`` refuses two records of one name).
 
