@@ -39,6 +39,7 @@ from ..io.report import ResultVocabulary
 from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
+from .campaign import DEFAULT_SPREAD, RAMP_SPEEDS, CampaignPlan
 from .diagnostics import (
     MISFIT_RATIO,
     MISFIT_REFIT_SHARE,
@@ -522,7 +523,8 @@ class PaperIdentification(ResultVocabulary):
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
 
-    def next_round(self, spread: float = 0.5, ramps: int = 10, number: int = 2):
+    def next_round(self, spread: float = DEFAULT_SPREAD, ramps: int = RAMP_SPEEDS,
+                   number: int = 2) -> CampaignPlan:
         """The bench tests of the next round, designed from this result
         (``identification.rounds.next_round``: its estimates where they have an interval,
         the prior's values elsewhere, each named in the plan's notes; ``spread``: this
