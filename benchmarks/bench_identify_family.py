@@ -189,7 +189,9 @@ def main() -> None:
         for (_index, seed, truth, *_), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
-            errors = " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows)
+            errors = " | round 2: ".join(
+                " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows
+                         if r["round"] == n) for n in sorted({r["round"] for r in result_rows}))
             print(f"{truth.name} seed {seed}: {result_rows[0]['wall_s']:.1f} s; {summary}; "
                   f"{errors}", flush=True)
     total = time.perf_counter() - started
