@@ -8,6 +8,8 @@
   the truth at least 90 % of the time over the family and its seeds; and refusing is not
   a way to pass: most parameters must be identified.
 - A thinner campaign of one of them, whose slow ramps stick-slip: Fs and vs refused.
+- A second round (issue 38, ``next_round``) on two of them whose first round identified
+  nothing: it identifies more, nothing wrongly.
 
 Records its model cannot explain: ``test_identification_mismatch.py``. The family is this
 suite's longest computation: this module is marked ``long`` (it starts first in a parallel
