@@ -1,7 +1,7 @@
 """Identification on a family of actuators: accuracy, verdicts, interval coverage, time.
 
 Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
-[--bench]
+[--bench] [--rounds 2 [--together]]
 
 Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
 0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
@@ -22,6 +22,11 @@ a third of the campaigns, else 0.5-20 ms log-uniform), a position resolution (no
 third, else 2-50 µm) and a sample rate (none in half, else 100 Hz-1 kHz, the records
 resampled); the table then adds whether each fault was named.
 
+With ``--rounds 2`` each campaign gets a second round designed from the first round's
+result (``PaperIdentification.next_round``), simulated on the same actuator (and bench),
+and identified from its records with the first round's estimates as the prior (with
+``--together``, from both rounds' records); the tables are printed per round.
+
 The same study, smaller, is the validation test
 ``tests/validation/test_identification_family.py``.
 """
@@ -40,7 +45,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pneumact.identification import design_campaign, identify_paper, synthetic_campaign
+from pneumact.identification import (
+    Noise,
+    design_campaign,
+    identify_paper,
+    synthetic_campaign,
+)
 from pneumact.parameters.family import ActuatorFamily
 
 FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
@@ -71,7 +81,6 @@ def with_faults(exact, faults, seed: int):
     """The campaign's exact records as the drawn bench sees them: sampled at its rate,
     the position through its lag, then the sensors' noise (the default ``Noise``) and
     the resolution (at least the default's), the pressure with its offset."""
-    from pneumact.identification import Noise
     from pneumact.identification.campaign import add_noise
     from pneumact.io.records import Record
 
@@ -89,33 +98,57 @@ def with_faults(exact, faults, seed: int):
 
 
 def run_one(job):
-    index, seed, truth, family_seed, bench = job
+    index, seed, truth, family_seed, bench, rounds, together = job
     rng = np.random.default_rng(family_seed * 1000 + index)
     prior = prior_of(truth, rng)
     faults = bench_faults(np.random.default_rng([family_seed, index, seed])) if bench \
         else None
     tic = time.perf_counter()
-    tests = design_campaign(prior, spread=SPREAD).tests
-    if faults:
-        from pneumact.identification import Noise
-
-        records = with_faults(synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0)),
-                              faults, seed)
-    else:
-        records = synthetic_campaign(truth, tests, seed=seed)
+    records = campaign_records(truth, design_campaign(prior, spread=SPREAD).tests, faults,
+                               seed)
     result = identify_paper(records, prior, seed=seed, executor=1)
     wall = time.perf_counter() - tic
+    rows = rows_of(result, truth, seed, 1, wall, named(faults, result))
+    summary = result.summary()
+    if rounds == 2:  # designed from round 1's result, run on the same bench
+        tic = time.perf_counter()
+        plan = result.next_round()
+        second = campaign_records(truth, plan.tests, faults, seed + SECOND_ROUND_SEED)
+        again = identify_paper((records if together else []) + second, plan.prior,
+                               seed=seed, executor=1)
+        rows += rows_of(again, truth, seed, 2, time.perf_counter() - tic,
+                        named(faults, again))
+        summary += "\n  round 2: " + again.headline()
+    return rows, summary
+
+
+def campaign_records(truth, tests, faults, seed: int):
+    """The ``tests`` run on ``truth``: with the default noise, or through the bench's
+    ``faults``."""
+    if faults:
+        return with_faults(synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0)),
+                           faults, seed)
+    return synthetic_campaign(truth, tests, seed=seed)
+
+
+#: The noise of a second round's records is drawn with the first's seed plus this.
+SECOND_ROUND_SEED = 1000
+
+
+def rows_of(result, truth, seed: int, round_number: int, wall: float, faults: dict
+            ) -> list[dict]:
+    """One row per free parameter: verdict, error, interval reported and covering."""
     table = result.to_pandas(truth=truth)
     rows = []
     for name in FREE:
         row = table.loc[name]
         reported = bool(np.isfinite(row["ci95_low"]) and np.isfinite(row["ci95_high"]))
-        rows.append({"actuator": truth.name, "seed": seed, "parameter": name,
-                     "verdict": row["verdict"], "error_%": row["error_%"],
-                     "reported": reported,
+        rows.append({"actuator": truth.name, "seed": seed, "round": round_number,
+                     "parameter": name, "verdict": row["verdict"],
+                     "error_%": row["error_%"], "reported": reported,
                      "covered": bool(row["truth_in_ci95"]) if reported else None,
-                     "wall_s": wall, **named(faults, result)})
-    return rows, result.summary()
+                     "wall_s": wall, **faults})
+    return rows
 
 
 def named(faults, result) -> dict:
@@ -138,22 +171,40 @@ def main() -> None:
     parser.add_argument("--csv", type=Path, default=None, help="write every row here")
     parser.add_argument("--bench", action="store_true",
                         help="add a drawn bench (offset, lag, resolution, rate) per campaign")
+    parser.add_argument("--rounds", type=int, choices=(1, 2), default=1,
+                        help="2: a second round per campaign, designed from the first "
+                             "round's result (next_round), and both rounds' shares")
+    parser.add_argument("--together", action="store_true",
+                        help="identify round 2 from both rounds' records (default: from "
+                             "the second round's, with the first round's estimates as "
+                             "its prior)")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     family = ActuatorFamily().draw(args.actuators, seed=args.seed)
-    jobs = [(i, s, truth, args.seed, args.bench) for i, truth in enumerate(family)
-            for s in range(args.seeds)]
+    jobs = [(i, s, truth, args.seed, args.bench, args.rounds, args.together)
+            for i, truth in enumerate(family) for s in range(args.seeds)]
     rows = []
     started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        for (_index, seed, truth, _, _), (result_rows, summary) in zip(
+        for (_index, seed, truth, *_), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
-            errors = " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows)
+            errors = " | round 2: ".join(
+                " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows
+                         if r["round"] == n) for n in sorted({r["round"] for r in result_rows}))
             print(f"{truth.name} seed {seed}: {result_rows[0]['wall_s']:.1f} s; {summary}; "
                   f"{errors}", flush=True)
     total = time.perf_counter() - started
-    table = pd.DataFrame(rows)
+    every = pd.DataFrame(rows)
+    for round_number in sorted(set(every["round"])):
+        print(f"\n--- round {round_number}")
+        report(every[every["round"] == round_number], len(family), args, total)
+    if args.csv:
+        every.to_csv(args.csv, index=False)
+
+
+def report(table: pd.DataFrame, actuators: int, args, total: float) -> None:
+    """Per parameter and overall: identified share, errors, coverage, times."""
     identified = table[table["verdict"] == "identified"]
     reported = table[table["reported"]]
     per = pd.DataFrame({
@@ -168,7 +219,7 @@ def main() -> None:
     print(per.to_string(float_format=lambda x: f"{x:.3g}"))
     wrong = identified[identified["error_%"].abs() > identified["parameter"].map(TOLERANCE)]
     walls = table.drop_duplicates(["actuator", "seed"])["wall_s"]
-    print(f"\n{len(family)} actuators × {args.seeds} seeds: identified "
+    print(f"\n{actuators} actuators × {args.seeds} seeds: identified "
           f"{100 * len(identified) / len(table):.1f} % of the parameters, "
           f"{len(wrong)} identified but out of tolerance; reported intervals "
           f"{len(reported)}, coverage {100 * reported['covered'].mean():.1f} %; "
@@ -185,8 +236,6 @@ def main() -> None:
             print(f"{fault}: in {int(present.sum())} campaigns, named in "
                   f"{int(runs.loc[present, column].sum())}; named without it in "
                   f"{int(runs.loc[~present, column].sum())}")
-    if args.csv:
-        table.to_csv(args.csv, index=False)
 
 
 if __name__ == "__main__":

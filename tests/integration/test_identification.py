@@ -167,6 +167,16 @@ def test_staged_procedure_names_missing_tests(campaign, start):
         identify_paper([r for r in campaign if r.meta["kind"] != "presliding"], start)
 
 
+def test_two_records_of_one_name_are_refused(campaign, start):
+    """Two rounds of one plan give records of one name; the fit tells records apart by
+    name (issue 38), so it refuses them and names the record."""
+    sweep = campaign[0]
+    again = Record.from_arrays(sweep.time, {**sweep.signals, "position": sweep["position"]
+                                            + 1e-6}, sweep.units, sweep.source, sweep.meta)
+    with pytest.raises(DataError, match="records = sweep appear more than once"):
+        identify_paper([*campaign, again], start)
+
+
 def test_fit_from_fifty_percent_off_converges(vgt, clean_presliding):
     model = pa.Actuator(vgt, valve=pa.PressureSource())
     for sign in (1, -1):
@@ -288,6 +298,12 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
         warnings.simplefilter("ignore", PassivityWarning)
         written = pa.load_params(tmp_path / "ident" / "identified.toml")
     assert "prior" in written.info["vs"].source  # what is not identified says so
+    # a second round designed from the partial set (issue 38), its tests named apart
+    result = runner.invoke(app, ["campaign", "--plan", "--params", "ident/identified.toml",
+                                 "--round", "2", "--out", "plan2"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "plan2" / "setpoint_presliding_round2.csv").exists()
+    assert not (tmp_path / "plan2" / "setpoint_presliding.csv").exists()
     result = runner.invoke(app, ["identify", "paper", "fast", "--partial", "--staged-only",
                                  "--out", "ident2"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output

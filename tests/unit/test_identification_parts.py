@@ -13,6 +13,7 @@ import reference as ref
 from pneumact.errors import ExperimentError
 from pneumact.identification import design_campaign
 from pneumact.identification.bench import smoothing_window
+from pneumact.identification.campaign import GUESSED
 from pneumact.identification.diagnostics import (
     IDENTIFIED_HALF_WIDTH,
     POORLY_HALF_WIDTH,
@@ -115,6 +116,33 @@ def test_the_plan_is_a_table_in_bench_units(vgt):
     assert table.loc["sweep", "from [kPa abs]"] == pytest.approx(vgt["p_atm"] * 1e-3)
     corners = plan.breakpoints("presliding")
     assert list(corners.columns) == ["time [s]", "pressure [kPa abs]"]
+
+
+def test_a_spread_per_parameter_sizes_only_what_it_names(vgt):
+    """A second round knows some values better (issue 38): one spread per parameter; the
+    same spread for all is the scalar's plan, a narrower vs moves the ramps towards it."""
+    wide = design_campaign(vgt, spread=0.5, ramps=4)
+    same = design_campaign(vgt, spread=dict.fromkeys(GUESSED, 0.5), ramps=4)
+    assert wide.speeds == same.speeds and wide.spread == same.spread == 0.5
+    narrow = design_campaign(vgt, spread={"vs": 0.1}, ramps=4)
+    slowest = min(v for t, v in narrow.speeds.items() if t.startswith("ramp"))
+    assert slowest == pytest.approx(vgt["vs"] * 0.9 / 3, rel=0.05)
+    assert narrow.spreads["vs"] == 0.1 and narrow.spreads["Fc"] == 0.5
+    with pytest.raises(ExperimentError, match=r"spread\['Fs'\] = 1.2"):
+        design_campaign(vgt, spread={"Fs": 1.2})
+    with pytest.raises(ExperimentError, match="spread names mass"):
+        design_campaign(vgt, spread={"mass": 0.1})
+
+
+def test_a_slowest_ramp_and_a_suffix_for_a_second_round(vgt):
+    plan = design_campaign(vgt, ramps=4, slowest=5e-3, suffix="_round2")
+    ramps = {t: v for t, v in plan.speeds.items() if t.startswith("ramp")}
+    assert min(ramps.values()) == pytest.approx(5e-3)
+    assert plan.speeds["sweep_round2"] >= 5e-3 * 0.99  # the sweep slides as fast
+    assert all(t.name.endswith("_round2") for t in plan.tests)
+    assert {t.kind for t in plan.tests} == {"sweep", "ramp", "presliding"}
+    with pytest.raises(ExperimentError, match="slowest = -1"):
+        design_campaign(vgt, slowest=-1.0)
 
 
 # --------------------------------------------------------------------------- covariance
@@ -284,3 +312,31 @@ def test_the_lag_search_stops_at_the_lag_stage_c_allows(vgt, monkeypatch):
     tau, _, with_lag, _ = faults.lag_search([record], ["ramp"], vgt, restage,
                                             longest=0.5 * period)
     assert tried == [] and tau == 0.0 and with_lag == np.inf
+
+
+def test_fs_and_vs_resting_on_faster_ramps_only_are_not_trusted():
+    """Issue 38: a second round's ramps start above the speeds that stick-slip; with no
+    ramp slower than vs, Fs and vs rest on faster records (measured: vs 8.7 % off with a
+    ±1.5 % interval) and are poorly identified; a slower ramp in the fit keeps them."""
+    import pandas as pd
+
+    from pneumact.identification.diagnostics import IDENTIFIED, POORLY, Verdict
+    from pneumact.identification.paper import _stribeck_dip_check
+
+    time = np.linspace(0.0, 2.0, 2001)
+
+    def ramp(name: str, speed: float) -> Record:
+        return Record.from_arrays(time, {"position": speed * time,
+                                         "pressure": np.full_like(time, 9e4)},
+                                  source=name, meta={"kind": "ramp"})
+
+    judged = [Verdict(n, IDENTIFIED, "95 % interval ±1 %") for n in ("Fc", "Fs", "vs")]
+    fast = [ramp("ramp_5mm_s", 5e-3)]
+    used = pd.DataFrame({"record": ["ramp_5mm_s", "ramp_0.1mm_s"]})
+    found: list = []
+    after, refused = _stribeck_dip_check(fast, used, {"vs": 1e-3}, judged, found)
+    assert refused == ["Fs", "vs"] and "no ramp is slower than vs" in found[0].message
+    assert [v.verdict for v in after] == [IDENTIFIED, POORLY, POORLY]
+    slow = [*fast, ramp("ramp_0.1mm_s", 1e-4)]
+    after, refused = _stribeck_dip_check(slow, used, {"vs": 1e-3}, judged, [])
+    assert not refused and all(v.identified for v in after)

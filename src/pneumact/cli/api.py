@@ -101,6 +101,8 @@ OWN: dict[str, str] = {
     "input_csv": "a CSV of time and an input signal, read by experiments.from_csv",
     "plan": "campaign: write the plan of the tests instead of simulating them",
     "simulate": "campaign: run a plan written by --plan (from a prior) on --params",
+    "round": "campaign: which round of tests (from 2 on every test's name ends in "
+             "_round<N>; design_campaign's suffix)",
     "partial": "identify paper: no longer needed (hidden; identified.toml is always "
                "written, the prior's values marked)",
     "validate": "identify friction: a second record to validate the estimates on",

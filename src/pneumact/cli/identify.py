@@ -138,6 +138,10 @@ def campaign(
         "--position-noise", help="Position sensor noise, standard deviation [µm].")] = 1.0,
     resolution: Annotated[float, typer.Option(
         help="Position sensor resolution [µm] (0: none).")] = 1.0,
+    round_number: Annotated[int, typer.Option(
+        "--round", help="Which round of tests this is: from 2 on, every test's name ends "
+                        "in _round<N>, so that the records of both rounds can be identified "
+                        "together (design it from the first round's identified.toml).")] = 1,
     simulate: Annotated[Path | None, typer.Option(
         "--simulate", help="Run the plan written to this folder by --plan (designed from "
                            "another set: a prior) on --params (the truth) instead of "
@@ -171,7 +175,11 @@ def campaign(
                            Noise(pressure_noise * 1e3, position_noise * 1e-6,
                                  resolution * 1e-6), simulate)
             return
-        designed = design_campaign(parameter_set, spread=spread / 100)
+        if round_number < 1:
+            raise ParameterError(f"--round = {round_number}; allowed: 1 (the first round) "
+                                 "or more")
+        suffix = f"_round{round_number}" if round_number > 1 else ""
+        designed = design_campaign(parameter_set, spread=spread / 100, suffix=suffix)
         if plan:  # the tests, for a real bench
             writers = {"plan.csv": lambda p: designed.to_pandas().to_csv(p)}
             for test in designed.tests:

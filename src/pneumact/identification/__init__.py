@@ -10,7 +10,9 @@
 - ``inverse_friction``: friction laws from measured motion and force (IDIM-LS);
 - ``design_campaign``: the bench tests for an actuator known roughly (a plan a
   technician can run); ``synthetic_campaign``: those tests simulated with realistic
-  measurement noise (``paper_campaign``: the paper's fixed set of speeds).
+  measurement noise (``paper_campaign``: the paper's fixed set of speeds);
+  ``PaperIdentification.next_round`` (``rounds``): a second campaign designed from a
+  first identification's result.
 """
 
 from .campaign import (

@@ -27,8 +27,8 @@ by the record the identification reads.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -151,6 +151,8 @@ def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e
 
 
 # --------------------------------------------------------------------------- design
+#: The relative uncertainty of a guess a plan is designed for, unless told (issue 18: ±50 %).
+DEFAULT_SPREAD = 0.5
 #: Ramps per campaign, log-spaced in speed.
 RAMP_SPEEDS = 10
 #: Lowest ramp speed [m/s]: below it a regulator-driven diaphragm seldom slides steadily.
@@ -164,6 +166,11 @@ REGULATOR_MARGIN = 0.5
 #: plausible Fs/A_d, the friction swings within ±0.85·Fs whatever the true Fs within
 #: ±50 % of the prior: below break-away.
 PRESLIDING_STEP = 0.35
+#: The reversal before the steps is at most this fraction of the guessed Fs/A_d, however
+#: well Fs is known: the friction at the stop is the sliding level Fc (Fs/Fc up to 2), and
+#: a reversal by 0.9·Fs from it sent a second round's steps (designed for Fs ±10 %) into
+#: breaking away backwards (93 µm of sliding on a family actuator).
+MAX_REVERSAL = 0.5
 
 
 @dataclass(frozen=True)
@@ -204,8 +211,9 @@ class CampaignPlan(ResultVocabulary):
     purposes: dict[str, str]
     speeds: dict[str, float]  # test -> target sliding speed [m/s]
     prior: object
-    spread: float
+    spread: float  # the widest of the guesses' relative uncertainties
     notes: list[str]
+    spreads: dict[str, float] = field(default_factory=dict)  # per parameter, if given
 
     def to_pandas(self, name: str | None = None) -> pd.DataFrame:
         """One row per test, in the units a bench technician sets: kPa, kPa/s, mm/s, s,
@@ -293,6 +301,29 @@ def _read_csv(path: Path) -> pd.DataFrame:
         raise ExperimentError(f"read_plan: cannot read {path}: {exc}") from None
 
 
+#: The guesses a plan is designed around (each with a relative uncertainty, its spread).
+GUESSED = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
+
+
+def _spreads(spread: float | Mapping[str, float]) -> dict[str, float]:
+    """The relative uncertainty of each guess in ``GUESSED``: one for all, or one per
+    name (``DEFAULT_SPREAD`` for those a mapping lacks), each in [0, 1)."""
+    if isinstance(spread, Mapping):
+        unknown = sorted(set(spread) - set(GUESSED))
+        if unknown:
+            raise ExperimentError(f"design_campaign: spread names {', '.join(unknown)}; "
+                                  f"allowed: {', '.join(GUESSED)}")
+        given = {n: spread.get(n, DEFAULT_SPREAD) for n in GUESSED}
+    else:
+        given = dict.fromkeys(GUESSED, spread)
+    for name, value in given.items():
+        if not (isinstance(value, (int, float)) and 0 <= value < 1):
+            label = "spread" if not isinstance(spread, Mapping) else f"spread[{name!r}]"
+            raise ExperimentError(f"design_campaign: {label} = {value!r}; must be in [0, 1) "
+                                  "(the guess's relative uncertainty)")
+    return {name: float(value) for name, value in given.items()}
+
+
 def _regulator_reach(params) -> float:
     """Fastest steady sliding speed [m/s] a regulator ramp can ask for: a share
     ``REGULATOR_MARGIN`` of the chamber's largest pressure rate (choked flow through the
@@ -305,8 +336,9 @@ def _regulator_reach(params) -> float:
     return float(REGULATOR_MARGIN * rate * params["A_d"] / params["k"])
 
 
-def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
-                    sweep_period: float | None = None) -> CampaignPlan:
+def design_campaign(prior, spread: float | Mapping[str, float] = 0.5,
+                    ramps: int = RAMP_SPEEDS, sweep_period: float | None = None, *,
+                    slowest: float | None = None, suffix: str = "") -> CampaignPlan:
     """Tests that let the identification pin down every parameter of an actuator known
     roughly as ``prior`` (each spring and friction value within ±``spread``):
 
@@ -324,12 +356,27 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
       a fifth of the stuck-mode period (0.5 to 2 ms, a fast solenoid valve) and held
       for ten decay times, sampled at 20 points per stuck period and 10 per rise (the
       rebuilt input must resolve each step's corners).
+
+    ``spread`` is one relative uncertainty for every guess, or one per parameter of
+    ``GUESSED`` (a mapping; the names it lacks take ``DEFAULT_SPREAD``): a second round
+    knows some values better than others (``PaperIdentification.next_round``).
+    ``slowest`` [m/s] sets the slowest ramp instead of vs/3, and the sweep's least speed
+    (above the speeds where a first round's ramps stick-slipped); ``suffix`` is appended
+    to every test's name (a second round's records must not take a first round's names).
     """
-    if not 0 <= spread < 1:
-        raise ExperimentError(f"design_campaign: spread = {spread}; must be in [0, 1)")
+    spreads = _spreads(spread)
     if ramps < 3:
         raise ExperimentError(f"design_campaign: ramps = {ramps}; need at least 3")
-    lo, hi = 1.0 - spread, 1.0 + spread
+    if slowest is not None and not (np.isfinite(slowest) and slowest > 0):
+        raise ExperimentError(f"design_campaign: slowest = {slowest}; must be a speed > 0 "
+                              "[m/s]")
+
+    def lo(name: str) -> float:
+        return 1.0 - spreads[name]
+
+    def hi(name: str) -> float:
+        return 1.0 + spreads[name]
+
     p_atm, area, k, f0 = (prior[n] for n in ("p_atm", "A_d", "k", "F0"))
     x_max, m = prior["x_max"], prior["m"]
     fc, fs, vs, delta = (prior[n] for n in ("Fc", "Fs", "vs", "delta"))
@@ -338,21 +385,23 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
     purposes, speeds = {}, {}
 
     # sweep: 90 % of the stroke, at three times the highest plausible vs
-    low = max(p_atm - (f0 + 0.9 * k * x_max + fs * hi) / area, floor)
-    sweep_speed = float(min(max(3 * vs * hi, 2e-4), 0.5 * reach))
+    low = max(p_atm - (f0 + 0.9 * k * x_max + fs * hi("Fs")) / area, floor)
+    sweep_speed = float(min(max(3 * vs * hi("vs"), 2e-4, slowest or 0.0), 0.5 * reach))
     travel = ((p_atm - low) * area - f0) / k
     period = sweep_period or max(2 * travel / sweep_speed, 4.0)
     rate = 1000.0 if period < 200 else 100.0
-    tests = [_test("sweep", "sweep", [(0, p_atm), (1.0, p_atm), (period / 2, low),
-                                      (period / 2, p_atm), (1.0, p_atm)], "regulator", rate)]
-    purposes["sweep"] = "F0, k (stage a): both branches over 90 % of the stroke"
-    speeds["sweep"] = 2 * travel / period
+    sweep = "sweep" + suffix
+    tests = [_test(sweep, "sweep", [(0, p_atm), (1.0, p_atm), (period / 2, low),
+                                    (period / 2, p_atm), (1.0, p_atm)], "regulator", rate)]
+    purposes[sweep] = "F0, k (stage a): both branches over 90 % of the stroke"
+    speeds[sweep] = 2 * travel / period
 
     # ramps: around the plausible vs, up to where eq. 13 holds
-    amplitude = (fs - fc) * hi
-    eq13 = vs * hi * max(np.log(max(amplitude / (STRIBECK_NEGLIGIBLE * fc * lo), 1.0)),
-                         1.0) ** (1 / delta)
-    slowest = max(vs * lo / 3, MIN_RAMP_SPEED)
+    amplitude = (fs - fc) * hi("Fs")
+    eq13 = vs * hi("vs") * max(np.log(max(amplitude / (STRIBECK_NEGLIGIBLE * fc * lo("Fc")),
+                                         1.0)), 1.0) ** (1 / delta)
+    if slowest is None:
+        slowest = max(vs * lo("vs") / 3, MIN_RAMP_SPEED)
     fastest = reach  # a wide speed range above vs is what separates σ2 from Fc
     notes = []
     if fastest < 2 * eq13:
@@ -364,7 +413,7 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
                               f"{reach * 1e3:.3g} mm/s, too close to the slowest useful "
                               f"ramp {slowest * 1e3:.3g} mm/s (vs/3) for a speed sweep")
     mid = p_atm - (f0 + k * 0.3 * x_max) / area  # 30 % of the stroke
-    band = 2.0 * fs * hi / area
+    band = 2.0 * fs * hi("Fs") / area
     for v in np.geomspace(slowest, fastest, ramps):
         v = float(f"{v:.2g}")
         pressure_rate = k * v / area
@@ -372,7 +421,7 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
         span = min(k * ramp_travel / area + band, mid - floor)
         duration = span / pressure_rate
         sample_rate = float(np.clip(400.0 / duration, 500.0, 2000.0))
-        name = f"ramp_{v * 1e3:g}mm_s"
+        name = f"ramp_{v * 1e3:g}mm_s{suffix}"
         tests.append(_test(name, "ramp",
                            [(0, p_atm), (0.5, p_atm), (1.5, mid), (0.5, mid),
                             (duration, mid - span), (0.5, mid - span), (duration, mid),
@@ -382,23 +431,26 @@ def design_campaign(prior, spread: float = 0.5, ramps: int = RAMP_SPEEDS,
         purposes[name] = f"{role}: steady sliding at {v * 1e3:.3g} mm/s both ways"
 
     # presliding: fast small steps below break-away after a stop
-    period_stuck = 2 * np.pi * np.sqrt(m / (k + prior["sigma0"] * hi))
+    period_stuck = 2 * np.pi * np.sqrt(m / (k + prior["sigma0"] * hi("sigma0")))
     rise = float(np.clip(period_stuck / 5, 5e-4, 2e-3))
-    damping = prior["sigma1"] * lo + prior["sigma2"] * lo
-    stiffness = k + prior["sigma0"] * lo
+    damping = prior["sigma1"] * lo("sigma1") + prior["sigma2"] * lo("sigma2")
+    stiffness = k + prior["sigma0"] * lo("sigma0")
     decay = max(2 * m / damping, damping / stiffness) if damping > 0 else 1.0
     hold = float(np.clip(10 * decay, 0.1, 1.0))
     sample_rate = float(np.clip(max(20 / period_stuck, 10 / rise), 2000.0, 20000.0))
     step = PRESLIDING_STEP * fs / area
-    reversal = fs * lo / area  # unloads the friction towards 0 whatever Fs within the spread
+    # unloads the friction towards 0 whatever Fs within the spread; never by more than
+    # half the guessed Fs: the friction at the stop is Fc, as low as half of Fs
+    reversal = fs * min(lo("Fs"), MAX_REVERSAL) / area
     points = [(0, p_atm), (0.2, p_atm), (1.5, mid), (0.3, mid), (0.02, mid + reversal),
               (0.3, mid + reversal)]
     for sign in (1, -2, 2, -2, 1):
         points += [(rise, points[-1][1] + sign * step), (hold, points[-1][1] + sign * step)]
-    tests.append(_test("presliding", "presliding", points, "source", sample_rate))
-    purposes["presliding"] = (f"σ0, σ1 (stage d): steps of {step * 1e-3:.3g} kPa in "
+    tests.append(_test("presliding" + suffix, "presliding", points, "source", sample_rate))
+    purposes["presliding" + suffix] = (f"σ0, σ1 (stage d): steps of {step * 1e-3:.3g} kPa in "
                               f"{rise * 1e3:.2g} ms, held {hold:.2g} s, below break-away")
-    return CampaignPlan(tests, purposes, speeds, prior, spread, notes)
+    return CampaignPlan(tests, purposes, speeds, prior, max(spreads.values()), notes,
+                        spreads)
 
 
 def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,

@@ -39,6 +39,7 @@ from ..io.report import ResultVocabulary
 from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
 from ..progress import ProgressCallback, check_progress, notify
+from .campaign import DEFAULT_SPREAD, RAMP_SPEEDS, CampaignPlan
 from .diagnostics import (
     MISFIT_RATIO,
     MISFIT_REFIT_SHARE,
@@ -522,6 +523,16 @@ class PaperIdentification(ResultVocabulary):
         return ParameterSet(values, name=params.name, description=params.description
                             + " (partial)", provenance=params.provenance, info=info)
 
+    def next_round(self, spread: float = DEFAULT_SPREAD, ramps: int = RAMP_SPEEDS,
+                   number: int = 2) -> CampaignPlan:
+        """The bench tests of the next round, designed from this result
+        (``identification.rounds.next_round``: its estimates where they have an interval,
+        the prior's values elsewhere, each named in the plan's notes; ``spread``: this
+        round's prior's). Identify both rounds' records together from ``plan.prior``."""
+        from .rounds import next_round
+
+        return next_round(self, spread, ramps, number)
+
     def _fallback(self, name: str, values: dict[str, float]) -> tuple[float, str]:
         """The value a parameter that is not identified takes in the partial set, and
         its source: the prior's, except a static friction below the set's Coulomb
@@ -882,7 +893,8 @@ STRIBECK_DIP_PARAMETERS = ("Fs", "vs")
 
 def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
     """Fs and vs are pinned down by the ramps slower than vs. If the joint fit left every
-    such ramp out (their stick-slip is not followed sample by sample), Fs and vs rest on
+    such ramp out (their stick-slip is not followed sample by sample), or there is none
+    (a second round's ramps above the speeds that stick-slip), Fs and vs rest on
     faster records, where the Stribeck curve can trade Fs against vs: measured, a
     campaign of 4 ramp pairs gave Fs +18 %, vs −16 % with ±1 % intervals. Then they are
     poorly identified, for that reason (a diagnostic says so), and shown without an
@@ -895,11 +907,13 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
         return judged, []
     used = set(residuals["record"]) if len(residuals) else set()
     slow = [(r, v) for r, v in ramps if v < vs]
-    if not slow or any(Path(r.source).name in used for r, _ in slow):
+    if any(Path(r.source).name in used for r, _ in slow):
         return judged, []
     names = ", ".join(Path(r.source).name for r, _ in slow)
     reason = (f"the ramps slower than vs = {vs * 1e3:.3g} mm/s ({names}) were left out of "
-              "the joint fit: Fs and vs rest on faster records")
+              "the joint fit: Fs and vs rest on faster records" if slow else
+              f"no ramp is slower than vs = {vs * 1e3:.3g} mm/s: Fs and vs rest on faster "
+              "records")
     diagnostics.append(Diagnostic("warning", "joint", reason, "ramps below vs that the "
                                   "diaphragm slides through steadily (a stiffer regulator, "
                                   "or more ramp speeds between vs/3 and vs)"))
@@ -938,6 +952,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     from ..parameters import as_parameter_set
 
     records = as_records(records, "identify_paper")
+    _check_unique_names(records)
     params = as_parameter_set(params, "identify_paper")
     if "x_max" in params:  # positions in % labelled [mm] (83 mm on a 20 mm stroke)
         for record in records:
@@ -1100,6 +1115,17 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                 "regulator": regulator})
 
 
+def _check_unique_names(records: Sequence[Record]) -> None:
+    """Records are told apart by their names (the fit's weights, the records left out):
+    two of one name, as two rounds of one plan give, would be taken for one."""
+    names = [Path(r.source).name for r in records]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise DataError(f"identify_paper: records = {', '.join(twice)} appear more than once; "
+                        "each record needs a name of its own (a second round's tests end in "
+                        "_round2: PaperIdentification.next_round)")
+
+
 def _with_bench(identified, side, sensors: pd.DataFrame):
     """The identified set with what the records say of the bench: the pressure sensor's
     offset where it was taken off, the position resolution where the records show one."""
@@ -1147,8 +1173,8 @@ def _beyond_the_prior(estimates: Estimates, prior, spread: float) -> list[Diagno
                 "warning", "prior", f"{name} = {value:.4g} is {100 * off:+.0f} % from the "
                 f"prior's {prior[name]:.4g}, beyond its ±{100 * spread:.0f} %: the tests "
                 "were designed for another actuator", "design a second round from these "
-                "estimates: pneumact campaign --plan --params identified.toml "
-                "(design_campaign(ident.parameter_set(partial=True)))"))
+                "estimates: ident.next_round() (pneumact campaign --plan --params "
+                "identified.toml --round 2)"))
     return out
 
 
