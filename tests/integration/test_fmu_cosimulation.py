@@ -115,6 +115,46 @@ def test_the_iso_6358_valve_exports_too(tmp_path):
                             pa.CommandCycle(period=10.0))
 
 
+@pytest.fixture(scope="module")
+def cylinder_fmu(tmp_path_factory):
+    """The ISO 15552 cylinder (issue 41, item 5) and its FMU with both interfaces, once."""
+    model = pa.Cylinder(load_quietly("iso15552-32"))
+    fmu = pa.export_fmu(model, tmp_path_factory.mktemp("cylinder") / "cylinder.fmu",
+                        kind="both")
+    return model, fmu
+
+
+@pytest.mark.parametrize("step", ref.CS_STEPS[:3])
+def test_the_cylinder_exports_and_its_cs_fmu_steps_like_pa_simulate(cylinder_fmu, step):
+    """The exporter asks the model (its fmu_interface): the spool command in [-1, 1] is
+    the drive input, and a held spool step runs as pa.simulate runs it."""
+    _, fmu = cylinder_fmu
+    spool = next(v for v in fmu.variables if v.name == "spool_command")
+    assert (spool.causality, spool.minimum, spool.maximum) == ("input", -1.0, 1.0)
+    experiment = pa.experiments.SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=1.0)
+    _steps_like_pa_simulate({"cylinder": cylinder_fmu}, "cylinder", step, experiment)
+
+
+def test_the_cylinder_me_fmu_follows_pa_simulate(cylinder_fmu):
+    """Model Exchange: FMPy's CVode on the same spool step (its corner in the input
+    table) against pa.simulate, within what the actuator's ME FMU is held to."""
+    model, fmu = cylinder_fmu
+    experiment = pa.experiments.SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=1.0)
+    table = np.array([(0.0, -1.0, 0.0), (0.1, -1.0, 0.0), (0.1, 0.5, 0.0), (1.0, 0.5, 0.0)],
+                     dtype=[("time", float), ("spool_command", float),
+                            ("external_force", float)])
+    out = fmpy.simulate_fmu(str(fmu.path), fmi_type="ModelExchange", stop_time=1.0,
+                            input=table, start_values={"spool_command": -1.0},
+                            relative_tolerance=ref.FMU_RTOL, output_interval=1e-3,
+                            output=["position"])
+    run = pa.simulate(model, experiment)
+    position = np.interp(run.time, out["time"], out["position"])
+    travel = float(np.ptp(run["position"]))
+    assert travel > 0.2 * float(model.params["x_max"])
+    rms = np.sqrt(np.mean((position - run["position"]) ** 2))
+    assert rms <= ref.FMU_POSITION_RMS_OF_STROKE * travel
+
+
 def _steps_like_pa_simulate(cosimulation, case: str, step: float,
                             experiment: pa.Experiment) -> None:
     model, fmu = cosimulation[case]

@@ -48,12 +48,11 @@ from numba.core import types
 
 from ..core.assembly import Assembly, assemble
 from ..core.c_source import translate
-from ..core.channels import CH_DRIVE, CH_LOAD_T, INPUT_OFFSET
+from ..core.channels import INPUT_OFFSET
 from ..core.signals import Constant, pack_channels
 from ..errors import ArgumentError, ExportError
 from ..files import atomic_write
-from ..models import Actuator
-from ..models.mechanics import explicit_step
+from ..models.fmu_interface import FORCE_INPUT, FmuInput, FmuModel
 from ..parameters.catalogue import catalogue
 from ..simulation.solvers import DEFAULT_MAX_STEPS, Rodas4
 from ..version import __version__
@@ -68,20 +67,11 @@ from .compiler import (
 
 __all__ = ["ExportedFmu", "FmuVariable", "export_fmu"]
 
-#: the FMU input that takes what drives each valve (the record signal it replaces)
-DRIVE_INPUTS = {"pressure": ("pressure_input", "Pa", "chamber pressure imposed by the source"),
-                "setpoint": ("pressure_setpoint", "Pa", "set-point of the pressure regulator"),
-                "command": ("valve_command", "1", "valve command (0 closed to atmosphere, 1 "
-                                                  "open to the vacuum reservoir)")}
-FORCE_INPUT = ("external_force", "N", "external force on the rod (opposes motion towards "
-                                      "larger x)")
 #: the FMI BaseUnit exponents pint's dimensions map onto
 BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[temperature]": "K",
               "[current]": "A", "[substance]": "mol", "[luminosity]": "cd"}
 TEMPLATES = "pneumact.export"
 STOP_TIME = 10.0
-#: the mechanics' parameters the FMU's end-stop check reads, in the template's order
-STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
 #: the FMU ends a run whose stop penetration passes this many times the deepest one the
 #: forces can cause (an explicit solver gone unstable on the stiff contact, issue 39)
 STOP_MARGIN = 10.0
@@ -170,17 +160,14 @@ class ExportedFmu:
 
 
 # ------------------------------------------------------------------------------ the model
-def exportable(model) -> Actuator:
-    """The actuator the FMU runs: ``model`` with an external-force input channel."""
-    if not isinstance(model, Actuator):
+def exportable(model) -> FmuModel:
+    """The model as the FMU runs it (its ``fmu_form``: an external-force input channel);
+    a model without the exporter's protocol (``models.fmu_interface``) is refused."""
+    if not hasattr(model, "fmu_form"):
         raise ArgumentError(f"export_fmu: model = {type(model).__name__}; an FMU is exported "
-                            "from a pa.Actuator (a friction rig, a cylinder or a closed loop "
-                            "is not yet: docs/fmu-export.md)")
-    if model.load is not None:
-        raise ArgumentError("export_fmu: the actuator has a load against time; in the FMU the "
-                            "external force is an input: export it without load= and drive "
-                            "the input 'external_force'")
-    return dataclasses.replace(model, load=Constant(0.0))
+                            "from a pa.Actuator or a pa.Cylinder (a friction rig or a closed "
+                            "loop is not yet: docs/fmu-export.md)")
+    return model.fmu_form()
 
 
 def kernel_roots(kernel: ModuleType, events: bool, cosimulation: bool = False) -> dict:
@@ -221,7 +208,7 @@ def guard_counts(kernel: ModuleType, vec: np.ndarray, sig: np.ndarray, ptr: np.n
 
 
 # ------------------------------------------------------------------------------ variables
-def parameter_variables(model: Actuator, asm: Assembly, vec: np.ndarray
+def parameter_variables(model: FmuModel, asm: Assembly, vec: np.ndarray
                         ) -> list[FmuVariable]:
     specs = catalogue()
     info = model.params.info
@@ -245,47 +232,42 @@ def nominal_of(value: float) -> float | None:
     return abs(value) if value != 0.0 and np.isfinite(value) else None
 
 
-def input_starts(model: Actuator, inputs: Mapping[str, float] | None) -> dict[str, float]:
+def input_starts(model: FmuModel, inputs: Mapping[str, float] | None) -> dict[str, float]:
     """The start value of each FMU input: ``inputs`` (checked: a name the FMU has, an
-    absolute pressure, a command in [0, 1], a finite force), else at rest (atmospheric
-    pressure, command 0, no force)."""
-    from ..checks import check_absolute_pressure, check_finite, check_range
-
-    name, unit, _ = DRIVE_INPUTS[model.input_signal]
-    starts = {name: float(model.params["p_atm"]) if unit == "Pa" else 0.0,
-              FORCE_INPUT[0]: 0.0}
+    absolute pressure, a value in the input's range, a finite force), else the model's
+    (at rest: atmospheric pressure, command 0, no force)."""
+    declared = {entry.name: entry for entry in model.fmu_interface().inputs}
+    starts = {name: entry.start for name, entry in declared.items()}
     unknown = sorted(set(inputs or {}) - set(starts))
     if unknown:
         raise ArgumentError(f"export_fmu: inputs = {unknown}: not inputs of this FMU; its "
                             f"inputs are {sorted(starts)}")
     for key, value in (inputs or {}).items():
-        where = "export_fmu inputs"
-        if key == FORCE_INPUT[0]:
-            starts[key] = check_finite(key, value, where=where)
-        elif unit == "Pa":
-            starts[key] = check_absolute_pressure(key, value, where=where)
-        else:
-            starts[key] = check_range(key, value, 0.0, 1.0, where=where)
+        starts[key] = checked_start(declared[key], value)
     return starts
 
 
-def input_variables(model: Actuator, ptr: np.ndarray, starts: Mapping[str, float]
-                    ) -> list[FmuVariable]:
-    """The drive and the external force, with the drive's hard range (an absolute
-    pressure from 0 to pneumact's 10 MPa ceiling, a command in [0, 1]) and nominal
-    magnitudes (the atmosphere, a full command, one atmosphere on the diaphragm)."""
-    from ..checks import MAX_ABSOLUTE_PRESSURE
+def checked_start(entry: FmuInput, value: float) -> float:
+    """``value`` as the start of the input ``entry``: an absolute pressure, a value in its
+    range, or finite."""
+    from ..checks import check_absolute_pressure, check_finite, check_range
 
-    name, unit, description = DRIVE_INPUTS[model.input_signal]
-    drive = int(ptr[CH_DRIVE]) + INPUT_OFFSET
-    force = int(ptr[CH_LOAD_T]) + INPUT_OFFSET
-    p_atm = float(model.params["p_atm"])
-    low, high, nominal = (0.0, MAX_ABSOLUTE_PRESSURE, p_atm) if unit == "Pa" else (0.0, 1.0, 1.0)
-    return [FmuVariable(name, "input", "input", drive, unit, description, start=starts[name],
-                        minimum=low, maximum=high, nominal=nominal),
-            FmuVariable(FORCE_INPUT[0], "input", "input", force, FORCE_INPUT[1], FORCE_INPUT[2],
-                        start=starts[FORCE_INPUT[0]],
-                        nominal=p_atm * float(model.params["A_d"]))]
+    where = "export_fmu inputs"
+    if entry.pressure:
+        return check_absolute_pressure(entry.name, value, where=where)
+    if entry.minimum is not None and entry.maximum is not None:
+        return check_range(entry.name, value, entry.minimum, entry.maximum, where=where)
+    return check_finite(entry.name, value, where=where)
+
+
+def input_variables(model: FmuModel, ptr: np.ndarray, starts: Mapping[str, float]
+                    ) -> list[FmuVariable]:
+    """The model's FMU inputs (the drive, the external force) on their signal entries,
+    with their hard ranges and nominal magnitudes (``fmu_interface``)."""
+    return [FmuVariable(entry.name, "input", "input", int(ptr[entry.channel]) + INPUT_OFFSET,
+                        entry.unit, entry.description, start=starts[entry.name],
+                        minimum=entry.minimum, maximum=entry.maximum, nominal=entry.nominal)
+            for entry in model.fmu_interface().inputs]
 
 
 def state_variables(asm: Assembly, nominals: np.ndarray, first: int
@@ -319,7 +301,7 @@ def rate_unit(unit: str) -> str:
     return f"{unit}/s"
 
 
-def all_variables(model: Actuator, asm: Assembly, kernel: ModuleType, vec: np.ndarray,
+def all_variables(model: FmuModel, asm: Assembly, kernel: ModuleType, vec: np.ndarray,
                   ptr: np.ndarray, starts: Mapping[str, float]) -> list[FmuVariable]:
     nominals = np.zeros(len(asm.states))
     kernel.state_scales(vec, nominals)
@@ -354,7 +336,7 @@ def _exponent(value) -> str:
 # ------------------------------------------------------------------------------ files
 def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVariable],
                 vec: np.ndarray, sig: np.ndarray, ptr: np.ndarray, guards: tuple[int, int],
-                kind: str = "me", fmi: int = 2) -> str:
+                stop_check: tuple[str, ...] | None, kind: str = "me", fmi: int = 2) -> str:
     kinds = {"parameter": 0, "input": 1, "state": 2, "derivative": 3, "output": 4,
              "indicator": 5, "time": 6}
     slot_ptr: list[int] = [0]
@@ -369,13 +351,9 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
     status_text = ", ".join(_c_string(kernel.STATUS_TEXT.get(code, "unknown status"))
                             for code in range(1, max(kernel.STATUS_TEXT) + 1))
     extra = {"stubs": fmi3_stubs()} if fmi == 3 else {}
-    force = next(v.index for v in variables if v.name == FORCE_INPUT[0])
     return render("fmu3.c.j2" if fmi == 3 else "fmu.c.j2", identifier=identifier, guid=guid,
                   n_states=len(asm.states), me=me, cs=cs, interfaces=interfaces(kind), **extra,
-                  position_state=asm.state_index("position"),
-                  mechanics_slots=", ".join(str(asm.slots[name][0])
-                                            for name in STOP_CHECK_PARAMETERS),
-                  force_entry=force, stop_margin=repr(STOP_MARGIN),
+                  **stop_check_context(asm, variables, stop_check),
                   info_length=kernel.INFO_LENGTH, info_status=kernel.INFO_STATUS,
                   info_h=kernel.INFO_H, info_t=kernel.INFO_T, rtol=repr(solver.rtol),
                   h_init=repr(solver.h_init), max_steps=DEFAULT_MAX_STEPS,
@@ -388,6 +366,19 @@ def glue_source(identifier: str, guid: str, asm: Assembly, variables: list[FmuVa
                   var_kind=", ".join(str(kinds[v.kind]) for v in variables),
                   var_index=", ".join(str(v.index) for v in variables),
                   slot_ptr=", ".join(map(str, slot_ptr)), slots=", ".join(map(str, slots)))
+
+
+def stop_check_context(asm: Assembly, variables: list[FmuVariable],
+                       stop_check: tuple[str, ...] | None) -> dict:
+    """What ``templates/stop_check.c.j2`` reads: the position state, the vector slots of
+    the model's end-stop parameters (its ``fmu_interface().stop_check``) and the signal
+    entry of the external force; ``stop_check`` false where the model has no check."""
+    if stop_check is None:
+        return {"stop_check": False}
+    force = next(v.index for v in variables if v.name == FORCE_INPUT[0])
+    return {"stop_check": True, "position_state": asm.state_index("position"),
+            "mechanics_slots": ", ".join(str(asm.slots[name][0]) for name in stop_check),
+            "force_entry": force, "stop_margin": repr(STOP_MARGIN)}
 
 
 def fmi3_variables(variables: list[FmuVariable], guards: tuple[int, int]
@@ -444,7 +435,7 @@ def _c_list(values) -> str:
                      for v in values)
 
 
-def model_description(model: Actuator, identifier: str, guid: str,
+def model_description(model: FmuModel, identifier: str, guid: str,
                       variables: list[FmuVariable], indicators: int, kind: str = "me",
                       fmi: int = 2) -> str:
     index = {id(v): i + 1 for i, v in enumerate(variables)}
@@ -464,19 +455,10 @@ def model_description(model: Actuator, identifier: str, guid: str,
                   date=datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
                   n_indicators=indicators, identifier=identifier, units=unit_definitions(variables),
                   stop_time=STOP_TIME, tolerance=RECOMMENDED_TOLERANCE,
-                  step_size=recommended_step(model) if me else CS_STEP,
+                  step_size=model.fmu_interface().recommended_step if me else CS_STEP,
                   variables=[_xml_fields(v) for v in variables],
                   outputs=outputs, derivatives=derivatives,
                   initial_unknowns=sorted(set(outputs) | set(derivatives)))
-
-
-def recommended_step(model: Actuator) -> float:
-    """The DefaultExperiment's stepSize [s]: a step at which a fixed-step explicit importer
-    (forward Euler, fmusim, ode1) stays stable on the end stops (``explicit_step``); a
-    variable-step solver takes its own steps and reads it as the output interval."""
-    p = model.params
-    return explicit_step(float(p["m"]), float(p["k"]), float(p["F0"]), float(p["k_stop"]),
-                         float(p["c_stop"]))
 
 
 def _xml_fields(v: FmuVariable) -> dict:
@@ -504,7 +486,7 @@ def identifier_for(path: Path) -> str:
 
 
 # ------------------------------------------------------------------------------ the export
-def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
+def export_fmu(model, path: str | os.PathLike[str], *,
                inputs: Mapping[str, float] | None = None, binary: bool = True,
                compiler: str | None = None, kind: str = "me", fmi: int = 2) -> ExportedFmu:
     """Write ``model`` as an FMI 2.0 (``fmi=2``) or 3.0 (``fmi=3``) FMU at ``path``.
@@ -551,7 +533,8 @@ def export_fmu(model: Actuator, path: str | os.PathLike[str], *,
     files: dict[str, str | bytes] = {"modelDescription.xml": description,
              "sources/model.c": unit.source, "sources/model.h": unit.header,
              "sources/fmu.c": glue_source(identifier, guid, asm, variables, vec, sig, ptr,
-                                          guards, kind, fmi)}
+                                          guards, fmu_model.fmu_interface().stop_check, kind,
+                                          fmi)}
     if fmi == 3:
         files["sources/buildDescription.xml"] = render("buildDescription.xml.j2",
                                                        identifier=identifier)

@@ -11,14 +11,23 @@ from ..core.component import Part, StateSpec
 from ..core.signals import Constant, Signal
 from ..errors import ArgumentError
 from ..parameters.files import as_parameter_set
+from .fmu_interface import FmuInterface, drive_input, force_input
 from .friction import FrictionModel, LuGre
-from .mechanics import MECHANICS_BLOCK
+from .mechanics import MECHANICS_BLOCK, explicit_step
 from .pneumatics import ChamberLaw, Isothermal
 from .valves import PressureSource, Valve
 
 if TYPE_CHECKING:
     from ..parameters.files import ParameterSetLike
     from ..parameters.parameter_set import ParameterSet
+
+#: the FMU input that takes what drives each valve (the record signal it replaces)
+FMU_DRIVES = {"pressure": ("pressure_input", "Pa", "chamber pressure imposed by the source"),
+              "setpoint": ("pressure_setpoint", "Pa", "set-point of the pressure regulator"),
+              "command": ("valve_command", "1", "valve command (0 closed to atmosphere, 1 "
+                                                "open to the vacuum reservoir)")}
+#: the mechanics' parameters the FMU's end-stop check reads, in the template's order
+STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
 
 
 @dataclass(frozen=True, eq=False)
@@ -161,6 +170,36 @@ class Actuator:
                          "load_t": self.load if self.load is not None else zero,
                          "load_x": self.load_map if self.load_map is not None else zero,
                          "map_res": res_map, "map_atm": atm_map})
+
+    # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
+    def fmu_form(self) -> Actuator:
+        """This actuator as its FMU runs it: the external force an input channel (a load
+        against time is refused: in the FMU it is the input)."""
+        if self.load is not None:
+            raise ArgumentError("export_fmu: the actuator has a load against time; in the FMU "
+                                "the external force is an input: export it without load= "
+                                "and drive the input 'external_force'")
+        return replace(self, load=Constant(0.0))
+
+    def fmu_interface(self) -> FmuInterface:
+        """The drive behind its valve (an absolute pressure in [0, 10 MPa] starting at the
+        atmosphere, or a command in [0, 1] starting closed), the external force (nominal:
+        one atmosphere on the diaphragm), the diaphragm's end-stop check and the Euler step
+        its stops allow."""
+        from ..checks import MAX_ABSOLUTE_PRESSURE
+
+        p = self.params
+        p_atm = float(p["p_atm"])
+        name, unit, description = FMU_DRIVES[self.input_signal]
+        if unit == "Pa":
+            drive = drive_input(name, unit, description, p_atm, p_atm, 0.0,
+                                MAX_ABSOLUTE_PRESSURE, pressure=True)
+        else:
+            drive = drive_input(name, unit, description, 0.0, 1.0, 0.0, 1.0)
+        step = explicit_step(float(p["m"]), float(p["k"]), float(p["F0"]),
+                             float(p["k_stop"]), float(p["c_stop"]))
+        return FmuInterface((drive, force_input(p_atm * float(p["A_d"]))),
+                            STOP_CHECK_PARAMETERS, step)
 
     def describe(self) -> str:
         return (f"Actuator(friction={self.friction!r}, valve={self.valve.name}, "

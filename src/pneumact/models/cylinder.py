@@ -29,8 +29,9 @@ from ..core.channels import CH_DRIVE, in_order
 from ..core.component import Block, Part, StateSpec
 from ..core.signals import Constant, Signal, channel_eval
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
+from .fmu_interface import FmuInterface, drive_input, force_input
 from .friction import FrictionModel, LuGre
-from .mechanics import stop_force, stop_force_params
+from .mechanics import explicit_step, stop_force, stop_force_params
 from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
 
 if TYPE_CHECKING:
@@ -552,6 +553,30 @@ class Cylinder:
     def channels(self, drive: Signal) -> list[Signal | None]:
         load = self.load if self.load is not None else Constant(0.0)
         return in_order({"drive": drive, "load_t": load})
+
+    # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
+    def fmu_form(self) -> Cylinder:
+        """This cylinder as its FMU runs it (its load channel is there already; a load
+        against time is refused: in the FMU it is the input)."""
+        from ..errors import ArgumentError
+
+        if self.load is not None:
+            raise ArgumentError("export_fmu: the cylinder has a load against time; in the FMU "
+                                "the external force is an input: export it without load= "
+                                "and drive the input 'external_force'")
+        return self
+
+    def fmu_interface(self) -> FmuInterface:
+        """The spool command u in [-1, 1] (starting centred), the external force (nominal:
+        the supply's force on the piston, (p_supply - p_atm)·A_a), no end-stop check
+        (``stop_check.c.j2`` is the diaphragm's: a preload and a spring) and the Euler
+        step its stops allow resting under that force."""
+        p = self.params
+        push = (float(p["p_supply"]) - float(p["p_atm"])) * QUARTER_PI * float(p["D_bore"]) ** 2
+        spool = drive_input("spool_command", "1", "spool command of the 5/3 valve (-1 supply to B, "
+                            "0 centred, 1 supply to A: extends)", 0.0, 1.0, -1.0, 1.0)
+        step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
+        return FmuInterface((spool, force_input(push)), None, step)
 
     def describe(self) -> str:
         return (f"Cylinder(friction={self.friction!r}, "

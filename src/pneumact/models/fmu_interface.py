@@ -1,0 +1,81 @@
+"""What a model tells the FMU exporter (issue 41, items 5 and 6): its inputs with their
+ranges and nominal values, the data of its end-stop check and its recommended step.
+
+A model that exports has ``fmu_form()`` (itself as the FMU runs it, or an
+``ArgumentError`` saying why it does not export) and ``fmu_interface()`` (an
+``FmuInterface``); the exporter asks these and nothing else of the model's kind.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+from ..core.channels import CH_DRIVE, CH_LOAD_T
+
+if TYPE_CHECKING:
+    from ..core.signals import Signal
+    from ..parameters.parameter_set import ParameterSet
+
+#: the FMU input of the external force (every exported model has it)
+FORCE_INPUT = ("external_force", "N", "external force on the rod (opposes motion towards "
+                                      "larger x)")
+
+
+@dataclass(frozen=True)
+class FmuInput:
+    """One FMU input: a one-point input channel of the packed signals, with its unit,
+    start value, hard range (None: unbounded) and nominal magnitude. ``pressure``: an
+    absolute pressure (a start value is checked as one)."""
+
+    name: str
+    unit: str
+    description: str
+    channel: int
+    start: float
+    nominal: float
+    minimum: float | None = None
+    maximum: float | None = None
+    pressure: bool = False
+
+
+@dataclass(frozen=True)
+class FmuInterface:
+    """The model's side of the FMU: its inputs (the drive, then the external force),
+    the parameters the end-stop check reads (``templates/stop_check.c.j2``'s order: mass,
+    preload, spring, stroke, k_stop, c_stop, area, p_atm; None: no check) and the
+    forward-Euler step its end stops allow (the DefaultExperiment's stepSize)."""
+
+    inputs: tuple[FmuInput, ...]
+    stop_check: tuple[str, ...] | None
+    recommended_step: float
+
+
+def drive_input(name: str, unit: str, description: str, start: float, nominal: float,
+                minimum: float | None, maximum: float | None, pressure: bool = False
+                ) -> FmuInput:
+    """The drive's FMU input (the drive channel)."""
+    return FmuInput(name, unit, description, CH_DRIVE, start, nominal, minimum, maximum,
+                    pressure)
+
+
+def force_input(nominal: float) -> FmuInput:
+    """The external force's FMU input (the load-against-time channel), starting at 0."""
+    return FmuInput(*FORCE_INPUT, channel=CH_LOAD_T, start=0.0, nominal=nominal)
+
+
+class FmuModel(Protocol):
+    """What the exporter asks of a model (an ``Actuator``, a ``Cylinder``): besides what
+    the kernel generator reads (``parts``, ``channels``), its parameter set, a
+    description and the two methods above."""
+
+    @property
+    def params(self) -> ParameterSet: ...
+
+    def channels(self, drive: Signal, /) -> list[Signal | None]: ...
+
+    def describe(self) -> str: ...
+
+    def fmu_form(self) -> FmuModel: ...
+
+    def fmu_interface(self) -> FmuInterface: ...
