@@ -242,7 +242,8 @@ def test_a_rig_run_summarises_its_motion_too():
 
 def test_the_fmu_export_refuses_a_closed_loop_and_a_cylinder_with_a_load(cylinder):
     """The cylinder exports (tests/integration/test_fmu_cosimulation.py); its closed loop
-    does not yet, and says where to read why; a load against time is the FMU's input."""
+    does not yet, and says where to read why; a load against time is the FMU's input, and
+    a spool command's start outside [-1, 1] is refused."""
     from pneumact.core.signals import Constant
     from pneumact.errors import ArgumentError
     from pneumact.export import export_fmu
@@ -251,3 +252,5 @@ def test_the_fmu_export_refuses_a_closed_loop_and_a_cylinder_with_a_load(cylinde
         export_fmu(ClosedLoop(cylinder, state_feedback(0.0)), "loop.fmu")
     with pytest.raises(ArgumentError, match=r"cylinder has a load against time"):
         export_fmu(pa.Cylinder(cylinder.params, load=Constant(10.0)), "cylinder.fmu")
+    with pytest.raises(ArgumentError, match=r"spool_command"):  # its range, [-1, 1]
+        export_fmu(cylinder, "cylinder.fmu", inputs={"spool_command": 1.5})

@@ -113,6 +113,8 @@ def test_the_fmu_export_page_runs(tmp_path, monkeypatch):
     assert namespace["euler_rms"] <= ref.FMU_EULER_POSITION_RMS * namespace["travelled"]
     assert (tmp_path / "vgt_actuator_cs.fmu").exists()  # the Co-Simulation FMU's section
     assert namespace["cs_rms"] <= ref.CS_POSITION_RMS_OF_TRAVEL * namespace["travel"]
+    assert (tmp_path / "cylinder_cs.fmu").exists()  # the cylinder's section
+    assert (tmp_path / "cylinder_me.fmu").exists()
 
 
 def test_the_control_tuning_page_runs(tmp_path, monkeypatch):

@@ -1,4 +1,7 @@
-"""Export an actuator as an FMI 2.0 or 3.0 FMU: Model Exchange, Co-Simulation or both.
+"""Export an actuator or a cylinder as an FMI 2.0 or 3.0 FMU: Model Exchange,
+Co-Simulation or both. What the FMU takes of the model (its inputs, their ranges and
+nominal values, its end-stop check, its recommended step) the model says
+(``fmu_form``, ``fmu_interface``: ``models.fmu_interface``); nothing here asks its class.
 
 The FMU's physics is the model's kernel written in C by the kernel generator's second
 back end (``core.c_source``), from the same component functions the compiled kernels
