@@ -1,0 +1,138 @@
+"""Honest about local optima: restarts of a bounded fit, and intervals that cover every
+optimum the noise cannot tell apart (issue 38, item 5).
+
+- A least-squares fit whose solution ends at a bound of its search range has not found
+  an optimum the data support: it is started again from the prior and from spread
+  starts (``spread_starts``), and the best optimum inside the bounds is kept
+  (``restarted_least_squares``). Only when every start ends at a bound does it give up,
+  with the reason (``stuck_reason``).
+- Two starts that reach costs within the noise (twice the cost difference of the scaled
+  residuals below ``CHI2_95_1DOF``, the 95 % quantile of χ² with one degree of freedom)
+  but values farther apart than the reported interval are two optima the records cannot
+  tell apart: the interval of each such parameter is widened to cover both
+  (``widen_for_optima``), never reported as tight about one of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import OptimizeResult, least_squares
+
+__all__ = [
+    "BOUND_ATOL",
+    "CHI2_95_1DOF",
+    "RESTART_SPREAD",
+    "Restarted",
+    "at_bound",
+    "restarted_least_squares",
+    "spread_starts",
+    "stuck_reason",
+    "widen_for_optima",
+]
+
+#: 95 % quantile of χ² with one degree of freedom: two optima whose scaled costs (Σr²/σ²)
+#: differ by less are within the noise of each other.
+CHI2_95_1DOF = 3.841458820694124
+#: A value within this (relative to the search range) of a bound is at the bound (the
+#: trust-region solver stops short of an active bound by some 1e-6 of the range).
+BOUND_ATOL = 1e-6
+#: The spread of the restarts about the prior: each parameter at prior × (1 ± spread/2),
+#: the others at the prior (a prior is a guess within ±50 %).
+RESTART_SPREAD = 0.5
+
+
+def at_bound(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Per value, whether it sits on its lower or upper bound (``BOUND_ATOL`` of the
+    range)."""
+    values, lower, upper = (np.asarray(a, dtype=float) for a in (values, lower, upper))
+    span = np.where(np.isfinite(upper - lower), upper - lower, 1.0)
+    tol = BOUND_ATOL * np.maximum(span, np.finfo(float).tiny)
+    return (np.abs(values - lower) <= tol) | (np.abs(values - upper) <= tol)
+
+
+def spread_starts(prior: np.ndarray, spread: float = RESTART_SPREAD) -> list[np.ndarray]:
+    """The prior, then each parameter in turn at prior × (1 − spread/2) and
+    prior × (1 + spread/2): deterministic, 1 + 2·n starts for n parameters."""
+    prior = np.asarray(prior, dtype=float)
+    starts = [prior.copy()]
+    for j in range(prior.size):
+        for factor in (1.0 - spread / 2, 1.0 + spread / 2):
+            start = prior.copy()
+            start[j] *= factor
+            starts.append(start)
+    return starts
+
+
+def stuck_reason(names: Sequence[str], values: np.ndarray, stuck: np.ndarray,
+                 starts: int) -> str:
+    """'vs stuck at its bound 1 after 7 starts' for each stuck parameter."""
+    return "; ".join(f"{name} stuck at its bound {value:.4g} after {starts} starts"
+                     for name, value, bad in zip(names, values, stuck, strict=True) if bad)
+
+
+@dataclass(frozen=True)
+class Restarted:
+    """The best solution of a restarted fit, every start's solution, and whether the best
+    is still at a bound (then ``reason`` says which parameter, where, after how many
+    starts)."""
+
+    best: OptimizeResult
+    solutions: list[OptimizeResult]
+    stuck: np.ndarray
+    reason: str
+
+    @property
+    def ok(self) -> bool:
+        return not bool(self.stuck.any())
+
+
+def restarted_least_squares(residuals: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
+                            lower: np.ndarray, upper: np.ndarray, prior: np.ndarray,
+                            names: Sequence[str], spread: float = RESTART_SPREAD,
+                            **options) -> Restarted:
+    """``scipy.optimize.least_squares`` from ``start`` within (``lower``, ``upper``); a
+    solution at a bound is fitted again from ``spread_starts(prior, spread)`` (each
+    clipped inside the bounds), and the best solution inside the bounds is kept (the best
+    at a bound when none is inside)."""
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    inner = (np.nextafter(lower, np.inf), np.nextafter(upper, -np.inf))
+
+    def solve(x0: np.ndarray) -> OptimizeResult:
+        return least_squares(residuals, np.clip(x0, *inner), bounds=(lower, upper), **options)
+
+    def stuck_of(solution: OptimizeResult) -> np.ndarray:
+        return (np.asarray(solution.active_mask) != 0) | at_bound(solution.x, lower, upper)
+
+    solutions = [solve(np.asarray(start, dtype=float))]
+    if stuck_of(solutions[0]).any():
+        solutions += [solve(s) for s in spread_starts(prior, spread)]
+    inside = [s for s in solutions if not stuck_of(s).any()]
+    best = min(inside or solutions, key=lambda s: s.cost)
+    stuck = stuck_of(best)
+    reason = stuck_reason(names, best.x, stuck, len(solutions)) if stuck.any() else ""
+    return Restarted(best, solutions, stuck, reason)
+
+
+def widen_for_optima(values: np.ndarray, half_widths: np.ndarray, best_cost: float,
+                     others: Sequence[tuple[np.ndarray, float]], noise_variance: float = 1.0
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The ``half_widths`` of the 95 % intervals about the best optimum ``values``
+    (cost ``best_cost`` = ½Σr²), each widened to reach every other optimum in ``others``
+    ((values, cost) of the other starts) whose cost is within the noise of the best
+    (2·Δcost/``noise_variance`` below ``CHI2_95_1DOF``) and which lies outside the
+    interval. Returns (half-widths, which were widened)."""
+    values = np.asarray(values, dtype=float)
+    half = np.asarray(half_widths, dtype=float).copy()
+    widened = np.zeros(values.size, bool)
+    for other, cost in others:
+        if not 2.0 * (cost - best_cost) / noise_variance < CHI2_95_1DOF:
+            continue
+        distance = np.abs(np.asarray(other, dtype=float) - values)
+        apart = distance > half
+        reach = distance + np.asarray(half_widths, dtype=float)
+        half = np.where(apart, np.maximum(half, reach), half)
+        widened |= apart
+    return half, widened
