@@ -390,3 +390,46 @@ def test_no_ramp_speed_is_proposed_beyond_the_regulators_reach():
     assert all("beyond what the regulator drives" in n.remedy for n in sliding)
     assert "add ramps at" in sliding_remedy(reach / 10, params)
     assert "add ramps at" not in sliding_remedy(ref.UNREACHABLE_VS, params)
+
+
+def test_stage_d_ending_at_a_bound_starts_again_from_the_prior(monkeypatch):
+    """Stage (d) whose fit from the staged values ends at σ0's bound is fitted again from
+    the prior and its spread starts, and keeps the optimum inside; where every start
+    ends at a bound, it gives up and names the bound (the fit is a stand-in: the
+    restarts are what is tested, not the simulation)."""
+    import importlib
+    from types import SimpleNamespace
+
+    from pneumact.identification.estimates import Estimates
+    from pneumact.identification.stages import prior_bounds, stage_presliding
+
+    params = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    prior = params.replace(sigma0=2 * params["sigma0"])
+    low = prior_bounds(prior, ["sigma0"])["sigma0"][0]
+    time = np.arange(0.0, 1.0, 1e-3)
+    x = 1e-3 * np.clip(time / 0.2, 0.0, 1.0) + np.random.default_rng(0).normal(0, 1e-7,
+                                                                               time.size)
+    record = Record.from_arrays(time, {"position": x, "pressure": np.full(x.size, 9e4)},
+                                source="presliding")
+    starts: list[dict] = []
+    fit_module = importlib.import_module("pneumact.identification.fit")
+
+    def stand_in(model, records, free, *, start, always_stuck=False, **_):
+        starts.append(start)
+        stuck = always_stuck or start["sigma0"] == params["sigma0"]  # the staged start
+        values = {"sigma0": low if stuck else start["sigma0"], "sigma1": start["sigma1"],
+                  "offset_position[0]": 0.0}
+        names = tuple(values)
+        est = Estimates(names, np.array(list(values.values())), np.ones(3), np.eye(3), 10,
+                        ("N/m", "N*s/m", "m"))
+        return SimpleNamespace(values=values, estimates=est, cost=0.0 if stuck else 1.0,
+                               simulated=[{"position": x}])
+
+    monkeypatch.setattr(fit_module, "fit", stand_in)
+    stage = stage_presliding([record], params, prior=prior)
+    assert len(starts) == 1 + 5 and stage.extra["starts"] == 6
+    assert stage.extra["stuck"] == "" and stage.estimates["sigma0"] == prior["sigma0"]
+    monkeypatch.setattr(fit_module, "fit", lambda *a, **k: stand_in(*a, **k,
+                                                                    always_stuck=True))
+    stage = stage_presliding([record], params, prior=prior)
+    assert stage.extra["stuck"] == f"sigma0 stuck at its bound {low:.4g} after 6 starts"

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import numpy as np
 from scipy.optimize import OptimizeResult, least_squares
@@ -27,11 +28,15 @@ __all__ = [
     "RESTART_SPREAD",
     "Restarted",
     "at_bound",
+    "restarted",
     "restarted_least_squares",
     "spread_starts",
     "stuck_reason",
     "widen_for_optima",
 ]
+
+#: A solution of a fit (scipy's OptimizeResult, a FitResult).
+Solution = TypeVar("Solution")
 
 #: 95 % quantile of χ² with one degree of freedom: two optima whose scaled costs (Σr²/σ²)
 #: differ by less are within the noise of each other.
@@ -74,13 +79,13 @@ def stuck_reason(names: Sequence[str], values: np.ndarray, stuck: np.ndarray,
 
 
 @dataclass(frozen=True)
-class Restarted:
+class Restarted(Generic[Solution]):
     """The best solution of a restarted fit, every start's solution, and whether the best
     is still at a bound (then ``reason`` says which parameter, where, after how many
     starts)."""
 
-    best: OptimizeResult
-    solutions: list[OptimizeResult]
+    best: Solution
+    solutions: list[Solution]
     stuck: np.ndarray
     reason: str
 
@@ -89,14 +94,32 @@ class Restarted:
         return not bool(self.stuck.any())
 
 
+def restarted(solve: Callable[[np.ndarray], Solution], start: np.ndarray, prior: np.ndarray,
+              names: Sequence[str], stuck_of: Callable[[Solution], np.ndarray],
+              cost_of: Callable[[Solution], float], values_of: Callable[[Solution], np.ndarray],
+              spread: float = RESTART_SPREAD) -> Restarted[Solution]:
+    """``solve(start)``; a solution ``stuck_of`` says is at a bound is solved again from
+    ``spread_starts(prior, spread)``, and the best (``cost_of``) solution inside the
+    bounds is kept (the best at a bound when none is inside; ``values_of`` gives its
+    values for the reason)."""
+    solutions = [solve(np.asarray(start, dtype=float))]
+    if stuck_of(solutions[0]).any():
+        solutions += [solve(s) for s in spread_starts(prior, spread)]
+    inside = [s for s in solutions if not stuck_of(s).any()]
+    best = min(inside or solutions, key=cost_of)
+    stuck = np.asarray(stuck_of(best), bool)
+    reason = stuck_reason(names, values_of(best), stuck, len(solutions)) if stuck.any() \
+        else ""
+    return Restarted(best, solutions, stuck, reason)
+
+
 def restarted_least_squares(residuals: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
                             lower: np.ndarray, upper: np.ndarray, prior: np.ndarray,
                             names: Sequence[str], spread: float = RESTART_SPREAD,
-                            **options) -> Restarted:
-    """``scipy.optimize.least_squares`` from ``start`` within (``lower``, ``upper``); a
-    solution at a bound is fitted again from ``spread_starts(prior, spread)`` (each
-    clipped inside the bounds), and the best solution inside the bounds is kept (the best
-    at a bound when none is inside)."""
+                            **options) -> Restarted[OptimizeResult]:
+    """``scipy.optimize.least_squares`` from ``start`` within (``lower``, ``upper``),
+    ``restarted`` from the prior and spread starts (each clipped inside the bounds) when
+    it ends at a bound."""
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     inner = (np.nextafter(lower, np.inf), np.nextafter(upper, -np.inf))
 
@@ -106,14 +129,8 @@ def restarted_least_squares(residuals: Callable[[np.ndarray], np.ndarray], start
     def stuck_of(solution: OptimizeResult) -> np.ndarray:
         return (np.asarray(solution.active_mask) != 0) | at_bound(solution.x, lower, upper)
 
-    solutions = [solve(np.asarray(start, dtype=float))]
-    if stuck_of(solutions[0]).any():
-        solutions += [solve(s) for s in spread_starts(prior, spread)]
-    inside = [s for s in solutions if not stuck_of(s).any()]
-    best = min(inside or solutions, key=lambda s: s.cost)
-    stuck = stuck_of(best)
-    reason = stuck_reason(names, best.x, stuck, len(solutions)) if stuck.any() else ""
-    return Restarted(best, solutions, stuck, reason)
+    return restarted(solve, start, prior, names, stuck_of, lambda s: float(s.cost),
+                     lambda s: s.x, spread)
 
 
 def widen_for_optima(values: np.ndarray, half_widths: np.ndarray, best_cost: float,

@@ -692,8 +692,13 @@ def _staged(kinds, prior, friction, fit_delta, sliding_speed, prior_spread, step
     try:
         presliding = stage_presliding(kinds["presliding"], current, friction, prior=prior)
         stages["presliding"] = presliding
-        current, found = _accept(current, presliding.estimates.as_dict(), "(d)")
-        diagnostics += found
+        if presliding.extra["stuck"]:  # no value at a bound goes on: the prior's does
+            diagnostics.append(Diagnostic(
+                "warning", "(d)", f"{presliding.extra['stuck']}; the next stages start "
+                "from the prior's σ0 and σ1", REMEDIES["sigma0"]))
+        else:
+            current, found = _accept(current, presliding.estimates.as_dict(), "(d)")
+            diagnostics += found
     except (DataError, SolverError) as exc:
         diagnostics.append(Diagnostic("warning", "(d)", f"the presliding fit failed: {exc}"))
     return stages, current, diagnostics

@@ -41,7 +41,7 @@ from .bench import (
 )
 from .diagnostics import REMEDIES, Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
-from .optima import stuck_reason, widen_for_optima
+from .optima import restarted, stuck_reason, widen_for_optima
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -515,8 +515,24 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     start = within({n: params[n] for n in free}, bounds)
     model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
     windows = [(presliding_window(r, params), r.time[-1]) for r in records]
-    result = fit(model, records, free, offsets=["position"], window=windows,
-                 solver=solver, bounds=bounds, start=start)
+
+    def solve(values: np.ndarray):
+        return fit(model, records, free, offsets=["position"], window=windows,
+                   solver=solver, bounds=bounds,
+                   start=within(dict(zip(free, map(float, values), strict=True)), bounds))
+
+    def values_of(result) -> np.ndarray:
+        return np.array([result.values[n] for n in free])
+
+    def stuck_of(result) -> np.ndarray:
+        low, high = (np.array([bounds[n][side] for n in free]) for side in (0, 1))
+        values = values_of(result)
+        return np.isclose(values, low, rtol=1e-6) | np.isclose(values, high, rtol=1e-6)
+
+    prior_values = np.array([(params if prior is None else prior)[n] for n in free])
+    tries = restarted(solve, np.array([start[n] for n in free]), prior_values, free,
+                      stuck_of, lambda r: float(r.cost), values_of)
+    result = tries.best
     keep = [n in ("sigma0", "sigma1") for n in result.estimates.names]
     est = result.estimates
     idx = np.flatnonzero(keep)
@@ -527,4 +543,5 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
                          "fitted": sim["position"] * 1e3})
     return StageResult("presliding", sub, tuple(os.path.basename(r.source) for r in records), data,
-                       "time [s]", "position [mm]", {"fit": result})
+                       "time [s]", "position [mm]",
+                       {"fit": result, "stuck": tries.reason, "starts": len(tries.solutions)})
