@@ -87,3 +87,63 @@ def test_only_an_optimum_within_the_noise_widens(delta_chi2, widens):
     assert which.tolist() == [widens, False]
     assert widened[0] == pytest.approx(1.1 if widens else 0.1)
     assert widened[1] == pytest.approx(0.1)
+
+
+def test_cover_optima_scales_only_the_estimates_the_other_optimum_lies_beyond():
+    """Standard errors 0.1 and 1 about (0, 0), another optimum at (1, 0.5) within the
+    noise: the first interval reaches 1 + 0.196, the second already covers 0.5."""
+    from pneumact.identification.optima import cover_optima
+
+    cov = np.diag([0.01, 1.0])
+    wide, which = cover_optima(cov, np.zeros(2), 0.0, [(np.array([1.0, 0.5]), 0.5)], 1.0)
+    assert which.tolist() == [True, False]
+    assert 1.96 * np.sqrt(wide[0, 0]) == pytest.approx(1.0 + 0.196)
+    assert wide[1, 1] == pytest.approx(1.0)
+
+
+def _stand_in_joint(k_value: float, low: float, high: float):
+    """What ``joint.restart_at_bounds`` reads of a joint fit: F0 and k, their bounds,
+    three moving records."""
+    from types import SimpleNamespace
+
+    from pneumact.identification.estimates import Estimates
+
+    values = np.array([10.0, k_value])
+    est = Estimates(("F0", "k"), values, np.array([0.01, 1.0]), np.diag([1e-4, 1.0]), 100,
+                    ("N", "N/m"))
+    return SimpleNamespace(estimates=est, values=dict(zip(est.names, values, strict=True)),
+                           bounds=(np.array([1.0, low]), np.array([100.0, high])),
+                           records=["a", "b", "c"], windows=[None] * 3, models=[None] * 3,
+                           record_weights=np.ones(3), cost=0.0)
+
+
+@pytest.mark.parametrize("inside", [True, False])
+def test_a_joint_fit_at_a_bound_starts_again_from_the_prior(monkeypatch, inside):
+    """k ended at its upper bound 1000 N/m; the prior says 400. Refitted from k = 400, 300
+    and 500 (F0 where the joint fit stopped), optima inside the bounds at 400 (twice) and
+    420: the best is kept, the others handed back for the intervals; where every start
+    ends at the bound, the reason names it."""
+    import importlib
+
+    joint_module = importlib.import_module("pneumact.identification.joint")
+    low, high = 100.0, 1000.0
+    joint = _stand_in_joint(high, low, high)
+    seen: list[dict] = []
+
+    def stand_in(models, records, names, *, start, **_):
+        seen.append(start)
+        k, cost = (high, 0.0) if not inside else \
+            (420.0, 50.0) if start["k"] < 400 else (400.0, 49.0)
+        fitted = _stand_in_joint(k, low, high)
+        fitted.cost = cost
+        return fitted
+
+    monkeypatch.setattr(joint_module, "fit", stand_in)
+    best, others, reason = joint_module.restart_at_bounds(joint, {"k": 400.0, "F0": 12.0})
+    assert [s["k"] for s in seen] == [400.0, 300.0, 500.0]
+    assert all(s["F0"] == 10.0 for s in seen)
+    if inside:
+        assert reason == "" and best.estimates.values[1] == 400.0
+        assert sorted(o.estimates.values[1] for o in others) == [400.0, 420.0]
+    else:
+        assert reason == f"k stuck at its bound {high:.4g} after 4 starts" and not others

@@ -28,6 +28,7 @@ __all__ = [
     "RESTART_SPREAD",
     "Restarted",
     "at_bound",
+    "cover_optima",
     "restarted",
     "restarted_least_squares",
     "spread_starts",
@@ -58,12 +59,15 @@ def at_bound(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nda
     return (np.abs(values - lower) <= tol) | (np.abs(values - upper) <= tol)
 
 
-def spread_starts(prior: np.ndarray, spread: float = RESTART_SPREAD) -> list[np.ndarray]:
-    """The prior, then each parameter in turn at prior × (1 − spread/2) and
-    prior × (1 + spread/2): deterministic, 1 + 2·n starts for n parameters."""
+def spread_starts(prior: np.ndarray, spread: float = RESTART_SPREAD,
+                  which: np.ndarray | None = None) -> list[np.ndarray]:
+    """The prior, then each parameter in turn (those ``which`` marks, default all) at
+    prior × (1 − spread/2) and prior × (1 + spread/2): deterministic, 1 + 2·n starts for
+    n parameters moved."""
     prior = np.asarray(prior, dtype=float)
+    moved = np.ones(prior.size, bool) if which is None else np.asarray(which, bool)
     starts = [prior.copy()]
-    for j in range(prior.size):
+    for j in np.flatnonzero(moved):
         for factor in (1.0 - spread / 2, 1.0 + spread / 2):
             start = prior.copy()
             start[j] *= factor
@@ -153,3 +157,19 @@ def widen_for_optima(values: np.ndarray, half_widths: np.ndarray, best_cost: flo
         half = np.where(apart, np.maximum(half, reach), half)
         widened |= apart
     return half, widened
+
+
+def cover_optima(covariance: np.ndarray, values: np.ndarray, best_cost: float,
+                 others: Sequence[tuple[np.ndarray, float]], noise_variance: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """``covariance`` scaled so that each 95 % interval (1.96 standard errors) reaches
+    every other optimum within the noise (``widen_for_optima``). Returns (covariance,
+    which estimates were widened)."""
+    half = 1.96 * np.sqrt(np.diag(covariance))
+    if not others or not noise_variance > 0:
+        return covariance, np.zeros(len(values), bool)
+    wide, widened = widen_for_optima(values, half, best_cost, others, noise_variance)
+    finite = np.isfinite(half) & (half > 0)
+    scale = np.ones_like(half)
+    scale[finite] = wide[finite] / half[finite]
+    return covariance * np.outer(scale, scale), widened & finite

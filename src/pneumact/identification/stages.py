@@ -41,7 +41,7 @@ from .bench import (
 )
 from .diagnostics import REMEDIES, Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
-from .optima import restarted, stuck_reason, widen_for_optima
+from .optima import cover_optima, restarted, stuck_reason
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -313,20 +313,11 @@ def _stribeck_values(q: np.ndarray) -> np.ndarray:
 
 def _covering_optima(cov: np.ndarray, values: np.ndarray, best, others: list, dof: int
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """``cov`` scaled so that each 95 % interval covers every other optimum of stage (c)
-    whose cost is within the noise of the best (``optima.widen_for_optima``; the noise
-    variance is the best fit's residual variance). Returns (covariance, which widened)."""
-    half = 1.96 * np.sqrt(np.diag(cov))
+    """``cov`` widened to cover every other optimum of stage (c) within the noise
+    (``optima.cover_optima``; the noise variance is the best fit's residual variance)."""
     variance = float(best.fun @ best.fun) / max(dof, 1)
-    if not others or not variance > 0:
-        return cov, np.zeros(values.size, bool)
-    wide, widened = widen_for_optima(values, half, best.cost,
-                                     [(_stribeck_values(t.x), t.cost) for t in others],
-                                     variance)
-    finite = np.isfinite(half) & (half > 0)
-    scale = np.ones_like(half)
-    scale[finite] = wide[finite] / half[finite]
-    return cov * np.outer(scale, scale), widened & finite
+    return cover_optima(cov, values, best.cost,
+                        [(_stribeck_values(t.x), t.cost) for t in others], variance)
 
 
 #: Stage (c) starts from the prior's vs and from these multiples of it (eq. 12 in vs
