@@ -758,3 +758,18 @@ CYLINDER_SUMMARY_RTOL = 1e-12
 #: integrated at rtol 1e-6 and sampled at 801 points: the peaks fall on samples; measured
 #: 4e-12 on the range, 1.2e-8 and 1.6e-7 on the top speeds out and in)
 RIG_MOTION_RTOL = 1e-6
+
+# --- local optima (issue 38, item 5: identification.optima) ------------------------------
+#: r(θ) = (θ + 1)·(θ − 2) on [0, 5]: a start at this value slides to the bound 0, the restarts
+#: from a prior of OPTIMA_PRIOR find the optimum θ = 2 inside the bounds
+OPTIMA_BOUND_START = 0.3
+OPTIMA_PRIOR = 1.6
+OPTIMA_INSIDE = 2.0
+#: r_i = (θ²·x_i − y_i)/σ with y = x + noise: two optima ±1 of one cost
+OPTIMA_NOISE = 0.01
+OPTIMA_SAMPLES = 50
+#: solutions within this of the known optimum
+OPTIMA_ATOL = 1e-6
+#: a speed [m/s] far beyond what the drawn actuator's regulator drives (71 mm/s): the
+#: remedy must not ask for ramps there
+UNREACHABLE_VS = 5.0

@@ -387,3 +387,55 @@ def test_a_law_without_sensitivities_is_fitted_by_finite_differences_on_request(
                  optimizer=Optimizer(jacobian="2-point"))
     for name in ("Fc", "sigma2"):
         assert result.values[name] == pytest.approx(params[name], rel=ref.FIT_RTOL)
+
+
+def test_a_presliding_stage_stuck_at_its_bound_hands_the_prior_on(campaign, start,
+                                                                 monkeypatch):
+    """Stage (d) that ends at a bound after its restarts (said by its ``stuck``): the
+    next stages start from the prior's σ0 and σ1, not from the stuck values, and a
+    warning names the bound (issue 38, item 5)."""
+    import importlib
+
+    paper = importlib.import_module("pneumact.identification.paper")
+    original = paper.stage_presliding
+    reason = "sigma0 stuck at its bound 1e+07 after 6 starts"
+
+    def stuck(*args, **kwargs):
+        stage = original(*args, **kwargs)
+        stage.extra["stuck"] = reason
+        return stage
+
+    monkeypatch.setattr(paper, "stage_presliding", stuck)
+    staged = identify_paper(campaign, start, refine=False)
+    assert any(d.stage == "(d)" and reason in d.message for d in staged.diagnostics)
+    assert staged.staged_parameters is not None
+    assert staged.staged_parameters["sigma0"] == start["sigma0"]
+    assert staged.staged_parameters["sigma1"] == start["sigma1"]
+
+
+def test_a_second_joint_optimum_within_the_noise_widens_the_interval(campaign, start,
+                                                                     monkeypatch):
+    """Were the joint fit's restarts to reach a second optimum of the same cost with F0
+    5 % away, F0's interval covers it (so F0 is no longer identified) and a warning says
+    why; the other estimates keep theirs (issue 38, item 5)."""
+    import importlib
+    from types import SimpleNamespace
+
+    paper = importlib.import_module("pneumact.identification.paper")
+    shift = 1.05
+
+    def second_optimum(joint, prior, **_):
+        values = joint.estimates.values.copy()
+        values[joint.estimates.names.index("F0")] *= shift
+        return joint, [SimpleNamespace(estimates=SimpleNamespace(values=values),
+                                       cost=joint.cost)], ""
+
+    monkeypatch.setattr(paper, "restart_at_bounds", second_optimum)
+    result = identify_paper(campaign, start)
+    table = result.to_pandas()
+    f0 = table.loc["F0"]
+    assert f0["ci95_high"] >= shift * f0["value"]
+    assert f0["verdict"] != "identified"
+    assert table.loc["k", "verdict"] == "identified"
+    assert any("more than one optimum within the noise for F0" in d.message
+               for d in result.diagnostics)

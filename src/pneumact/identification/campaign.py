@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
-           "paper_campaign", "read_plan", "synthetic_campaign"]
+           "paper_campaign", "read_plan", "regulator_reach", "synthetic_campaign"]
 
 KINDS = ("sweep", "ramp", "presliding")
 
@@ -324,7 +324,7 @@ def _spreads(spread: float | Mapping[str, float]) -> dict[str, float]:
     return {name: float(value) for name, value in given.items()}
 
 
-def _regulator_reach(params) -> float:
+def regulator_reach(params) -> float:
     """Fastest steady sliding speed [m/s] a regulator ramp can ask for: a share
     ``REGULATOR_MARGIN`` of the chamber's largest pressure rate (choked flow through the
     smaller valve area into the rest volume), moving the spring k·v/A_d."""
@@ -381,7 +381,7 @@ def design_campaign(prior, spread: float | Mapping[str, float] = 0.5,
     x_max, m = prior["x_max"], prior["m"]
     fc, fs, vs, delta = (prior[n] for n in ("Fc", "Fs", "vs", "delta"))
     floor = prior["p_res"] + 0.05 * (p_atm - prior["p_res"])  # the regulator's reach
-    reach = _regulator_reach(prior)
+    reach = regulator_reach(prior)
     purposes, speeds = {}, {}
 
     # sweep: 90 % of the stroke, at three times the highest plausible vs

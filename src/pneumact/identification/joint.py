@@ -35,11 +35,13 @@ from ..options import Executor, Offsets, Optimizer, Weights
 from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import SENSOR_LAGS, FitResult, fit
+from .optima import RESTART_SPREAD, spread_starts, stuck_reason
 from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
            "SPRING_AND_FRICTION", "amplification", "bench_model", "feasible",
-           "joint_refinement", "prediction_ratio", "refit_without"]
+           "joint_refinement", "prediction_ratio", "refit_without", "restart_at_bounds",
+           "stuck_at_bounds"]
 
 #: Tolerance of the joint fit's simulations (see the module docstring).
 JOINT_RTOL = 1e-8
@@ -176,11 +178,13 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
 
 
 def refit_without(joint: FitResult, keep: Sequence[bool],
-                  max_evaluations: int = MAX_EVALUATIONS) -> FitResult | None:
-    """The ``joint`` fit again on the records ``keep`` marks, from its optimum, with its
-    models, windows, weights, offsets and bounds: what the records the model fits say
-    without the others (``diagnostics.misfit_influence``). None when fewer than
-    ``MIN_RECORDS`` sweeps or ramps would be left, or the fit fails."""
+                  max_evaluations: int = MAX_EVALUATIONS,
+                  start: dict[str, float] | None = None) -> FitResult | None:
+    """The ``joint`` fit again on the records ``keep`` marks, from its optimum (or from
+    ``start`` where it names a value), with its models, windows, weights, offsets and
+    bounds: what the records the model fits say without the others
+    (``diagnostics.misfit_influence``). None when fewer than ``MIN_RECORDS`` sweeps or
+    ramps would be left, or the fit fails."""
     from ..simulation import Rodas4
 
     kept = [i for i, ok in enumerate(keep) if ok]
@@ -200,9 +204,44 @@ def refit_without(joint: FitResult, keep: Sequence[bool],
                    weights=Weights(records=[joint.record_weights[i] for i in kept]),
                    optimizer=Optimizer(max_nfev=max_evaluations),
                    bounds={n: (low[j], high[j]) for n, j in where.items()},
-                   start={n: joint.values[n] for n in names})
+                   start={n: float(np.clip((start or {}).get(n, joint.values[n]),
+                                           low[j], high[j])) for n, j in where.items()})
     except (DataError, SolverError):
         return None
+
+
+def stuck_at_bounds(joint: FitResult) -> np.ndarray:
+    """Per estimate of ``joint`` (offsets: never), whether it ended at a search bound."""
+    low, high = joint.bounds
+    values = joint.estimates.values
+    return np.isclose(values, low, rtol=1e-6) | np.isclose(values, high, rtol=1e-6)
+
+
+def restart_at_bounds(joint: FitResult, prior, spread: float = RESTART_SPREAD,
+                      max_evaluations: int = MAX_EVALUATIONS
+                      ) -> tuple[FitResult, list[FitResult], str]:
+    """Where the ``joint`` fit ended with estimates at a bound, fit it again with those
+    at the ``prior``'s value and at prior × (1 ± ``spread``/2) (``optima.spread_starts``;
+    the others where the joint fit stopped), and keep the best optimum inside the bounds.
+    Returns (the fit kept, the other optima inside the bounds, why it gave up: the
+    estimates still at a bound, "" if none)."""
+    stuck = stuck_at_bounds(joint)
+    if not stuck.any():
+        return joint, [], ""
+    names = joint.estimates.names
+    base = joint.estimates.values.copy()
+    base[stuck] = [prior[names[j]] for j in np.flatnonzero(stuck)]
+    every = [True] * len(joint.records)
+    fits = [joint] + [f for f in (refit_without(joint, every, max_evaluations,
+                                                dict(zip(names, map(float, s), strict=True)))
+                                  for s in spread_starts(base, spread, stuck))
+                      if f is not None]
+    inside = [f for f in fits if not stuck_at_bounds(f).any()]
+    best = min(inside or fits, key=lambda f: f.cost)
+    left = stuck_at_bounds(best)
+    reason = stuck_reason(names, best.estimates.values, left, len(fits)) if left.any() \
+        else ""
+    return best, [f for f in inside if f is not best], reason
 
 
 def _within(time: np.ndarray, window: tuple[float, float] | None) -> np.ndarray:

@@ -75,7 +75,9 @@ from .joint import (
     feasible,
     joint_refinement,
     refit_without,
+    restart_at_bounds,
 )
+from .optima import cover_optima
 from .stages import (
     STAGES,
     StageResult,
@@ -692,8 +694,13 @@ def _staged(kinds, prior, friction, fit_delta, sliding_speed, prior_spread, step
     try:
         presliding = stage_presliding(kinds["presliding"], current, friction, prior=prior)
         stages["presliding"] = presliding
-        current, found = _accept(current, presliding.estimates.as_dict(), "(d)")
-        diagnostics += found
+        if presliding.extra["stuck"]:  # no value at a bound goes on: the prior's does
+            diagnostics.append(Diagnostic(
+                "warning", "(d)", f"{presliding.extra['stuck']}; the next stages start "
+                "from the prior's σ0 and σ1", REMEDIES["sigma0"]))
+        else:
+            current, found = _accept(current, presliding.estimates.as_dict(), "(d)")
+            diagnostics += found
     except (DataError, SolverError) as exc:
         diagnostics.append(Diagnostic("warning", "(d)", f"the presliding fit failed: {exc}"))
     return stages, current, diagnostics
@@ -756,6 +763,12 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
                              free=free, replicates=replicates, seed=seed, executor=workers,
                              prior=prior, excluded=chaotic,
                              max_evaluations=max_evaluations)
+    joint, optima, stuck = restart_at_bounds(joint, prior, max_evaluations=max_evaluations)
+    if stuck:
+        diagnostics.append(Diagnostic(
+            "warning", "joint", f"{stuck} (started again from the prior's value and spread "
+            "starts): the records do not hold it inside its search range", "the tests "
+            "the verdicts name for it, designed from the prior (not from the stuck value)"))
     for name in chaotic:
         diagnostics.append(Diagnostic(
             "warning", "joint", f"{Path(name).name} left out of the joint fit: the model "
@@ -778,6 +791,8 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
         covariance = covariance + nuisance_covariance(joint, held, Rodas4(rtol=JOINT_RTOL),
                                                       workers)
     estimates = with_covariance(joint.estimates, covariance)
+    estimates, found = _covering(joint, estimates, optima)
+    diagnostics += found
     if not joint.success:
         diagnostics.append(Diagnostic("error", "joint", "the joint fit did not converge: "
                                       + joint.message,
@@ -790,6 +805,23 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
                 f"{r.sensor_noise:.3g}) and its slow part {r.structure:.3g}× what noise "
                 "leaves", MISFIT_REMEDY + "; or the fit stopped in a local optimum"))
     return joint, noise, estimates, checks, diagnostics
+
+
+def _covering(joint, estimates: Estimates, optima: list) -> tuple[Estimates, list[Diagnostic]]:
+    """``estimates`` whose intervals reach every other optimum of the joint fit's restarts
+    within the noise (``optima.cover_optima``; the noise variance is the joint fit's
+    residual variance), and a warning that names the parameters so widened."""
+    variance = 2.0 * joint.cost / max(joint.estimates.dof, 1)
+    covariance, widened = cover_optima(estimates.covariance, estimates.values, joint.cost,
+                                       [(o.estimates.values, o.cost) for o in optima],
+                                       variance)
+    names = [n for n, w in zip(estimates.names, widened, strict=True) if w and "[" not in n]
+    if not names:
+        return estimates, []
+    return with_covariance(estimates, covariance), [Diagnostic(
+        "warning", "joint", f"the joint fit has more than one optimum within the noise for "
+        f"{', '.join(names)}: their intervals cover them all",
+        "; ".join(dict.fromkeys(REMEDIES.get(n, "") for n in names)))]
 
 
 def _attempt(records, kinds, staged, free, options) -> tuple[tuple | None, list[Diagnostic]]:

@@ -39,15 +39,17 @@ from .bench import (
     smoothing_window,
     steady_segments,
 )
-from .diagnostics import Diagnostic
+from .diagnostics import REMEDIES, Diagnostic
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
+from .optima import cover_optima, restarted, stuck_reason
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range", "presliding_window",
            "prior_bounds", "segments_of", "sliding_and_stribeck", "sliding_branches",
-           "stage_presliding", "stage_sliding", "stage_spring", "stage_stribeck", "within"]
+           "sliding_remedy", "stage_presliding", "stage_sliding", "stage_spring",
+           "stage_stribeck", "within"]
 
 STAGES = {
     "spring": "(a) spring: F0, k from the quasi-static sweep",
@@ -273,8 +275,7 @@ def stage_stribeck(segments: pd.DataFrame, sliding: StageResult, params,
     inside = [t for t in tries if not stuck(t)]
     sol = min(inside or tries, key=lambda t: t.cost)
     jac = sol.jac.copy()
-    values = sol.x.copy()
-    values[1] = np.exp(values[1])
+    values = _stribeck_values(sol.x)
     jac[:, 1] /= values[1]  # back from log vs to vs
     cov, dof = covariance_from_jacobian(jac, sol.fun, n_par, correlated=False)
     # the estimates of stage (b) are held here: add their uncertainty (delta method)
@@ -287,19 +288,74 @@ def stage_stribeck(segments: pd.DataFrame, sliding: StageResult, params,
     gain = -np.linalg.pinv(jac) @ held  # ∂θ_c/∂θ_b at the optimum
     cov = cov + gain @ cov_b @ gain.T
     names = ["Fs", "vs"] + (["delta"] if fit_delta else [])
+    cov, widened = _covering_optima(cov, values, sol, [t for t in inside if t is not sol], dof)
     est = Estimates(tuple(names), values, np.sqrt(np.diag(cov)), cov, dof,
                     ("N", "m/s", "")[:n_par])
     fitted = np.sign(v) * model(sol.x) + s2 * v + off + dk * x
     data = pd.DataFrame({"x": v * 1e3, "measured": f, "fitted": fitted,
                          "record": slow["record"].to_numpy()})
     at_bound = stuck(sol)
+    stuck_at = np.isclose(sol.x, lower, rtol=0, atol=1e-9) | \
+        np.isclose(sol.x, upper, rtol=0, atol=1e-9)
+    reason = stuck_reason(names, values, stuck_at, len(tries)) if at_bound else ""
+    optima = ", ".join(n for n, w in zip(names, widened, strict=True) if w)
     return StageResult("stribeck", est, tuple(dict.fromkeys(slow["record"])), data,
-                       "velocity [mm/s]", "friction force [N]", extra={"at_bound": at_bound})
+                       "velocity [mm/s]", "friction force [N]",
+                       extra={"at_bound": at_bound, "stuck": reason, "optima": optima})
+
+
+def _stribeck_values(q: np.ndarray) -> np.ndarray:
+    """Stage (c)'s solution (Fs, log vs[, δ]) as (Fs, vs[, δ])."""
+    values = np.array(q, dtype=float)
+    values[1] = np.exp(values[1])
+    return values
+
+
+def _covering_optima(cov: np.ndarray, values: np.ndarray, best, others: list, dof: int
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """``cov`` widened to cover every other optimum of stage (c) within the noise
+    (``optima.cover_optima``; the noise variance is the best fit's residual variance)."""
+    variance = float(best.fun @ best.fun) / max(dof, 1)
+    return cover_optima(cov, values, best.cost,
+                        [(_stribeck_values(t.x), t.cost) for t in others], variance)
 
 
 #: Stage (c) starts from the prior's vs and from these multiples of it (eq. 12 in vs
 #: has local optima: a tenth of the data's range of speeds away, a start can stop there).
 STRIBECK_RESTARTS = (1 / 30, 1 / 10, 1 / 3, 3.0, 10.0, 30.0)
+
+
+def sliding_remedy(needed: float, params) -> str:
+    """The test that would let eq. 13 hold: ramps from ``needed`` [m/s] to three times
+    it, when the regulator can drive them (``campaign.regulator_reach``); else no
+    speed is asked for (a remedy from a speed the bench cannot reach is no remedy), and
+    the test that would tell is named instead."""
+    from .campaign import regulator_reach
+
+    reach = regulator_reach(params)
+    if needed <= reach:
+        return (f"add ramps at {needed * 1e3:.3g} to {min(3 * needed, reach) * 1e3:.3g} "
+                "mm/s in both directions; meanwhile eq. 13 is used where it holds least "
+                "badly and the joint refinement fits eq. 12 whole")
+    return (f"ramps at {needed * 1e3:.3g} mm/s are beyond what the regulator drives "
+            f"(about {reach * 1e3:.3g} mm/s), so no ramp speed is proposed from this vs: "
+            "ramps at many steady speeds between vs/3 and 3·vs of the prior, which tell "
+            "vs itself, would tell where eq. 13 holds; the joint refinement fits eq. 12 "
+            "whole")
+
+
+def _stribeck_remedy(params) -> str:
+    """Ramps around the prior's vs (never around a vs stuck at a bound), as far as the
+    regulator drives them."""
+    from .campaign import regulator_reach
+
+    vs, reach = params["vs"], regulator_reach(params)
+    if vs / 3 >= reach:
+        return (f"the prior's vs/3 = {vs / 3 * 1e3:.3g} mm/s is beyond what the regulator "
+                f"drives (about {reach * 1e3:.3g} mm/s): " + REMEDIES["vs"] + ", with a "
+                "faster regulator")
+    return (f"add ramps around the prior's vs, from {vs / 3 * 1e3:.3g} to "
+            f"{min(3 * vs, reach) * 1e3:.3g} mm/s (not from the stuck estimate)")
 
 
 def _needed_speed(sliding: StageResult, stribeck: StageResult, delta: float) -> float:
@@ -323,6 +379,8 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
     instead, and is then only checked. Returns (sliding, stribeck, diagnostics); a stage
     the segments cannot support is None, with a diagnostic that says why and what test
     would help (the joint refinement then starts from the prior's values)."""
+    from .campaign import regulator_reach
+
     speeds = np.sort(np.abs(segments["velocity"].to_numpy()))
     min_slow = (3 if fit_delta else 2) + 2
     notes: list[Diagnostic] = []
@@ -358,7 +416,9 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
                     f"is not well above vs = {stribeck.estimates['vs'] * 1e3:.3g} mm/s: the "
                     f"Stribeck term there exceeds the Fc standard error, which biases Fc "
                     f"and σ2", f"use at least {needed * 1e3:.3g} mm/s, or leave the sliding "
-                    "speed to the procedure"))
+                    "speed to the procedure" if needed <= regulator_reach(params) else
+                    "leave the sliding speed to the procedure (the speed this vs asks "
+                    f"for, {needed * 1e3:.3g} mm/s, is beyond what the regulator drives)"))
             break
         above = speeds[speeds >= needed]
         if above.size < MIN_SLIDING_SEGMENTS:
@@ -367,10 +427,7 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
                 f"{needed * 1e3:.3g} mm/s (where the Stribeck term of vs = "
                 f"{stribeck.estimates['vs'] * 1e3:.3g} mm/s is below the Fc standard "
                 f"error); the records have {above.size} such segments "
-                f"(need {MIN_SLIDING_SEGMENTS})",
-                f"add ramps at {needed * 1e3:.3g} to {3 * needed * 1e3:.3g} mm/s in both "
-                "directions; meanwhile eq. 13 is used where it holds least badly and the "
-                "joint refinement fits eq. 12 whole"))
+                f"(need {MIN_SLIDING_SEGMENTS})", sliding_remedy(needed, params)))
             break
         new = float(max(above[0], speeds[min(min_slow, speeds.size - 1)]))
         if new == threshold:
@@ -383,13 +440,15 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
     else:
         notes.append(Diagnostic("warning", "(b, c)", "the sliding threshold did not settle "
                                 f"in {MAX_THRESHOLD_ITERATIONS} iterations"))
+    if stribeck is not None and stribeck.extra.get("optima"):
+        notes.append(Diagnostic(
+            "warning", "(c)", f"eq. 12 has more than one optimum within the noise for "
+            f"{stribeck.extra['optima']}: the interval covers them all",
+            REMEDIES["vs"]))
     if stribeck is not None and stribeck.extra.get("at_bound"):
-        vs = params["vs"]
-        notes.append(Diagnostic("warning", "(c)", "Fs or vs ended at a bound of its search "
-                                f"range from {1 + len(STRIBECK_RESTARTS)} starts: the slow "
+        notes.append(Diagnostic("warning", "(c)", f"{stribeck.extra['stuck']}: the slow "
                                 "segments do not show the Stribeck dip",
-                                f"add ramps around the prior's vs, from {vs / 3 * 1e3:.3g} "
-                                f"to {3 * vs * 1e3:.3g} mm/s (not from the stuck estimate)"))
+                                _stribeck_remedy(params)))
     return sliding, stribeck, notes
 
 
@@ -447,8 +506,24 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     start = within({n: params[n] for n in free}, bounds)
     model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
     windows = [(presliding_window(r, params), r.time[-1]) for r in records]
-    result = fit(model, records, free, offsets=["position"], window=windows,
-                 solver=solver, bounds=bounds, start=start)
+
+    def solve(values: np.ndarray):
+        return fit(model, records, free, offsets=["position"], window=windows,
+                   solver=solver, bounds=bounds,
+                   start=within(dict(zip(free, map(float, values), strict=True)), bounds))
+
+    def values_of(result) -> np.ndarray:
+        return np.array([result.values[n] for n in free])
+
+    def stuck_of(result) -> np.ndarray:
+        low, high = (np.array([bounds[n][side] for n in free]) for side in (0, 1))
+        values = values_of(result)
+        return np.isclose(values, low, rtol=1e-6) | np.isclose(values, high, rtol=1e-6)
+
+    prior_values = np.array([(params if prior is None else prior)[n] for n in free])
+    tries = restarted(solve, np.array([start[n] for n in free]), prior_values, free,
+                      stuck_of, lambda r: float(r.cost), values_of)
+    result = tries.best
     keep = [n in ("sigma0", "sigma1") for n in result.estimates.names]
     est = result.estimates
     idx = np.flatnonzero(keep)
@@ -459,4 +534,5 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     data = pd.DataFrame({"x": rec.time, "measured": rec["position"] * 1e3,
                          "fitted": sim["position"] * 1e3})
     return StageResult("presliding", sub, tuple(os.path.basename(r.source) for r in records), data,
-                       "time [s]", "position [mm]", {"fit": result})
+                       "time [s]", "position [mm]",
+                       {"fit": result, "stuck": tries.reason, "starts": len(tries.solutions)})

@@ -1,0 +1,149 @@
+"""Restarts of a bounded fit and intervals that cover optima the noise cannot tell apart
+(``identification.optima``), on small least-squares problems with known optima."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reference as ref
+from pneumact.identification.estimates import covariance_from_jacobian
+from pneumact.identification.optima import (
+    CHI2_95_1DOF,
+    restarted_least_squares,
+    spread_starts,
+    widen_for_optima,
+)
+
+
+def _two_roots(theta: np.ndarray) -> np.ndarray:
+    """(θ + 1)·(θ − 2): optima at −1 (beyond the lower bound 0, where a start below ½
+    ends) and at 2 (inside)."""
+    return np.array([(theta[0] + 1.0) * (theta[0] - 2.0)])
+
+
+def test_spread_starts_are_the_prior_and_each_parameter_moved_both_ways():
+    starts = spread_starts(np.array([2.0, 10.0]), spread=0.5)
+    assert [s.tolist() for s in starts] == [[2.0, 10.0], [1.5, 10.0], [2.5, 10.0],
+                                            [2.0, 7.5], [2.0, 12.5]]
+
+
+def test_a_fit_that_ends_at_a_bound_starts_again_from_the_prior():
+    start = np.array([ref.OPTIMA_BOUND_START])
+    out = restarted_least_squares(_two_roots, start, np.array([0.0]), np.array([5.0]),
+                                  np.array([ref.OPTIMA_PRIOR]), ["theta"])
+    assert out.solutions[0].active_mask[0] == -1  # the first ended at the lower bound
+    assert len(out.solutions) == 1 + 3  # then the prior and two spread starts
+    assert out.ok and out.reason == ""
+    assert out.best.x[0] == pytest.approx(ref.OPTIMA_INSIDE, abs=ref.OPTIMA_ATOL)
+
+
+def test_a_fit_stuck_at_its_bound_from_every_start_says_so():
+    out = restarted_least_squares(lambda q: q, np.array([3.0]), np.array([1.0]),
+                                  np.array([5.0]), np.array([3.0]), ["theta"])
+    assert not out.ok
+    assert out.reason == "theta stuck at its bound 1 after 4 starts"
+
+
+def _plus_minus_one():
+    """r_i = (θ²·x_i − y_i)/σ, y = x + noise: θ = +1 and −1 fit equally well."""
+    rng = np.random.default_rng(0)
+    x = np.linspace(0.5, 1.5, ref.OPTIMA_SAMPLES)
+    y = x + rng.normal(0.0, ref.OPTIMA_NOISE, x.size)
+
+    def residuals(theta):
+        return (theta[0] ** 2 * x - y) / ref.OPTIMA_NOISE
+
+    return residuals
+
+
+def test_two_optima_within_the_noise_widen_the_interval_to_cover_both():
+    residuals = _plus_minus_one()
+    lower, upper = np.array([-3.0]), np.array([3.0])
+    plus = restarted_least_squares(residuals, np.array([0.5]), lower, upper,
+                                   np.array([0.5]), ["theta"])
+    minus = restarted_least_squares(residuals, np.array([-0.5]), lower, upper,
+                                    np.array([-0.5]), ["theta"])
+    assert plus.best.x[0] == pytest.approx(1.0, abs=0.01)
+    assert minus.best.x[0] == pytest.approx(-1.0, abs=0.01)
+    cov, _ = covariance_from_jacobian(plus.best.jac, plus.best.fun, 1, correlated=False)
+    half = 1.96 * np.sqrt(np.diag(cov))
+    assert half[0] < 0.01  # alone, a tight interval about +1 that misses −1
+    widened, which = widen_for_optima(plus.best.x, half, plus.best.cost,
+                                      [(minus.best.x, minus.best.cost)])
+    assert which.tolist() == [True]
+    distance = plus.best.x[0] - minus.best.x[0]
+    assert widened[0] == pytest.approx(distance + half[0])  # both optima and their noise
+
+
+@pytest.mark.parametrize("delta_chi2, widens", [(0.99 * CHI2_95_1DOF, True),
+                                                (1.01 * CHI2_95_1DOF, False)])
+def test_only_an_optimum_within_the_noise_widens(delta_chi2, widens):
+    """A second optimum 1.0 away from the best, its scaled cost just below or above the
+    95 % χ² threshold; a third inside the interval never widens it."""
+    half = np.array([0.1, 0.1])
+    others = [(np.array([1.0, 0.0]), 0.5 * delta_chi2), (np.array([0.05, 0.0]), 0.0)]
+    widened, which = widen_for_optima(np.zeros(2), half, 0.0, others)
+    assert which.tolist() == [widens, False]
+    assert widened[0] == pytest.approx(1.1 if widens else 0.1)
+    assert widened[1] == pytest.approx(0.1)
+
+
+def test_cover_optima_scales_only_the_estimates_the_other_optimum_lies_beyond():
+    """Standard errors 0.1 and 1 about (0, 0), another optimum at (1, 0.5) within the
+    noise: the first interval reaches 1 + 0.196, the second already covers 0.5."""
+    from pneumact.identification.optima import cover_optima
+
+    cov = np.diag([0.01, 1.0])
+    wide, which = cover_optima(cov, np.zeros(2), 0.0, [(np.array([1.0, 0.5]), 0.5)], 1.0)
+    assert which.tolist() == [True, False]
+    assert 1.96 * np.sqrt(wide[0, 0]) == pytest.approx(1.0 + 0.196)
+    assert wide[1, 1] == pytest.approx(1.0)
+
+
+def _stand_in_joint(k_value: float, low: float, high: float):
+    """What ``joint.restart_at_bounds`` reads of a joint fit: F0 and k, their bounds,
+    three moving records."""
+    from types import SimpleNamespace
+
+    from pneumact.identification.estimates import Estimates
+
+    values = np.array([10.0, k_value])
+    est = Estimates(("F0", "k"), values, np.array([0.01, 1.0]), np.diag([1e-4, 1.0]), 100,
+                    ("N", "N/m"))
+    return SimpleNamespace(estimates=est, values=dict(zip(est.names, values, strict=True)),
+                           bounds=(np.array([1.0, low]), np.array([100.0, high])),
+                           records=["a", "b", "c"], windows=[None] * 3, models=[None] * 3,
+                           record_weights=np.ones(3), cost=0.0)
+
+
+@pytest.mark.parametrize("inside", [True, False])
+def test_a_joint_fit_at_a_bound_starts_again_from_the_prior(monkeypatch, inside):
+    """k ended at its upper bound 1000 N/m; the prior says 400. Refitted from k = 400, 300
+    and 500 (F0 where the joint fit stopped), optima inside the bounds at 400 (twice) and
+    420: the best is kept, the others handed back for the intervals; where every start
+    ends at the bound, the reason names it."""
+    import importlib
+
+    joint_module = importlib.import_module("pneumact.identification.joint")
+    low, high = 100.0, 1000.0
+    joint = _stand_in_joint(high, low, high)
+    seen: list[dict] = []
+
+    def stand_in(models, records, names, *, start, **_):
+        seen.append(start)
+        k, cost = (high, 0.0) if not inside else \
+            (420.0, 50.0) if start["k"] < 400 else (400.0, 49.0)
+        fitted = _stand_in_joint(k, low, high)
+        fitted.cost = cost
+        return fitted
+
+    monkeypatch.setattr(joint_module, "fit", stand_in)
+    best, others, reason = joint_module.restart_at_bounds(joint, {"k": 400.0, "F0": 12.0})
+    assert [s["k"] for s in seen] == [400.0, 300.0, 500.0]
+    assert all(s["F0"] == 10.0 for s in seen)
+    if inside:
+        assert reason == "" and best.estimates.values[1] == 400.0
+        assert sorted(o.estimates.values[1] for o in others) == [400.0, 420.0]
+    else:
+        assert reason == f"k stuck at its bound {high:.4g} after 4 starts" and not others
