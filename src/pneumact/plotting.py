@@ -394,16 +394,32 @@ def write_png(fig, target, dpi: int) -> None:
         Path(target).write_bytes(png)
 
 
+def _crop(pixels: np.ndarray, box, dpi: int, facecolor) -> np.ndarray:
+    """The pixels of ``box`` [in] of a drawn figure (rows from the top); where the box
+    (its padding) reaches past the figure, the figure's face colour, as savefig's
+    enlarged canvas shows it."""
+    import math
+
+    rows, columns = pixels.shape[:2]
+    top, bottom = rows - math.ceil(box.y1 * dpi), rows - int(box.y0 * dpi)
+    left, right = int(box.x0 * dpi), math.ceil(box.x1 * dpi)
+    face = np.round(np.asarray(facecolor, dtype=float) * 255).astype(np.uint8)
+    out = np.empty((bottom - top, right - left, 4), dtype=np.uint8)
+    out[:] = face
+    inside = pixels[max(top, 0):min(bottom, rows), max(left, 0):min(right, columns)]
+    row0, column0 = max(top, 0) - top, max(left, 0) - left
+    out[row0:row0 + inside.shape[0], column0:column0 + inside.shape[1]] = inside
+    return out
+
+
 def _tight_png(fig, dpi: int) -> bytes | None:
     """The PNG ``savefig(bbox_inches="tight")`` writes, drawn once instead of twice
     (savefig lays the figure out in a first, hidden draw to measure it, then draws it
     again: a third of a many-panel figure's time): the figure drawn at ``dpi`` on its
     Agg canvas, its tight box measured on that drawing and the pixels cropped to it (±1
-    pixel of savefig's). None (savefig does it) where the box reaches outside the
-    figure, which a crop cannot show, or the figure or the savefig settings are not
-    the plain Agg case."""
-    import math
-
+    pixel of savefig's; its padding may reach past the figure). None (savefig does it)
+    where what is drawn reaches outside the figure, which a crop cannot show, or the
+    figure or the savefig settings are not the plain Agg case."""
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
@@ -418,14 +434,12 @@ def _tight_png(fig, dpi: int) -> bytes | None:
     try:
         fig.set_dpi(dpi)
         canvas.draw()
-        box = fig.get_tightbbox(canvas.get_renderer()).padded(pad)
+        drawn = fig.get_tightbbox(canvas.get_renderer())
         width, height = fig.get_size_inches()
-        if box.x0 < 0 or box.y0 < 0 or box.x1 > width or box.y1 > height:
+        if drawn.x0 < 0 or drawn.y0 < 0 or drawn.x1 > width or drawn.y1 > height:
             return None
         pixels = np.asarray(canvas.buffer_rgba())
-        rows = pixels.shape[0]
-        crop = pixels[rows - math.ceil(box.y1 * dpi):rows - int(box.y0 * dpi),
-                      int(box.x0 * dpi):math.ceil(box.x1 * dpi)]
+        crop = _crop(pixels, drawn.padded(pad), dpi, fig.get_facecolor())
         buffer = io.BytesIO()
         Image.fromarray(crop).save(buffer, format="png", dpi=(dpi, dpi))
         return buffer.getvalue()
