@@ -78,6 +78,7 @@ BAD_VALUES: dict[str, list[str]] = {
                     str(BAD / "kpa_as_pa.csv"), str(BAD / "negative_time.csv"),
                     str(BAD / "missing.csv")],
     "--valve": ["butterfly"],
+    "--model": ["piston"],
     "--friction": ["lugree"],
     "--chamber": ["adiabatic"],  # with the default pressure source: it would do nothing
     "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
@@ -96,6 +97,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "--seed": ["-1"],
     "--spread": ["-1", "100", "150"],  # the prior's uncertainty, % in [0, 100)
     "--plan": [],
+    "--round": ["0", "-2"],  # the first round is 1
     "--simulate": ["nowhere", "+--plan"],  # no plan there; with --plan: contradictory
     "--staged-only": [],
     "--partial": [],
