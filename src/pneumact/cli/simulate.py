@@ -92,18 +92,11 @@ def simulate(
             lambda report: pa.simulate(actuator, experiment, solver, progress=report))
         summary = result.summary()
         use_agg()
-        import matplotlib.pyplot as plt
 
-        from pneumact.plotting import plot_hysteresis, save_figure
+        from pneumact.plotting import plot_hysteresis
 
         figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
-        try:
-            written = write_outputs(out, {
-                "simulation.csv": result.save,
-                "hysteresis.png": lambda path: save_figure(figure, path),
-            })
-        finally:
-            plt.close(figure)
+        written = _write_run(out, result, figure, "hysteresis.png")
         _print_summary(summary, result, parameter_set["p_atm"], written)
 
 
@@ -161,19 +154,12 @@ def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     result = run_with_progress(lambda report: pa.simulate(
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
     use_agg()
-    import matplotlib.pyplot as plt
 
-    from pneumact.plotting import plot_time_series, save_figure
+    from pneumact.plotting import plot_time_series
 
     figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
                                        "pressure_b"])
-    try:
-        written = write_outputs(out, {
-            "simulation.csv": result.save,
-            "response.png": lambda path: save_figure(figure, path),
-        })
-    finally:
-        plt.close(figure)
+    written = _write_run(out, result, figure, "response.png")
     _print_cylinder_summary(result, float(parameter_set["x_max"]), written)
 
 
@@ -198,3 +184,17 @@ def _print_cylinder_summary(result, stroke: float, written) -> None:
     out_console.print(table)
     for path in written:
         out_console.print(f"wrote {path}")
+
+
+def _write_run(out, result, figure, png: str):
+    """The run's CSV and ``figure`` as ``png`` into ``out`` (all or nothing); the figure
+    closed whatever happens."""
+    import matplotlib.pyplot as plt
+
+    from pneumact.plotting import save_figure
+
+    try:
+        return write_outputs(out, {"simulation.csv": result.save,
+                                   png: lambda path: save_figure(figure, path)})
+    finally:
+        plt.close(figure)

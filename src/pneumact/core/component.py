@@ -17,7 +17,7 @@ components one after another and binds their compiled functions into one kernel.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 PARAMETER = "parameter"
@@ -105,3 +105,8 @@ class Part:
     templates: tuple[str, ...] = ()
     values: Mapping[str, float] = field(default_factory=dict)
     units: Mapping[str, str] = field(default_factory=dict)
+
+
+def required_parameters(parts: Sequence[Part]) -> tuple[str, ...]:
+    """The parameters a model of ``parts`` reads: every block's, each once, in order."""
+    return tuple(dict.fromkeys(p for part in parts for p in part.block.parameters))

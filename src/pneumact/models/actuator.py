@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 from ..checks import as_instance, check_type
 from ..core.channels import in_order
-from ..core.component import Part, StateSpec
+from ..core.component import Part, StateSpec, required_parameters
 from ..core.signals import Constant, Signal
 from ..errors import ArgumentError
 from ..parameters.files import as_parameter_set
@@ -145,7 +145,7 @@ class Actuator:
 
     @property
     def required(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(p for part in self.parts() for p in part.block.parameters))
+        return required_parameters(self.parts())
 
     def parts(self) -> tuple[Part, ...]:
         mechanics = Part(role="mechanics", block=MECHANICS_BLOCK,

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, ClassVar
 from numba import njit
 
 from ..core.channels import CH_DRIVE, in_order
-from ..core.component import Block, Part, StateSpec
+from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.signals import Constant, Signal, channel_eval
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
 from .fmu_interface import FmuInterface, drive_input, force_input
@@ -540,7 +540,7 @@ class Cylinder:
 
     @property
     def required(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(p for part in self.parts() for p in part.block.parameters))
+        return required_parameters(self.parts())
 
     def parts(self) -> tuple[Part, ...]:
         cylinder = Part(

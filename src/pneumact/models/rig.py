@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, ClassVar
 from numba import njit
 
 from ..core.channels import CH_DRIVE, in_order
-from ..core.component import Block, Part, StateSpec
+from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .friction import FrictionModel, LuGre
@@ -210,7 +210,7 @@ class FrictionRig:
 
     @property
     def required(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(p for part in self.parts() for p in part.block.parameters))
+        return required_parameters(self.parts())
 
     def parts(self) -> tuple[Part, ...]:
         module = __name__
