@@ -235,6 +235,7 @@ warnings.simplefilter("ignore")
 import pneumact as pa
 from numba.core.registry import CPUDispatcher
 from pneumact.core.assembly import assemble
+from pneumact.core.jit import LazyDispatcher
 from pneumact.core.c_source import translate
 from pneumact.export.fmu import kernel_roots
 actuator = pa.Actuator(pa.load_params("vgt-paper"), valve=pa.PressureRegulator())
@@ -242,7 +243,9 @@ kernel = assemble(actuator).numba_kernel
 unit = translate(kernel_roots(kernel, False, cosimulation=True))
 compiled = sorted(f"{m.__name__}.{n}" for m in list(sys.modules.values())
                   if getattr(m, "__name__", "").startswith("pneumact")
-                  for n, v in vars(m).items() if isinstance(v, CPUDispatcher) and v.signatures)
+                  for n, v in vars(m).items()
+                  if isinstance(v, LazyDispatcher) and v.made and v.dispatcher().signatures
+                  or isinstance(v, CPUDispatcher) and v.signatures)
 print(len(unit.source), compiled)
 """
 

@@ -23,6 +23,7 @@ __all__ = [
     "CANDIDATES",
     "INSTALL_HINT",
     "CBuildError",
+    "CSourceError",
     "compile_library",
     "compiler_path",
     "missing_compiler",
@@ -41,6 +42,11 @@ INSTALL_HINT = {
 
 class CBuildError(PneumactError, RuntimeError):
     """No C compiler, or the compiler refused a source (its own message is in the text)."""
+
+
+class CSourceError(RuntimeError):
+    """A construct of a kernel function the C back end does not translate (raised by
+    ``core.c_source``; here so that catching it does not import numba)."""
 
 
 def compiler_path(compiler: str | None = None) -> str | None:

@@ -29,6 +29,7 @@ from .c_engine import (
     library_functions,
     sources_digest,
 )
+from .jit import dispatcher_of
 
 __all__ = ["COMMON", "common_functions", "common_library_path", "on_engine"]
 
@@ -126,7 +127,7 @@ def on_engine(function: Any) -> Any:
     the compiler is there but the build failed)."""
     engine = current_engine()
     if engine == "numba":
-        return function
+        return dispatcher_of(function)
     entry = _ENTRIES.get(getattr(getattr(function, "py_func", function), "__name__", ""))
     if entry is None:
         raise ValueError(f"{function!r} is not one of the functions the common library "
@@ -137,14 +138,14 @@ def on_engine(function: Any) -> Any:
 
 
 def _auto(entry: str, function: Any) -> Any:
-    from .c_source import CSourceError
+    from .c_build import CSourceError
 
     place = _place()
     loaded = _LOADED.get(place)
     if loaded is not None:
         return loaded[entry]
     if place[0] is None or place in _REFUSED:  # no compiler: the model's kernel said so
-        return function
+        return dispatcher_of(function)
     try:
         return common_functions()[entry]
     except (CSourceError, CBuildError, OSError) as error:
@@ -153,4 +154,4 @@ def _auto(entry: str, function: Any) -> Any:
             _REFUSED[place] = reason
         warnings.warn(f"the C engine cannot build the signal and feature functions here "
                       f"({reason}); numba runs them", EngineWarning, stacklevel=3)
-        return function
+        return dispatcher_of(function)

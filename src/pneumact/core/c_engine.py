@@ -39,9 +39,9 @@ import numpy as np
 
 from ..errors import ArgumentError, EngineWarning
 from . import codegen
+from .c_abi import Arena, array_struct
 from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
 from .c_build import shared_library_suffix as _suffix
-from .c_source import Arena, array_struct
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
@@ -248,7 +248,7 @@ class CKernel:
             raise AttributeError(name)
         group = _GROUP_OF.get(name)
         if group is not None and group not in self.__dict__.get("_groups", {group: None}):
-            from .c_source import CSourceError
+            from .c_build import CSourceError
 
             try:
                 self._load(group)
@@ -345,10 +345,8 @@ def library_functions(library: Path, header: str) -> dict[str, CFunction]:
 def sources_digest(*paths: Path, compiler: str) -> str:
     """A digest of the sources a library is translated from, the C back end, this module,
     the compiler (its path and date) and the flags: a library's cache name."""
-    from . import c_source
-
     digest = hashlib.sha256()
-    for path in (*paths, Path(c_source.__file__), Path(__file__)):
+    for path in (*paths, Path(__file__).with_name("c_source.py"), Path(__file__)):
         digest.update(path.read_bytes())
     digest.update(f"{compiler} {os.path.getmtime(compiler)} {FLAGS}".encode())
     return digest.hexdigest()[:12]
@@ -379,7 +377,7 @@ def engine_kernel(spec: codegen.KernelSpec, engine: str) -> Kernel:
         return codegen.load(spec)
     if engine == "c":
         return c_kernel(spec)
-    from .c_source import CSourceError
+    from .c_build import CSourceError
 
     # the reason depends on the compiler and on what the cache holds
     refusal = (spec.label, os.environ.get("CC"), str(codegen.cache_dir()))

@@ -31,8 +31,6 @@ compiles them.
 from __future__ import annotations
 
 import builtins
-import ctypes
-import functools
 import itertools
 import math
 import operator
@@ -50,11 +48,11 @@ from numba.core.compiler_machinery import FunctionPass, PassManager, register_pa
 from numba.core.typed_passes import AnnotateTypes
 from numba.core.typing.templates import signature
 
+from .c_abi import Arena, array_struct, c_array
+from .c_build import CSourceError
+from .jit import dispatcher_of, is_compiled_function
+
 __all__ = ["Arena", "CSourceError", "CUnit", "array_struct", "c_array", "translate"]
-
-
-class CSourceError(RuntimeError):
-    """A construct of a kernel function the C back end does not translate."""
 
 
 BINARY = {operator.add: "+", operator.sub: "-", operator.mul: "*", operator.lt: "<",
@@ -440,13 +438,13 @@ class _Shadows:
         if id(dispatcher) not in self.dispatchers:
             py_func = self.function(dispatcher.py_func)
             if id(dispatcher) not in self.dispatchers:  # else made meanwhile, for its module
-                shadow = _TypingOnly(dispatcher, py_func, self)
+                shadow = _TypingOnly(dispatcher_of(dispatcher), py_func, self)
                 self.dispatchers[id(dispatcher)] = (dispatcher, shadow)
         return self.dispatchers[id(dispatcher)][1]
 
 
 def _is_dispatcher(value: Any) -> bool:
-    return isinstance(value, registry.CPUDispatcher) and not isinstance(value, _TypingOnly)
+    return is_compiled_function(value) and not isinstance(value, _TypingOnly)
 
 
 def _contents(cell: Any) -> Any:
@@ -863,7 +861,7 @@ class _FunctionWriter:
         if expr.kws or expr.vararg:
             raise self.fail(f"keyword or star arguments in a call of {fn}")
         signature = self.calltypes[expr]
-        if isinstance(fn, numba.core.registry.CPUDispatcher):
+        if is_compiled_function(fn):
             args = [self.coerce(a, t) for a, t in zip(expr.args, signature.args, strict=True)
                     if self.unit.ctype(t) is not None]
             # a stand-in's function is typed already; a dispatcher that is no stand-in (one
@@ -931,35 +929,3 @@ def _translate(roots: dict[str, tuple[Callable, Sequence]], shadows: _Shadows) -
         py_func = shadows.function(getattr(function, "py_func", function))
         unit.entry(entry, unit.function(py_func, argtypes))
     return unit.unit()
-
-
-# --------------------------------------------------------------------------- calling it
-# What a caller of a built unit passes (ctypes mirrors of the structs above): the tests,
-# the benchmarks and a run-time engine load the same library the FMU carries.
-
-class Arena(ctypes.Structure):
-    """``pa_arena``: the allocations of a function that allocates (zero it to start)."""
-
-    _fields_ = [("first", ctypes.c_void_p), ("current", ctypes.c_void_p),
-                ("failed", ctypes.c_int)]
-
-
-@functools.cache
-def array_struct(element: type, ndim: int) -> type[ctypes.Structure]:
-    """The ctypes mirror of the back end's ``ndim``-d array struct of ``element`` (one
-    class per kind, made once)."""
-    fields = [("data", ctypes.POINTER(element)), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
-    return type(f"Array{ndim}", (ctypes.Structure,), {"_fields_": fields})
-
-
-def c_array(values: np.ndarray) -> ctypes.Structure:
-    """The back end's array struct of ``values`` (float64 or int64, any ndim): data,
-    shape[ndim], strides[ndim] in elements; it points into ``values``, which must
-    outlive the call."""
-    element = ctypes.c_int64 if values.dtype == np.int64 else ctypes.c_double
-    ndim = values.ndim
-    struct = array_struct(element, ndim)
-    return struct(values.ctypes.data_as(ctypes.POINTER(element)),
-                  (ctypes.c_int64 * ndim)(*values.shape),
-                  (ctypes.c_int64 * ndim)(*[n // values.itemsize for n in values.strides]))

@@ -197,9 +197,9 @@ def _dependency_closure(modules: tuple[str, ...]) -> tuple[Path, ...]:
 
 
 def _versions() -> str:
-    import numba
+    from importlib.metadata import version
 
-    return f"numba {numba.__version__}; python {sys.version_info[:3]}"
+    return f"numba {version('numba')}; python {sys.version_info[:3]}"
 
 
 def _stamps(paths: Iterable[Path]) -> list[list]:
@@ -285,9 +285,8 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str,
     name, which one a kernel function would read depends on the binding order, so that
     is refused naming both (``origins``: name -> template that defined it).
     """
-    import numba
-
     from ..errors import PneumactError
+    from .jit import lazy_dispatcher
 
     marked = {name: obj for name, obj in vars(template).items()
               if getattr(obj, "__kernel_options__", None) is not None
@@ -323,8 +322,10 @@ def _bind(namespace: dict, template: types.ModuleType, filename: str,
         options = dict(fn.__kernel_options__)
         if name.startswith("_"):  # called from compiled code only: no Python wrapper
             options.setdefault("no_cpython_wrapper", True)
-        namespace[name] = compile_one_process_at_a_time(
-            numba.njit(cache=True, **options)(bound), compile_lock_path(filename, prefix + name))
+        lock = compile_lock_path(filename, prefix + name)
+        namespace[name] = lazy_dispatcher(
+            bound, {"cache": True, **options},
+            prepare=functools.partial(compile_one_process_at_a_time, lock_path=lock))
         origins[name] = template.__name__
 
 

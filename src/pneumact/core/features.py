@@ -22,14 +22,16 @@ A record without such a pair (a step response, say) gives NaN loop features.
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
 from pneumact.core.compile_lock import compile_one_process_at_a_time
 from pneumact.errors import DataError
+
+from .jit import lazy_dispatcher, njit
 
 __all__ = [
     "FEATURES",
@@ -633,4 +635,6 @@ def _features_lock() -> Path:
 
 #: a batch's features compile once per machine: processes that start batches together
 #: (a Dask cluster, a parallel test run) wait for the first instead of each compiling
-all_features = compile_one_process_at_a_time(all_features, _features_lock)
+all_features = lazy_dispatcher(
+    all_features.py_func, all_features.options,
+    prepare=functools.partial(compile_one_process_at_a_time, lock_path=_features_lock))

@@ -4,7 +4,7 @@ LAPACK through ``np.linalg`` allocates and dispatches on every call, which costs
 than the factorisation itself at this size; these loops are compiled into the kernel.
 """
 
-from numba import njit
+from .jit import njit
 
 
 @njit(cache=True, inline="always")

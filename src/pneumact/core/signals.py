@@ -24,9 +24,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
 from ..errors import ExperimentError
+from .jit import njit
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike

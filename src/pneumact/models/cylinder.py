@@ -23,10 +23,9 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
-from numba import njit
-
 from ..core.channels import CH_DRIVE, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
+from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_eval
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
 from .fmu_interface import FmuInterface, drive_input, force_input

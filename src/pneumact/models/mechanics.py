@@ -14,10 +14,9 @@ maths is in scalar-only functions and the array-reading wrappers are inlined.
 
 from __future__ import annotations
 
-from numba import njit
-
 from ..core.channels import CH_LOAD_T, CH_LOAD_X
 from ..core.component import Block
+from ..core.jit import njit
 from ..core.signals import channel_eval
 from ..parameters.catalogue import ParameterSpec, declare
 

@@ -19,9 +19,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..core.component import Block
+from ..core.jit import njit
 from ..errors import ParameterError
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
 

@@ -27,10 +27,9 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from numba import njit
-
 from ..core.channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
 from ..core.component import Block, Part, StateSpec
+from ..core.jit import njit
 from ..core.signals import Signal, channel_eval, map_eval
 from ..parameters.catalogue import ParameterSpec, declare
 from .pneumatics import (

@@ -40,9 +40,9 @@ import math
 from typing import ClassVar
 
 import numpy as np
-from numba import njit
 
 from ...core.component import Block, Part, StateSpec
+from ...core.jit import njit
 from ...parameters.catalogue import ParameterSpec, declare, declare_relation
 
 __all__ = ["RELAXED_LEVEL", "SCALAR_LAW", "STATELESS_LAW", "CoulombBristleLaw", "FrictionModel",

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from ...core.component import Block
+from ...core.jit import njit
 from ...parameters.catalogue import ParameterSpec, declare, declare_relation
 from .base import CoulombBristleLaw, clear_block, presliding_scale, sign
 

@@ -8,9 +8,8 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from numba import njit
-
 from ...core.component import Block
+from ...core.jit import njit
 from ...parameters.catalogue import ParameterSpec, declare
 from .base import CoulombBristleLaw, clear_block, presliding_scale, sign
 

@@ -33,9 +33,9 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from numba import njit
 
 from ...core.component import Block, StateSpec
+from ...core.jit import njit
 from ...parameters.catalogue import ParameterSpec, declare
 from .base import RELAXED_LEVEL, FrictionModel, sign, stribeck_level
 

@@ -14,9 +14,8 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from numba import njit
-
 from ...core.component import Block
+from ...core.jit import njit
 from .base import (
     RELAXED_LEVEL,
     StribeckBristleLaw,

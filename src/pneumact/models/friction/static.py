@@ -8,9 +8,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ...core.component import Block
+from ...core.jit import njit
 from .base import STATELESS_LAW, FrictionModel, clear_block, stribeck_curve, stribeck_curve_params
 
 COULOMB_BLOCK = Block.of("Fc", "sigma2", "v_reg")
