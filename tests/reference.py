@@ -643,6 +643,9 @@ BENCH_ACTUATOR = 0
 #: a pressure-sensor offset [Pa], a position resolution [m] and
 #: a regulator whose valve time constant is this many times the model's
 BENCH_PRESSURE_OFFSET = 1000.0
+#: a position-sensor offset [m] (50 µm: a potentiometer's wiper zeroed by eye; left in, it
+#: moved F0 by k·50 µm and every record misfit: the joint refinement refused the campaign)
+BENCH_POSITION_OFFSET = 50e-6
 BENCH_RESOLUTION = 10e-6
 BENCH_REGULATOR_SLOWER = 4.0
 #: a named fault's size within this of the one put in
@@ -651,7 +654,7 @@ BENCH_SIZE_RTOL = 0.05
 #: misses two since the end stop's damping changed (issue 39): vs in every run (0.070 %
 #: from the truth with ±0.048 %, under-covered on this actuator since stop 45) and σ2 at
 #: the edge (1.31 % with ±1.30 % before, 1.42 % after): left on issue 38 (vs coverage)
-BENCH_MAX_MISSES = {"quantisation": 1, "pressure offset": 2}
+BENCH_MAX_MISSES = {"quantisation": 1, "pressure offset": 2, "position offset": 1}
 #: the sensor-model unit tests: a lag [s], the exactness of the filter on a ramp [m] and
 #: of its τ-derivative against central differences (relative)
 SENSOR_TEST_LAG = 4e-3

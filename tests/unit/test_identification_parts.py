@@ -433,3 +433,36 @@ def test_stage_d_ending_at_a_bound_starts_again_from_the_prior(monkeypatch):
                                                                     always_stuck=True))
     stage = stage_presliding([record], params, prior=prior)
     assert stage.extra["stuck"] == f"sigma0 stuck at its bound {low:.4g} after 6 starts"
+
+
+def _rest_then_pull(params, offset, rng, start_drive=0.0, n=400):
+    """A record that holds ``start_drive`` [share of F0] for its first half, then pulls
+    the diaphragm off the stop; positions read with ``offset`` and 1 µm of noise."""
+    time = np.arange(n) * 1e-3
+    drive = np.where(np.arange(n) < n // 2, start_drive, 1.5) * params["F0"]
+    pressure = params["p_atm"] - drive / params["A_d"]
+    x = np.where(drive > params["F0"], (drive - params["F0"]) / params["k"],
+                 -(params["F0"] - drive) / params["k_stop"])
+    return Record.from_arrays(time, {"position": x + offset + rng.normal(0, 1e-6, n),
+                                     "pressure": pressure}, {"position": "m", "pressure": "Pa"},
+                              f"pull_{start_drive}")
+
+
+def test_the_position_zero_is_read_at_rest_on_the_stop(vgt):
+    """The offset of records that start on the stop is found and taken off; a record that
+    starts off the stop says nothing; no offset is invented on a zeroed sensor."""
+    from pneumact.identification.faults import position_zero
+
+    rng = np.random.default_rng(ref.IDENT_SEED)
+    records = [_rest_then_pull(vgt, 30e-6, rng) for _ in range(3)]
+    off_stop = _rest_then_pull(vgt, 30e-6, rng, start_drive=1.2)  # already lifted
+    zero = position_zero([*records, off_stop], vgt)
+    assert zero.applied and len(zero.table) == 3
+    assert zero.offset == pytest.approx(30e-6, abs=4 * zero.offset_stderr)
+    assert "reads +30" in zero.diagnostics[0].message
+    assert abs(np.median(zero.records[0]["position"][:100]) + vgt["F0"] / vgt["k_stop"]) \
+        < 3e-7
+    zeroed = [_rest_then_pull(vgt, 0.0, rng) for _ in range(3)]
+    clean = position_zero(zeroed, vgt)
+    assert not clean.applied and not clean.diagnostics
+    assert all(a is b for a, b in zip(clean.records, zeroed, strict=True))  # left as read

@@ -1,6 +1,7 @@
 """The bench in the model (issue 38, item 1): a fault a real bench adds is named, with its
 size, not "the model does not fit"; where the records can tell, it is estimated and
-taken out (a pressure-sensor offset from the set-point/pressure pairs, a position lag
+taken out (a pressure-sensor offset from the set-point/pressure pairs, a position-sensor
+offset from the records at rest on the stop, a position lag
 fitted jointly: ``test_identification_mismatch.py``), else its effect goes into the
 intervals (quantisation).
 
@@ -37,8 +38,8 @@ def actuator():
     return truth, prior, design_campaign(prior, ramps=ref.FAMILY_RAMPS)
 
 
-def _offset(records, pressure):
-    return [Record.from_arrays(r.time, {**r.signals, "pressure": r["pressure"] + pressure},
+def _offset(records, offset, signal="pressure"):
+    return [Record.from_arrays(r.time, {**r.signals, signal: r[signal] + offset},
                                r.units, r.source, r.meta) for r in records]
 
 
@@ -58,13 +59,15 @@ def _bench_lines(result) -> str:
     return "\n".join(d.message for d in result.diagnostics if d.stage == "bench")
 
 
-@pytest.mark.parametrize("fault", ["pressure offset", "quantisation"])
+@pytest.mark.parametrize("fault", ["pressure offset", "position offset", "quantisation"])
 def test_a_bench_fault_is_named_with_its_size(fault, actuator):
     truth, prior, plan = actuator
     noise = Noise(resolution=ref.BENCH_RESOLUTION) if fault == "quantisation" else Noise()
     records = synthetic_campaign(truth, plan.tests, noise=noise, seed=ref.IDENT_SEED)
     if fault == "pressure offset":
         records = _offset(records, ref.BENCH_PRESSURE_OFFSET)
+    if fault == "position offset":
+        records = _offset(records, ref.BENCH_POSITION_OFFSET, "position")
     result = identify_paper(records, prior, replicates=ref.FAMILY_REPLICATES)
     lines = _bench_lines(result)
     table = _right_and_covered(result, truth, ref.BENCH_MAX_MISSES[fault])
@@ -76,8 +79,17 @@ def test_a_bench_fault_is_named_with_its_size(fault, actuator):
                                                                                 rel=1e-2)
         for name in ("F0", "k"):  # the spring rests on the corrected pressure
             assert table.loc[name, "verdict"] == "identified", table
+    elif fault == "position offset":  # read at rest on the stop, taken off, F0 not moved
+        found = float(re.search(r"position sensor reads ([+-][\d.]+) µm", lines).group(1))
+        assert found * 1e-6 == pytest.approx(ref.BENCH_POSITION_OFFSET,
+                                             rel=ref.BENCH_SIZE_RTOL)
+        assert result.parameter_set(partial=True)["position_offset"] == pytest.approx(
+            found * 1e-6, rel=1e-2)
+        for name in ("F0", "k"):
+            assert table.loc[name, "verdict"] == "identified", table
     else:
         assert f"quantised at {ref.BENCH_RESOLUTION * 1e6:.3g} µm" in lines, lines
+        assert "position sensor reads" not in lines, lines  # no offset invented
 
 
 def test_a_slow_regulator_is_named_with_how_much_later_it_follows(actuator):

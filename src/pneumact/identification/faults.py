@@ -19,6 +19,12 @@ times too large on vgt-paper). Each is checked here where the records can tell:
   inputs left residuals of 3.5-4.5 noise deviations on every ramp, worse than the
   set-point; a fit of the regulator's time constant at the prior stopped at 13 ms of
   40 ms, the prior's friction moving the chamber. So the regulator is named, not fixed.)
+- **the position sensor's zero** (``position_zero``): where a record starts at rest on
+  the lower stop (the drive well below the prior's preload, which no friction can hold
+  the diaphragm against), the model's position is the stop's tiny penetration
+  (F0 − drive)/k_stop; what the sensor reads there, less that, is its offset. Left in,
+  the preload absorbs k·offset and every record's motion misfits. The records' median
+  is taken off every position record where it is significant.
 - **a position-sensor lag** (``lag_search``): where the model does not fit, lags on a
   grid are undone from the records and the stages run again on them (a lag is k·τ of
   viscous friction to stage (c), and its transients can leave too few steady
@@ -50,8 +56,10 @@ __all__ = [
     "LAG_GAIN",
     "OFFSET_SIGMAS",
     "REGULATOR_RATIO",
+    "PositionZero",
     "PressureSide",
     "lag_search",
+    "position_zero",
     "pressure_side",
     "quantisation_covariance",
     "quantised_records",
@@ -68,6 +76,13 @@ OFFSET_SIGMAS = 5.0
 #: ... and exceeds this fraction of the pressure sensor's noise (smaller ones change no
 #: force beyond its noise).
 OFFSET_NOISE = 0.5
+#: The position sensor's zero is read where the drive is below this share of the
+#: preload the prior allows for (F0·(1 − prior_spread)): the diaphragm rests on its stop
+#: whatever the prior's error ...
+REST_DRIVE_SHARE = 0.5
+#: ... on a record's first samples, before the drive first exceeds that: at least this
+#: many (a record that starts elsewhere says nothing of the zero).
+REST_MIN_SAMPLES = 10
 #: A record whose measured chamber pressure departs from the model's (driven by the
 #: set-point, at the prior) by more than this many pressure-noise deviations (RMS, the
 #: offset removed) is not followed by the model's regulator: measured 1.2-5 on
@@ -105,6 +120,76 @@ class PressureSide:
 
 
 
+@dataclass(frozen=True)
+class PositionZero:
+    """What the records at rest on the lower stop say of the position sensor's zero: its
+    ``offset`` [m] (reading − the model's position) and standard error, per record the
+    offset and the samples it rests on (``table``), the records as corrected
+    (``records``: the offset taken off where it is significant) and the
+    ``diagnostics``."""
+
+    offset: float
+    offset_stderr: float
+    applied: bool
+    table: pd.DataFrame
+    records: list[Record]
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+
+def _rest_offset(record: Record, prior, prior_spread: float) -> dict | None:
+    """The record's offset on its first samples at rest on the stop (see ``position_zero``),
+    or None where it does not start there."""
+    from .bench import drive_force
+
+    drive = drive_force(record["pressure"], prior)
+    limit = REST_DRIVE_SHARE * (1.0 - prior_spread) * prior["F0"]
+    above = np.flatnonzero(drive > limit)
+    rest = slice(0, int(above[0]) if above.size else drive.size)
+    if rest.stop < REST_MIN_SAMPLES:
+        return None
+    penetration = np.maximum(prior["F0"] - drive[rest], 0.0) / prior["k_stop"]
+    reading = record["position"][rest] + penetration  # the model's position is −penetration
+    return {"record": record.source, "offset": float(np.median(reading)),
+            "samples": rest.stop, "noise": sensor_noise(record["position"]),
+            "resolution": resolution(record["position"])}
+
+
+def position_zero(records: Sequence[Record], prior, prior_spread: float = 0.5
+                  ) -> PositionZero:
+    """The position sensor's offset (see the module docstring) from the ``records`` that
+    start at rest on the lower stop, with the preload and stop of ``prior``: the median
+    of the records' offsets, its standard error from their spread (at least the noise of
+    the samples read, and a quantised sensor's rounding), taken off every position
+    record where it is ``OFFSET_SIGMAS`` standard errors from zero and above half the
+    position noise."""
+    rows = [row for r in records if "position" in r and "pressure" in r
+            if (row := _rest_offset(r, prior, prior_spread)) is not None]
+    table = pd.DataFrame(rows, columns=["record", "offset", "samples", "noise", "resolution"])
+    if not len(table):
+        return PositionZero(0.0, np.inf, False, table, list(records))
+    offsets = table["offset"].to_numpy()
+    offset = float(np.median(offsets))
+    noise = float(table["noise"].median())
+    spread = 1.4826 * float(np.median(np.abs(offsets - offset))) if offsets.size > 2 else 0.0
+    floor = noise / np.sqrt(table["samples"].median())  # one record's median, white noise
+    # a quantised sensor at rest reads one rounded value: its error, up to half a step,
+    # is the same in every record and no average takes it off (q/√12, the phase unknown)
+    rounding = float(table["resolution"].max()) / np.sqrt(12.0)
+    stderr = max(spread / np.sqrt(offsets.size), floor, rounding)
+    applied = abs(offset) > OFFSET_SIGMAS * stderr and abs(offset) > OFFSET_NOISE * noise
+    diagnostics = []
+    if applied:
+        diagnostics.append(Diagnostic(
+            "warning", "bench", f"the position sensor reads {offset * 1e6:+.3g} µm "
+            f"(±{1.96 * stderr * 1e6:.2g} µm) where the diaphragm rests on its lower stop "
+            f"({len(table)} records start there): taken off every position record "
+            "(position_offset)", "zero the position sensor at the stop, or log the stop's "
+            "reading with the records"))
+    corrected = [_shifted(r, offset if applied else 0.0, "position") if "position" in r
+                 else r for r in records]
+    return PositionZero(offset, float(stderr), bool(applied), table, corrected, diagnostics)
+
+
 def _regression(time, measured, simulated) -> tuple[float, float, float]:
     """(offset, delay [s], RMS left) of measured − simulated ≈ offset − delay·dp/dt."""
     difference = measured - simulated
@@ -115,10 +200,10 @@ def _regression(time, measured, simulated) -> tuple[float, float, float]:
     return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(left**2)))
 
 
-def _shifted(record: Record, offset: float) -> Record:
+def _shifted(record: Record, offset: float, signal: str = "pressure") -> Record:
     if offset == 0.0:
         return record
-    signals = {**record.signals, "pressure": record["pressure"] - offset}
+    signals = {**record.signals, signal: record[signal] - offset}
     return Record.from_arrays(record.time, signals, record.units, record.source,
                               record.meta)
 

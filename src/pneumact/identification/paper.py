@@ -60,6 +60,7 @@ from .estimates import Estimates
 from .faults import (
     LAG_GAIN,
     lag_search,
+    position_zero,
     pressure_side,
     quantisation_covariance,
     quantised_records,
@@ -321,6 +322,7 @@ class PaperIdentification(ResultVocabulary):
     def bench_table(self) -> pd.DataFrame:
         """The bench's parameters as the records tell them (``models.sensors``): the
         pressure sensor's offset (from the set-point/pressure pairs), the position
+        sensor's offset (from the records at rest on the stop), the position
         sensor's lag (fitted, when the records needed it), its resolution and the sample
         rates (read from the records), each with how it was found."""
         rows = []
@@ -333,6 +335,14 @@ class PaperIdentification(ResultVocabulary):
                                 f"{len(side.table)} records; "
                                 + ("taken off the records" if side.applied else
                                    "not significant: left on")})
+        zero = self.extra.get("position_zero")
+        if zero is not None and len(zero.table):
+            rows.append({"parameter": "position_offset", "value": zero.offset,
+                         "ci95_low": zero.offset - 1.96 * zero.offset_stderr,
+                         "ci95_high": zero.offset + 1.96 * zero.offset_stderr, "unit": "m",
+                         "how": f"at rest on the stop, median of {len(zero.table)} "
+                                "records; " + ("taken off the records" if zero.applied else
+                                               "not significant: left on")})
         if "position_lag" in self.estimates.names:
             j = self.estimates.names.index("position_lag")
             low, high = self.estimates.interval(0.95)[j]
@@ -1003,12 +1013,13 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             any(record_kind(r) == "sweep" for r in records):
         return identify_signature(records, params, prior_spread=prior_spread, name=name,
                                   progress=progress)
-    side = pressure_side(records, params, friction, chamber, pool.threads)
+    zero = position_zero(records, params, prior_spread)
+    side = pressure_side(zero.records, params, friction, chamber, pool.threads)
     records = side.records
     kinds = _kinds(records)
     stages, staged, diagnostics = _staged(kinds, params, friction, fit_delta, sliding_speed,
                                           prior_spread, step)
-    diagnostics = side.diagnostics + diagnostics
+    diagnostics = zero.diagnostics + side.diagnostics + diagnostics
     notes, sensors = sensor_notes(records, [record_kind(r) for r in records], params)
     diagnostics += notes
     free = list(SPRING_AND_FRICTION) + (["delta"] if fit_delta else [])
@@ -1136,14 +1147,15 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         sources, name or f"{params.name}-identified",
         {"identified": f"pneumact {__version__} identify_paper, {when}",
          "records": ", ".join(Path(r.source).name for r in records)})
-    identified = _with_bench(identified, side, sensors)
+    identified = _with_bench(identified, side, zero, sensors)
     step("done", 1.0)
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
                                 "trusted": trusted, "no_interval": no_interval,
                                 "joint_failed": joint_failed,
-                                "pressure_side": side, "sensors": sensors,
+                                "pressure_side": side, "position_zero": zero,
+                                "sensors": sensors,
                                 "regulator": regulator})
 
 
@@ -1158,9 +1170,10 @@ def _check_unique_names(records: Sequence[Record]) -> None:
                         "_round2: PaperIdentification.next_round)")
 
 
-def _with_bench(identified, side, sensors: pd.DataFrame):
-    """The identified set with what the records say of the bench: the pressure sensor's
-    offset where it was taken off, the position resolution where the records show one."""
+def _with_bench(identified, side, zero, sensors: pd.DataFrame):
+    """The identified set with what the records say of the bench: the pressure and
+    position sensors' offsets where they were taken off, the position resolution where
+    the records show one."""
     from ..parameters import ParameterSet
     from ..parameters.parameter_set import ParameterInfo, number_text
 
@@ -1168,6 +1181,9 @@ def _with_bench(identified, side, sensors: pd.DataFrame):
     if side.applied:
         found["pressure_offset"] = (side.offset, "bench: set-point/pressure pairs",
                                     f"± {side.offset_stderr:.3g} (standard error)")
+    if zero.applied:
+        found["position_offset"] = (zero.offset, "bench: the records at rest on the stop",
+                                    f"± {zero.offset_stderr:.3g} (standard error)")
     step = float(sensors["position_resolution"].max()) if len(sensors) else 0.0
     if step > 0:
         found["position_resolution"] = (step, "bench: read from the records", "")
