@@ -232,6 +232,29 @@ def build_model(options: ModelOptions, params=None):
                             chamber=build_chamber(options.chamber, options.exponent))
 
 
+class ModelKind(StrEnum):
+    """The model kinds a command builds (--model)."""
+
+    actuator = "actuator"
+    cylinder = "cylinder"
+
+
+ModelOption = Annotated[ModelKind, typer.Option(
+    "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
+                    "double-acting cylinder behind its 5/3 valve (--params default "
+                    "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
+
+
+def build_model_of(kind: ModelKind, options: ModelOptions):
+    """(parameter set, model, experiment) of --model: the actuator (``build_model``,
+    ``build_experiment``) or the cylinder (``build_cylinder``, ``cylinder_experiment``)."""
+    if kind is ModelKind.cylinder:
+        params, model = build_cylinder(options)
+        return params, model, cylinder_experiment(options, params)
+    params, model = build_model(options)
+    return params, model, build_experiment(options, params)
+
+
 #: the parameter set of ``--model cylinder`` when --params keeps the actuator's default
 CYLINDER_SET = "iso15552-32"
 #: the default spool step's duration [s] (the spool steps at 0.1 s)
