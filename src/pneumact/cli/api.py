@@ -36,7 +36,7 @@ API: dict[str, tuple[str, ...]] = {
                        *_CYLINDER),
     "campaign": ("pneumact.identification:design_campaign",
                  "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),
-    "fit": ("pneumact.identification:fit", *_MODEL),
+    "fit": ("pneumact.identification:fit", *_MODEL, *_CYLINDER),
     "compare": ("pneumact.validation:compare_friction_models", "pneumact.options:Executor",
                 "pneumact.options:Optimizer", *_MODEL),
     "sensitivity": ("pneumact.sensitivity:sobol", "pneumact.sensitivity:src",

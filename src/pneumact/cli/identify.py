@@ -24,13 +24,15 @@ from pneumact.cli.common import (
     ElementsOption,
     ExponentOption,
     FrictionOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     ParamsOption,
     SchedulerOption,
     ValveOption,
     WorkersOption,
     build_chamber,
-    build_model,
+    build_model_of,
     err_console,
     executor_of,
     figure_writer,
@@ -465,6 +467,7 @@ def fit_command(
     records: RecordsArgument,
     free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -495,7 +498,8 @@ def fit_command(
     rtol: Annotated[float, typer.Option(help="Relative tolerance of the solver.")] = 1e-6,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-fit"),
 ) -> None:
-    """Fit parameters of the actuator to measured records (forward-sensitivity Jacobian)."""
+    """Fit parameters of the actuator (or --model cylinder, its records driven by a
+    spool command) to measured records (forward-sensitivity Jacobian)."""
     with user_errors():
         import pneumact as pa
         from pneumact.identification import fit
@@ -528,13 +532,12 @@ def fit_command(
             from pneumact.identification.arguments import check_window
 
             check_window(span, where="--window")
-        parameter_set, actuator = build_model(ModelOptions(
+        parameter_set, built, _ = build_model_of(model, ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
-            exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements))
+            exponent=exponent, decaying_damping=decaying_damping, elements=elements))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
-            actuator, recs, free_names, per_record=names(per_record, "--per-record") or (),
+            built, recs, free_names, per_record=names(per_record, "--per-record") or (),
             signals=names(signals, "--signals") or ("position",),
             offsets=names(offsets, "--offsets") or (), window=span,
             multistart=Multistart(multistart, seed),
