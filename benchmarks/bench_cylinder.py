@@ -3,8 +3,9 @@
 Cases (``iso15552-32``, LuGre, isothermal chambers, Rodas4 at rtol 1e-6, 2001 output
 points over 2 s):
   (loop step)   the position loop (kp 100 1/m, kd 0.5 s/m, kdp 3e-6 1/Pa on the
-                chambers' pressure difference, spool limited to ±1) held at 90 mm, a 20 mm
-                set-point step at 1 s, 2 s in all: the issue's "20 mm, 2 s";
+                chambers' pressure difference, spool limited to ±1) with the piston placed
+                at 90 mm (``y0``: it rests wherever its chambers balance) and held there, a
+                20 mm set-point step at 1 s, 2 s in all: the issue's "20 mm, 2 s";
   (loop 1 Hz)   the same loop following a 20 mm square wave at 1 Hz (90 -> 110 -> 90 mm,
                 steps every 0.5 s, 2 s): the other reading of "20 mm at 1 Hz";
   (spool step)  open loop: the spool stepped from -1 to 0.5 at 0.1 s, the piston across
@@ -70,34 +71,34 @@ def _square_wave():
                            n_points=N_POINTS)
 
 
-def cases(case_b: bool) -> dict[str, tuple[object, object]]:
-    """name -> (model, experiment)."""
+def cases(case_b: bool) -> dict[str, tuple[object, object, dict | None]]:
+    """name -> (model, experiment, initial states by name or None)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the shipped sets' passivity warning
-        loop = _loop()
-        chosen = {
+        loop, at_start = _loop(), {"position": START}
+        chosen: dict[str, tuple[object, object, dict | None]] = {
             "loop step (20 mm at 1 s, 2 s)": (loop, SetpointStep(
-                START, START + STEP, t_step=1.0, t_end=T_END, n_points=N_POINTS)),
-            "loop 1 Hz (20 mm square wave, 2 s)": (loop, _square_wave()),
+                START, START + STEP, t_step=1.0, t_end=T_END, n_points=N_POINTS), at_start),
+            "loop 1 Hz (20 mm square wave, 2 s)": (loop, _square_wave(), at_start),
             "spool step (-1 -> 0.5 at 0.1 s, 2 s)": (
                 pa.Cylinder(pa.load_params("iso15552-32")),
-                SpoolStep(-1.0, 0.5, t_step=0.1, t_end=T_END, n_points=N_POINTS)),
+                SpoolStep(-1.0, 0.5, t_step=0.1, t_end=T_END, n_points=N_POINTS), None),
         }
         if case_b:
             chosen["actuator b (CommandValve, 20 s cycle)"] = (
                 pa.Actuator(pa.load_params("vgt-paper"), valve=pa.CommandValve()),
-                pa.CommandCycle(0, 1, period=20))
+                pa.CommandCycle(0, 1, period=20), None)
     return chosen
 
 
-def cpu_times(model, experiment, engine: str, repeats: int) -> tuple[list[float], dict]:
+def cpu_times(model, experiment, y0, engine: str, repeats: int) -> tuple[list[float], dict]:
     """CPU seconds of each of ``repeats`` warm runs, and the last run's meta."""
     solver = pa.Rodas4(rtol=RTOL)
-    result = pa.simulate(model, experiment, solver, engine=engine)  # compile or load
+    result = pa.simulate(model, experiment, solver, y0=y0, engine=engine)  # compile or load
     times = []
     for _ in range(repeats):
         start = time.process_time()
-        result = pa.simulate(model, experiment, solver, engine=engine)
+        result = pa.simulate(model, experiment, solver, y0=y0, engine=engine)
         times.append(time.process_time() - start)
     return times, result.meta
 
@@ -115,11 +116,11 @@ def main(argv: list[str] | None = None) -> None:
     print(f"CPU time per warm run (process_time), {args.repeats} repeats; rtol {RTOL:g}")
     print(f"{'case':42s} {'engine':6s} {'median ms':>10s} {'min ms':>8s} {'steps':>6s} "
           f"{'rhs':>6s}")
-    for name, (model, experiment) in cases(args.case_b).items():
+    for name, (model, experiment, y0) in cases(args.case_b).items():
         if args.only not in name:
             continue
         for engine in args.engines.split(","):
-            times, meta = cpu_times(model, experiment, engine, args.repeats)
+            times, meta = cpu_times(model, experiment, y0, engine, args.repeats)
             print(f"{name:42s} {meta['engine']:6s} {1e3 * statistics.median(times):10.3f} "
                   f"{1e3 * min(times):8.3f} {meta['steps']:6d} "
                   f"{meta['rhs_evaluations']:6d}", flush=True)
