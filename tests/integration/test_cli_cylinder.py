@@ -125,3 +125,16 @@ def test_control_step_holds_the_cylinder_at_its_start(tmp_path):
     before = signals["time [s]"].to_numpy() < 0.1  # the step is at 0.1 s
     assert np.abs(position[before] - 0.09).max() < ref.CYLINDER_LOOP_STEP * 0.01
     assert abs(position[-1] - 0.11) < ref.CYLINDER_LOOP_BAND * ref.CYLINDER_LOOP_STEP
+
+
+@pytest.mark.parametrize(("command", "words"), [
+    (("simulate",), "this command models the diaphragm actuator"),
+    (("campaign", "--plan"), "the paper's identification is the diaphragm's"),
+])
+def test_a_cylinder_s_set_on_a_diaphragm_command_is_refused(tmp_path, command, words):
+    """One line naming the set, why, and where the cylinder runs instead."""
+    result = invoke(*command, "--params", "iso15552-32", "--out", str(tmp_path / "out"))
+    said = " ".join(result.output.split())
+    assert result.exit_code != 0 and said.count("error:") == 1, said
+    assert "--params iso15552-32: a double-acting cylinder's set" in said and words in said
+    assert "--model cylinder" in said and not (tmp_path / "out").exists()

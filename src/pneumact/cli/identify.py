@@ -42,6 +42,7 @@ from pneumact.cli.common import (
     names,
     out_console,
     progress_display,
+    refuse_cylinder_set,
     refuse_unused,
     the_call,
     use_agg,
@@ -169,6 +170,7 @@ def campaign(
             check_positive(label, value, strict=False)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         if simulate is not None:
             if plan:
                 raise ParameterError("--simulate runs a written plan, --plan writes one: "
@@ -276,6 +278,7 @@ def identify_paper_command(
         executor = executor_of(workers, None)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
         with progress_display("identifying", bar_per_stage=False) as progress:
@@ -348,6 +351,7 @@ def identify_signature_command(
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
         result = identify_signature(recs, parameter_set, prior_spread=spread / 100)
