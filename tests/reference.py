@@ -779,3 +779,25 @@ OPTIMA_ATOL = 1e-6
 #: a speed [m/s] far beyond what the drawn actuator's regulator drives (71 mm/s): the
 #: remedy must not ask for ramps there
 UNREACHABLE_VS = 5.0
+
+# ------------------------------------- every model kind through every entry point (issue 41, 5)
+#: a batch row's features against the single run's summary: the same integrator and the
+#: same arithmetic (measured 0.0 for every kind)
+META_BATCH_RTOL = 1e-12
+#: the central differences' noise allowed on ∂position/∂θ: this factor × their rtol × the
+#: position's travel / the step (the formula of SENS_NOISE_FLOOR, for any model's travel)
+META_SENS_NOISE_FACTOR = 10.0
+#: a fit started 30 % off, on its own noise-free record, against the values that made it
+#: (measured 3.2e-5 actuator, 3.1e-5 rig, 4.1e-6 cylinder, 7.1e-6 loop)
+META_FIT_RTOL = 3e-4
+#: the regression study of a feature on ±5 % of Fc and σ2: runs, and the smallest R² (a
+#: smooth response is near-linear over such a range: measured 0.9998 to 1.0000)
+META_SRC_N = 16
+META_SRC_R2_MIN = 0.99
+#: a linearisation's rest: its rates against each state's scale (per second), and the
+#: largest real part of an eigenvalue, relative to the largest modulus (round-off above 0;
+#: measured rates 2.4e-8 for the cylinder at its balancing spool command, 1e-13 or 0 for
+#: the others; real parts 1.3e-18 or 0). The sensitivities' RMS errors were measured at
+#: 4e-5 to 2e-3 of their size (the loop's the largest), against SENS_RMS_FRACTION.
+META_REST_RATE = 1e-6
+META_EIGEN_RTOL = 1e-9

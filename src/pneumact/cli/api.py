@@ -22,6 +22,8 @@ _MODEL = ("pneumact.models:Actuator", "pneumact.models:LuGre", "pneumact.models:
           "pneumact.models:Polytropic", "pneumact.simulation:Rodas4")
 #: the default experiment of ``common.build_experiment``
 _EXPERIMENT = ("pneumact.experiments:PressureCycle",)
+#: what --model cylinder builds instead (``common.build_cylinder``, ``cylinder_experiment``)
+_CYLINDER = ("pneumact.models:Cylinder", "pneumact.experiments:SpoolStep")
 _FRICTION_TEST = ("pneumact.analysis.friction_tests:run_friction_test",)
 _CONTROL = ("pneumact.control:ClosedLoop", "pneumact.control:PID", "pneumact.control:Cascade",
             "pneumact.control.study:run_loop", "pneumact.models:Actuator",
@@ -29,18 +31,18 @@ _CONTROL = ("pneumact.control:ClosedLoop", "pneumact.control:PID", "pneumact.con
 
 #: command (its words joined by spaces) -> the API it calls and the objects it builds
 API: dict[str, tuple[str, ...]] = {
-    "simulate": ("pneumact.simulation:simulate", *_MODEL, *_EXPERIMENT,
-                 "pneumact.models:Cylinder", "pneumact.experiments:SpoolStep"),
-    "simulate-batch": ("pneumact.simulation.batch:simulate_batch", *_MODEL, *_EXPERIMENT),
+    "simulate": ("pneumact.simulation:simulate", *_MODEL, *_EXPERIMENT, *_CYLINDER),
+    "simulate-batch": ("pneumact.simulation.batch:simulate_batch", *_MODEL, *_EXPERIMENT,
+                       *_CYLINDER),
     "campaign": ("pneumact.identification:design_campaign",
                  "pneumact.identification:synthetic_campaign", "pneumact.identification:Noise"),
-    "fit": ("pneumact.identification:fit", *_MODEL),
+    "fit": ("pneumact.identification:fit", *_MODEL, *_CYLINDER),
     "compare": ("pneumact.validation:compare_friction_models", "pneumact.options:Executor",
                 "pneumact.options:Optimizer", *_MODEL),
     "sensitivity": ("pneumact.sensitivity:sobol", "pneumact.sensitivity:src",
                     "pneumact.sensitivity:rbd_fast", "pneumact.sensitivity:model_outputs",
                     "pneumact.sensitivity:across_conditions", "pneumact.sensitivity:model_signal",
-                    "pneumact.sensitivity:one_at_a_time", *_MODEL, *_EXPERIMENT),
+                    "pneumact.sensitivity:one_at_a_time", *_MODEL, *_EXPERIMENT, *_CYLINDER),
     "validate": ("pneumact.validation:validate", "pneumact.validation:train_test", *_MODEL),
     "reproduce": ("pneumact.reproduction:reproduce",),
     "friction-test steady-state": (*_FRICTION_TEST, "pneumact.experiments.friction:SteadyState",
@@ -67,7 +69,7 @@ API: dict[str, tuple[str, ...]] = {
                      "pneumact.options:Executor"),
     "control compare": ("pneumact.control:linear_design", "pneumact.control:compare_designs",
                         *_CONTROL),
-    "export fmu": ("pneumact.export:export_fmu", *_MODEL),
+    "export fmu": ("pneumact.export:export_fmu", *_MODEL, *_CYLINDER),
 }
 
 #: options whose word is not the API's, and the parameter ("module:name.parameter") each

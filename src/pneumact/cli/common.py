@@ -220,16 +220,54 @@ def check_model_options(options: ModelOptions) -> None:
     check_range("--rtol", options.rtol, 1e-14, 1.0, high_open=True)
 
 
+#: where the cylinder runs on the command line (the hint of ``refuse_cylinder_set``)
+CYLINDER_COMMANDS = ("--model cylinder (simulate, simulate-batch, fit, sensitivity, export "
+                     "fmu) or --plant cylinder (control step, profile, tune, compare)")
+
+
+def refuse_cylinder_set(params, what: str = "this command models the diaphragm actuator"):
+    """A double-acting cylinder's set (a bore, no diaphragm) given where the diaphragm
+    actuator is modelled: one line saying where the cylinder runs instead."""
+    if "D_bore" in params and "A_d" not in params:
+        raise ArgumentError(f"--params {params.name}: a double-acting cylinder's set (bore "
+                            f"D_bore, no diaphragm area A_d); {what}: give a diaphragm's "
+                            f"set (vgt-paper), or run the cylinder with {CYLINDER_COMMANDS}")
+
+
 def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
     from pneumact.models import VALVES, Actuator
 
     check_model_options(options)
     params = load_quietly(options.params) if params is None else params
+    refuse_cylinder_set(params)
     friction = friction_of(options)
     _check_friction_parameters(friction, params, options)
     return params, Actuator(params, friction=friction, valve=VALVES[options.valve.value](),
                             chamber=build_chamber(options.chamber, options.exponent))
+
+
+class ModelKind(StrEnum):
+    """The model kinds a command builds (--model)."""
+
+    actuator = "actuator"
+    cylinder = "cylinder"
+
+
+ModelOption = Annotated[ModelKind, typer.Option(
+    "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
+                    "double-acting cylinder behind its 5/3 valve (--params default "
+                    "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
+
+
+def build_model_of(kind: ModelKind, options: ModelOptions):
+    """(parameter set, model, experiment) of --model: the actuator (``build_model``,
+    ``build_experiment``) or the cylinder (``build_cylinder``, ``cylinder_experiment``)."""
+    if kind is ModelKind.cylinder:
+        params, model = build_cylinder(options)
+        return params, model, cylinder_experiment(options, params)
+    params, model = build_model(options)
+    return params, model, build_experiment(options, params)
 
 
 #: the parameter set of ``--model cylinder`` when --params keeps the actuator's default

@@ -19,6 +19,7 @@ from rich.table import Table
 
 from pneumact.checks import check_out_dir, check_range
 from pneumact.cli.common import (
+    CYLINDER_SET,
     Friction,
     FrictionOption,
     ParamsOption,
@@ -36,7 +37,7 @@ from pneumact.cli.common import (
 from pneumact.errors import ParameterError
 
 if TYPE_CHECKING:
-    from pneumact.models import Actuator, FrictionRig
+    from pneumact.models import Actuator, Cylinder, FrictionRig
     from pneumact.models.controllers import Compensation
 
 #: Exit code of a tuning that ran but whose gains do not meet --spec on the asked share
@@ -54,6 +55,7 @@ class Plant(StrEnum):
     command = "command"
     source = "source"
     rig = "rig"
+    cylinder = "cylinder"
 
 
 class Regime(StrEnum):
@@ -70,14 +72,15 @@ class Structure(StrEnum):
 #: vgt-paper actuator settles (2 %) in 0.55 s without overshoot behind the regulator, in
 #: 0.32 s with 11 % overshoot behind the command valve; the rig's are Canudas et al.'s
 DEFAULT_GAINS = {"regulator": (5e6, 5e7), "source": (5e6, 5e7), "command": (200.0, 2000.0),
-                 "rig": (3.0, 4.0)}
+                 "rig": (3.0, 4.0), "cylinder": (60.0, 300.0)}
 #: the regulator's set-point range [Pa abs] below p_atm when no limits are given
 REGULATOR_MIN_PRESSURE = 10e3
 
 PlantOption = Annotated[Plant, typer.Option(
     help="regulator / command / source: the vgt actuator behind that valve (the input is "
          "the pressure set-point, the valve command or the chamber pressure); rig: a mass "
-         "with friction and a force actuator.")]
+         "with friction and a force actuator; cylinder: the double-acting cylinder behind "
+         "its 5/3 valve (the spool command, --params default iso15552-32).")]
 ControllerOption = Annotated[Structure, typer.Option(
     "--controller", help="pid, or cascade (outer P on position --kx, inner PI on velocity "
                          "--kv, --ki).")]
@@ -143,7 +146,8 @@ def _limits(plant: Plant, params, options: ControllerOptions) -> tuple[float, fl
                     f"plant works from {natural[0]:g} to {natural[1]:g} Pa); {value:g} looks "
                     f"like kPa: {flag} {value * 1e3:g}")
     else:
-        natural = {"command": (0.0, 1.0), "rig": (-math.inf, math.inf)}[plant.value]
+        natural = {"command": (0.0, 1.0), "rig": (-math.inf, math.inf),
+                   "cylinder": (-1.0, 1.0)}[plant.value]
     return (natural[0] if options.u_min is None else options.u_min,
             natural[1] if options.u_max is None else options.u_max)
 
@@ -185,18 +189,28 @@ def build_controller(plant: Plant, params, options: ControllerOptions):
                derivative=options.derivative, filter_time=options.filter_time, **common)
 
 
+def plant_params(plant: Plant, params_name: str):
+    """The parameter set of --params (the cylinder's iso15552-32 in place of the
+    actuator's default set with --plant cylinder)."""
+    if plant is Plant.cylinder and params_name == "vgt-paper":
+        params_name = CYLINDER_SET
+    return load_quietly(params_name)
+
+
 def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
                start: float, gains: Path | None = None):
     """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0; the
     controller of a ``gains`` file (``control tune``) if given."""
     from pneumact.control import ClosedLoop
-    from pneumact.models import VALVES, Actuator, FrictionRig, friction_models
+    from pneumact.models import VALVES, Actuator, Cylinder, FrictionRig, friction_models
 
-    params = load_quietly(params_name)
+    params = plant_params(plant, params_name)
     law = friction_models()[str(friction)]()
-    model: FrictionRig | Actuator
+    model: FrictionRig | Actuator | Cylinder
     if plant is Plant.rig:
         model = FrictionRig(params, law, drive="force")
+    elif plant is Plant.cylinder:
+        model = Cylinder(params, law)
     else:
         model = Actuator(params, law, valve=VALVES[plant.value]())
     if gains is not None:
@@ -215,10 +229,11 @@ def _check_setpoints(plant: Plant, params_name: str, **positions_mm: float) -> N
     """Set-points [mm] within the actuator's stroke (before the loop is built)."""
     if plant is Plant.rig:
         return
-    x_max = load_quietly(params_name)["x_max"] * 1e3
+    params = plant_params(plant, params_name)
+    x_max = params["x_max"] * 1e3
     for label, value in positions_mm.items():
         check_range(label, value, 0.0, x_max, unit="mm",
-                    hint=f"the stroke of '{params_name}' is 0 to x_max = {x_max:g} mm")
+                    hint=f"the stroke of '{params.name}' is 0 to x_max = {x_max:g} mm")
 
 
 #: a measured profile may pass an end of the stroke by its sensor's noise: by this many
@@ -237,7 +252,7 @@ def _within_stroke(plant: Plant, params_name: str, label: str, positions):
 
     if plant is Plant.rig or len(positions) < 4:
         return positions
-    x_max = load_quietly(params_name)["x_max"]
+    x_max = plant_params(plant, params_name)["x_max"]
     # white noise of σ gives second differences of standard deviation σ·√6
     sigma = 1.4826 * float(np.median(np.abs(np.diff(positions, 2)))) / np.sqrt(6.0)
     tolerance = max(END_TOLERANCE, NOISE_SIGMAS * sigma)
@@ -253,7 +268,10 @@ def _within_stroke(plant: Plant, params_name: str, label: str, positions):
 
 
 def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
-                   tracking: bool = False) -> None:
+                   tracking: bool = False, start: float | None = None) -> None:
+    """Run the loop and write its study; ``start`` [m]: the piston placed there at t = 0
+    (a cylinder rests on a stop wherever its chambers balance; an actuator's rest under
+    the loop's holding input is the start already: None)."""
     import pneumact as pa
     from pneumact.control.study import run_loop
     from pneumact.simulation.simulate import check_drive
@@ -261,7 +279,7 @@ def _run_and_write(ctx, loop, experiment, out: Path, rtol: float, title: str,
     check_drive(loop, experiment)  # before the progress display
     study = run_with_progress(lambda report: run_loop(
         loop, experiment, solver=pa.Rodas4(rtol=rtol), progress=report, title=title,
-        tracking=tracking))
+        tracking=tracking, y0=None if start is None else {"position": start}))
     use_agg()
     written = study.write(out, call=the_call(ctx))
     _print_metrics(study.to_pandas("metrics"))
@@ -379,7 +397,8 @@ def step_command(
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
         _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file)
         _run_and_write(ctx, loop, experiment, out, rtol,
-                       f"Position step {start:g} → {stop:g} mm ({plant.value})")
+                       f"Position step {start:g} → {stop:g} mm ({plant.value})",
+                       start=start * 1e-3 if plant is Plant.cylinder else None)
 
 
 @control_app.command("profile")
@@ -432,7 +451,8 @@ def profile_command(
         options = _options(ctx)
         _, loop = build_loop(plant, params, friction, options, float(positions[0]))
         _run_and_write(ctx, loop, experiment, out, rtol,
-                       f"Position profile {profile.name} ({plant.value})", tracking=True)
+                       f"Position profile {profile.name} ({plant.value})", tracking=True,
+                       start=float(positions[0]) if plant is Plant.cylinder else None)
 
 
 @control_app.command("hunting")
@@ -623,7 +643,7 @@ def _print_comparison(comparison) -> None:
 
 
 def _mid(plant: Plant, params_name: str) -> float:
-    return 0.0 if plant is Plant.rig else 0.5 * float(load_quietly(params_name)["x_max"])
+    return 0.0 if plant is Plant.rig else 0.5 * float(plant_params(plant, params_name)["x_max"])
 
 
 def _print_gains(result) -> None:

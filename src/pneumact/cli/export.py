@@ -1,5 +1,5 @@
-"""``pneumact export fmu``: the actuator as an FMI 2.0 or 3.0 FMU (Model Exchange,
-Co-Simulation or both)."""
+"""``pneumact export fmu``: the actuator (or ``--model cylinder``) as an FMI 2.0 or 3.0
+FMU (Model Exchange, Co-Simulation or both)."""
 
 from __future__ import annotations
 
@@ -22,10 +22,12 @@ from pneumact.cli.common import (
     ElementsOption,
     ExponentOption,
     FrictionOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     ParamsOption,
     ValveOption,
-    build_model,
+    build_model_of,
     out_console,
     user_errors,
 )
@@ -47,6 +49,7 @@ class FmuKind(StrEnum):
 @export_app.command("fmu")
 def export_fmu_command(
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -55,7 +58,8 @@ def export_fmu_command(
     exponent: ExponentOption = DEFAULT_EXPONENT,
     out: Annotated[Path, typer.Option(
         help="The FMU file (…/name.fmu; its stem is the model identifier), or a folder to "
-             f"write {DEFAULT_NAME} into.")] = Path(DEFAULT_NAME),
+             f"write {DEFAULT_NAME} into (cylinder.fmu with --model cylinder, also in place "
+             "of the default).")] = Path(DEFAULT_NAME),
     binary: Annotated[bool, typer.Option(
         "--binary/--no-binary",
         help="Build this platform's binary with the C compiler (the C sources are always "
@@ -70,20 +74,21 @@ def export_fmu_command(
     fmi: Annotated[int, typer.Option(
         min=2, max=3, help="The FMI version: 2 (2.0) or 3 (3.0).")] = 2,
 ) -> None:
-    """Export the actuator as an FMI 2.0 or 3.0 FMU (Simulink, Dymola, OpenModelica,
-    GT-SUITE, FMPy), Model Exchange, Co-Simulation or both: inputs, every parameter, states
-    and outputs."""
+    """Export the actuator (or --model cylinder) as an FMI 2.0 or 3.0 FMU (Simulink,
+    Dymola, OpenModelica, GT-SUITE, FMPy), Model Exchange, Co-Simulation or both: inputs,
+    every parameter, states and outputs."""
     with user_errors():
         from pneumact.export import export_fmu
 
-        target = check_path("--out", out)
+        name = f"{model.value}.fmu"
+        target = check_path("--out", Path(name) if out == Path(DEFAULT_NAME) else out)
         if target.suffix != ".fmu":  # a folder (refused at once if it is a file)
-            target = check_out_dir("--out", target) / DEFAULT_NAME
+            target = check_out_dir("--out", target) / name
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                exponent=exponent, decaying_damping=decaying_damping,
                                elements=elements)
-        _, actuator = build_model(options)
-        fmu = export_fmu(actuator, target, binary=binary, compiler=compiler,
+        _, built, _ = build_model_of(model, options)
+        fmu = export_fmu(built, target, binary=binary, compiler=compiler,
                          kind=FmuKind(kind).value, fmi=fmi)
         _print_summary(fmu)
 

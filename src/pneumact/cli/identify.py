@@ -24,13 +24,15 @@ from pneumact.cli.common import (
     ElementsOption,
     ExponentOption,
     FrictionOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     ParamsOption,
     SchedulerOption,
     ValveOption,
     WorkersOption,
     build_chamber,
-    build_model,
+    build_model_of,
     err_console,
     executor_of,
     figure_writer,
@@ -40,6 +42,7 @@ from pneumact.cli.common import (
     names,
     out_console,
     progress_display,
+    refuse_cylinder_set,
     refuse_unused,
     the_call,
     use_agg,
@@ -167,6 +170,7 @@ def campaign(
             check_positive(label, value, strict=False)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         if simulate is not None:
             if plan:
                 raise ParameterError("--simulate runs a written plan, --plan writes one: "
@@ -274,6 +278,7 @@ def identify_paper_command(
         executor = executor_of(workers, None)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
         with progress_display("identifying", bar_per_stage=False) as progress:
@@ -346,6 +351,7 @@ def identify_signature_command(
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
+        refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         recs = read_records(records, required=("pressure", "position"),
                             p_atm=parameter_set["p_atm"])
         result = identify_signature(recs, parameter_set, prior_spread=spread / 100)
@@ -465,6 +471,7 @@ def fit_command(
     records: RecordsArgument,
     free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -495,7 +502,8 @@ def fit_command(
     rtol: Annotated[float, typer.Option(help="Relative tolerance of the solver.")] = 1e-6,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-fit"),
 ) -> None:
-    """Fit parameters of the actuator to measured records (forward-sensitivity Jacobian)."""
+    """Fit parameters of the actuator (or --model cylinder, its records driven by a
+    spool command) to measured records (forward-sensitivity Jacobian)."""
     with user_errors():
         import pneumact as pa
         from pneumact.identification import fit
@@ -528,13 +536,12 @@ def fit_command(
             from pneumact.identification.arguments import check_window
 
             check_window(span, where="--window")
-        parameter_set, actuator = build_model(ModelOptions(
+        parameter_set, built, _ = build_model_of(model, ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
-            exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements))
+            exponent=exponent, decaying_damping=decaying_damping, elements=elements))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
-            actuator, recs, free_names, per_record=names(per_record, "--per-record") or (),
+            built, recs, free_names, per_record=names(per_record, "--per-record") or (),
             signals=names(signals, "--signals") or ("position",),
             offsets=names(offsets, "--offsets") or (), window=span,
             multistart=Multistart(multistart, seed),

@@ -1,5 +1,6 @@
-"""``pneumact sensitivity oat|sobol|morris|src|rbd_fast``: sensitivity studies of the actuator,
-at one operating condition or across several (``--conditions``)."""
+"""``pneumact sensitivity oat|sobol|morris|src|rbd_fast``: sensitivity studies of the actuator
+(or ``--model cylinder``), at one operating condition or across several (``--conditions``,
+the actuator's)."""
 
 from __future__ import annotations
 
@@ -27,6 +28,8 @@ from pneumact.cli.common import (
     ElementsOption,
     ExponentOption,
     FrictionOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     OverwriteOption,
     ParamsOption,
@@ -37,8 +40,7 @@ from pneumact.cli.common import (
     ValveOption,
     WorkersOption,
     batch_progress,
-    build_experiment,
-    build_model,
+    build_model_of,
     checkpoint_of,
     err_console,
     executor_of,
@@ -58,7 +60,15 @@ from pneumact.options import Checkpoint, Executor
 if TYPE_CHECKING:
     from pneumact.experiments.actuator import Experiment
     from pneumact.models.actuator import Actuator
+    from pneumact.models.cylinder import Cylinder
     from pneumact.parameters.parameter_set import ParameterSet
+
+
+#: --features when not given, by the model's ``summary_kind``: the actuator's loop, the
+#: cylinder's move (its step reaches the end stop: the travel is the stroke whatever the
+#: parameters, the top speed is not)
+DEFAULT_FEATURES = {"hysteresis": "loop_width_pressure,breakaway_pressure",
+                    "motion": "top_speed_out"}
 
 
 class Method(StrEnum):
@@ -96,6 +106,7 @@ def sensitivity(
     method: Annotated[Method, typer.Argument(help="oat (paper eq. 15), sobol, morris, src "
                                                   "(eq. 14) or rbd_fast.")],
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -106,8 +117,9 @@ def sensitivity(
     variations: Annotated[str | None, typer.Option(
         help="name=N% list; default: the paper's amounts (oat), else ±20 % of sigma0, "
              "sigma1, sigma2, vs and ±10 % of Fc, Fs (so that Fs >= Fc in every run).")] = None,
-    features: Annotated[str, typer.Option(help="Features to analyse.")] = (
-        "loop_width_pressure,breakaway_pressure"),
+    features: Annotated[str | None, typer.Option(
+        help="Features to analyse (default: loop_width_pressure,breakaway_pressure of the "
+             "actuator, top_speed_out of the cylinder).")] = None,
     signals: Annotated[str | None, typer.Option(
         help="Signals to analyse along time (e.g. position): indices against time and along "
              "the loop, and local normalised sensitivities.")] = None,
@@ -131,8 +143,9 @@ def sensitivity(
     overwrite: OverwriteOption = Checkpoint.overwrite,
     out: Annotated[Path, typer.Option(help="Output directory.")] = Path("pneumact-sensitivity"),
 ) -> None:
-    """Sensitivity of the actuator's features (and signals) to its parameters, on the
-    batch engine. The runs of the global methods are kept in OUT/runs (resumable)."""
+    """Sensitivity of the actuator's (or the cylinder's) features and signals to its
+    parameters, on the batch engine. The runs of the global methods are kept in OUT/runs
+    (resumable)."""
     with user_errors(kept=KEPT_AS_IT_WAS if method is Method.oat else KEPT_FOR_RESUME):
         import numpy as np
 
@@ -148,8 +161,13 @@ def sensitivity(
                                t_end=t_end, exponent=exponent,
                                decaying_damping=decaying_damping,
                                elements=elements)
-        parameter_set, actuator = build_model(options)
-        experiment = build_experiment(options, parameter_set)
+        parameter_set, actuator, experiment = build_model_of(model, options)
+        if conditions and model is ModelKind.cylinder:
+            raise ArgumentError("--conditions varies the actuator's pressure cycle (period, "
+                                "amplitude, valve); --model cylinder steps its spool: drop "
+                                "--conditions")
+        if features is None:
+            features = DEFAULT_FEATURES[actuator.summary_kind]
         feature_names = names(features, "--features") or []
         signal_names = names(signals, "--signals") or []
         from pneumact.simulation.batch import check_outputs
@@ -254,7 +272,7 @@ class Study:
     what each analysis produced."""
 
     method: Method
-    model: Actuator
+    model: Actuator | Cylinder
     experiment: Experiment
     parameter_set: ParameterSet
     variations: str | None
@@ -296,11 +314,19 @@ class Study:
             with err_console.status("oat: simulating"):
                 study = sa.one_at_a_time(self.model, self.experiment, _variations(self.variations),
                                          features=feature_names, executor=self.executor)
-            curves = sa.friction_velocity(self.parameter_set, _variations(self.variations))
             _print_oat(study, feature_names)
-            return {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
-                    "loops.png": figure_writer(lambda: study.plot_loops(zoom=True)),
-                    "friction_velocity.png": figure_writer(curves.plot)}
+            writers = {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
+                       "loops.png": figure_writer(  # zoomed into an actuator's loops
+                           lambda: study.plot_loops(zoom="pressure" in study.signals))}
+            # Fig. 3 of the varied parameters of the friction law (not the valve's, ...)
+            law = set(self.model.friction.required)
+            on_law = {name: amount for name, amount in
+                      (_variations(self.variations) or sa.PAPER_VARIATIONS).items()
+                      if name in law}
+            if on_law:
+                curves = sa.friction_velocity(self.parameter_set, on_law)
+                writers["friction_velocity.png"] = figure_writer(curves.plot)
+            return writers
         problem = self.problem()
         with batch_progress(f"{self.method.value}: features") as progress:
             evaluate = sa.model_outputs(self.model, self.experiment, problem, feature_names,
@@ -353,7 +379,7 @@ class Study:
             local = sa.local_along_time(self.model, self.experiment, problem.names, signal,
                                         grid)
             nominal = pa.simulate(self.model, self.experiment, t_eval=grid)
-        pressure_kpa = nominal["pressure"] * 1e-3
+        pressure_kpa = nominal["pressure"] * 1e-3 if "pressure" in nominal else None
         writers = {f"local_{signal}.csv": lambda p: local.to_csv(p),
                    f"local_{signal}.png": figure_writer(lambda: sa.plot_along_time(local))}
         if self.method is Method.oat:
@@ -366,9 +392,10 @@ class Study:
         curves = sa.along_time(study)
         writers.update({
             f"indices_{signal}.csv": lambda p: study.indices.to_csv(p, index=False),
-            f"along_time_{signal}.png": figure_writer(lambda: sa.plot_along_time(study)),
-            f"along_loop_{signal}.png": figure_writer(
-                lambda: sa.plot_along_loop(curves, pressure_kpa, "chamber pressure [kPa]"))})
+            f"along_time_{signal}.png": figure_writer(lambda: sa.plot_along_time(study))})
+        if pressure_kpa is not None:  # an actuator's loop (a cylinder has two chambers)
+            writers[f"along_loop_{signal}.png"] = figure_writer(
+                lambda: sa.plot_along_loop(curves, pressure_kpa, "chamber pressure [kPa]"))
         return writers
 
 

@@ -3,7 +3,6 @@ the double-acting cylinder (CSV, step response plot and a summary)."""
 
 from __future__ import annotations
 
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -25,6 +24,8 @@ from pneumact.cli.common import (
     FrictionOption,
     InputOption,
     LowOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     ParamsOption,
     RtolOption,
@@ -41,17 +42,6 @@ from pneumact.cli.common import (
     user_errors,
     write_outputs,
 )
-
-
-class ModelKind(StrEnum):
-    actuator = "actuator"
-    cylinder = "cylinder"
-
-
-ModelOption = Annotated[ModelKind, typer.Option(
-    "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
-                    "double-acting cylinder behind its 5/3 valve (--params default "
-                    "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
 
 
 def simulate(

@@ -2,8 +2,9 @@
 line.
 
 Reads the parameter table (CSV or Parquet; header cells ``name`` or ``name [unit]``,
-values converted to SI), builds the model and experiment from the same options as
-``simulate``, runs the batch with a progress bar and writes ``DIR/results.parquet``,
+values converted to SI), builds the model (``--model``: the actuator or the cylinder) and
+experiment from the same options as ``simulate``, runs the batch with a progress bar and
+writes ``DIR/results.parquet``,
 ``DIR/summary.csv`` (and ``DIR/signals.parquet`` with ``--signals``).
 """
 
@@ -30,6 +31,8 @@ from pneumact.cli.common import (
     FrictionOption,
     InputOption,
     LowOption,
+    ModelKind,
+    ModelOption,
     ModelOptions,
     OverwriteOption,
     ParamsOption,
@@ -40,8 +43,7 @@ from pneumact.cli.common import (
     ValveOption,
     WorkersOption,
     batch_progress,
-    build_experiment,
-    build_model,
+    build_model_of,
     checkpoint_of,
     err_console,
     executor_of,
@@ -94,6 +96,7 @@ def simulate_batch(
                                                      "per parameter, one row per set")],
     out: Annotated[Path, typer.Option("--out", help="output directory (resumable)")],
     params: ParamsOption = "vgt-paper",
+    model: ModelOption = ModelKind.actuator,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -113,7 +116,8 @@ def simulate_batch(
     resume: ResumeOption = Checkpoint.resume,
     overwrite: OverwriteOption = Checkpoint.overwrite,
 ) -> None:
-    """Simulate every parameter set of PARAMS_CSV; write Parquet and a CSV summary."""
+    """Simulate every parameter set of PARAMS_CSV (the actuator, or --model cylinder);
+    write Parquet and a CSV summary."""
     with user_errors(kept=KEPT_FOR_RESUME):
         import pneumact as pa
 
@@ -124,10 +128,9 @@ def simulate_batch(
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
                                elements=elements)
-        parameter_set, model = build_model(options)
-        experiment = build_experiment(options, parameter_set)
+        _, built, experiment = build_model_of(model, options)
         with batch_progress() as progress:
-            result = pa.simulate_batch(model, experiment, table,
+            result = pa.simulate_batch(built, experiment, table,
                                        features=names(features, "--features"),
                                        signals=names(signals, "--signals"),
                                        solver=pa.Rodas4(rtol=rtol), executor=executor,

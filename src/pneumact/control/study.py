@@ -9,6 +9,7 @@ Canudas de Wit et al. (1995) exactly as published.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -129,10 +130,12 @@ class LoopStudy(NotebookDisplay):
 
 def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
              progress: ProgressCallback | None = None, title: str | None = None,
-             tracking: bool = False, **metric_options) -> LoopStudy:
+             tracking: bool = False, y0: Mapping[str, float] | None = None,
+             **metric_options) -> LoopStudy:
     """Simulate ``loop`` under the set-point ``experiment`` and measure it
     (``metric_options`` go to ``loop_metrics``); ``tracking``: the set-point is a profile
-    to follow, not a step (no step metrics)."""
+    to follow, not a step (no step metrics). ``y0``: states set at the start by name, as
+    ``simulate``'s (a cylinder rests on a stop: ``{"position": x0}`` holds it at x0)."""
     from ..checks import check_bool, check_type
 
     check_type("loop", loop, ClosedLoop, where="run_loop", what="a control.ClosedLoop")
@@ -140,7 +143,7 @@ def run_loop(loop: ClosedLoop, experiment: Experiment, *, solver=None,
     from ..simulation import simulate
     from .metrics import loop_metrics
 
-    result = simulate(loop, experiment, solver, progress=progress)
+    result = simulate(loop, experiment, solver, progress=progress, y0=y0)
     metrics = loop_metrics(result, **metric_options)
     return LoopStudy(loop, experiment, result, metrics,
                      title or f"Closed-loop position control: {experiment.name}", tracking)

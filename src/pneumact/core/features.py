@@ -3,7 +3,8 @@
 These numbers summarise one simulated or measured run: the stroke, the width of the
 hysteresis loop in pressure and in position, the loop area, the break-away pressure, the
 sliding speed and the presliding travel at a reversal, and the position error against a
-reference. They are compiled (numba) once per machine, not per model: the batch
+reference; and a move's (start, travel, overshoot, range, top speeds out and in: a
+cylinder's step). They are compiled (numba) once per machine, not per model: the batch
 engine computes them for every row without the Python interpreter's cost, and
 ``Result.summary()`` runs the very same code.
 
@@ -36,6 +37,8 @@ from .jit import lazy_dispatcher, njit
 __all__ = [
     "FEATURES",
     "FEATURE_UNITS",
+    "MOTION_FEATURES",
+    "SUMMARY_FEATURES",
     "breakaway_pressure",
     "hysteresis_summary",
     "loop_area",
@@ -64,6 +67,12 @@ FEATURE_UNITS: dict[str, str] = {
     "presliding_travel": "m",
     "rms_error": "m",
     "max_error": "m",
+    "start_position": "m",
+    "travel": "m",
+    "overshoot": "m",
+    "position_range": "m",
+    "top_speed_out": "m/s",
+    "top_speed_in": "m/s",
 }
 FEATURES = tuple(FEATURE_UNITS)
 #: each feature's place in that vector (compiled code reads these constants)
@@ -78,11 +87,27 @@ F_SLIDING_SPEED = FEATURES.index("sliding_speed")
 F_PRESLIDING_TRAVEL = FEATURES.index("presliding_travel")
 F_RMS_ERROR = FEATURES.index("rms_error")
 F_MAX_ERROR = FEATURES.index("max_error")
+F_START_POSITION = FEATURES.index("start_position")
+F_TRAVEL = FEATURES.index("travel")
+F_OVERSHOOT = FEATURES.index("overshoot")
+F_POSITION_RANGE = FEATURES.index("position_range")
+F_TOP_SPEED_OUT = FEATURES.index("top_speed_out")
+F_TOP_SPEED_IN = FEATURES.index("top_speed_in")
 N_FEATURES = len(FEATURES)
 #: Features that need a pressure record, and those that need a reference record.
 PRESSURE_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
                      "breakaway_pressure", "sliding_speed", "presliding_travel")
 REFERENCE_FEATURES = ("rms_error", "max_error")
+#: A move's features, from position and velocity alone (``Result.summary()`` of a model
+#: whose ``summary_kind`` is "motion": a cylinder's step, a rig's motion).
+MOTION_FEATURES = ("start_position", "final_position", "travel", "overshoot",
+                   "position_range", "top_speed_out", "top_speed_in")
+#: The features a batch computes by default for a model of each ``summary_kind`` (the
+#: pressure features where the model has a pressure signal): what its runs' summary says.
+SUMMARY_FEATURES: dict[str, tuple[str, ...]] = {
+    "hysteresis": ("final_position", "max_velocity", "stroke", *PRESSURE_FEATURES),
+    "motion": MOTION_FEATURES,
+}
 
 #: The sliding part of a branch: from this fraction of its travel to that one (counted
 #: from where the branch starts). Gross sliding needs the travel to exceed the presliding
@@ -431,6 +456,26 @@ def _pressure_features(t, p, x, out):
 
 
 @njit(cache=True)
+def _motion_features(x, v, out):  # pragma: no cover - compiled
+    """The features of MOTION_FEATURES into ``out``: a move from the first position to
+    the last, as ``simulation.result.motion_summary`` defines it."""
+    start, final = x[0], x[-1]
+    travel = final - start
+    direction = 1.0 if travel >= 0.0 else -1.0
+    farthest = direction * (x[0] - final)
+    for i in range(x.shape[0]):
+        farthest = max(farthest, direction * (x[i] - final))
+    lo, hi = _span(x)
+    v_lo, v_hi = _span(v)
+    out[F_START_POSITION] = start
+    out[F_TRAVEL] = travel
+    out[F_OVERSHOOT] = max(0.0, farthest)
+    out[F_POSITION_RANGE] = hi - lo
+    out[F_TOP_SPEED_OUT] = max(0.0, v_hi)
+    out[F_TOP_SPEED_IN] = max(0.0, -v_lo)
+
+
+@njit(cache=True)
 def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
     """Every feature of FEATURES into ``out`` (NaN where one does not apply)."""
     for k in range(N_FEATURES):
@@ -439,6 +484,7 @@ def all_features(t, x, v, p, has_pressure, ref_t, ref_x, has_reference, out):
     v_lo, v_hi = _span(v)
     out[F_MAX_VELOCITY] = max(-v_lo, v_hi)
     out[F_STROKE] = _stroke(x)
+    _motion_features(x, v, out)
     if has_pressure:
         _pressure_features(t, p, x, out)
     if has_reference:

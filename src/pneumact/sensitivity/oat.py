@@ -24,6 +24,9 @@ __all__ = ["PAPER_VARIATIONS", "FrictionCurves", "OneAtATime", "friction_velocit
 #: varied "around its nominal value": ±50 % here.
 PAPER_VARIATIONS = {"sigma0": 0.50, "sigma1": 0.68, "sigma2": 0.90, "Fs": 0.16,
                     "Fc": 0.1536, "vs": 0.50}
+#: the signals kept of each run, by the model's ``summary_kind``: an actuator's loops, a
+#: cylinder's or a rig's positions (their motion has no pressure to draw against)
+LOOP_SIGNALS = {"hysteresis": ("pressure", "position"), "motion": ("position",)}
 DEFAULT_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
                     "breakaway_pressure")
 
@@ -59,24 +62,33 @@ class OneAtATime(ResultVocabulary):
         return self.plot_loops(zoom)
 
     def plot_loops(self, zoom: bool = False) -> Figure:
-        """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5);
+        """Applied pressure [kPa] against position [mm], one panel per parameter (Fig. 5; a
+        model whose summary is a motion, a cylinder: position over time);
         with ``zoom`` a row per parameter: the whole loop, the break-away (where the
         diaphragm leaves rest), the middle of the stroke (the loop's width in position on
         its own scale) and the low-pressure reversal, where σ0, σ1 and vs act."""
         params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
+        loops = "pressure" in self.signals
+        if zoom and not loops:
+            raise ParameterError("plot_loops: zoom = True zooms into pressure-position loops; "
+                                 "this study's model has none (its runs are positions over "
+                                 "time): use zoom = False")
         if zoom:
             return self._plot_zoomed(params)
         fig, axes = _panels(len(params))
         for ax, name in zip(axes.ravel(), params, strict=False):
             self._draw(ax, name)
-            _label(ax, "pressure [kPa abs]", "position [mm]")
+            _label(ax, "pressure [kPa abs]" if loops else "time [s]", "position [mm]")
         return _finish(fig, axes, len(params))
 
     def _draw(self, ax, name: str, window=None) -> None:
         """The nominal loop and the runs varying ``name`` (kPa, mm); within ``window``
         ((p_lo, p_hi) kPa) the position axis is fitted to the curves."""
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
-        p, x = self.signals["pressure"] * 1e-3, self.signals["position"] * 1e3
+        x = self.signals["position"] * 1e3
+        # a model without a pressure-position loop (a cylinder): its positions over time
+        p = (self.signals["pressure"] * 1e-3 if "pressure" in self.signals
+             else np.broadcast_to(self.time, x.shape))
         rows = [nominal, *np.flatnonzero(self.runs["parameter"] == name)]
         for i in rows:
             label = "nominal" if i == nominal else \
@@ -162,10 +174,14 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
                   solver=None) -> OneAtATime:
     """Vary each parameter of ``variations`` (fractions, "N%" strings, or lists of them;
     default ``PAPER_VARIATIONS``, both directions) with the others nominal, on the batch
-    engine (``executor``: where it runs); the nominal run comes first."""
+    engine (``executor``: where it runs); the nominal run comes first. ``features``: the
+    paper's loop features by default (an actuator's); a model whose summary is a motion
+    (a cylinder) has ``core.features.MOTION_FEATURES`` instead (``travel``, ...)."""
     from ..simulation.batch import simulate_batch
+    from ..simulation.simulate import check_model
     from .problem import parse_variation
 
+    check_model(model, "one_at_a_time")
     params = model.params
     variations = PAPER_VARIATIONS if variations is None else variations
     rows: list[dict[str, float]] = [{}]
@@ -187,8 +203,8 @@ def one_at_a_time(model, experiment, variations: Mapping[str, object] | None = N
     if table.empty or not names:
         table = pd.DataFrame({"Fc": [params["Fc"]]})
     batch = simulate_batch(model, experiment, table, features=list(features),
-                           signals=["pressure", "position"], executor=executor,
-                           solver=solver)
+                           signals=list(LOOP_SIGNALS[model.summary_kind]),
+                           executor=executor, solver=solver)
     runs = pd.DataFrame(labels, columns=["parameter", "change_%", "value"])
     for feature in features:
         values = batch.table[feature].to_numpy(float)

@@ -178,7 +178,8 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
     reference = check_reference(reference)
     has_pressure = assembly.signal_source("pressure") is not None
     if features is None:
-        features = default_features(has_pressure, reference is not None, signals)
+        features = default_features(model.summary_kind, has_pressure, reference is not None,
+                                    signals)
     features = check_features(features, has_pressure, reference is not None,
                               type(model).__name__)
     t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
@@ -267,7 +268,8 @@ def simulate_batch(model, experiment: Experiment, table: pd.DataFrame, *,
     """Simulate ``model`` under ``experiment`` once per row of ``table``.
 
     ``table``: one column per parameter name (SI values), one row per set. ``features``:
-    names from ``pneumact.analysis.FEATURES`` (default: all that apply, none if
+    names from ``pneumact.analysis.FEATURES`` (default: those of the model's
+    ``summary_kind``, an actuator's hysteresis or a cylinder's motion; none if
     ``signals`` are asked; ``rms_error``/``max_error`` need ``reference=(time,
     position)``); ``signals``: signal names kept on the output grid ``t_eval`` (default
     the experiment's grid, on which features are computed too). ``executor``: an

@@ -18,7 +18,13 @@ import numpy as np
 import pandas as pd
 
 from ...core.channels import LOOP_CHANNELS
-from ...core.features import FEATURE_UNITS, FEATURES, PRESSURE_FEATURES, REFERENCE_FEATURES
+from ...core.features import (
+    FEATURE_UNITS,
+    FEATURES,
+    PRESSURE_FEATURES,
+    REFERENCE_FEATURES,
+    SUMMARY_FEATURES,
+)
 from ...errors import DataError, ParameterError
 from ...experiments.actuator import Experiment
 from ..solvers import Solver
@@ -168,13 +174,15 @@ def check_reference(reference) -> tuple[np.ndarray, np.ndarray] | None:
     return t, x
 
 
-def default_features(has_pressure: bool, has_reference: bool, signals) -> tuple[str, ...]:
-    """The features a batch computes when none are named (none if signals are asked)."""
+def default_features(summary_kind: str, has_pressure: bool, has_reference: bool,
+                     signals) -> tuple[str, ...]:
+    """The features a batch computes when none are named (none if signals are asked):
+    those of the model's ``summary_kind`` (an actuator's hysteresis, a cylinder's or a
+    rig's motion; the pressure features only where the model has a pressure)."""
     if signals:
         return ()
-    features = ["final_position", "max_velocity", "stroke"]
-    if has_pressure:
-        features += PRESSURE_FEATURES
+    features = [f for f in SUMMARY_FEATURES[summary_kind]
+                if has_pressure or f not in PRESSURE_FEATURES]
     if has_reference:
         features += REFERENCE_FEATURES
     return tuple(features)
@@ -186,7 +194,8 @@ def check_features(features: Sequence[str], has_pressure: bool, has_reference: b
     if not has_pressure and set(features) & set(PRESSURE_FEATURES):
         raise ParameterError(
             f"features {sorted(set(features) & set(PRESSURE_FEATURES))} need a pressure "
-            f"signal: use them with an Actuator, not a {model_name}")
+            f"signal, which a {model_name} does not have: use them with an Actuator (a "
+            f"{model_name}'s motion: {', '.join(SUMMARY_FEATURES['motion'])})")
     if not has_reference and set(features) & set(REFERENCE_FEATURES):
         raise ParameterError("features rms_error/max_error need reference=(time, position)")
     return features

@@ -1,0 +1,140 @@
+"""The cylinder on every command that takes a model (issue 41, item 5): ``--model
+cylinder`` (``--plant cylinder`` for the closed loop) runs what the API runs, and what
+belongs to the actuator alone is refused in one line naming the option."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+import pneumact as pa
+import reference as ref
+from conftest import load_quietly
+from pneumact.cli import app
+from pneumact.experiments import SpoolStep
+
+pytestmark = pytest.mark.integration
+
+runner = CliRunner()
+#: the commands with --model that these tests run on the cylinder (simulate: test_cli.py)
+TESTED = {"simulate", "simulate-batch", "sensitivity", "fit", "export fmu"}
+T_END = "0.3"  # s: the spool steps at 0.1 s, the piston reaches the stop at about 0.27 s
+
+
+def invoke(*args: str):
+    result = runner.invoke(app, list(args))
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result
+
+
+def _commands(group=app, words=()):
+    """(words, click command) of every command."""
+    import typer.main
+
+    click_group = typer.main.get_command(group) if not hasattr(group, "commands") else group
+    for name, command in click_group.commands.items():
+        if hasattr(command, "commands"):
+            yield from _commands(command, (*words, name))
+        else:
+            yield " ".join((*words, name)), command
+
+
+def test_every_command_with_a_model_option_is_run_on_the_cylinder():
+    with_model = {words for words, command in _commands()
+                  if any("--model" in p.opts for p in command.params)}
+    assert with_model == TESTED, f"run these on the cylinder here: {with_model - TESTED}"
+
+
+def test_simulate_batch_runs_the_cylinder(tmp_path):
+    """Each row's features are the cylinder's motion, as the API's batch computes them."""
+    table = tmp_path / "table.csv"
+    table.write_text("Fc,sigma2\n20,50\n15,80\n", encoding="utf-8")
+    result = invoke("simulate-batch", str(table), "--model", "cylinder", "--t-end", T_END,
+                    "--workers", "1", "--out", str(tmp_path / "batch"))
+    assert result.exit_code == 0, result.output
+    cli = pd.read_parquet(tmp_path / "batch" / "results.parquet")
+    api = pa.simulate_batch(pa.Cylinder(load_quietly("iso15552-32")),
+                            SpoolStep(t_end=float(T_END)),
+                            pd.DataFrame({"Fc": [20.0, 15.0], "sigma2": [50.0, 80.0]}),
+                            executor=1).table
+    for name in ("travel", "overshoot", "top_speed_out", "top_speed_in"):
+        np.testing.assert_allclose(cli[name], api[name], rtol=ref.META_BATCH_RTOL,
+                                   err_msg=name)
+
+
+def test_sensitivity_runs_the_cylinder_and_refuses_the_actuator_s_conditions(tmp_path):
+    out = tmp_path / "src"
+    result = invoke("sensitivity", "src", "--model", "cylinder", "--t-end", T_END,
+                    "--variations", "sigma2=20%,valve_C=10%", "--n", "8", "--workers", "1",
+                    "--out", str(out))
+    assert result.exit_code == 0, result.output
+    indices = pd.read_csv(out / "indices.csv").set_index("parameter")
+    assert set(indices["output"]) == {"top_speed_out"}  # the cylinder's default feature
+    assert indices.loc["valve_C", "SRC"] > 0  # a wider valve, a faster piston
+    for args, words in (
+            (("--conditions", "period=2"), "--conditions varies the actuator's pressure"),
+            (("--features", "loop_width_pressure"), "--features: features "
+                                                    "['loop_width_pressure'] need a pressure")):
+        refused = invoke("sensitivity", "sobol", "--model", "cylinder", *args,
+                         "--out", str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and words in " ".join(refused.output.split())
+        assert not (tmp_path / "refused").exists()
+
+
+def test_fit_runs_the_cylinder_on_its_record(tmp_path):
+    """Fc and σ2 found again from the cylinder's own record (its spool command and
+    position), started from the set's values moved by --params."""
+    cylinder = pa.Cylinder(load_quietly("iso15552-32"))
+    spool = pa.experiments.PiecewiseLinear([0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
+    run = pa.simulate(cylinder, pa.Experiment(spool, "spool", 0.3, n_points=301))
+    record = tmp_path / "cylinder.csv"
+    pa.Record.from_arrays(run.time, {"position": run["position"], "spool": run["spool"]},
+                          {"position": "m", "spool": "1"}, "cylinder").save(record)
+    truth = {"Fc": float(cylinder.params["Fc"]), "sigma2": float(cylinder.params["sigma2"])}
+    start = cylinder.params.replace(Fc=1.3 * truth["Fc"], sigma2=0.7 * truth["sigma2"])
+    start_file = tmp_path / "start.toml"
+    pa.write_params(start, start_file)
+    result = invoke("fit", str(record), "--model", "cylinder", "--params", str(start_file),
+                    "--free", "Fc,sigma2", "--out", str(tmp_path / "fit"))
+    assert result.exit_code == 0, result.output
+    found = pd.read_csv(tmp_path / "fit" / "estimates.csv").set_index("parameter")["value"]
+    for name, value in truth.items():
+        assert found[name] == pytest.approx(value, rel=ref.META_FIT_RTOL), name
+
+
+def test_export_fmu_writes_the_cylinder(tmp_path):
+    result = invoke("export", "fmu", "--model", "cylinder", "--no-binary", "--out",
+                    str(tmp_path))
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "cylinder.fmu").is_file()
+    assert "spool_command" in result.output
+
+
+def test_control_step_holds_the_cylinder_at_its_start(tmp_path):
+    """--plant cylinder: the piston placed at --start (it rests on a stop wherever its
+    chambers balance), then stepped."""
+    result = invoke("control", "step", "--plant", "cylinder", "--start", "90", "--stop",
+                    "110", "--kd", "0.5", "--derivative", "velocity", "--t-end", "0.5",
+                    "--out", str(tmp_path))
+    assert result.exit_code == 0, result.output
+    signals = pd.read_csv(tmp_path / "signals.csv")
+    position = signals["position [m]"].to_numpy()
+    before = signals["time [s]"].to_numpy() < 0.1  # the step is at 0.1 s
+    assert np.abs(position[before] - 0.09).max() < ref.CYLINDER_LOOP_STEP * 0.01
+    assert abs(position[-1] - 0.11) < ref.CYLINDER_LOOP_BAND * ref.CYLINDER_LOOP_STEP
+
+
+@pytest.mark.parametrize(("command", "words"), [
+    (("simulate",), "this command models the diaphragm actuator"),
+    (("campaign", "--plan"), "the paper's identification is the diaphragm's"),
+])
+def test_a_cylinder_s_set_on_a_diaphragm_command_is_refused(tmp_path, command, words):
+    """One line naming the set, why, and where the cylinder runs instead."""
+    result = invoke(*command, "--params", "iso15552-32", "--out", str(tmp_path / "out"))
+    said = " ".join(result.output.split())
+    assert result.exit_code != 0 and said.count("error:") == 1, said
+    assert "--params iso15552-32: a double-acting cylinder's set" in said and words in said
+    assert "--model cylinder" in said and not (tmp_path / "out").exists()

@@ -1,0 +1,237 @@
+"""Every model kind through every entry point (issue 41, item 5).
+
+Each pair of a model kind (the diaphragm actuator, the force-driven friction rig, the
+double-acting cylinder, the cylinder in a closed loop) and an entry point (simulate, the
+batch engine, forward sensitivities, fit, a global sensitivity method, linearisation, the
+FMU export) either works, with a check that can fail (a batch row is the single run's
+summary, sensitivities are central differences, a fit finds the parameters that made its
+record, ...), or is refused with one clear error, which ``REFUSED`` states and the test
+checks; a pair that does neither fails. The runs are short and reuse the kernels the
+other tests compile (the cylinder loop's sensitivities excepted: nothing else needs them).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import pneumact as pa
+import reference as ref
+from conftest import load_quietly
+from pneumact import sensitivity as sa
+from pneumact.control import PID, ClosedLoop, linearise
+from pneumact.core.features import FEATURE_UNITS
+from pneumact.experiments import Experiment, PiecewiseLinear, SetpointRamp
+from pneumact.simulation.simulate import Model
+
+pytestmark = pytest.mark.integration
+
+#: the friction parameters every kind has (its LuGre law's): varied, fitted, differenced
+VARIED = ("Fc", "sigma2")
+ENTRY_POINTS = ("simulate", "simulate_batch", "sensitivities", "fit", "src", "linearise",
+                "export_fmu")
+#: the pairs refused, with the error and what its message must say
+REFUSED = {
+    ("loop", "linearise"): (pa.ParameterError, r"linearise: plant = ClosedLoop.*allowed: an "
+                                               r"Actuator, a Cylinder"),
+    ("rig", "export_fmu"): (pa.ArgumentError, r"model = FrictionRig; an FMU is exported "
+                                              r"from a pa.Actuator or a pa.Cylinder"),
+    ("loop", "export_fmu"): (pa.ArgumentError, r"model = ClosedLoop; an FMU is exported "
+                                               r"from a pa.Actuator or a pa.Cylinder"),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """A model kind with its experiment (inputs linear between samples, so that a record
+    of the run drives the model exactly as the experiment did), the feature its global
+    sensitivity study reads, and its linearisation point (input, position or None)."""
+
+    model: Model
+    experiment: Experiment
+    feature: str
+    input_value: float
+    position: float | None
+
+
+#: the PID of the cylinder's loop tests
+PID_GAINS = {"kp": 60.0, "ki": 300.0, "kd": 0.5}
+
+
+def _cylinder_loop(cylinder, bias: float = 0.0) -> ClosedLoop:
+    return ClosedLoop(cylinder, PID(**PID_GAINS, derivative="velocity", u_min=-1.0,
+                                    u_max=1.0), bias=bias)
+
+
+def _make(kind: str) -> Case:
+    if kind == "actuator":
+        return Case(pa.Actuator(load_quietly("vgt-paper")),
+                    pa.PressureCycle(high=100e3, low=20e3, period=2.0, n_points=201),
+                    "loop_width_pressure", 60e3, None)
+    if kind == "rig":  # pushed one way, then the other
+        force = PiecewiseLinear([0.0, 0.25, 0.75, 1.0], [0.0, 2.0, -2.0, 0.0])
+        return Case(pa.FrictionRig(load_quietly("canudas1995"), drive="force"),
+                    Experiment(force, "force", 1.0, n_points=201), "position_range", 0.0,
+                    None)
+    cylinder = pa.Cylinder(load_quietly("iso15552-32"))
+    if kind == "cylinder":  # held retracted, the spool opened over 50 ms: it extends;
+        # linearised mid-stroke at the spool command that balances the chambers there
+        spool = PiecewiseLinear([0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
+        return Case(cylinder, Experiment(spool, "spool", 0.3, n_points=301),
+                    "top_speed_out", _cylinder_loop(cylinder).holding_input(0.1), 0.1)
+    # held at 90 mm, then a 20 mm ramp over 50 ms
+    return Case(_cylinder_loop(cylinder, _cylinder_loop(cylinder).holding_input(0.09)),
+                SetpointRamp(0.09, 0.11, 0.05, t_start=0.05, t_end=0.5, n_points=501),
+                "top_speed_out", 0.0, None)
+
+
+KINDS = ("actuator", "rig", "cylinder", "loop")
+
+
+@pytest.fixture(scope="module")
+def cases() -> dict[str, Case]:
+    return {}
+
+
+@pytest.fixture
+def case(cases, request) -> Case:
+    kind = request.param
+    if kind not in cases:
+        cases[kind] = _make(kind)
+    return cases[kind]
+
+
+def test_every_model_kind_is_walked():
+    """The kinds above are every model of the package: each public class that the
+    ``Model`` protocol describes (its instances pass ``check_model``)."""
+    import pneumact.control
+    import pneumact.models
+
+    modules = (pneumact.models, pneumact.control)
+    classes = [getattr(m, name) for m in modules for name in m.__all__]
+    models = {c for c in classes if isinstance(c, type) and all(
+        hasattr(c, a) for a in ("parts", "channels", "breakpoints", "driven_by"))}
+    walked = {type(_make(kind).model) for kind in KINDS}
+    assert models == walked, f"walk these too: {sorted(c.__name__ for c in models - walked)}"
+
+
+# ------------------------------------------------------------------------ the checks
+def _simulate(case: Case, tmp_path) -> None:
+    """The run's summary: the model's features, finite, each a batch feature."""
+    summary = pa.simulate(case.model, case.experiment).summary()
+    assert set(summary) <= set(FEATURE_UNITS), sorted(set(summary) - set(FEATURE_UNITS))
+    assert all(np.isfinite(v) for v in summary.values()), summary
+
+
+def _simulate_batch(case: Case, tmp_path) -> None:
+    """The nominal row's default features are the single run's summary; a changed Fc
+    changes them."""
+    fc = float(case.model.params["Fc"])
+    batch = pa.simulate_batch(case.model, case.experiment,
+                              pd.DataFrame({"Fc": [fc, 1.2 * fc]}), executor=1)
+    assert list(batch.table["status"]) == ["ok", "ok"], batch.table["error"].tolist()
+    summary = pa.simulate(case.model, case.experiment).summary()
+    shared = [name for name in summary if name in batch.table]
+    assert shared and set(shared) == set(summary)  # every summary feature is in the batch
+    nominal = batch.table.iloc[0]
+    for name in shared:
+        np.testing.assert_allclose(nominal[name], summary[name], rtol=ref.META_BATCH_RTOL,
+                                   err_msg=name)
+    changed = batch.table.iloc[1]
+    assert any(changed[n] != nominal[n] for n in shared)
+
+
+def _sensitivities(case: Case, tmp_path) -> None:
+    """∂position/∂θ against central differences (RMS within a fraction of its size, or
+    within the differences' own noise)."""
+    tight = pa.Rodas4(rtol=ref.SENS_REFERENCE_RTOL)
+    sens = pa.simulate_sensitivities(case.model, case.experiment, list(VARIED),
+                                     pa.Rodas4(rtol=ref.SENS_RTOL))
+    travel = float(np.ptp(sens.result["position"]))
+    for k, name in enumerate(VARIED):
+        value = float(case.model.params[name])
+        step = ref.SENS_FD_REL_STEP * value
+        up, down = (pa.simulate(case.model, case.experiment, tight,
+                                values={name: value + s})["position"] for s in (step, -step))
+        difference = (up - down) / (2.0 * step)
+        rms = np.sqrt(np.mean((sens["position"][:, k] - difference) ** 2))
+        noise = ref.META_SENS_NOISE_FACTOR * ref.SENS_REFERENCE_RTOL * travel / step
+        allowed = max(ref.SENS_RMS_FRACTION * np.max(np.abs(difference)), noise)
+        assert rms <= allowed, (name, rms, allowed)
+
+
+def _record(case: Case):
+    """The nominal run as a record: its position and the signal that drives the model."""
+    run = pa.simulate(case.model, case.experiment)
+    drive = case.model.input_signal
+    values = run[drive] if drive in run else run[f"drive_{case.experiment.quantity}"]
+    return pa.Record.from_arrays(run.time, {"position": run["position"], drive: values},
+                                 {"position": "m", drive: case.experiment.unit}, "nominal")
+
+
+def _fit(case: Case, tmp_path) -> None:
+    """Started 30 % off, the fit finds the Fc and σ2 that made its record."""
+    truth = {name: float(case.model.params[name]) for name in VARIED}
+    result = pa.fit(case.model, [_record(case)], list(VARIED),
+                    start={"Fc": 1.3 * truth["Fc"], "sigma2": 0.7 * truth["sigma2"]},
+                    smooth_input=False)
+    found = result.to_pandas()["value"]
+    for name, value in truth.items():
+        assert found[name] == pytest.approx(value, rel=ref.META_FIT_RTOL), name
+
+
+def _src(case: Case, tmp_path) -> None:
+    """Standardised regression coefficients of the kind's feature on ±5 % of Fc and σ2:
+    a near-linear response (R²), and Fc's coefficient has the sign of the feature's change
+    with Fc."""
+    problem = sa.Problem.around(case.model.params, dict.fromkeys(VARIED, 0.05))
+    evaluate = sa.model_outputs(case.model, case.experiment, problem, [case.feature],
+                                executor=1)
+    study = sa.src(problem, evaluate, n=ref.META_SRC_N, seed=1)
+    indices = study.indices.set_index("parameter")
+    assert indices["R2"].iloc[0] >= ref.META_SRC_R2_MIN, indices
+    fc = float(case.model.params["Fc"])
+    ends = pa.simulate_batch(case.model, case.experiment,
+                             pd.DataFrame({"Fc": [0.95 * fc, 1.05 * fc]}),
+                             features=[case.feature], executor=1).table[case.feature]
+    assert np.sign(indices.loc["Fc", "SRC"]) == np.sign(ends.iloc[1] - ends.iloc[0])
+
+
+def _linearise(case: Case, tmp_path) -> None:
+    """A rest with friction: an equilibrium (no rates) whose modes decay or stay."""
+    plant = linearise(case.model, case.input_value, position=case.position)
+    assert plant.equilibrium and plant.output_names == ("position",)
+    scales = np.where(plant.state_scales > 0, plant.state_scales, 1.0)
+    assert np.max(np.abs(plant.rates) / scales) <= ref.META_REST_RATE, plant.rates
+    eigenvalues = np.linalg.eigvals(plant.A)
+    assert np.all(eigenvalues.real <= ref.META_EIGEN_RTOL * np.max(np.abs(eigenvalues)))
+
+
+def _export_fmu(case: Case, tmp_path) -> None:
+    """The FMU (sources only) has the inputs the model declares and its position."""
+    fmu = pa.export_fmu(case.model, tmp_path / "model.fmu", binary=False)
+    declared = tuple(i.name for i in case.model.fmu_interface().inputs)
+    assert fmu.names("input") == declared
+    assert "position" in fmu.names("output")
+
+
+CHECKS = {"simulate": _simulate, "simulate_batch": _simulate_batch,
+          "sensitivities": _sensitivities, "fit": _fit, "src": _src,
+          "linearise": _linearise, "export_fmu": _export_fmu}
+
+
+@pytest.mark.parametrize(("case", "entry_point"), list(itertools.product(KINDS, ENTRY_POINTS)),
+                         indirect=["case"])
+def test_every_entry_point_works_or_refuses(case, entry_point, request, tmp_path):
+    kind = request.node.callspec.params["case"]
+    refused = REFUSED.get((kind, entry_point))
+    if refused is None:
+        CHECKS[entry_point](case, tmp_path)
+        return
+    error, message = refused
+    with pytest.raises(error, match=message):
+        CHECKS[entry_point](case, tmp_path)
