@@ -235,3 +235,40 @@ def test_every_entry_point_works_or_refuses(case, entry_point, request, tmp_path
     error, message = refused
     with pytest.raises(error, match=message):
         CHECKS[entry_point](case, tmp_path)
+
+
+#: per model (and valve), a drive its components refuse, and what the refusal says
+BAD_DRIVES = {
+    "source": ("pressure", -5e3, r"its pressure = -5000 Pa: an absolute pressure must be in"),
+    "command": ("command", 1.5, r"its command spans 0 to 1.5; a valve command must stay "
+                                r"within \[0, 1\]"),
+    "regulator": ("pressure", 0.0, r"its pressure = 0 Pa"),
+    "cylinder": ("spool", 1.5, r"its spool command spans 0 to 1.5; a 5/3 valve's command "
+                               r"must stay within \[-1, 1\]"),
+    "loop": ("position", 0.25, r"its set-point spans 0 to 250 mm; the actuator's stroke is "
+                               r"0 to x_max"),
+}
+
+
+def _ramp_to(quantity: str, value: float) -> Experiment:
+    start = 1e5 if quantity == "pressure" else 0.0
+    return Experiment(PiecewiseLinear([0.0, 0.1], [start, value]), quantity, 0.1)
+
+
+@pytest.mark.parametrize("kind", list(BAD_DRIVES))
+def test_each_model_refuses_the_drives_its_components_cannot_take(kind):
+    """The limits and the message are the model's (``check_drive_values``: the valve's, the
+    5/3 valve's, the loop's stroke), not a list of quantities in ``simulation``; the rig
+    takes any force."""
+    from pneumact.simulation.simulate import check_drive
+
+    valves = {"source": pa.PressureSource(), "command": pa.CommandValve(),
+              "regulator": pa.PressureRegulator()}
+    if kind in valves:
+        model = pa.Actuator(load_quietly("vgt-paper"), valve=valves[kind])
+    else:
+        model = _make(kind).model
+    quantity, value, message = BAD_DRIVES[kind]
+    with pytest.raises(pa.ExperimentError, match=message):
+        check_drive(model, _ramp_to(quantity, value))
+    check_drive(_make("rig").model, _ramp_to("force", 1e6))

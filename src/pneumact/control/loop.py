@@ -198,6 +198,15 @@ class ClosedLoop:
         """Its plant's stroke: a set-point beyond it is impossible."""
         return self.plant.stroke
 
+    def check_drive_values(self, low: float, high: float, where: str) -> None:
+        """A set-point beyond its plant's stroke is refused."""
+        stroke = self.stroke
+        if stroke is not None and (low < 0.0 or high > stroke):
+            raise ExperimentError(
+                f"{where}: its set-point spans {low * 1e3:g} to {high * 1e3:g} mm; the "
+                f"actuator's stroke is 0 to x_max = {stroke * 1e3:g} mm (positions in m: "
+                "4 mm is 0.004)")
+
     @property
     def summary_kind(self) -> str:
         """Its runs summarise as its plant's do."""

@@ -128,6 +128,10 @@ class Actuator:
         set-point in [p_res, p_atm], a prescribed pressure > 0)."""
         return self.valve.input_range(self.params)
 
+    def check_drive_values(self, low: float, high: float, where: str) -> None:
+        """Refuse a signal spanning ``low`` to ``high`` that its valve cannot take."""
+        self.valve.check_drive_values(self.params, low, high, where)
+
     #: what ``Result.summary()`` computes of its runs: the pressure-position hysteresis
     summary_kind: ClassVar[str] = "hysteresis"
 

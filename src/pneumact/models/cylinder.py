@@ -27,6 +27,7 @@ from ..core.channels import CH_DRIVE, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_eval
+from ..errors import ExperimentError
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
 from .fmu_interface import FmuInterface, drive_input, force_input
 from .friction import FrictionModel, LuGre
@@ -516,6 +517,13 @@ class Cylinder:
     def input_range(self) -> tuple[float, float]:
         """The spool command u ∈ [−1, 1]."""
         return -1.0, 1.0
+
+    def check_drive_values(self, low: float, high: float, where: str) -> None:
+        """A spool command outside [−1, 1] is refused."""
+        if low < -1.0 or high > 1.0:
+            raise ExperimentError(f"{where}: its spool command spans {low:g} to {high:g}; a "
+                                  "5/3 valve's command must stay within [-1, 1] (1 extends, "
+                                  "-1 retracts, 0 closes the centre)")
 
     #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
     summary_kind: ClassVar[str] = "motion"

@@ -184,6 +184,9 @@ class FrictionRig:
         """A force (or a prescribed motion) is unbounded."""
         return -math.inf, math.inf
 
+    def check_drive_values(self, low: float, high: float, where: str) -> None:
+        """Any force or motion can drive it."""
+
     #: what ``Result.summary()`` computes of its runs: the mass's motion
     summary_kind: ClassVar[str] = "motion"
 

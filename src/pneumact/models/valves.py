@@ -27,10 +27,12 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
+from ..checks import check_absolute_pressure
 from ..core.channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
 from ..core.component import Block, Part, StateSpec
 from ..core.jit import njit
 from ..core.signals import Signal, channel_eval, map_eval
+from ..errors import ExperimentError
 from ..parameters.catalogue import ParameterSpec, declare
 from .pneumatics import (
     CHAMBER_BLOCK,
@@ -566,6 +568,11 @@ class Valve:
         """The values its input takes: a prescribed pressure, any positive one."""
         return 0.0, math.inf
 
+    def check_drive_values(self, params, low: float, high: float, where: str) -> None:
+        """Refuse an experiment whose signal spans ``low`` to ``high`` where this valve
+        cannot take it (``where`` names the experiment): a pressure must be absolute."""
+        _check_pressures(low, high, where)
+
     @property
     def required(self) -> tuple[str, ...]:
         return self.block.parameters
@@ -586,6 +593,11 @@ class Valve:
     @property
     def name(self) -> str:
         return type(self).__name__
+
+
+def _check_pressures(low: float, high: float, where: str) -> None:
+    for value in (low, high):
+        check_absolute_pressure("its pressure", value, where=where, error=ExperimentError)
 
 
 @dataclass(frozen=True)
@@ -636,6 +648,13 @@ class CommandValve(Valve):
         """The command u ∈ [0, 1]."""
         return 0.0, 1.0
 
+    def check_drive_values(self, params, low: float, high: float, where: str) -> None:
+        """A command outside [0, 1] is refused."""
+        if low < 0.0 or high > 1.0:
+            raise ExperimentError(f"{where}: its command spans {low:g} to {high:g}; a valve "
+                                  "command must stay within [0, 1] (0 vents the chamber, 1 "
+                                  "opens it to the reservoir)")
+
 
 @dataclass(frozen=True)
 class PressureRegulator(CommandValve):
@@ -655,6 +674,10 @@ class PressureRegulator(CommandValve):
     def input_range(self, params) -> tuple[float, float]:
         """A set-point in [p_res, p_atm] (it is clipped there)."""
         return float(params["p_res"]), float(params["p_atm"])
+
+    def check_drive_values(self, params, low: float, high: float, where: str) -> None:
+        """A set-point must be an absolute pressure (one beyond the supply is clipped)."""
+        _check_pressures(low, high, where)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,6 @@ import numpy as np
 
 from ..checks import (
     as_instance,
-    check_absolute_pressure,
     check_finite,
     check_type,
     shown,
@@ -76,6 +75,10 @@ class Model(Protocol):
     @property
     def drive_label(self) -> str: ...
 
+    def check_drive_values(self, low: float, high: float, where: str, /) -> None:
+        """Refuse a drive signal spanning ``low`` to ``high`` the model cannot take (its
+        components own the limits and the message; ``where`` names the experiment)."""
+
     @property
     def stroke(self) -> float | None: ...
 
@@ -120,25 +123,7 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
             f"{model.drive_label} of this {type(model).__name__} needs a {expected!r} "
             "signal")
     low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
-    what = f"experiment '{experiment.name}'"
-    if expected == "pressure":
-        for value in (low, high):
-            check_absolute_pressure("its pressure", value, where=what, error=ExperimentError)
-    elif expected == "command" and (low < 0.0 or high > 1.0):
-        raise ExperimentError(f"{what}: its command spans {low:g} to {high:g}; a valve "
-                              "command must stay within [0, 1] (0 vents the chamber, 1 "
-                              "opens it to the reservoir)")
-    elif expected == "spool" and (low < -1.0 or high > 1.0):
-        raise ExperimentError(f"{what}: its spool command spans {low:g} to {high:g}; a 5/3 "
-                              "valve's command must stay within [-1, 1] (1 extends, -1 "
-                              "retracts, 0 closes the centre)")
-    elif expected == "position":
-        stroke = model_stroke(model)
-        if stroke is not None and (low < 0.0 or high > stroke):
-            raise ExperimentError(
-                f"{what}: its set-point spans {low * 1e3:g} to {high * 1e3:g} mm; the "
-                f"actuator's stroke is 0 to x_max = {stroke * 1e3:g} mm (positions in m: "
-                "4 mm is 0.004)")
+    model.check_drive_values(low, high, f"experiment '{experiment.name}'")
 
 
 def model_stroke(model: Model) -> float | None:
