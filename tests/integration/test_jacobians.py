@@ -189,3 +189,22 @@ def test_cylinder_jacobian(spool_lag):
                 label = f"cylinder u={u}"
                 _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
                 _param_fd_check(prep, 0.3, 0.5, y, label)
+
+
+@pytest.mark.parametrize("overlap", [0.1, -0.1], ids=["overlap", "underlap"])
+def test_cylinder_jacobian_with_an_overlap(overlap):
+    """The 5/3 valve's overlap and underlap: ∂f/∂u (the lagged spool's column) and
+    ∂f/∂spool_overlap with the spool inside the band (only the leakage flows, or, under-
+    lapped, both paths of each chamber), outside it either way, and in a fully open
+    spool's range."""
+    params = load_quietly("iso15552-32").replace(iso_b=0.25, iso_m=0.6,
+                                                 spool_overlap=overlap)
+    model = Cylinder(params, chamber=Adiabatic(), spool_lag=True)
+    prep = prepare(model, Experiment(Constant(0.3), "spool", t_end=1.0), Rodas4())
+    x, v, z = CYLINDER_MECHANICAL[0]
+    for spool in (0.05, -0.04, 0.45, -0.7):
+        for pa, pb in CYLINDER_PRESSURES:
+            y = np.array([x, v, pa, pb, z, spool])
+            label = f"cylinder overlap={overlap} u={spool}"
+            _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
+            _param_fd_check(prep, 0.3, 0.5, y, label)

@@ -9,10 +9,11 @@ x ∈ [0, x_max] is the rod's extension from the cap-end stop; chamber A is the 
 the rod's cross-section A_a − A_b. The end stops are the Hunt–Crossley contacts of
 ``models.mechanics``. The spool command u ∈ [−1, 1] of the closed-centre 5/3 valve opens
 supply → A and B → exhaust for u > 0, supply → B and A → exhaust for u < 0; each path
-is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(|u| + valve_leak)
-on its open side and valve_C·valve_leak on its closed one (the mid-position leakage that
-keeps a chamber's pressure defined at u = 0). The chamber law (isothermal, adiabatic,
-polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ.
+is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(a(±u) + valve_leak),
+a(w) = max(w − e, 0)/(1 − e) the opening of a path the spool travels w towards, e the
+spool's overlap (e < 0: an underlap, both paths of a chamber open around the centre); the
+mid-position leakage keeps a chamber's pressure defined at u = 0. The chamber law
+(isothermal, adiabatic, polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ.
 
 The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p``.
 """
@@ -57,6 +58,10 @@ declare(
       plausible=(1e-10, 1e-6)),
     P("valve_leak", "", "mid-position leakage of each path of the 5/3 valve, as a fraction "
       "of valve_C", 0.0, 0.0, False, 1.0, group="cylinder", plausible=(0.0, 0.1)),
+    P("spool_overlap", "", "overlap of the 5/3 valve's spool lands over its ports, as a "
+      "fraction of the spool's travel: no path opens until |u| exceeds it; negative: an "
+      "underlap, both paths of a chamber open around the centre (0: critical centre)", 0.0,
+      -0.5, False, 0.5, group="cylinder", plausible=(-0.2, 0.3)),
     P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
       "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(1e-5, 1.0)),
@@ -70,8 +75,8 @@ declare_relation(("p_supply", "p_atm"), lambda supply, atm: supply > atm,
 
 CYLINDER_BLOCK = Block.of(
     "m", "D_bore", "d_rod", "x_max", "V_dead_a", "V_dead_b", "p_atm", "p_supply",
-    "valve_C", "valve_leak", "iso_b", "iso_m", "r_lin", "gamma", "R", "T", "k_stop",
-    "c_stop",
+    "valve_C", "valve_leak", "spool_overlap", "iso_b", "iso_m", "r_lin", "gamma", "R", "T",
+    "k_stop", "c_stop",
     settings=("chamber_n_offset", "chamber_n_gamma"),
     derived=("n_poly", "area_a", "area_b"),
 )
@@ -85,6 +90,7 @@ CY_PATM = CYLINDER_BLOCK.index("p_atm")
 CY_PSUP = CYLINDER_BLOCK.index("p_supply")
 CY_C = CYLINDER_BLOCK.index("valve_C")
 CY_LEAK = CYLINDER_BLOCK.index("valve_leak")
+CY_OVERLAP = CYLINDER_BLOCK.index("spool_overlap")
 CY_B = CYLINDER_BLOCK.index("iso_b")
 CY_MEXP = CYLINDER_BLOCK.index("iso_m")
 CY_RLIN = CYLINDER_BLOCK.index("r_lin")
@@ -115,13 +121,48 @@ def derive_cylinder(p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def spool_fractions(u, leak):  # pragma: no cover - compiled
-    """Openings of the four paths as fractions of valve_C at spool command u (clipped to
-    [−1, 1]): (supply → A, A → exhaust, supply → B, B → exhaust)."""
+def path_opening(travel, overlap):  # pragma: no cover - compiled
+    """Opening of one path as a fraction of valve_C, the spool ``travel`` towards it
+    (±u): zero until the travel passes the overlap, then linear, full at travel 1."""
+    return max(travel - overlap, 0.0) / (1.0 - overlap)
+
+
+@njit(cache=True)
+def path_opening_slopes(travel, overlap):  # pragma: no cover - compiled
+    """(∂opening/∂travel, ∂opening/∂overlap) of ``path_opening``; at the edge of the
+    band the travel's slope from above, the overlap's from above (none)."""
+    span = 1.0 - overlap
+    if travel > overlap:
+        return 1.0 / span, (travel - 1.0) / (span * span)
+    if travel == overlap:
+        return 1.0 / span, 0.0
+    return 0.0, 0.0
+
+
+@njit(cache=True)
+def spool_fractions(u, leak, overlap):  # pragma: no cover - compiled
+    """Openings of the four paths as fractions of valve_C at spool position u (clipped to
+    [−1, 1]), each with the leakage: (supply → A, A → exhaust, supply → B, B → exhaust)."""
     spool = min(max(u, -1.0), 1.0)
-    extend = max(spool, 0.0) + leak
-    retract = max(-spool, 0.0) + leak
+    extend = path_opening(spool, overlap) + leak
+    retract = path_opening(-spool, overlap) + leak
     return extend, retract, retract, extend
+
+
+@njit(cache=True)
+def spool_fraction_slopes(u, overlap):  # pragma: no cover - compiled
+    """∂/∂u and ∂/∂overlap of the paths that open as u rises (supply → A, B → exhaust)
+    and of those that open as it falls (A → exhaust, supply → B): (d_extend_du,
+    d_retract_du, d_extend_de, d_retract_de), slopes in u from above; none in u beyond
+    ±1, where the spool is on its stop."""
+    spool = min(max(u, -1.0), 1.0)
+    du_ext, de_ext = path_opening_slopes(spool, overlap)
+    du_ret, de_ret = path_opening_slopes(-spool, overlap)
+    if -spool == overlap:  # the retracting edge closes as u rises: from above, shut
+        du_ret = 0.0
+    if u > 1.0 or u < -1.0:
+        du_ext = du_ret = 0.0
+    return du_ext, -du_ret, de_ext, de_ret
 
 
 @njit(cache=True)
@@ -178,7 +219,7 @@ def rest_pressure(p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
 @njit(cache=True)
 def rest_pressures(u, p, o):  # pragma: no cover - compiled
     """(p_a, p_b) at which each chamber's flows balance at spool command u."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
@@ -202,7 +243,7 @@ def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
 def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
     """Net mass flows into A and B at spool position u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
     ṁ_b, ∂ṁ_b/∂p_b)."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
@@ -215,18 +256,18 @@ def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def chamber_flow_slopes(u, pa, pb, p, o):  # pragma: no cover - compiled
-    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (the slope from above at u = 0; none
-    beyond ±1, where the spool is on its stop)."""
-    if u > 1.0 or u < -1.0:
-        return 0.0, 0.0
+    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (slopes from above at the edges of the
+    band; none beyond ±1, where the spool is on its stop)."""
+    d_extend, d_retract, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
-    if u >= 0.0:  # supply → A and B → exhaust open with u
-        return (c * iso_flow(p_sup, pa, b, m, r_lam, temperature)[0],
-                -c * iso_flow(pb, p_exh, b, m, r_lam, temperature)[0])
-    return (c * iso_flow(pa, p_exh, b, m, r_lam, temperature)[0],
-            -c * iso_flow(p_sup, pb, b, m, r_lam, temperature)[0])
+    fill_a = iso_flow(p_sup, pa, b, m, r_lam, temperature)[0]
+    vent_a = iso_flow(pa, p_exh, b, m, r_lam, temperature)[0]
+    fill_b = iso_flow(p_sup, pb, b, m, r_lam, temperature)[0]
+    vent_b = iso_flow(pb, p_exh, b, m, r_lam, temperature)[0]
+    return (c * (d_extend * fill_a - d_retract * vent_a),
+            c * (d_retract * fill_b - d_extend * vent_b))
 
 
 @njit(cache=True)
@@ -270,11 +311,12 @@ def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
 
 
 @njit(cache=True)
-def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, c, p, o,
-                   g):  # pragma: no cover - compiled
+def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p,
+                   o, g):  # pragma: no cover - compiled
     """g[row, o + k] = ∂ṗ/∂θ_k of one chamber for the flow entries of the block (the
-    volume's entries are the caller's): valve_C, valve_leak, p_supply, p_atm, iso_b,
-    iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions."""
+    volume's entries are the caller's): valve_C, valve_leak, spool_overlap, p_supply,
+    p_atm, iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths'
+    fractions, ``e_fill``, ``e_vent`` their slopes in the overlap."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
     n, r_gas = p[o + CY_N], p[o + CY_R]
@@ -286,6 +328,7 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, c, p, o,
     k = n / volume * rt  # ∂ṗ/∂ṁ
     g[row, o + CY_C] = k * (u_fill * q_in - u_vent * q_out)
     g[row, o + CY_LEAK] = k * c * (q_in - q_out)
+    g[row, o + CY_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
     g[row, o + CY_PSUP] = k * d_sup
     g[row, o + CY_PATM] = k * d_exh
     g[row, o + CY_B] = k * d_b
@@ -312,12 +355,15 @@ def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # prag
     g[row_v, o + CY_KSTOP] = dks / m_mass
     g[row_v, o + CY_CSTOP] = dcs / m_mass
     g[row_v, o + CY_XMAX] = dxmax / m_mass
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     vol_a, vol_b = chamber_volumes(x, p, o)
     n = p[o + CY_N]
-    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, c, p, o, g)
-    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, c, p, o, g)
+    _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, e_extend, e_retract, c, p,
+                   o, g)
+    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, e_retract, e_extend, c, p,
+                   o, g)
     mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
     rt = p[o + CY_R] * p[o + CY_T]
     rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
