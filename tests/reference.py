@@ -719,7 +719,8 @@ CYLINDER_POLYTROPIC_RTOL = 1e-7
 CYLINDER_STATIC_RTOL = 1e-9
 CYLINDER_REST_POSITION_ATOL = 1e-9
 #: the lagged spool against 1 − exp(−t/τ) after a step (Rodas4 at CYLINDER_RTOL; measured
-#: 2e-10)
+#: 2e-10), and the second-order spool against its closed-form step response (measured
+#: 1.6e-10 at ζ = 0.3, 6.1e-11 at ζ = 1.5)
 CYLINDER_SPOOL_LAG_ATOL = 1e-7
 #: the 5/3 valve's flows against the closed-form ISO 6358 law: round-off only
 CYLINDER_VALVE_FLOW_RTOL = 1e-12

@@ -318,6 +318,35 @@ def test_the_lagged_spool_follows_its_first_order_law(cylinder_set):
     assert started[0] > started[1]
 
 
+@pytest.mark.parametrize("zeta", [0.3, 1.5], ids=["underdamped", "overdamped"])
+def test_the_second_order_spool_follows_its_step_response(zeta, cylinder_set):
+    """Cylinder(spool_lag=2): after a step of its command from u0 to u1 the spool moves as
+    the closed-form step response of ü = ω²·(u1 − u) − 2·ζ·ω·u̇ from rest, under- and
+    overdamped, overshooting the command when ζ < 1."""
+    params = cylinder_set.replace(spool_zeta=zeta)
+    u0, u1, t_step = -0.5, 0.4, 0.05
+    experiment = SpoolStep(before=u0, after=u1, t_step=t_step, t_end=0.1, n_points=2001)
+    run = pa.simulate(pa.Cylinder(params, spool_lag=2), experiment, SOLVER)
+    omega, t = params["spool_omega"], np.maximum(run.time - t_step, 0.0)
+    if zeta < 1.0:
+        damped = omega * math.sqrt(1.0 - zeta**2)
+        shape = np.exp(-zeta * omega * t) * (np.cos(damped * t) + zeta * omega / damped
+                                             * np.sin(damped * t))
+    else:
+        root = omega * math.sqrt(zeta**2 - 1.0)
+        fast, slow = -zeta * omega - root, -zeta * omega + root
+        shape = (fast * np.exp(slow * t) - slow * np.exp(fast * t)) / (fast - slow)
+    expected = u1 + (u0 - u1) * shape
+    assert np.abs(run["spool"] - expected).max() <= CYLINDER_SPOOL_LAG_ATOL
+    overshoot = run["spool"].max() - u1
+    assert (overshoot > 0.1) if zeta < 1.0 else (overshoot <= 0.0)
+
+
+def test_a_spool_lag_of_no_known_order_is_refused(cylinder_set):
+    with pytest.raises(pa.ArgumentError, match=r"spool_lag = 3: must be False or 0"):
+        pa.Cylinder(cylinder_set, spool_lag=3)
+
+
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"after": 1.5}, r"after = 1.5: must be in \[-1, 1\]"),
     ({"t_step": 0.0}, "t_step"), ({"t_step": 0.5, "t_end": 0.4}, "t_end = 0.4 s")])

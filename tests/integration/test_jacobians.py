@@ -192,19 +192,20 @@ def test_cylinder_jacobian(spool_lag):
 
 
 @pytest.mark.parametrize("overlap", [0.1, -0.1], ids=["overlap", "underlap"])
-def test_cylinder_jacobian_with_an_overlap(overlap):
-    """The 5/3 valve's overlap and underlap: ∂f/∂u (the lagged spool's column) and
-    ∂f/∂spool_overlap with the spool inside the band (only the leakage flows, or, under-
-    lapped, both paths of each chamber), outside it either way, and in a fully open
-    spool's range."""
+def test_cylinder_jacobian_with_an_overlap_and_a_second_order_spool(overlap):
+    """The 5/3 valve's overlap and underlap behind a second-order spool: ∂f/∂u (the
+    spool's position column), the spool's own rows and ∂f/∂spool_overlap with the spool
+    inside the band (only the leakage flows, or, underlapped, both paths of each chamber),
+    outside it either way, and moving both ways."""
     params = load_quietly("iso15552-32").replace(iso_b=0.25, iso_m=0.6,
                                                  spool_overlap=overlap)
-    model = Cylinder(params, chamber=Adiabatic(), spool_lag=True)
+    model = Cylinder(params, chamber=Adiabatic(), spool_lag=2)
     prep = prepare(model, Experiment(Constant(0.3), "spool", t_end=1.0), Rodas4())
     x, v, z = CYLINDER_MECHANICAL[0]
-    for spool in (0.05, -0.04, 0.45, -0.7):
+    scales = np.array([*CYLINDER_SCALES, 100.0])  # the spool's velocity [1/s]
+    for spool, speed in ((0.05, 40.0), (-0.04, -25.0), (0.45, 3.0), (-0.7, -60.0)):
         for pa, pb in CYLINDER_PRESSURES:
-            y = np.array([x, v, pa, pb, z, spool])
+            y = np.array([x, v, pa, pb, z, spool, speed])
             label = f"cylinder overlap={overlap} u={spool}"
-            _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
+            _fd_check(prep, 0.3, 0.5, y, label, scales)
             _param_fd_check(prep, 0.3, 0.5, y, label)

@@ -62,6 +62,12 @@ declare(
       "fraction of the spool's travel: no path opens until |u| exceeds it; negative: an "
       "underlap, both paths of a chamber open around the centre (0: critical centre)", 0.0,
       -0.5, False, 0.5, group="cylinder", plausible=(-0.2, 0.3)),
+    P("spool_omega", "rad/s", "natural frequency of the 5/3 valve's spool as a second-order "
+      "system (Cylinder(spool_lag=2))", None, 0.0, True, 1e6, group="cylinder",
+      plausible=(10.0, 1e5)),
+    P("spool_zeta", "", "damping ratio of the 5/3 valve's spool as a second-order system "
+      "(Cylinder(spool_lag=2))", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(0.1, 3.0)),
     P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
       "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(1e-5, 1.0)),
@@ -467,20 +473,92 @@ def lagged_scales(out, s):  # pragma: no cover - compiled
     out[s + LAGGED_SPOOL_STATE] = 1.0
 
 
+# ------------------------------------------------------- the spool: second-order dynamics
+#: the second-order spool's block and its local states (position, velocity)
+SECOND_ORDER_BLOCK = Block.of("spool_omega", "spool_zeta")
+SO_OMEGA = SECOND_ORDER_BLOCK.index("spool_omega")
+SO_ZETA = SECOND_ORDER_BLOCK.index("spool_zeta")
+SECOND_SPOOL_STATE = 0
+SECOND_SPOOL_SPEED = 1
+
+
+@njit(cache=True, inline="always")
+def second_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool's position is its first state (the flows clip it to ±1)."""
+    return y[s + SECOND_SPOOL_STATE]
+
+
+@njit(cache=True, inline="always")
+def second_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    """du/dt = w, dw/dt = ω²·(u_command − u) − 2·ζ·ω·w."""
+    omega = p[o + SO_OMEGA]
+    speed = y[s + SECOND_SPOOL_SPEED]
+    dydt[s + SECOND_SPOOL_STATE] = speed
+    dydt[s + SECOND_SPOOL_SPEED] = (omega * omega * (spool_target(t, ts, sig, ptr)
+                                                     - y[s + SECOND_SPOOL_STATE])
+                                    - 2.0 * p[o + SO_ZETA] * omega * speed)
+
+
+@njit(cache=True)
+def second_partials(p, o, jac, s):  # pragma: no cover - compiled
+    omega = p[o + SO_OMEGA]
+    jac[s + SECOND_SPOOL_STATE, s + SECOND_SPOOL_SPEED] = 1.0
+    jac[s + SECOND_SPOOL_SPEED, s + SECOND_SPOOL_STATE] = -omega * omega
+    jac[s + SECOND_SPOOL_SPEED, s + SECOND_SPOOL_SPEED] = -2.0 * p[o + SO_ZETA] * omega
+
+
+@njit(cache=True)
+def second_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    omega, speed = p[o + SO_OMEGA], y[s + SECOND_SPOOL_SPEED]
+    error = spool_target(t, ts, sig, ptr) - y[s + SECOND_SPOOL_STATE]
+    g[s + SECOND_SPOOL_SPEED, o + SO_OMEGA] = 2.0 * omega * error - 2.0 * p[o + SO_ZETA] * speed
+    g[s + SECOND_SPOOL_SPEED, o + SO_ZETA] = -2.0 * omega * speed
+
+
+@njit(cache=True)
+def second_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """At rest on the initial command."""
+    y0[s + SECOND_SPOOL_STATE] = spool_target(t, ts, sig, ptr)
+    y0[s + SECOND_SPOOL_SPEED] = 0.0
+
+
+@njit(cache=True)
+def second_project(y, s):  # pragma: no cover - compiled
+    """Nothing: an underdamped spool may pass ±1 for a while (the flows clip it there);
+    clipping the state would break its dynamics."""
+
+
+@njit(cache=True)
+def second_scales(out, s):  # pragma: no cover - compiled
+    out[s + SECOND_SPOOL_STATE] = 1.0
+    out[s + SECOND_SPOOL_SPEED] = 1.0
+
+
 _SPOOL_FUNCTIONS = ("position", "rates", "partials", "params", "start", "project", "scales")
+#: the spool's dynamics by the order of its lag: (kind, block, states, label)
+_SPOOL_KINDS = {
+    0: ("direct", Block(), (), "ideal spool"),
+    1: ("lagged", LAG_BLOCK, (StateSpec("spool_position", "1"),), "spool lag"),
+    2: ("second", SECOND_ORDER_BLOCK, (StateSpec("spool_position", "1"),
+                                       StateSpec("spool_velocity", "1/s")),
+        "second-order spool"),
+}
 
 
-def spool_part(lagged: bool) -> Part:
-    """The 5/3 valve's spool: following its command at once, or with a first-order lag
-    ``spool_tau`` (a state)."""
-    kind = "lagged" if lagged else "direct"
-    return Part(role="valve", block=LAG_BLOCK if lagged else Block(),
-                states=(StateSpec("spool_position", "1"),) if lagged else (),
+SPOOL_LAG_CHOICES = ("False or 0 (an ideal spool), True or 1 (a first-order lag, spool_tau) "
+                     "or 2 (a second-order spool, spool_omega and spool_zeta)")
+
+
+def spool_part(order: int) -> Part:
+    """The 5/3 valve's spool: following its command at once (order 0), with a first-order
+    lag ``spool_tau`` (1, a state) or as a second-order system of natural frequency
+    ``spool_omega`` and damping ``spool_zeta`` (2, two states)."""
+    kind, block, states, label = _SPOOL_KINDS[int(order)]
+    return Part(role="valve", block=block, states=states,
                 functions={f"spool_{name}": f"{__name__}:{kind}_{name}"
                            for name in _SPOOL_FUNCTIONS},
                 constants={"SPOOL_STATE": f"{__name__}:{kind.upper()}_SPOOL_STATE"},
-                label=f"5/3 valve, {'spool lag' if lagged else 'ideal spool'}",
-                key=f"spool_{kind}")
+                label=f"5/3 valve, {label}", key=f"spool_{kind}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -489,23 +567,25 @@ class Cylinder:
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
     chambers; ``load`` an external force F_load(t) [N] against extension (zero by
-    default); ``spool_lag`` makes the spool follow its command with the time constant
-    ``spool_tau`` (a state) instead of at once."""
+    default); ``spool_lag`` the order of the spool's dynamics: False (0) follows the
+    command at once, True (1) with the time constant ``spool_tau`` (a state), 2 as a
+    second-order system (``spool_omega``, ``spool_zeta``; two states)."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
-    spool_lag: bool = False
+    spool_lag: bool | int = False
     template: ClassVar[str] = "pneumact.models.cylinder_template"
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
                      chamber: ChamberLaw = ..., load: Signal | None = ...,
-                     spool_lag: bool = ...) -> None: ...
+                     spool_lag: bool | int = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance, check_type
+        from ..errors import ArgumentError
         from ..parameters.files import as_parameter_set
 
         set_ = object.__setattr__
@@ -520,7 +600,10 @@ class Cylinder:
         if self.load is not None:
             check_type("load", self.load, Signal, where="Cylinder",
                        what="a Signal (e.g. pa.experiments.Step(...)) or None")
-        check_type("spool_lag", self.spool_lag, bool, where="Cylinder", what="True or False")
+        check_type("spool_lag", self.spool_lag, int, where="Cylinder", what=SPOOL_LAG_CHOICES)
+        if self.spool_lag not in _SPOOL_KINDS:
+            raise ArgumentError(f"Cylinder: spool_lag = {self.spool_lag!r}: must be "
+                                f"{SPOOL_LAG_CHOICES}")
         self.params.require(self.required, "Cylinder")
 
     @property
