@@ -68,6 +68,9 @@ declare(
     P("spool_zeta", "", "damping ratio of the 5/3 valve's spool as a second-order system "
       "(Cylinder(spool_lag=2))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(0.1, 3.0)),
+    P("heat_transfer_coefficient", "W/(m^2*K)", "heat transfer coefficient between each "
+      "chamber's gas and its walls (Cylinder(chamber=HeatTransfer())): 0 adiabatic, large "
+      "isothermal", None, 0.0, False, None, group="cylinder", plausible=(0.0, 2000.0)),
     P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
       "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(1e-5, 1.0)),
@@ -561,6 +564,193 @@ def spool_part(order: int) -> Part:
                 label=f"5/3 valve, {label}", key=f"spool_{kind}")
 
 
+# ------------------------------------------- the chambers' heat transfer (HeatTransfer())
+#: the block of chambers with a temperature state, and their local states (T_a, T_b); the
+#: polytropic chambers have neither
+THERMAL_BLOCK = Block.of("heat_transfer_coefficient")
+TH_H = THERMAL_BLOCK.index("heat_transfer_coefficient")
+POLYTROPIC_THERMAL_STATE = -1
+HEAT_THERMAL_STATE = 0
+
+
+@njit(cache=True)
+def node_inflow(p_node, t_node, pressure, temp, b, m, r_lam):  # pragma: no cover
+    """ISO 6358 flow per unit conductance from a node (supply, exhaust) into a chamber at
+    (pressure, temp), at the upstream side's temperature, with what it carries, T_up·q:
+    (q, T_up·q, ∂q/∂p, ∂(T_up·q)/∂p, ∂q/∂T, ∂(T_up·q)/∂T), p and T the chamber's."""
+    if p_node >= pressure:  # into the chamber at the node's temperature
+        q, _, dq_dp = iso_flow(p_node, pressure, b, m, r_lam, t_node)
+        return q, t_node * q, dq_dp, t_node * dq_dp, 0.0, 0.0
+    q, _, dq_dp = iso_flow(p_node, pressure, b, m, r_lam, temp)  # out at the chamber's
+    dq_dt = -0.5 * q / temp
+    return q, temp * q, dq_dp, temp * dq_dp, dq_dt, q + temp * dq_dt
+
+
+@njit(cache=True)
+def thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h, p,
+                    o):  # pragma: no cover - compiled
+    """One chamber's energy equation: (dp/dt, dT/dt, ṁ) and their partials in p, T, V,
+    dV/dt; and per unit conductance of its supply and exhaust paths the mass inflows and
+    T_up·q (for the spool's slope). ``fill``, ``vent`` are the paths' fractions of C."""
+    c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+    b, m, r_lam, t_wall = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    q_s, e_s, qs_p, es_p, qs_t, es_t = node_inflow(p[o + CY_PSUP], t_wall, pressure, temp,
+                                                   b, m, r_lam)
+    q_e, e_e, qe_p, ee_p, qe_t, ee_t = node_inflow(p[o + CY_PATM], t_wall, pressure, temp,
+                                                   b, m, r_lam)
+    k_s, k_e = c * fill, c * vent
+    mdot = k_s * q_s + k_e * q_e
+    energy = k_s * e_s + k_e * e_e  # Σ T_up·q into the chamber
+    wall = 2.0 * area + perimeter * volume / area
+    heat = h * wall * (t_wall - temp)
+    g1 = gamma - 1.0
+    n_p = gamma * r_gas * energy - gamma * pressure * vol_rate + g1 * heat
+    n_t = gamma * r_gas * energy - g1 * pressure * vol_rate + g1 * heat - r_gas * temp * mdot
+    dp = n_p / volume
+    kt = temp / (pressure * volume)
+    dt = kt * n_t
+    m_p, m_t = k_s * qs_p + k_e * qe_p, k_s * qs_t + k_e * qe_t
+    e_p, e_t = k_s * es_p + k_e * ee_p, k_s * es_t + k_e * ee_t
+    heat_v = h * perimeter / area * (t_wall - temp)
+    heat_t = -h * wall
+    dp_p = (gamma * r_gas * e_p - gamma * vol_rate) / volume
+    dp_t = (gamma * r_gas * e_t + g1 * heat_t) / volume
+    dp_v = (g1 * heat_v - dp) / volume
+    dp_vr = -gamma * pressure / volume
+    dt_p = kt * (gamma * r_gas * e_p - g1 * vol_rate - r_gas * temp * m_p) - dt / pressure
+    dt_t = dt / temp + kt * (gamma * r_gas * e_t + g1 * heat_t - r_gas * mdot
+                             - r_gas * temp * m_t)
+    dt_v = kt * g1 * heat_v - dt / volume
+    dt_vr = -kt * g1 * pressure
+    return (dp, dt, mdot, dp_p, dp_t, dp_v, dp_vr, dt_p, dt_t, dt_v, dt_vr, q_s, e_s, q_e,
+            e_e)
+
+
+@njit(cache=True)
+def thermal_pair(x, v, pa, pb, ta, tb, u, p, o, h):  # pragma: no cover - compiled
+    """Both chambers' ``thermal_chamber`` at piston (x, v) and spool position u; the
+    chambers' wetted perimeters are the bore's (A) and the bore's and the rod's (B)."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    bore, rod = p[o + CY_BORE], p[o + CY_ROD]
+    return (thermal_chamber(pa, ta, vol_a, area_a * v, fill_a, vent_a, area_a,
+                            math.pi * bore, h, p, o),
+            thermal_chamber(pb, tb, vol_b, -area_b * v, fill_b, vent_b, area_b,
+                            math.pi * (bore + rod), h, p, o))
+
+
+@njit(cache=True)
+def polytropic_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+                     row_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+               row_b):  # pragma: no cover - compiled
+    """The chambers' pressure rates from their energy equations (replacing the polytropic
+    ones in rows ``row_a``, ``row_b``) and their temperature rates."""
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    dydt[row_a], dydt[row_b] = ra[0], rb[0]
+    dydt[s], dydt[s + 1] = ra[1], rb[1]
+
+
+@njit(cache=True)
+def polytropic_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a,
+                     i_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a, i_b):  # pragma: no cover - compiled
+    """The net mass flows into A and B (outflows at the chambers' temperatures) into
+    out[i_a], out[i_b]."""
+    ra, rb = thermal_pair(x, 0.0, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    out[i_a], out[i_b] = ra[2], rb[2]
+
+
+@njit(cache=True)
+def polytropic_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+                        col_u):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_chamber_partials(rates, row_p, row_t, d_vol, d_fill, d_vent, volume, pressure,
+                          temp, p, o, jac, col_u):  # pragma: no cover - compiled
+    """One chamber's pressure and temperature rows of ∂f/∂y (x in column 0, v in 1) from
+    ``thermal_chamber``'s partials; the spool's column when it is a state (col_u ≥ 0)."""
+    jac[row_p, 0] = rates[5] * d_vol
+    jac[row_p, 1] = rates[6] * d_vol
+    jac[row_p, row_p] = rates[3]
+    jac[row_p, row_t] = rates[4]
+    jac[row_t, 0] = rates[9] * d_vol
+    jac[row_t, 1] = rates[10] * d_vol
+    jac[row_t, row_p] = rates[7]
+    jac[row_t, row_t] = rates[8]
+    if col_u >= 0:
+        c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+        m_u = c * (d_fill * rates[11] + d_vent * rates[13])
+        e_u = c * (d_fill * rates[12] + d_vent * rates[14])
+        jac[row_p, col_u] = gamma * r_gas * e_u / volume
+        jac[row_t, col_u] = temp / (pressure * volume) * (gamma * r_gas * e_u
+                                                          - r_gas * temp * m_u)
+
+
+@njit(cache=True)
+def heat_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+                  col_u):  # pragma: no cover - compiled
+    """The pressure rows (replacing the polytropic ones) and the temperature rows of ∂f/∂y
+    in x, v, p, T and the spool's position (column ``col_u`` when it is a state)."""
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    d_ext, d_ret, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    heat_chamber_partials(ra, row_a, s, p[o + CY_AA], d_ext, d_ret, vol_a, pa, y[s], p, o,
+                          jac, col_u)
+    heat_chamber_partials(rb, row_b, s + 1, -p[o + CY_AB], d_ret, d_ext, vol_b, pb,
+                          y[s + 1], p, o, jac, col_u)
+
+
+@njit(cache=True)
+def polytropic_start(p, o, y0, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_start(p, o, y0, s):  # pragma: no cover - compiled
+    """Both chambers at the walls' temperature."""
+    y0[s] = y0[s + 1] = p[o + CY_T]
+
+
+@njit(cache=True)
+def polytropic_scales(p, o, out, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_scales(p, o, out, s):  # pragma: no cover - compiled
+    out[s] = out[s + 1] = p[o + CY_T]
+
+
+_THERMAL_FUNCTIONS = ("rates", "flows", "partials", "start", "scales")
+
+
+def thermal_part(chamber: ChamberLaw) -> Part:
+    """The chambers' temperatures: none for a polytropic law, two states and the heat
+    transfer coefficient with ``HeatTransfer()``."""
+    heat = chamber.temperature_state
+    kind = "heat" if heat else "polytropic"
+    return Part(role="thermal", block=THERMAL_BLOCK if heat else Block(),
+                states=(StateSpec("temperature_a", "K"), StateSpec("temperature_b", "K"))
+                if heat else (),
+                functions={f"thermal_{name}": f"{__name__}:{kind}_{name}"
+                           for name in _THERMAL_FUNCTIONS},
+                constants={"THERMAL_STATE": f"{__name__}:{kind.upper()}_THERMAL_STATE"},
+                label="chambers with heat transfer" if heat else "polytropic chambers",
+                key=f"chambers_{kind}")
+
+
 @dataclass(frozen=True, eq=False)
 class Cylinder:
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
@@ -596,7 +786,8 @@ class Cylinder:
                      "pa.StribeckMap()"))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Cylinder",
-            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
+            examples="pa.Isothermal(), pa.Adiabatic(), pa.Polytropic(exponent) or "
+                     "pneumact.models.HeatTransfer()"))
         if self.load is not None:
             check_type("load", self.load, Signal, where="Cylinder",
                        what="a Signal (e.g. pa.experiments.Step(...)) or None")
@@ -608,7 +799,11 @@ class Cylinder:
 
     @property
     def sensitivity_refusal(self) -> str | None:
-        """Why forward sensitivities are refused: the friction law's reason, if any."""
+        """Why forward sensitivities are refused: the friction law's reason, if any, or
+        the heat-transfer chambers' (their parameter rows are not written yet)."""
+        if self.chamber.temperature_state:
+            return ("the chambers with heat transfer (HeatTransfer()) have no parameter "
+                    "rows yet: use finite differences")
         return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
@@ -677,7 +872,8 @@ class Cylinder:
             states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
             settings=self.chamber.settings(), label="double-acting cylinder")
-        return cylinder, self.friction.part(), spool_part(self.spool_lag)
+        return (cylinder, self.friction.part(), spool_part(self.spool_lag),
+                thermal_part(self.chamber))
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         load = self.load if self.load is not None else Constant(0.0)
