@@ -21,6 +21,7 @@ import pneumact as pa
 from conftest import load_quietly
 from pneumact.core.signals import Constant, Sine
 from pneumact.experiments import SpoolStep
+from pneumact.models import HeatTransfer
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
 from reference import (
@@ -326,7 +327,8 @@ def test_the_second_order_spool_follows_its_step_response(zeta, cylinder_set):
     params = cylinder_set.replace(spool_zeta=zeta)
     u0, u1, t_step = -0.5, 0.4, 0.05
     experiment = SpoolStep(before=u0, after=u1, t_step=t_step, t_end=0.1, n_points=2001)
-    run = pa.simulate(pa.Cylinder(params, spool_lag=2), experiment, SOLVER)
+    model = pa.Cylinder(params, chamber=HeatTransfer(), spool_lag=2)  # one kernel with
+    run = pa.simulate(model, experiment, SOLVER)  # test_cylinder_heat.py's
     omega, t = params["spool_omega"], np.maximum(run.time - t_step, 0.0)
     if zeta < 1.0:
         damped = omega * math.sqrt(1.0 - zeta**2)
