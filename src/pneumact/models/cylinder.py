@@ -13,7 +13,9 @@ is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(a(±u) + 
 a(w) = max(w − e, 0)/(1 − e) the opening of a path the spool travels w towards, e the
 spool's overlap (e < 0: an underlap, both paths of a chamber open around the centre); the
 mid-position leakage keeps a chamber's pressure defined at u = 0. The chamber law
-(isothermal, adiabatic, polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ.
+(isothermal, adiabatic, polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ; with
+``HeatTransfer()`` each chamber's energy equation replaces it, its temperature a state
+(``thermal_part``, docs/model.md).
 
 The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p``.
 """
@@ -756,8 +758,9 @@ class Cylinder:
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
-    chambers; ``load`` an external force F_load(t) [N] against extension (zero by
-    default); ``spool_lag`` the order of the spool's dynamics: False (0) follows the
+    chambers (``HeatTransfer()``: their energy equations, temperatures as states);
+    ``load`` an external force F_load(t) [N] against extension (zero by default);
+    ``spool_lag`` the order of the spool's dynamics: False (0) follows the
     command at once, True (1) with the time constant ``spool_tau`` (a state), 2 as a
     second-order system (``spool_omega``, ``spool_zeta``; two states)."""
 
