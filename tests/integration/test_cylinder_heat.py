@@ -225,4 +225,6 @@ def test_heat_transfer_is_refused_where_it_is_not_modelled(cylinder_set, vgt):
     with pytest.raises(pa.ArgumentError, match="only the cylinder's chambers carry a "
                                                "temperature"):
         pa.Actuator(vgt, valve=pa.CommandValve(), chamber=HeatTransfer())
-    assert "HeatTransfer()" in _cylinder(cylinder_set).sensitivity_refusal
+    experiment = pa.Experiment(Constant(0.2), "spool", 0.1)
+    with pytest.raises(pa.ParameterError, match=r"HeatTransfer\(\)\) have no parameter rows"):
+        pa.simulate_sensitivities(_cylinder(cylinder_set), experiment, ["valve_C"])
