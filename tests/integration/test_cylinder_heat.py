@@ -4,8 +4,9 @@ The energy equation with the gas temperature as a state and Newton's heat transf
 walls at the set's T (``HeatTransfer()``): a closed chamber relaxes to the wall
 temperature with the time constant m·c_v/(h·A_w); without heat transfer closed chambers
 follow the adiabatic closed form, with a large one the isothermal; each chamber's mass
-and energy balance in the right-hand side, and its mass balance along a run. One kernel
-(LuGre, the second-order spool, heat transfer), shared with the spool's step response.
+and energy balance in the right-hand side, and its mass balance along a run; forward
+sensitivities against differences. One kernel (LuGre, the second-order spool, heat
+transfer), shared with the spool's step response.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from scipy.integrate import cumulative_simpson
 import pneumact as pa
 from conftest import load_quietly
 from pneumact.core.signals import Constant, Sine
+from pneumact.experiments import SpoolStep
 from pneumact.models import HeatTransfer
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
@@ -31,6 +33,10 @@ from reference import (
     CYLINDER_RTOL,
     ISO_RHO0,
     ISO_T0,
+    SENS_FD_REL_STEP,
+    SENS_REFERENCE_RTOL,
+    SENS_RMS_FRACTION,
+    SENS_RTOL,
 )
 
 SOLVER = Rodas4(rtol=CYLINDER_RTOL)
@@ -219,12 +225,27 @@ def test_mass_balance_of_each_chamber_along_a_run(cylinder_set):
             mass)
 
 
-def test_heat_transfer_is_refused_where_it_is_not_modelled(cylinder_set, vgt):
-    """The diaphragm actuator's chamber has no temperature state; forward sensitivities
-    of the heat-transfer chambers are not written yet: both say so."""
+def test_the_actuator_refuses_heat_transfer(vgt):
+    """The diaphragm actuator's chamber has no temperature state: one error saying so."""
     with pytest.raises(pa.ArgumentError, match="only the cylinder's chambers carry a "
                                                "temperature"):
         pa.Actuator(vgt, valve=pa.CommandValve(), chamber=HeatTransfer())
-    experiment = pa.Experiment(Constant(0.2), "spool", 0.1)
-    with pytest.raises(pa.ParameterError, match=r"HeatTransfer\(\)\) have no parameter rows"):
-        pa.simulate_sensitivities(_cylinder(cylinder_set), experiment, ["valve_C"])
+
+
+@pytest.mark.parametrize("name", ["heat_transfer_coefficient", "valve_C", "D_bore"])
+def test_forward_sensitivities_match_central_differences(name, cylinder_set):
+    """∂(p_a, T_a, x)/∂θ carried through a spool step against central differences of two
+    runs: the heat transfer coefficient, a flow entry and the bore (the wall's perimeter)."""
+    experiment = SpoolStep(before=-0.3, after=0.4, t_step=0.02, t_end=0.15, n_points=151)
+    signals = ("pressure_a", "temperature_a", "position")
+    sens = pa.simulate_sensitivities(_cylinder(cylinder_set), experiment, [name],
+                                     Rodas4(rtol=SENS_RTOL))
+    value = cylinder_set[name]
+    step = SENS_FD_REL_STEP * value
+    runs = [pa.simulate(_cylinder(cylinder_set.replace({name: value + sign * step})),
+                        experiment, Rodas4(rtol=SENS_REFERENCE_RTOL)) for sign in (1, -1)]
+    for signal in signals:
+        difference = (runs[0][signal] - runs[1][signal]) / (2.0 * step)
+        size = np.abs(difference).max()
+        rms = np.sqrt(np.mean((sens[signal][:, 0] - difference) ** 2))
+        assert size > 0.0 and rms <= SENS_RMS_FRACTION * size, (name, signal, rms, size)

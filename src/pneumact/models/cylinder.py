@@ -715,6 +715,122 @@ def heat_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
 
 
 @njit(cache=True)
+def node_inflow_params(p_node, t_node, pressure, temp, b, m, r_lam):  # pragma: no cover
+    """Partials of ``node_inflow``'s (q, T_up·q) in the node's pressure and temperature and
+    in b, m, r_lam: (q_pn, e_pn, q_tn, e_tn, q_b, e_b, q_m, e_m, q_lam, e_lam)."""
+    inflow = p_node >= pressure
+    t_up = t_node if inflow else temp
+    q, dq_dpn, _ = iso_flow(p_node, pressure, b, m, r_lam, t_up)
+    q_b, q_m, q_lam, _ = iso_flow_params(p_node, pressure, b, m, r_lam, t_up)
+    q_tn = -0.5 * q / t_node if inflow else 0.0
+    e_tn = 0.5 * q if inflow else 0.0
+    return (dq_dpn, t_up * dq_dpn, q_tn, e_tn, q_b, t_up * q_b, q_m, t_up * q_m, q_lam,
+            t_up * q_lam)
+
+
+@njit(cache=True)
+def flow_column(g, row_p, row_t, column, m_th, e_th, q_th, volume, kt, k_p, k_t,
+                g1):  # pragma: no cover - compiled
+    """A chamber's pressure and temperature entries of column ``column`` of ∂f/∂θ from
+    the parameter's partials of ṁ, E = Σ T_up·q and Q̇ (k_p = γ·R, k_t = R·T_c,
+    g1 = γ − 1, kt = T_c/(p·V))."""
+    g[row_p, column] = (k_p * e_th + g1 * q_th) / volume
+    g[row_t, column] = kt * (k_p * e_th + g1 * q_th - k_t * m_th)
+
+
+@njit(cache=True)
+def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area, perimeter,
+                        fill, vent, e_fill, e_vent, geometry, p, o, oh,
+                        h):  # pragma: no cover - compiled
+    """One chamber's pressure and temperature rows of ∂f/∂θ (the pressure row's cylinder
+    entries rewritten); ``e_fill``, ``e_vent`` are the paths' slopes in the overlap,
+    ``geometry`` (columns of its area, dead volume and stroke (−1: none), ∂V/∂area,
+    ∂(dV/dt)/∂area, ∂P/∂D_bore, ∂P/∂d_rod)."""
+    rates = thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h,
+                            p, o)
+    mdot = rates[2]
+    q_s, e_s, q_e, e_e = rates[11], rates[12], rates[13], rates[14]
+    c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+    b, m, r_lam, t_wall = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    g1, kt = gamma - 1.0, temp / (pressure * volume)
+    k_s, k_e = c * fill, c * vent
+    energy = k_s * e_s + k_e * e_e
+    wall = 2.0 * area + perimeter * volume / area
+    heat = h * wall * (t_wall - temp)
+    sup = node_inflow_params(p[o + CY_PSUP], t_wall, pressure, temp, b, m, r_lam)
+    exh = node_inflow_params(p[o + CY_PATM], t_wall, pressure, temp, b, m, r_lam)
+    for k in range(CYLINDER_SIZE):
+        g[row_p, o + k] = 0.0
+    # the flow entries: ∂ṁ/∂θ, ∂E/∂θ, ∂Q̇/∂θ of each
+    k_p, k_t = gamma * r_gas, r_gas * temp
+    flow_column(g, row_p, row_t, o + CY_C, fill * q_s + vent * q_e, fill * e_s + vent * e_e,
+                0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_LEAK, c * (q_s + q_e), c * (e_s + e_e), 0.0, volume,
+                kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_OVERLAP, c * (e_fill * q_s + e_vent * q_e),
+                c * (e_fill * e_s + e_vent * e_e), 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_PSUP, k_s * sup[0], k_s * sup[1], 0.0, volume, kt,
+                k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_PATM, k_e * exh[0], k_e * exh[1], 0.0, volume, kt,
+                k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_T, k_s * sup[2] + k_e * exh[2],
+                k_s * sup[3] + k_e * exh[3], h * wall, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_B, k_s * sup[4] + k_e * exh[4],
+                k_s * sup[5] + k_e * exh[5], 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_MEXP, k_s * sup[6] + k_e * exh[6],
+                k_s * sup[7] + k_e * exh[7], 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_RLIN, k_s * sup[8] + k_e * exh[8],
+                k_s * sup[9] + k_e * exh[9], 0.0, volume, kt, k_p, k_t, g1)
+    g[row_p, o + CY_GAMMA] = (r_gas * energy - pressure * vol_rate + heat) / volume
+    g[row_t, o + CY_GAMMA] = kt * (r_gas * energy - pressure * vol_rate + heat)
+    g[row_p, o + CY_R] = gamma * energy / volume
+    g[row_t, o + CY_R] = kt * (gamma * energy - temp * mdot)
+    g[row_p, oh + TH_H] = g1 * wall * (t_wall - temp) / volume
+    g[row_t, oh + TH_H] = kt * g1 * wall * (t_wall - temp)
+    # geometry: through V, dV/dt and the wall area's own area and perimeter
+    heat_area = h * (2.0 - perimeter * volume / (area * area)) * (t_wall - temp)
+    heat_perimeter = h * volume / area * (t_wall - temp)
+    col_area, col_dead, col_xmax, dvol_area, dvol_rate_area, d_bore, d_rod = geometry
+    g[row_p, o + col_area] = (rates[5] * dvol_area + rates[6] * dvol_rate_area
+                              + g1 * heat_area / volume)
+    g[row_t, o + col_area] = (rates[9] * dvol_area + rates[10] * dvol_rate_area
+                              + kt * g1 * heat_area)
+    g[row_p, o + col_dead] = rates[5]
+    g[row_t, o + col_dead] = rates[9]
+    if col_xmax >= 0:  # chamber B: V = V_dead_b + A_b·(x_max − x)
+        g[row_p, o + col_xmax] = rates[5] * area
+        g[row_t, o + col_xmax] = rates[9] * area
+    g[row_p, o + CY_BORE] = g1 * heat_perimeter * d_bore / volume
+    g[row_t, o + CY_BORE] = kt * g1 * heat_perimeter * d_bore
+    g[row_p, o + CY_ROD] = g1 * heat_perimeter * d_rod / volume
+    g[row_t, o + CY_ROD] = kt * g1 * heat_perimeter * d_rod
+
+
+@njit(cache=True)
+def polytropic_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a,
+                      row_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a, row_b):  # pragma: no cover
+    """The chambers' pressure rows of ∂f/∂θ (replacing the polytropic ones) and their
+    temperature rows, the heat transfer coefficient's column included."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
+    _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    bore, rod, h = p[o + CY_BORE], p[o + CY_ROD], p[oh + TH_H]
+    heat_chamber_params(g, row_a, s, pa, y[s], vol_a, area_a * v, area_a, math.pi * bore,
+                        fill_a, vent_a, e_extend, e_retract,
+                        (CY_AA, CY_VDA, -1, x, v, math.pi, 0.0), p, o, oh, h)
+    heat_chamber_params(g, row_b, s + 1, pb, y[s + 1], vol_b, -area_b * v, area_b,
+                        math.pi * (bore + rod), fill_b, vent_b, e_retract, e_extend,
+                        (CY_AB, CY_VDB, CY_XMAX, p[o + CY_XMAX] - x, -v, math.pi, math.pi),
+                        p, o, oh, h)
+
+
+@njit(cache=True)
 def polytropic_start(p, o, y0, s):  # pragma: no cover - compiled
     pass
 
@@ -735,7 +851,7 @@ def heat_scales(p, o, out, s):  # pragma: no cover - compiled
     out[s] = out[s + 1] = p[o + CY_T]
 
 
-_THERMAL_FUNCTIONS = ("rates", "flows", "partials", "start", "scales")
+_THERMAL_FUNCTIONS = ("rates", "flows", "partials", "params", "start", "scales")
 
 
 def thermal_part(chamber: ChamberLaw) -> Part:
@@ -802,11 +918,7 @@ class Cylinder:
 
     @property
     def sensitivity_refusal(self) -> str | None:
-        """Why forward sensitivities are refused: the friction law's reason, if any, or
-        the heat-transfer chambers' (their parameter rows are not written yet)."""
-        if self.chamber.temperature_state:
-            return ("the chambers with heat transfer (HeatTransfer()) have no parameter "
-                    "rows yet: use finite differences")
+        """Why forward sensitivities are refused: the friction law's reason, if any."""
         return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------

@@ -36,7 +36,8 @@ friction_rates = friction_force = friction_partials = friction_param_partials = 
 friction_project = friction_scales = friction_store = friction_store_partials = None
 spool_position = spool_rates = spool_partials = spool_params = spool_start = None
 spool_project = spool_scales = None
-thermal_rates = thermal_flows = thermal_partials = thermal_start = thermal_scales = None
+thermal_rates = thermal_flows = thermal_partials = thermal_params = None
+thermal_start = thermal_scales = None
 SPOOL_STATE = -1
 THERMAL_STATE = -1
 NSTATE = 5
@@ -151,6 +152,8 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
     cylinder_params(x, v, pa, pb, _spool(t, ts, y, prm, sig, ptr), net, prm, CYLINDER_LO, g,
                     S_VELOCITY, S_PRESSURE_A, S_PRESSURE_B)
+    thermal_params(x, v, pa, pb, y, S_THERMAL, _spool(t, ts, y, prm, sig, ptr), prm,
+                   CYLINDER_LO, THERMAL_LO, g, S_PRESSURE_A, S_PRESSURE_B)
     spool_params(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
     friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
     m = prm[CYLINDER_LO + CY_M]
