@@ -1,9 +1,12 @@
 """Model template: the double-acting cylinder behind a 5/3 proportional valve.
 
 States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
-position when it lags], the parameter vector is [cylinder block | friction block | spool
-block]; the generator binds the friction law and the spool (``spool_*``, direct or
-lagged). The equations are ``models.cylinder``'s.
+position (and velocity) when it lags | the chambers' temperatures with heat transfer],
+the parameter vector is [cylinder block | friction block | spool block | heat transfer
+block]; the generator binds the friction law, the spool (``spool_*``: direct, lagged or
+second-order) and the chambers (``thermal_*``: polytropic, whose functions do nothing, or
+with heat transfer, whose energy equations replace the pressure rates, rows and columns
+the polytropic code wrote). The equations are ``models.cylinder``'s.
 """
 
 from pneumact.core import kernel
