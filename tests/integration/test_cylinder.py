@@ -21,6 +21,7 @@ import pneumact as pa
 from conftest import load_quietly
 from pneumact.core.signals import Constant, Sine
 from pneumact.experiments import SpoolStep
+from pneumact.models import HeatTransfer
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import prepare
 from reference import (
@@ -161,23 +162,54 @@ def _iso6358(conductance, p_up, p_down, params):
     return conductance * ISO_RHO0 * p_up * math.sqrt(ISO_T0 / params["T"]) * phi
 
 
+def _opening(travel, overlap):
+    """A path's opening as docs/model.md writes it: a(w) = max(w − e, 0)/(1 − e)."""
+    return max(travel - overlap, 0.0) / (1.0 - overlap)
+
+
+def _valve_outputs(params, u, p_a, p_b):
+    """(ṁ_a, ṁ_b) of the kernel at spool position u (the lagged spool's state: one kernel
+    for every u) and chamber pressures p_a, p_b."""
+    model = pa.Cylinder(params, spool_lag=True)
+    prep = prepare(model, pa.Experiment(Constant(0.0), "spool", 1.0), SOLVER)
+    kernel, names = prep.kernel, prep.assembly.output_names
+    out = np.empty(kernel.NOUT)
+    kernel.outputs(0.5, 0.5, np.array([0.1, 0.0, p_a, p_b, 0.0, u]), prep.vector, prep.sig,
+                   prep.ptr, out)
+    return out[names.index("mass_flow_a")], out[names.index("mass_flow_b")]
+
+
+def _expected_flows(params, u, p_a, p_b):
+    """Each chamber's supply path minus its exhaust path, ISO 6358 written out, with the
+    opening of docs/model.md (the leakage included); pressures between p_atm and p_s."""
+    c, leak, overlap = params["valve_C"], params["valve_leak"], params["spool_overlap"]
+    p_s, p_e = params["p_supply"], params["p_atm"]
+    extend, retract = _opening(u, overlap) + leak, _opening(-u, overlap) + leak
+    return (_iso6358(c * extend, p_s, p_a, params) - _iso6358(c * retract, p_a, p_e, params),
+            _iso6358(c * retract, p_s, p_b, params) - _iso6358(c * extend, p_b, p_e, params))
+
+
 # (u, p_a, p_b): supply → A choked (r = 0.2) and B → exhaust subsonic (r = 0.8), then the
 # reverse; and retracting: A → exhaust choked, supply → B subsonic
 VALVE_CASES = [(0.6, 1.4e5, 1.25e5), (0.6, 4.9e5, 6e5), (-0.35, 6e5, 4.9e5),
                (-1.0, 1.25e5, 1.4e5)]
 
 
+@pytest.mark.parametrize("overlap", [0.0, 0.15, -0.1], ids=["critical", "overlap",
+                                                            "underlap"])
 @pytest.mark.parametrize(("u", "p_a", "p_b"), VALVE_CASES)
-def test_valve_flows_follow_iso6358(u, p_a, p_b, cylinder_set):
-    """Each open path of the 5/3 valve is an ISO 6358 flow of conductance C·|u| (no
-    leakage; a gas temperature off T0 and a datasheet's b and m)."""
-    params = cylinder_set.replace(valve_leak=0.0, T=313.15, iso_b=0.25, iso_m=0.6)
+def test_valve_flows_follow_iso6358(u, p_a, p_b, overlap, cylinder_set):
+    """Each open path of the 5/3 valve is an ISO 6358 flow of conductance C·a(±u) (no
+    leakage; a gas temperature off T0 and a datasheet's b and m), a the opening past the
+    spool's overlap."""
+    params = cylinder_set.replace(valve_leak=0.0, T=313.15, iso_b=0.25, iso_m=0.6,
+                                  spool_overlap=overlap)
     prep = prepare(pa.Cylinder(params), pa.Experiment(Constant(u), "spool", 1.0), SOLVER)
     kernel, names = prep.kernel, prep.assembly.output_names
     out = np.empty(kernel.NOUT)
     y = np.array([0.1, 0.0, p_a, p_b, 0.0])
     kernel.outputs(0.5, 0.5, y, prep.vector, prep.sig, prep.ptr, out)
-    conductance = params["valve_C"] * abs(u)
+    conductance = params["valve_C"] * _opening(abs(u), overlap)
     p_s, p_e = params["p_supply"], params["p_atm"]
     if u > 0:
         expected_a = _iso6358(conductance, p_s, p_a, params)
@@ -192,6 +224,62 @@ def test_valve_flows_follow_iso6358(u, p_a, p_b, cylinder_set):
         assert abs(got - expected) <= CYLINDER_VALVE_FLOW_RTOL * abs(expected), name
 
 
+def test_an_overlapped_spool_passes_only_its_leakage_inside_the_band(cylinder_set):
+    """Overlap 0.15: for |u| ≤ 0.15 only the leakage flows (as at the centre), none
+    without it; just past the band the paths open."""
+    params = cylinder_set.replace(spool_overlap=0.15)
+    p_a, p_b = 2.5e5, 4.5e5
+    centre = _valve_outputs(params, 0.0, p_a, p_b)
+    expected = _expected_flows(params, 0.0, p_a, p_b)
+    for u in (-0.15, -0.08, 0.1, 0.15):
+        got = _valve_outputs(params, u, p_a, p_b)
+        assert got == centre, u
+        for flow, closed_form in zip(got, expected, strict=True):
+            assert abs(flow - closed_form) <= CYLINDER_VALVE_FLOW_RTOL * abs(closed_form)
+    assert _valve_outputs(params.replace(valve_leak=0.0), 0.12, p_a, p_b) == (0.0, 0.0)
+    past = _valve_outputs(params.replace(valve_leak=0.0), 0.2, p_a, p_b)
+    assert past[0] > 0.0 > past[1]  # supply → A and B → exhaust open
+
+
+def test_an_underlapped_spool_opens_both_paths_of_each_chamber_at_the_centre(
+        cylinder_set):
+    """Underlap 0.1, centred, no leakage: each chamber is fed from the supply and vented
+    to the exhaust, both paths by C·0.1/1.1 (ISO 6358 written out), so a chamber at
+    supply pressure empties and one at exhaust pressure fills; the two chambers see the
+    same valve."""
+    params = cylinder_set.replace(spool_overlap=-0.1, valve_leak=0.0)
+    p_s, p_e = params["p_supply"], params["p_atm"]
+    c_open = params["valve_C"] * 0.1 / 1.1
+    for p_a, p_b in ((2e5, 5e5), (4e5, 4e5)):
+        got = _valve_outputs(params, 0.0, p_a, p_b)
+        for flow, p in zip(got, (p_a, p_b), strict=True):
+            expected = _iso6358(c_open, p_s, p, params) - _iso6358(c_open, p, p_e, params)
+            assert abs(flow - expected) <= CYLINDER_VALVE_FLOW_RTOL * abs(expected)
+    flow_a, flow_b = _valve_outputs(params, 0.0, p_s, p_e)
+    assert flow_a < 0.0 < flow_b
+
+
+@pytest.mark.parametrize("overlap", [0.15, -0.1], ids=["overlap", "underlap"])
+def test_the_valve_opens_continuously_in_the_spool_position(overlap, cylinder_set):
+    """No jump in either chamber's flow as the spool crosses the edges ±e of the band:
+    across each edge the flow changes by at most the largest slope, two paths of flow at
+    most q_max (choked from the supply) opening by 1/(1 − e) per unit u, times the step
+    (2e-9), and it follows the written-out opening on both sides."""
+    params = cylinder_set.replace(spool_overlap=overlap)
+    p_a, p_b, step = 2.5e5, 4.5e5, 1e-9
+    q_max = _iso6358(params["valve_C"], params["p_supply"], params["p_atm"], params)
+    for edge in (overlap, -overlap):
+        below, above = (_valve_outputs(params, edge + sign * step, p_a, p_b)
+                        for sign in (-1.0, 1.0))
+        for lo, hi in zip(below, above, strict=True):
+            assert abs(hi - lo) <= 2.0 * q_max / (1.0 - overlap) * 2.0 * step
+        for u in (edge - step, edge + step):
+            got, expected = _valve_outputs(params, u, p_a, p_b), _expected_flows(
+                params, u, p_a, p_b)
+            for flow, closed_form in zip(got, expected, strict=True):
+                assert abs(flow - closed_form) <= CYLINDER_VALVE_FLOW_RTOL * abs(closed_form)
+
+
 def test_valve_command_outside_its_range_is_refused(cylinder_set):
     """A spool command beyond ±1 is impossible: one error naming the range."""
     experiment = pa.Experiment(Constant(1.5), "spool", 1.0)
@@ -201,7 +289,8 @@ def test_valve_command_outside_its_range_is_refused(cylinder_set):
 
 @pytest.mark.parametrize(("field", "value", "allowed"), [
     ("d_rod", 0.04, "must be < D_bore"), ("p_supply", 0.9e5, "must be > p_atm"),
-    ("valve_leak", 2.0, "must be <= 1"), ("D_bore", 0.0, "must be > 0")])
+    ("valve_leak", 2.0, "must be <= 1"), ("D_bore", 0.0, "must be > 0"),
+    ("spool_overlap", 0.7, "must be <= 0.5")])
 def test_impossible_cylinders_are_refused(field, value, allowed, cylinder_set):
     """A rod wider than the bore, a supply below the atmosphere, a leakage above the
     valve's own conductance, no bore: one error naming the field, value and range."""
@@ -228,6 +317,36 @@ def test_the_lagged_spool_follows_its_first_order_law(cylinder_set):
     assert np.abs(lagged["spool"] - expected).max() <= CYLINDER_SPOOL_LAG_ATOL
     started = [run.time[np.argmax(run["position"] > 1e-3)] for run in (lagged, ideal)]
     assert started[0] > started[1]
+
+
+@pytest.mark.parametrize("zeta", [0.3, 1.5], ids=["underdamped", "overdamped"])
+def test_the_second_order_spool_follows_its_step_response(zeta, cylinder_set):
+    """Cylinder(spool_lag=2): after a step of its command from u0 to u1 the spool moves as
+    the closed-form step response of ü = ω²·(u1 − u) − 2·ζ·ω·u̇ from rest, under- and
+    overdamped, overshooting the command when ζ < 1."""
+    params = cylinder_set.replace(spool_zeta=zeta)
+    u0, u1, t_step = -0.5, 0.4, 0.05
+    experiment = SpoolStep(before=u0, after=u1, t_step=t_step, t_end=0.1, n_points=2001)
+    model = pa.Cylinder(params, chamber=HeatTransfer(), spool_lag=2)  # one kernel with
+    run = pa.simulate(model, experiment, SOLVER)  # test_cylinder_heat.py's
+    omega, t = params["spool_omega"], np.maximum(run.time - t_step, 0.0)
+    if zeta < 1.0:
+        damped = omega * math.sqrt(1.0 - zeta**2)
+        shape = np.exp(-zeta * omega * t) * (np.cos(damped * t) + zeta * omega / damped
+                                             * np.sin(damped * t))
+    else:
+        root = omega * math.sqrt(zeta**2 - 1.0)
+        fast, slow = -zeta * omega - root, -zeta * omega + root
+        shape = (fast * np.exp(slow * t) - slow * np.exp(fast * t)) / (fast - slow)
+    expected = u1 + (u0 - u1) * shape
+    assert np.abs(run["spool"] - expected).max() <= CYLINDER_SPOOL_LAG_ATOL
+    overshoot = run["spool"].max() - u1
+    assert (overshoot > 0.1) if zeta < 1.0 else (overshoot <= 0.0)
+
+
+def test_a_spool_lag_of_no_known_order_is_refused(cylinder_set):
+    with pytest.raises(pa.ArgumentError, match=r"spool_lag = 3: must be False or 0"):
+        pa.Cylinder(cylinder_set, spool_lag=3)
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [

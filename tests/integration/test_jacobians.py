@@ -22,6 +22,7 @@ from pneumact.models import (
     CoulombViscous,
     Cylinder,
     FrictionRig,
+    HeatTransfer,
     Iso6358Valve,
     LuGre,
     PressureRegulator,
@@ -71,9 +72,10 @@ def _fd_check(prep, t, ts, y, label, state_scales=STATE_SCALES):
     )
 
 
-def _param_fd_check(prep, t, ts, y, label):
+def _param_fd_check(prep, t, ts, y, label, names=None):
     """∂f/∂prm[k] of ``param_jac`` against central differences of ``rhs`` in each slot
-    (derived slots included: the kernel reads them as they are, without re-deriving)."""
+    (derived slots included: the kernel reads them as they are, without re-deriving), or
+    in the slots ``names`` only."""
     kernel, prm, sig, ptr = prep.kernel, prep.vector, prep.sig, prep.ptr
     n, n_par = y.size, prm.size
     analytic = np.zeros((n, n_par))
@@ -82,6 +84,8 @@ def _param_fd_check(prep, t, ts, y, label):
     kernel.rhs(t, ts, y, prm, sig, ptr, f0)
     slots = prep.assembly.entries
     for k in range(n_par):
+        if names is not None and slots[k].name not in names:
+            continue
         h = JAC_FD_REL_STEP * max(abs(prm[k]), 1e-300)
         plus, minus = prm.copy(), prm.copy()
         plus[k] += h
@@ -188,4 +192,50 @@ def test_cylinder_jacobian(spool_lag):
                 y = np.array([x, v, pa, pb, z, *spool])
                 label = f"cylinder u={u}"
                 _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
+                _param_fd_check(prep, 0.3, 0.5, y, label)
+
+
+@pytest.mark.parametrize("overlap", [0.1, -0.1], ids=["overlap", "underlap"])
+def test_cylinder_jacobian_with_an_overlap(overlap):
+    """The 5/3 valve's overlap and underlap: ∂f/∂u (the lagged spool's column) and
+    ∂f/∂spool_overlap with the spool inside the band (only the leakage flows, or, under-
+    lapped, both paths of each chamber), outside it either way, and fully open."""
+    params = load_quietly("iso15552-32").replace(iso_b=0.25, iso_m=0.6,
+                                                 spool_overlap=overlap)
+    model = Cylinder(params, chamber=Adiabatic(), spool_lag=True)
+    prep = prepare(model, Experiment(Constant(0.3), "spool", t_end=1.0), Rodas4())
+    x, v, z = CYLINDER_MECHANICAL[0]
+    for spool in (0.05, -0.04, 0.45, -0.7):
+        for pa, pb in CYLINDER_PRESSURES:
+            y = np.array([x, v, pa, pb, z, spool])
+            label = f"cylinder overlap={overlap} u={spool}"
+            _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES)
+            _param_fd_check(prep, 0.3, 0.5, y, label)
+
+
+# the states of a cylinder with heat transfer behind a second-order spool: the cylinder's,
+# then the spool's position and velocity [1/s], the chambers' temperatures [K]
+THERMAL_SCALES = np.array([*CYLINDER_SCALES, 100.0, 10.0, 10.0])
+# (p_a, p_b, T_a, T_b): filling and venting at temperatures off the wall's, and a chamber
+# above the supply (its flow back at its own temperature)
+THERMAL_GAS = [(1.3e5, 6.5e5, 330.0, 250.0), (5.2e5, 2.4e5, 280.0, 320.0),
+               (7.3e5, 0.9e5, 360.0, 293.15)]
+
+
+@pytest.mark.parametrize("overlap", [0.0, -0.1], ids=["critical", "underlap"])
+def test_cylinder_jacobian_with_heat_transfer_and_a_second_order_spool(overlap):
+    """The chambers' energy equations (pressure and temperature rows, the outflows at the
+    chambers' temperatures) behind a second-order spool, ∂f/∂y against differences; of
+    ∂f/∂θ the spool's entries (the chambers' are not written: their sensitivities are
+    refused)."""
+    params = load_quietly("iso15552-32").replace(iso_b=0.25, iso_m=0.6,
+                                                 spool_overlap=overlap)
+    model = Cylinder(params, chamber=HeatTransfer(), spool_lag=2)
+    prep = prepare(model, Experiment(Constant(0.3), "spool", t_end=1.0), Rodas4())
+    for x, v, z in CYLINDER_MECHANICAL[:3]:
+        for pa, pb, ta, tb in THERMAL_GAS:
+            for spool, speed in ((0.05, 40.0), (0.45, -3.0), (-0.7, -60.0)):
+                y = np.array([x, v, pa, pb, z, spool, speed, ta, tb])
+                label = f"cylinder heat overlap={overlap} u={spool}"
+                _fd_check(prep, 0.3, 0.5, y, label, THERMAL_SCALES)
                 _param_fd_check(prep, 0.3, 0.5, y, label)

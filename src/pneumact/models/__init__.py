@@ -19,6 +19,7 @@ from .inputs import INPUT_SIGNALS, input_signal, valve_for_signal
 from .pneumatics import (
     Adiabatic,
     ChamberLaw,
+    HeatTransfer,
     Isothermal,
     Polytropic,
     conductance_of_area,
@@ -39,8 +40,8 @@ from .valves import (
 __all__ = [
     "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
     "CommandValve", "CoulombViscous", "Cylinder", "Dahl", "ElastoPlastic", "FrictionModel",
-    "FrictionRig", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic", "PressureRegulator",
-    "PressureSource", "StribeckMap", "Valve", "conductance_of_area", "flow_function_values",
-    "friction_law", "friction_models", "input_signal", "iso6358_mass_flow",
+    "FrictionRig", "HeatTransfer", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic",
+    "PressureRegulator", "PressureSource", "StribeckMap", "Valve", "conductance_of_area",
+    "flow_function_values", "friction_law", "friction_models", "input_signal", "iso6358_mass_flow",
     "orifice_mass_flow", "valve_for_signal"
 ]

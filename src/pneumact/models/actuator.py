@@ -72,6 +72,11 @@ class Actuator:
             if value is not None:
                 check_type(name, value, Signal, where="Actuator",
                            what="a Signal (e.g. pa.experiments.Ramp(...)) or None")
+        if self.chamber.temperature_state:
+            raise ArgumentError(
+                f"Actuator: chamber = {type(self.chamber).__name__}(): only the cylinder's "
+                "chambers carry a temperature state; the actuator's chamber takes "
+                "pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)")
         if isinstance(self.valve, PressureSource) and not isinstance(self.chamber, Isothermal):
             raise ArgumentError(
                 f"Actuator: chamber = {type(self.chamber).__name__}() has no effect with "

@@ -9,10 +9,13 @@ x ∈ [0, x_max] is the rod's extension from the cap-end stop; chamber A is the 
 the rod's cross-section A_a − A_b. The end stops are the Hunt–Crossley contacts of
 ``models.mechanics``. The spool command u ∈ [−1, 1] of the closed-centre 5/3 valve opens
 supply → A and B → exhaust for u > 0, supply → B and A → exhaust for u < 0; each path
-is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(|u| + valve_leak)
-on its open side and valve_C·valve_leak on its closed one (the mid-position leakage that
-keeps a chamber's pressure defined at u = 0). The chamber law (isothermal, adiabatic,
-polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ.
+is an ISO 6358 flow (``pneumatics.iso_flow``) of conductance valve_C·(a(±u) + valve_leak),
+a(w) = max(w − e, 0)/(1 − e) the opening of a path the spool travels w towards, e the
+spool's overlap (e < 0: an underlap, both paths of a chamber open around the centre); the
+mid-position leakage keeps a chamber's pressure defined at u = 0. The chamber law
+(isothermal, adiabatic, polytropic) is the actuator's ``ChamberLaw``: n = a + b·γ; with
+``HeatTransfer()`` each chamber's energy equation replaces it, its temperature a state
+(``thermal_part``, docs/model.md).
 
 The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p``.
 """
@@ -57,6 +60,19 @@ declare(
       plausible=(1e-10, 1e-6)),
     P("valve_leak", "", "mid-position leakage of each path of the 5/3 valve, as a fraction "
       "of valve_C", 0.0, 0.0, False, 1.0, group="cylinder", plausible=(0.0, 0.1)),
+    P("spool_overlap", "", "overlap of the 5/3 valve's spool lands over its ports, as a "
+      "fraction of the spool's travel: no path opens until |u| exceeds it; negative: an "
+      "underlap, both paths of a chamber open around the centre (0: critical centre)", 0.0,
+      -0.5, False, 0.5, group="cylinder", plausible=(-0.2, 0.3)),
+    P("spool_omega", "rad/s", "natural frequency of the 5/3 valve's spool as a second-order "
+      "system (Cylinder(spool_lag=2))", None, 0.0, True, 1e6, group="cylinder",
+      plausible=(10.0, 1e5)),
+    P("spool_zeta", "", "damping ratio of the 5/3 valve's spool as a second-order system "
+      "(Cylinder(spool_lag=2))", None, 0.0, True, 10.0, group="cylinder",
+      plausible=(0.1, 3.0)),
+    P("heat_transfer_coefficient", "W/(m^2*K)", "heat transfer coefficient between each "
+      "chamber's gas and its walls (Cylinder(chamber=HeatTransfer())): 0 adiabatic, large "
+      "isothermal", None, 0.0, False, None, group="cylinder", plausible=(0.0, 2000.0)),
     P("spool_tau", "s", "time constant of the 5/3 valve's spool: a first-order lag of the "
       "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(1e-5, 1.0)),
@@ -70,8 +86,8 @@ declare_relation(("p_supply", "p_atm"), lambda supply, atm: supply > atm,
 
 CYLINDER_BLOCK = Block.of(
     "m", "D_bore", "d_rod", "x_max", "V_dead_a", "V_dead_b", "p_atm", "p_supply",
-    "valve_C", "valve_leak", "iso_b", "iso_m", "r_lin", "gamma", "R", "T", "k_stop",
-    "c_stop",
+    "valve_C", "valve_leak", "spool_overlap", "iso_b", "iso_m", "r_lin", "gamma", "R", "T",
+    "k_stop", "c_stop",
     settings=("chamber_n_offset", "chamber_n_gamma"),
     derived=("n_poly", "area_a", "area_b"),
 )
@@ -85,6 +101,7 @@ CY_PATM = CYLINDER_BLOCK.index("p_atm")
 CY_PSUP = CYLINDER_BLOCK.index("p_supply")
 CY_C = CYLINDER_BLOCK.index("valve_C")
 CY_LEAK = CYLINDER_BLOCK.index("valve_leak")
+CY_OVERLAP = CYLINDER_BLOCK.index("spool_overlap")
 CY_B = CYLINDER_BLOCK.index("iso_b")
 CY_MEXP = CYLINDER_BLOCK.index("iso_m")
 CY_RLIN = CYLINDER_BLOCK.index("r_lin")
@@ -115,13 +132,48 @@ def derive_cylinder(p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def spool_fractions(u, leak):  # pragma: no cover - compiled
-    """Openings of the four paths as fractions of valve_C at spool command u (clipped to
-    [−1, 1]): (supply → A, A → exhaust, supply → B, B → exhaust)."""
+def path_opening(travel, overlap):  # pragma: no cover - compiled
+    """Opening of one path as a fraction of valve_C, the spool ``travel`` towards it
+    (±u): zero until the travel passes the overlap, then linear, full at travel 1."""
+    return max(travel - overlap, 0.0) / (1.0 - overlap)
+
+
+@njit(cache=True)
+def path_opening_slopes(travel, overlap):  # pragma: no cover - compiled
+    """(∂opening/∂travel, ∂opening/∂overlap) of ``path_opening``; at the edge of the
+    band the travel's slope from above, the overlap's from above (none)."""
+    span = 1.0 - overlap
+    if travel > overlap:
+        return 1.0 / span, (travel - 1.0) / (span * span)
+    if travel == overlap:
+        return 1.0 / span, 0.0
+    return 0.0, 0.0
+
+
+@njit(cache=True)
+def spool_fractions(u, leak, overlap):  # pragma: no cover - compiled
+    """Openings of the four paths as fractions of valve_C at spool position u (clipped to
+    [−1, 1]), each with the leakage: (supply → A, A → exhaust, supply → B, B → exhaust)."""
     spool = min(max(u, -1.0), 1.0)
-    extend = max(spool, 0.0) + leak
-    retract = max(-spool, 0.0) + leak
+    extend = path_opening(spool, overlap) + leak
+    retract = path_opening(-spool, overlap) + leak
     return extend, retract, retract, extend
+
+
+@njit(cache=True)
+def spool_fraction_slopes(u, overlap):  # pragma: no cover - compiled
+    """∂/∂u and ∂/∂overlap of the paths that open as u rises (supply → A, B → exhaust)
+    and of those that open as it falls (A → exhaust, supply → B): (d_extend_du,
+    d_retract_du, d_extend_de, d_retract_de), slopes in u from above; none in u beyond
+    ±1, where the spool is on its stop."""
+    spool = min(max(u, -1.0), 1.0)
+    du_ext, de_ext = path_opening_slopes(spool, overlap)
+    du_ret, de_ret = path_opening_slopes(-spool, overlap)
+    if -spool == overlap:  # the retracting edge closes as u rises: from above, shut
+        du_ret = 0.0
+    if u > 1.0 or u < -1.0:
+        du_ext = du_ret = 0.0
+    return du_ext, -du_ret, de_ext, de_ret
 
 
 @njit(cache=True)
@@ -178,7 +230,7 @@ def rest_pressure(p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
 @njit(cache=True)
 def rest_pressures(u, p, o):  # pragma: no cover - compiled
     """(p_a, p_b) at which each chamber's flows balance at spool command u."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
@@ -202,7 +254,7 @@ def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
 def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
     """Net mass flows into A and B at spool position u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
     ṁ_b, ∂ṁ_b/∂p_b)."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
@@ -215,18 +267,18 @@ def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def chamber_flow_slopes(u, pa, pb, p, o):  # pragma: no cover - compiled
-    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (the slope from above at u = 0; none
-    beyond ±1, where the spool is on its stop)."""
-    if u > 1.0 or u < -1.0:
-        return 0.0, 0.0
+    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (slopes from above at the edges of the
+    band; none beyond ±1, where the spool is on its stop)."""
+    d_extend, d_retract, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
-    if u >= 0.0:  # supply → A and B → exhaust open with u
-        return (c * iso_flow(p_sup, pa, b, m, r_lam, temperature)[0],
-                -c * iso_flow(pb, p_exh, b, m, r_lam, temperature)[0])
-    return (c * iso_flow(pa, p_exh, b, m, r_lam, temperature)[0],
-            -c * iso_flow(p_sup, pb, b, m, r_lam, temperature)[0])
+    fill_a = iso_flow(p_sup, pa, b, m, r_lam, temperature)[0]
+    vent_a = iso_flow(pa, p_exh, b, m, r_lam, temperature)[0]
+    fill_b = iso_flow(p_sup, pb, b, m, r_lam, temperature)[0]
+    vent_b = iso_flow(pb, p_exh, b, m, r_lam, temperature)[0]
+    return (c * (d_extend * fill_a - d_retract * vent_a),
+            c * (d_retract * fill_b - d_extend * vent_b))
 
 
 @njit(cache=True)
@@ -270,11 +322,12 @@ def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
 
 
 @njit(cache=True)
-def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, c, p, o,
-                   g):  # pragma: no cover - compiled
+def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p,
+                   o, g):  # pragma: no cover - compiled
     """g[row, o + k] = ∂ṗ/∂θ_k of one chamber for the flow entries of the block (the
-    volume's entries are the caller's): valve_C, valve_leak, p_supply, p_atm, iso_b,
-    iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions."""
+    volume's entries are the caller's): valve_C, valve_leak, spool_overlap, p_supply,
+    p_atm, iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths'
+    fractions, ``e_fill``, ``e_vent`` their slopes in the overlap."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
     n, r_gas = p[o + CY_N], p[o + CY_R]
@@ -286,6 +339,7 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, c, p, o,
     k = n / volume * rt  # ∂ṗ/∂ṁ
     g[row, o + CY_C] = k * (u_fill * q_in - u_vent * q_out)
     g[row, o + CY_LEAK] = k * c * (q_in - q_out)
+    g[row, o + CY_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
     g[row, o + CY_PSUP] = k * d_sup
     g[row, o + CY_PATM] = k * d_exh
     g[row, o + CY_B] = k * d_b
@@ -312,12 +366,15 @@ def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # prag
     g[row_v, o + CY_KSTOP] = dks / m_mass
     g[row_v, o + CY_CSTOP] = dcs / m_mass
     g[row_v, o + CY_XMAX] = dxmax / m_mass
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK])
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     vol_a, vol_b = chamber_volumes(x, p, o)
     n = p[o + CY_N]
-    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, c, p, o, g)
-    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, c, p, o, g)
+    _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, e_extend, e_retract, c, p,
+                   o, g)
+    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, e_retract, e_extend, c, p,
+                   o, g)
     mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
     rt = p[o + CY_R] * p[o + CY_T]
     rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
@@ -421,20 +478,395 @@ def lagged_scales(out, s):  # pragma: no cover - compiled
     out[s + LAGGED_SPOOL_STATE] = 1.0
 
 
+# ------------------------------------------------------- the spool: second-order dynamics
+#: the second-order spool's block and its local states (position, velocity)
+SECOND_ORDER_BLOCK = Block.of("spool_omega", "spool_zeta")
+SO_OMEGA = SECOND_ORDER_BLOCK.index("spool_omega")
+SO_ZETA = SECOND_ORDER_BLOCK.index("spool_zeta")
+SECOND_SPOOL_STATE = 0
+SECOND_SPOOL_SPEED = 1
+
+
+@njit(cache=True, inline="always")
+def second_position(t, ts, y, s, p, o, sig, ptr):  # pragma: no cover - compiled
+    """The spool's position is its first state (the flows clip it to ±1)."""
+    return y[s + SECOND_SPOOL_STATE]
+
+
+@njit(cache=True, inline="always")
+def second_rates(t, ts, y, s, p, o, sig, ptr, dydt):  # pragma: no cover - compiled
+    """du/dt = w, dw/dt = ω²·(u_command − u) − 2·ζ·ω·w."""
+    omega = p[o + SO_OMEGA]
+    speed = y[s + SECOND_SPOOL_SPEED]
+    dydt[s + SECOND_SPOOL_STATE] = speed
+    dydt[s + SECOND_SPOOL_SPEED] = (omega * omega * (spool_target(t, ts, sig, ptr)
+                                                     - y[s + SECOND_SPOOL_STATE])
+                                    - 2.0 * p[o + SO_ZETA] * omega * speed)
+
+
+@njit(cache=True)
+def second_partials(p, o, jac, s):  # pragma: no cover - compiled
+    omega = p[o + SO_OMEGA]
+    jac[s + SECOND_SPOOL_STATE, s + SECOND_SPOOL_SPEED] = 1.0
+    jac[s + SECOND_SPOOL_SPEED, s + SECOND_SPOOL_STATE] = -omega * omega
+    jac[s + SECOND_SPOOL_SPEED, s + SECOND_SPOOL_SPEED] = -2.0 * p[o + SO_ZETA] * omega
+
+
+@njit(cache=True)
+def second_params(t, ts, y, s, p, o, sig, ptr, g):  # pragma: no cover - compiled
+    omega, speed = p[o + SO_OMEGA], y[s + SECOND_SPOOL_SPEED]
+    error = spool_target(t, ts, sig, ptr) - y[s + SECOND_SPOOL_STATE]
+    g[s + SECOND_SPOOL_SPEED, o + SO_OMEGA] = 2.0 * omega * error - 2.0 * p[o + SO_ZETA] * speed
+    g[s + SECOND_SPOOL_SPEED, o + SO_ZETA] = -2.0 * omega * speed
+
+
+@njit(cache=True)
+def second_start(t, ts, p, o, sig, ptr, y0, s):  # pragma: no cover - compiled
+    """At rest on the initial command."""
+    y0[s + SECOND_SPOOL_STATE] = spool_target(t, ts, sig, ptr)
+    y0[s + SECOND_SPOOL_SPEED] = 0.0
+
+
+@njit(cache=True)
+def second_project(y, s):  # pragma: no cover - compiled
+    """Nothing: an underdamped spool may pass ±1 for a while (the flows clip it there);
+    clipping the state would break its dynamics."""
+
+
+@njit(cache=True)
+def second_scales(out, s):  # pragma: no cover - compiled
+    out[s + SECOND_SPOOL_STATE] = 1.0
+    out[s + SECOND_SPOOL_SPEED] = 1.0
+
+
 _SPOOL_FUNCTIONS = ("position", "rates", "partials", "params", "start", "project", "scales")
+#: the spool's dynamics by the order of its lag: (kind, block, states, label)
+_SPOOL_KINDS = {
+    0: ("direct", Block(), (), "ideal spool"),
+    1: ("lagged", LAG_BLOCK, (StateSpec("spool_position", "1"),), "spool lag"),
+    2: ("second", SECOND_ORDER_BLOCK, (StateSpec("spool_position", "1"),
+                                       StateSpec("spool_velocity", "1/s")),
+        "second-order spool"),
+}
 
 
-def spool_part(lagged: bool) -> Part:
-    """The 5/3 valve's spool: following its command at once, or with a first-order lag
-    ``spool_tau`` (a state)."""
-    kind = "lagged" if lagged else "direct"
-    return Part(role="valve", block=LAG_BLOCK if lagged else Block(),
-                states=(StateSpec("spool_position", "1"),) if lagged else (),
+SPOOL_LAG_CHOICES = ("False or 0 (an ideal spool), True or 1 (a first-order lag, spool_tau) "
+                     "or 2 (a second-order spool, spool_omega and spool_zeta)")
+
+
+def spool_part(order: int) -> Part:
+    """The 5/3 valve's spool: following its command at once (order 0), with a first-order
+    lag ``spool_tau`` (1, a state) or as a second-order system of natural frequency
+    ``spool_omega`` and damping ``spool_zeta`` (2, two states)."""
+    kind, block, states, label = _SPOOL_KINDS[int(order)]
+    return Part(role="valve", block=block, states=states,
                 functions={f"spool_{name}": f"{__name__}:{kind}_{name}"
                            for name in _SPOOL_FUNCTIONS},
                 constants={"SPOOL_STATE": f"{__name__}:{kind.upper()}_SPOOL_STATE"},
-                label=f"5/3 valve, {'spool lag' if lagged else 'ideal spool'}",
-                key=f"spool_{kind}")
+                label=f"5/3 valve, {label}", key=f"spool_{kind}")
+
+
+# ------------------------------------------- the chambers' heat transfer (HeatTransfer())
+#: the block of chambers with a temperature state, and their local states (T_a, T_b); the
+#: polytropic chambers have neither
+THERMAL_BLOCK = Block.of("heat_transfer_coefficient")
+TH_H = THERMAL_BLOCK.index("heat_transfer_coefficient")
+POLYTROPIC_THERMAL_STATE = -1
+HEAT_THERMAL_STATE = 0
+
+
+@njit(cache=True)
+def node_inflow(p_node, t_node, pressure, temp, b, m, r_lam):  # pragma: no cover
+    """ISO 6358 flow per unit conductance from a node (supply, exhaust) into a chamber at
+    (pressure, temp), at the upstream side's temperature, with what it carries, T_up·q:
+    (q, T_up·q, ∂q/∂p, ∂(T_up·q)/∂p, ∂q/∂T, ∂(T_up·q)/∂T), p and T the chamber's."""
+    if p_node >= pressure:  # into the chamber at the node's temperature
+        q, _, dq_dp = iso_flow(p_node, pressure, b, m, r_lam, t_node)
+        return q, t_node * q, dq_dp, t_node * dq_dp, 0.0, 0.0
+    q, _, dq_dp = iso_flow(p_node, pressure, b, m, r_lam, temp)  # out at the chamber's
+    dq_dt = -0.5 * q / temp
+    return q, temp * q, dq_dp, temp * dq_dp, dq_dt, q + temp * dq_dt
+
+
+@njit(cache=True)
+def thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h, p,
+                    o):  # pragma: no cover - compiled
+    """One chamber's energy equation: (dp/dt, dT/dt, ṁ) and their partials in p, T, V,
+    dV/dt; and per unit conductance of its supply and exhaust paths the mass inflows and
+    T_up·q (for the spool's slope). ``fill``, ``vent`` are the paths' fractions of C."""
+    c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+    b, m, r_lam, t_wall = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    q_s, e_s, qs_p, es_p, qs_t, es_t = node_inflow(p[o + CY_PSUP], t_wall, pressure, temp,
+                                                   b, m, r_lam)
+    q_e, e_e, qe_p, ee_p, qe_t, ee_t = node_inflow(p[o + CY_PATM], t_wall, pressure, temp,
+                                                   b, m, r_lam)
+    k_s, k_e = c * fill, c * vent
+    mdot = k_s * q_s + k_e * q_e
+    energy = k_s * e_s + k_e * e_e  # Σ T_up·q into the chamber
+    wall = 2.0 * area + perimeter * volume / area
+    heat = h * wall * (t_wall - temp)
+    g1 = gamma - 1.0
+    n_p = gamma * r_gas * energy - gamma * pressure * vol_rate + g1 * heat
+    n_t = gamma * r_gas * energy - g1 * pressure * vol_rate + g1 * heat - r_gas * temp * mdot
+    dp = n_p / volume
+    kt = temp / (pressure * volume)
+    dt = kt * n_t
+    m_p, m_t = k_s * qs_p + k_e * qe_p, k_s * qs_t + k_e * qe_t
+    e_p, e_t = k_s * es_p + k_e * ee_p, k_s * es_t + k_e * ee_t
+    heat_v = h * perimeter / area * (t_wall - temp)
+    heat_t = -h * wall
+    dp_p = (gamma * r_gas * e_p - gamma * vol_rate) / volume
+    dp_t = (gamma * r_gas * e_t + g1 * heat_t) / volume
+    dp_v = (g1 * heat_v - dp) / volume
+    dp_vr = -gamma * pressure / volume
+    dt_p = kt * (gamma * r_gas * e_p - g1 * vol_rate - r_gas * temp * m_p) - dt / pressure
+    dt_t = dt / temp + kt * (gamma * r_gas * e_t + g1 * heat_t - r_gas * mdot
+                             - r_gas * temp * m_t)
+    dt_v = kt * g1 * heat_v - dt / volume
+    dt_vr = -kt * g1 * pressure
+    return (dp, dt, mdot, dp_p, dp_t, dp_v, dp_vr, dt_p, dt_t, dt_v, dt_vr, q_s, e_s, q_e,
+            e_e)
+
+
+@njit(cache=True)
+def thermal_pair(x, v, pa, pb, ta, tb, u, p, o, h):  # pragma: no cover - compiled
+    """Both chambers' ``thermal_chamber`` at piston (x, v) and spool position u; the
+    chambers' wetted perimeters are the bore's (A) and the bore's and the rod's (B)."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    bore, rod = p[o + CY_BORE], p[o + CY_ROD]
+    return (thermal_chamber(pa, ta, vol_a, area_a * v, fill_a, vent_a, area_a,
+                            math.pi * bore, h, p, o),
+            thermal_chamber(pb, tb, vol_b, -area_b * v, fill_b, vent_b, area_b,
+                            math.pi * (bore + rod), h, p, o))
+
+
+@njit(cache=True)
+def polytropic_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+                     row_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+               row_b):  # pragma: no cover - compiled
+    """The chambers' pressure rates from their energy equations (replacing the polytropic
+    ones in rows ``row_a``, ``row_b``) and their temperature rates."""
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    dydt[row_a], dydt[row_b] = ra[0], rb[0]
+    dydt[s], dydt[s + 1] = ra[1], rb[1]
+
+
+@njit(cache=True)
+def polytropic_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a,
+                     i_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a, i_b):  # pragma: no cover - compiled
+    """The net mass flows into A and B (outflows at the chambers' temperatures) into
+    out[i_a], out[i_b]."""
+    ra, rb = thermal_pair(x, 0.0, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    out[i_a], out[i_b] = ra[2], rb[2]
+
+
+@njit(cache=True)
+def polytropic_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+                        col_u):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_chamber_partials(rates, row_p, row_t, d_vol, d_fill, d_vent, volume, pressure,
+                          temp, p, o, jac, col_u):  # pragma: no cover - compiled
+    """One chamber's pressure and temperature rows of ∂f/∂y (x in column 0, v in 1) from
+    ``thermal_chamber``'s partials; the spool's column when it is a state (col_u ≥ 0)."""
+    jac[row_p, 0] = rates[5] * d_vol
+    jac[row_p, 1] = rates[6] * d_vol
+    jac[row_p, row_p] = rates[3]
+    jac[row_p, row_t] = rates[4]
+    jac[row_t, 0] = rates[9] * d_vol
+    jac[row_t, 1] = rates[10] * d_vol
+    jac[row_t, row_p] = rates[7]
+    jac[row_t, row_t] = rates[8]
+    if col_u >= 0:
+        c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+        m_u = c * (d_fill * rates[11] + d_vent * rates[13])
+        e_u = c * (d_fill * rates[12] + d_vent * rates[14])
+        jac[row_p, col_u] = gamma * r_gas * e_u / volume
+        jac[row_t, col_u] = temp / (pressure * volume) * (gamma * r_gas * e_u
+                                                          - r_gas * temp * m_u)
+
+
+@njit(cache=True)
+def heat_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+                  col_u):  # pragma: no cover - compiled
+    """The pressure rows (replacing the polytropic ones) and the temperature rows of ∂f/∂y
+    in x, v, p, T and the spool's position (column ``col_u`` when it is a state)."""
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    d_ext, d_ret, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    heat_chamber_partials(ra, row_a, s, p[o + CY_AA], d_ext, d_ret, vol_a, pa, y[s], p, o,
+                          jac, col_u)
+    heat_chamber_partials(rb, row_b, s + 1, -p[o + CY_AB], d_ret, d_ext, vol_b, pb,
+                          y[s + 1], p, o, jac, col_u)
+
+
+@njit(cache=True)
+def node_inflow_params(p_node, t_node, pressure, temp, b, m, r_lam):  # pragma: no cover
+    """Partials of ``node_inflow``'s (q, T_up·q) in the node's pressure and temperature and
+    in b, m, r_lam: (q_pn, e_pn, q_tn, e_tn, q_b, e_b, q_m, e_m, q_lam, e_lam)."""
+    inflow = p_node >= pressure
+    t_up = t_node if inflow else temp
+    q, dq_dpn, _ = iso_flow(p_node, pressure, b, m, r_lam, t_up)
+    q_b, q_m, q_lam, _ = iso_flow_params(p_node, pressure, b, m, r_lam, t_up)
+    q_tn = -0.5 * q / t_node if inflow else 0.0
+    e_tn = 0.5 * q if inflow else 0.0
+    return (dq_dpn, t_up * dq_dpn, q_tn, e_tn, q_b, t_up * q_b, q_m, t_up * q_m, q_lam,
+            t_up * q_lam)
+
+
+@njit(cache=True)
+def flow_column(g, row_p, row_t, column, m_th, e_th, q_th, volume, kt, k_p, k_t,
+                g1):  # pragma: no cover - compiled
+    """A chamber's pressure and temperature entries of column ``column`` of ∂f/∂θ from
+    the parameter's partials of ṁ, E = Σ T_up·q and Q̇ (k_p = γ·R, k_t = R·T_c,
+    g1 = γ − 1, kt = T_c/(p·V))."""
+    g[row_p, column] = (k_p * e_th + g1 * q_th) / volume
+    g[row_t, column] = kt * (k_p * e_th + g1 * q_th - k_t * m_th)
+
+
+@njit(cache=True)
+def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area, perimeter,
+                        fill, vent, e_fill, e_vent, geometry, p, o, oh,
+                        h):  # pragma: no cover - compiled
+    """One chamber's pressure and temperature rows of ∂f/∂θ (the pressure row's cylinder
+    entries rewritten); ``e_fill``, ``e_vent`` are the paths' slopes in the overlap,
+    ``geometry`` (columns of its area, dead volume and stroke (−1: none), ∂V/∂area,
+    ∂(dV/dt)/∂area, ∂P/∂D_bore, ∂P/∂d_rod)."""
+    rates = thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h,
+                            p, o)
+    mdot = rates[2]
+    q_s, e_s, q_e, e_e = rates[11], rates[12], rates[13], rates[14]
+    c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
+    b, m, r_lam, t_wall = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    g1, kt = gamma - 1.0, temp / (pressure * volume)
+    k_s, k_e = c * fill, c * vent
+    energy = k_s * e_s + k_e * e_e
+    wall = 2.0 * area + perimeter * volume / area
+    heat = h * wall * (t_wall - temp)
+    sup = node_inflow_params(p[o + CY_PSUP], t_wall, pressure, temp, b, m, r_lam)
+    exh = node_inflow_params(p[o + CY_PATM], t_wall, pressure, temp, b, m, r_lam)
+    for k in range(CYLINDER_SIZE):
+        g[row_p, o + k] = 0.0
+    # the flow entries: ∂ṁ/∂θ, ∂E/∂θ, ∂Q̇/∂θ of each
+    k_p, k_t = gamma * r_gas, r_gas * temp
+    flow_column(g, row_p, row_t, o + CY_C, fill * q_s + vent * q_e, fill * e_s + vent * e_e,
+                0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_LEAK, c * (q_s + q_e), c * (e_s + e_e), 0.0, volume,
+                kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_OVERLAP, c * (e_fill * q_s + e_vent * q_e),
+                c * (e_fill * e_s + e_vent * e_e), 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_PSUP, k_s * sup[0], k_s * sup[1], 0.0, volume, kt,
+                k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_PATM, k_e * exh[0], k_e * exh[1], 0.0, volume, kt,
+                k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_T, k_s * sup[2] + k_e * exh[2],
+                k_s * sup[3] + k_e * exh[3], h * wall, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_B, k_s * sup[4] + k_e * exh[4],
+                k_s * sup[5] + k_e * exh[5], 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_MEXP, k_s * sup[6] + k_e * exh[6],
+                k_s * sup[7] + k_e * exh[7], 0.0, volume, kt, k_p, k_t, g1)
+    flow_column(g, row_p, row_t, o + CY_RLIN, k_s * sup[8] + k_e * exh[8],
+                k_s * sup[9] + k_e * exh[9], 0.0, volume, kt, k_p, k_t, g1)
+    g[row_p, o + CY_GAMMA] = (r_gas * energy - pressure * vol_rate + heat) / volume
+    g[row_t, o + CY_GAMMA] = kt * (r_gas * energy - pressure * vol_rate + heat)
+    g[row_p, o + CY_R] = gamma * energy / volume
+    g[row_t, o + CY_R] = kt * (gamma * energy - temp * mdot)
+    g[row_p, oh + TH_H] = g1 * wall * (t_wall - temp) / volume
+    g[row_t, oh + TH_H] = kt * g1 * wall * (t_wall - temp)
+    # geometry: through V, dV/dt and the wall area's own area and perimeter
+    heat_area = h * (2.0 - perimeter * volume / (area * area)) * (t_wall - temp)
+    heat_perimeter = h * volume / area * (t_wall - temp)
+    col_area, col_dead, col_xmax, dvol_area, dvol_rate_area, d_bore, d_rod = geometry
+    g[row_p, o + col_area] = (rates[5] * dvol_area + rates[6] * dvol_rate_area
+                              + g1 * heat_area / volume)
+    g[row_t, o + col_area] = (rates[9] * dvol_area + rates[10] * dvol_rate_area
+                              + kt * g1 * heat_area)
+    g[row_p, o + col_dead] = rates[5]
+    g[row_t, o + col_dead] = rates[9]
+    if col_xmax >= 0:  # chamber B: V = V_dead_b + A_b·(x_max − x)
+        g[row_p, o + col_xmax] = rates[5] * area
+        g[row_t, o + col_xmax] = rates[9] * area
+    g[row_p, o + CY_BORE] = g1 * heat_perimeter * d_bore / volume
+    g[row_t, o + CY_BORE] = kt * g1 * heat_perimeter * d_bore
+    g[row_p, o + CY_ROD] = g1 * heat_perimeter * d_rod / volume
+    g[row_t, o + CY_ROD] = kt * g1 * heat_perimeter * d_rod
+
+
+@njit(cache=True)
+def polytropic_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a,
+                      row_b):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a, row_b):  # pragma: no cover
+    """The chambers' pressure rows of ∂f/∂θ (replacing the polytropic ones) and their
+    temperature rows, the heat transfer coefficient's column included."""
+    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
+    _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    bore, rod, h = p[o + CY_BORE], p[o + CY_ROD], p[oh + TH_H]
+    heat_chamber_params(g, row_a, s, pa, y[s], vol_a, area_a * v, area_a, math.pi * bore,
+                        fill_a, vent_a, e_extend, e_retract,
+                        (CY_AA, CY_VDA, -1, x, v, math.pi, 0.0), p, o, oh, h)
+    heat_chamber_params(g, row_b, s + 1, pb, y[s + 1], vol_b, -area_b * v, area_b,
+                        math.pi * (bore + rod), fill_b, vent_b, e_retract, e_extend,
+                        (CY_AB, CY_VDB, CY_XMAX, p[o + CY_XMAX] - x, -v, math.pi, math.pi),
+                        p, o, oh, h)
+
+
+@njit(cache=True)
+def polytropic_start(p, o, y0, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_start(p, o, y0, s):  # pragma: no cover - compiled
+    """Both chambers at the walls' temperature."""
+    y0[s] = y0[s + 1] = p[o + CY_T]
+
+
+@njit(cache=True)
+def polytropic_scales(p, o, out, s):  # pragma: no cover - compiled
+    pass
+
+
+@njit(cache=True)
+def heat_scales(p, o, out, s):  # pragma: no cover - compiled
+    out[s] = out[s + 1] = p[o + CY_T]
+
+
+_THERMAL_FUNCTIONS = ("rates", "flows", "partials", "params", "start", "scales")
+
+
+def thermal_part(chamber: ChamberLaw) -> Part:
+    """The chambers' temperatures: none for a polytropic law, two states and the heat
+    transfer coefficient with ``HeatTransfer()``."""
+    heat = chamber.temperature_state
+    kind = "heat" if heat else "polytropic"
+    return Part(role="thermal", block=THERMAL_BLOCK if heat else Block(),
+                states=(StateSpec("temperature_a", "K"), StateSpec("temperature_b", "K"))
+                if heat else (),
+                functions={f"thermal_{name}": f"{__name__}:{kind}_{name}"
+                           for name in _THERMAL_FUNCTIONS},
+                constants={"THERMAL_STATE": f"{__name__}:{kind.upper()}_THERMAL_STATE"},
+                label="chambers with heat transfer" if heat else "polytropic chambers",
+                key=f"chambers_{kind}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -442,24 +874,27 @@ class Cylinder:
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
-    chambers; ``load`` an external force F_load(t) [N] against extension (zero by
-    default); ``spool_lag`` makes the spool follow its command with the time constant
-    ``spool_tau`` (a state) instead of at once."""
+    chambers (``HeatTransfer()``: their energy equations, temperatures as states);
+    ``load`` an external force F_load(t) [N] against extension (zero by default);
+    ``spool_lag`` the order of the spool's dynamics: False (0) follows the
+    command at once, True (1) with the time constant ``spool_tau`` (a state), 2 as a
+    second-order system (``spool_omega``, ``spool_zeta``; two states)."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
-    spool_lag: bool = False
+    spool_lag: bool | int = False
     template: ClassVar[str] = "pneumact.models.cylinder_template"
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
                      chamber: ChamberLaw = ..., load: Signal | None = ...,
-                     spool_lag: bool = ...) -> None: ...
+                     spool_lag: bool | int = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance, check_type
+        from ..errors import ArgumentError
         from ..parameters.files import as_parameter_set
 
         set_ = object.__setattr__
@@ -470,11 +905,15 @@ class Cylinder:
                      "pa.StribeckMap()"))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Cylinder",
-            examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
+            examples="pa.Isothermal(), pa.Adiabatic(), pa.Polytropic(exponent) or "
+                     "pneumact.models.HeatTransfer()"))
         if self.load is not None:
             check_type("load", self.load, Signal, where="Cylinder",
                        what="a Signal (e.g. pa.experiments.Step(...)) or None")
-        check_type("spool_lag", self.spool_lag, bool, where="Cylinder", what="True or False")
+        check_type("spool_lag", self.spool_lag, int, where="Cylinder", what=SPOOL_LAG_CHOICES)
+        if self.spool_lag not in _SPOOL_KINDS:
+            raise ArgumentError(f"Cylinder: spool_lag = {self.spool_lag!r}: must be "
+                                f"{SPOOL_LAG_CHOICES}")
         self.params.require(self.required, "Cylinder")
 
     @property
@@ -555,7 +994,8 @@ class Cylinder:
             states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
             settings=self.chamber.settings(), label="double-acting cylinder")
-        return cylinder, self.friction.part(), spool_part(self.spool_lag)
+        return (cylinder, self.friction.part(), spool_part(self.spool_lag),
+                thermal_part(self.chamber))
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         load = self.load if self.load is not None else Constant(0.0)

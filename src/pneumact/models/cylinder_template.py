@@ -1,9 +1,12 @@
 """Model template: the double-acting cylinder behind a 5/3 proportional valve.
 
 States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
-position when it lags], the parameter vector is [cylinder block | friction block | spool
-block]; the generator binds the friction law and the spool (``spool_*``, direct or
-lagged). The equations are ``models.cylinder``'s.
+position (and velocity) when it lags | the chambers' temperatures with heat transfer],
+the parameter vector is [cylinder block | friction block | spool block | heat transfer
+block]; the generator binds the friction law, the spool (``spool_*``: direct, lagged or
+second-order) and the chambers (``thermal_*``: polytropic, whose functions do nothing, or
+with heat transfer, whose energy equations replace the pressure rates, rows and columns
+the polytropic code wrote). The equations are ``models.cylinder``'s.
 """
 
 from pneumact.core import kernel
@@ -36,15 +39,20 @@ friction_rates = friction_force = friction_partials = friction_param_partials = 
 friction_project = friction_scales = friction_store = friction_store_partials = None
 spool_position = spool_rates = spool_partials = spool_params = spool_start = None
 spool_project = spool_scales = None
+thermal_rates = thermal_flows = thermal_partials = thermal_params = None
+thermal_start = thermal_scales = None
 SPOOL_STATE = -1
+THERMAL_STATE = -1
 NSTATE = 5
 CYLINDER_LO = CYLINDER_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
+THERMAL_LO = THERMAL_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
 S_PRESSURE_A = 2
 S_PRESSURE_B = 3
 S_FRICTION = 4
 S_VALVE = 5
+S_THERMAL = 6
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool", "mass_flow_a",
@@ -77,14 +85,18 @@ def model_velocity(t, ts, y, prm, sig, ptr):
 def rhs(t, ts, y, prm, sig, ptr, dydt):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
+    pa = y[S_PRESSURE_A]
+    pb = y[S_PRESSURE_B]
     f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
+    u = _spool(t, ts, y, prm, sig, ptr)
     accel, rate_a, rate_b = cylinder_rates(
-        x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], _spool(t, ts, y, prm, sig, ptr), f_fric,
-        load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
+        x, v, pa, pb, u, f_fric, load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
     dydt[S_POSITION] = v
     dydt[S_VELOCITY] = accel
     dydt[S_PRESSURE_A] = rate_a
     dydt[S_PRESSURE_B] = rate_b
+    thermal_rates(x, v, pa, pb, y, S_THERMAL, u, prm, CYLINDER_LO, THERMAL_LO, dydt,
+                  S_PRESSURE_A, S_PRESSURE_B)
     friction_store(z_rates, dydt, S_FRICTION)
     spool_rates(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
 
@@ -123,6 +135,8 @@ def jac(t, ts, y, prm, sig, ptr, out):
         dma_du, dmb_du = chamber_flow_slopes(u, pa, pb, prm, o)
         out[S_PRESSURE_A, S_VALVE + SPOOL_STATE] = n / vol_a * rt * dma_du
         out[S_PRESSURE_B, S_VALVE + SPOOL_STATE] = n / vol_b * rt * dmb_du
+    thermal_partials(x, v, pa, pb, y, S_THERMAL, u, prm, o, THERMAL_LO, out, S_PRESSURE_A,
+                     S_PRESSURE_B, S_VALVE + SPOOL_STATE if SPOOL_STATE >= 0 else -1)
     spool_partials(prm, VALVE_LO, out, S_VALVE)
 
 
@@ -141,6 +155,8 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
     cylinder_params(x, v, pa, pb, _spool(t, ts, y, prm, sig, ptr), net, prm, CYLINDER_LO, g,
                     S_VELOCITY, S_PRESSURE_A, S_PRESSURE_B)
+    thermal_params(x, v, pa, pb, y, S_THERMAL, _spool(t, ts, y, prm, sig, ptr), prm,
+                   CYLINDER_LO, THERMAL_LO, g, S_PRESSURE_A, S_PRESSURE_B)
     spool_params(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
     friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
     m = prm[CYLINDER_LO + CY_M]
@@ -165,6 +181,8 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_SPOOL] = u
     out[OUT_MASS_FLOW_A] = mdot_a
     out[OUT_MASS_FLOW_B] = mdot_b
+    thermal_flows(x, y[S_PRESSURE_A], y[S_PRESSURE_B], y, S_THERMAL, u, prm, CYLINDER_LO,
+                  THERMAL_LO, out, OUT_MASS_FLOW_A, OUT_MASS_FLOW_B)
 
 
 @kernel()
@@ -200,6 +218,7 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     y0[S_POSITION] = rest_position(net0, 0.0, prm[o + CY_KSTOP], prm[o + CY_XMAX])
     y0[S_PRESSURE_A] = pa
     y0[S_PRESSURE_B] = pb
+    thermal_start(prm, o, y0, S_THERMAL)
 
 
 @kernel()
@@ -221,3 +240,4 @@ def state_scales(prm, out):
     out[S_PRESSURE_B] = prm[CYLINDER_LO + CY_PSUP]
     friction_scales(prm, FRICTION_LO, out, S_FRICTION)
     spool_scales(out, S_VALVE)
+    thermal_scales(prm, CYLINDER_LO, out, S_THERMAL)

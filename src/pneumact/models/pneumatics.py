@@ -352,6 +352,9 @@ def conductance_of_area(area: float, params) -> float:
 class ChamberLaw:
     """How the chamber gas exchanges heat: dp/dt = n/V·(R·T·ṁ + p·A_d·v), n = a + b·γ."""
 
+    #: whether the law carries the gas temperature as a state (only the cylinder has one)
+    temperature_state: bool = False
+
     def settings(self) -> dict[str, float]:
         """Values of the chamber block's settings (a, b)."""
         raise NotImplementedError
@@ -393,3 +396,15 @@ class Polytropic(ChamberLaw):
 
     def settings(self) -> dict[str, float]:
         return {"chamber_n_offset": float(self.exponent), "chamber_n_gamma": 0.0}
+
+
+@dataclass(frozen=True)
+class HeatTransfer(ChamberLaw):
+    """The energy equation with the gas temperature as a state and Newton's heat transfer
+    h·A_w·(T_wall − T) to walls at the gas temperature T of the set (``Cylinder`` only;
+    h = ``heat_transfer_coefficient``): h = 0 is adiabatic, a large h isothermal."""
+
+    temperature_state: bool = True
+
+    def settings(self) -> dict[str, float]:
+        return {"chamber_n_offset": 0.0, "chamber_n_gamma": 1.0}
