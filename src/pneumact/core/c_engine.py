@@ -22,6 +22,7 @@ back end translates the model, numba otherwise, with a warning saying why).
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import os
 import re
@@ -59,7 +60,8 @@ FLAGS = ("-O3", "-fno-tree-vectorize", "-std=c99", "-fPIC", "-shared")
 #: the functions the libraries carry: one library per group, built on the group's first use
 GROUPS = {"run": ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
                   "integrate_rodas4"),
-          "sensitivities": ("integrate_rodas4_sens", "output_sensitivities")}
+          "sensitivities": ("integrate_rodas4_sens", "output_sensitivities"),
+          "states": ("integrate_rodas4_states",)}
 _GROUP_OF = {name: group for group, names in GROUPS.items() for name in names}
 PREFIX = "pa_"
 
@@ -114,13 +116,15 @@ _SCALARS: dict[str, Any] = {"double": ctypes.c_double, "float": ctypes.c_float,
                             "int64_t": ctypes.c_int64, "int": ctypes.c_int}
 
 
-def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]:
+def _array_converter(name: str, ctype: str) -> tuple[type, type, Callable[[Any], Any]]:
+    """(the struct a result comes back as, the struct an argument goes as, the converter
+    of an argument) for the C array type ``ctype``."""
     match = re.fullmatch(r"pa_arr_(\w+?)_(\d+)d", ctype)
     if match is None or match.group(1) not in _ELEMENTS:
         raise CBuildError(f"{name}: no ctypes mirror for the C type {ctype}")
     dtype, element = _ELEMENTS[match.group(1)]
     ndim = int(match.group(2))
-    struct = array_struct(element, ndim)
+    argument = _argument_struct(ndim)
     size = np.dtype(dtype).itemsize
 
     def convert(values: Any) -> ctypes.Structure:
@@ -128,11 +132,22 @@ def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]
             raise TypeError(f"{name}: expected a {ndim}-d {np.dtype(dtype).name} array, got "
                             f"{getattr(values, 'dtype', type(values).__name__)} with "
                             f"{getattr(values, 'ndim', '?')} dimensions")
-        return struct(values.ctypes.data_as(ctypes.POINTER(element)),
-                      (ctypes.c_int64 * ndim)(*values.shape),
-                      (ctypes.c_int64 * ndim)(*(s // size for s in values.strides)))
+        return argument(values.ctypes.data, values.shape,
+                        tuple(s // size for s in values.strides))
 
-    return struct, convert
+    return array_struct(element, ndim), argument, convert
+
+
+@functools.cache
+def _argument_struct(ndim: int) -> type[ctypes.Structure]:
+    """An array argument as the library reads it (the back end's struct: data, shape,
+    strides in elements), its data pointer held as an address. The same layout as
+    ``c_source.array_struct``'s typed pointer, but made of plain numbers: a typed pointer
+    from ``ndarray.ctypes.data_as`` cost 3 times as much per argument (a batch row of the
+    C engine passes about 25) and left reference cycles for the garbage collector."""
+    fields = [("data", ctypes.c_void_p), ("shape", ctypes.c_int64 * ndim),
+              ("strides", ctypes.c_int64 * ndim)]
+    return type(f"ArrayArgument{ndim}", (ctypes.Structure,), {"_fields_": fields})
 
 
 class CFunction:
@@ -159,8 +174,8 @@ class CFunction:
                 argtypes.append(_SCALARS[ctype])
                 self._converters.append(_scalar)
             else:
-                struct, convert = _array_converter(name, ctype)
-                argtypes.append(struct)
+                _, argument, convert = _array_converter(name, ctype)
+                argtypes.append(argument)
                 self._converters.append(convert)
         self._function.argtypes = argtypes
         self._result = self._result_reader(restype)
@@ -172,7 +187,7 @@ class CFunction:
         if restype in _SCALARS:
             self._function.restype = _SCALARS[restype]
             return (lambda value: bool(value)) if restype == "int" else (lambda value: value)
-        struct, _ = _array_converter(self.name, restype)
+        struct, _, _ = _array_converter(self.name, restype)
         self._function.restype = struct
         dtype = _ELEMENTS[restype.split("_")[2]][0]
 
@@ -283,6 +298,7 @@ def _roots(module: ModuleType, group: str) -> dict[str, tuple[Callable, Sequence
         "state_scales": (vector, vector), "rhs": (*run, vector), "jac": (*run, matrix),
         "outputs": (*run, vector), "integrate_rodas4": integrate,
         "integrate_rodas4_sens": (*integrate, *directions, types.boolean[::1], matrix, cube),
+        "integrate_rodas4_states": (*integrate[:12], vector),
         "output_sensitivities": (vector, vector, matrix, cube, vector, vector, indices,
                                  *directions, cube)}
     return {PREFIX + name: (getattr(module, name), signatures[name]) for name in GROUPS[group]
