@@ -24,6 +24,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import hashlib
+import math
 import os
 import re
 import tempfile
@@ -132,21 +133,24 @@ def _array_converter(name: str, ctype: str) -> tuple[type, type, Callable[[Any],
             raise TypeError(f"{name}: expected a {ndim}-d {np.dtype(dtype).name} array, got "
                             f"{getattr(values, 'dtype', type(values).__name__)} with "
                             f"{getattr(values, 'ndim', '?')} dimensions")
-        return argument(values.ctypes.data, values.shape,
-                        tuple(s // size for s in values.strides))
+        return argument(values.ctypes.data, *values.shape,
+                        *[s // size for s in values.strides])
 
     return array_struct(element, ndim), argument, convert
 
 
 @functools.cache
 def _argument_struct(ndim: int) -> type[ctypes.Structure]:
-    """An array argument as the library reads it (the back end's struct: data, shape,
-    strides in elements), its data pointer held as an address. The same layout as
-    ``c_source.array_struct``'s typed pointer, but made of plain numbers: a typed pointer
-    from ``ndarray.ctypes.data_as`` cost 3 times as much per argument (a batch row of the
-    C engine passes about 25) and left reference cycles for the garbage collector."""
-    fields = [("data", ctypes.c_void_p), ("shape", ctypes.c_int64 * ndim),
-              ("strides", ctypes.c_int64 * ndim)]
+    """An array argument as the library reads it (the back end's struct: data, shape[ndim],
+    strides[ndim] in elements), made of plain numbers: its data pointer as an address, each
+    extent and stride a field of its own. The same memory layout as
+    ``c_source.array_struct``'s typed pointer and arrays; a typed pointer from
+    ``ndarray.ctypes.data_as`` and arrays filled from tuples cost 2-3 times as much per
+    argument (a batch row on the C engine passes about 25) and the pointer left reference
+    cycles for the garbage collector."""
+    fields = [("data", ctypes.c_void_p),
+              *((f"shape{k}", ctypes.c_int64) for k in range(ndim)),
+              *((f"stride{k}", ctypes.c_int64) for k in range(ndim))]
     return type(f"ArrayArgument{ndim}", (ctypes.Structure,), {"_fields_": fields})
 
 
@@ -189,11 +193,15 @@ class CFunction:
             return (lambda value: bool(value)) if restype == "int" else (lambda value: value)
         struct, _, _ = _array_converter(self.name, restype)
         self._function.restype = struct
-        dtype = _ELEMENTS[restype.split("_")[2]][0]
+        dtype, element = _ELEMENTS[restype.split("_")[2]]
 
         def copy_out(value: Any) -> np.ndarray:  # the array lives in the arena: copy it
             shape = tuple(value.shape)
-            count = int(np.prod(shape)) if shape else 1
+            count = math.prod(shape)
+            if tuple(value.strides) == _c_order(shape):  # one block: one copy
+                address = ctypes.cast(value.data, ctypes.c_void_p).value
+                return np.frombuffer((element * count).from_address(address) if count
+                                     else b"", dtype).reshape(shape).copy()
             flat = np.ctypeslib.as_array(value.data, shape=(max(count, 1),))[:count]
             strides = tuple(s * np.dtype(dtype).itemsize for s in value.strides)
             return np.lib.stride_tricks.as_strided(flat, shape, strides).copy()
@@ -225,9 +233,19 @@ def _scalar(value: Any) -> Any:
     return value
 
 
+def _c_order(shape: tuple[int, ...]) -> tuple[int, ...]:
+    """The strides, in elements, of a C-ordered array of ``shape``."""
+    strides, step = [], 1
+    for extent in reversed(shape):
+        strides.append(step)
+        step *= extent
+    return tuple(reversed(strides))
+
+
 class CKernel:
     """A kernel whose entry points run in C libraries: ``run``'s (everything a run needs)
-    at once, ``sensitivities``' on first use (a plain run does not wait for them);
+    at once, ``sensitivities``' and ``states``' (the batch's integrator without derived
+    outputs) on first use (a plain run does not wait for them);
     attributes no library carries (constants, other functions) are the numba kernel
     module's, as are a group's functions where the back end cannot translate them (with
     an ``EngineWarning``)."""
