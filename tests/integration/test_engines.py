@@ -266,3 +266,78 @@ def test_a_model_the_back_end_cannot_translate_runs_on_numba_naming_the_construc
     assert run.meta["engine"] == "numba"
     with pytest.raises(CSourceError, match="<gamma>"):
         pa.simulate(_models()["source"][0], experiment, engine="c")
+
+
+def _output_signal(model, experiment) -> str:
+    """A signal of ``model`` that is a derived output, not a state."""
+    from pneumact.simulation.batch import signal_names
+
+    states = assemble(model).state_names
+    return next(n for n in signal_names(model, experiment) if n not in states)
+
+
+@pytest.mark.parametrize(("name", "engine", "solver"), [
+    pytest.param("command", "c", pa.Rodas4(), marks=needs_compiler),
+    ("command", "numba", pa.Rodas4()),
+    pytest.param("loop", "c", pa.Rodas4(), marks=needs_compiler),
+    ("rig", "numba", pa.DormandPrince())])
+def test_a_batch_that_keeps_states_only_skips_the_outputs_bit_for_bit(name, engine, solver,
+                                                                      monkeypatch):
+    """Features that read states only (the command valve's position, velocity and
+    pressure; the closed loop's rig) run the integrator that writes no derived output
+    (``Solver.states_function``); every feature is the one the full integrator gives (a
+    kept output signal makes the batch run it) and the one ``simulate`` and the feature
+    functions give, bit for bit; with either method."""
+    from pneumact.core.features import FEATURES, N_FEATURES, all_features
+    from pneumact.simulation.batch import simulate_batch
+    from pneumact.simulation.batch.runner import ChunkRunner
+
+    model, experiment = _models()[name]
+    base = model.params
+    table = pd.DataFrame({"Fc": base["Fc"] * np.array([1.0, 0.8, 1.2]),
+                          "sigma0": base["sigma0"] * np.array([1.0, 1.3, 0.7])})
+    chosen: list[bool] = []
+    reads_states_only = ChunkRunner.reads_states_only
+    monkeypatch.setattr(ChunkRunner, "reads_states_only",
+                        lambda self: chosen.append(reads_states_only(self)) or chosen[-1])
+    states = simulate_batch(model, experiment, table, executor=1, engine=engine,
+                            solver=solver)
+    assert chosen and all(chosen)  # each chunk's choice
+    chosen.clear()
+    names = [f for f in FEATURES if f in states.table.columns]
+    full = simulate_batch(model, experiment, table, features=names, executor=1,
+                          engine=engine, solver=solver,
+                          signals=[_output_signal(model, experiment)])
+    assert chosen and not any(chosen)
+    np.testing.assert_array_equal(states.table[names].to_numpy(), full.table[names].to_numpy())
+    run = pa.simulate(model, experiment, solver, engine=engine)  # the table's first row
+    expected, none = np.empty(N_FEATURES), np.empty(0)
+    x, v = run["position"], run["velocity"]
+    has_pressure = "pressure" in run.signals
+    all_features(run.time, x, v, run["pressure"] if has_pressure else x, has_pressure, none,
+                 none, False, expected)
+    np.testing.assert_array_equal(states.table[names].iloc[0].to_numpy(),
+                                  expected[[FEATURES.index(f) for f in names]])
+
+
+@needs_compiler
+def test_a_call_on_c_leaves_nothing_for_the_garbage_collector():
+    """An array goes to the library as plain numbers (its address, shape and strides): a
+    call makes no reference cycle, so the arguments of a batch's rows (about 25 a row)
+    leave the garbage collector nothing to find."""
+    import gc
+
+    from pneumact.core.c_common import common_functions
+
+    stroke = common_functions()["stroke"]
+    x = np.linspace(0.0, 1.0, 11)
+    enabled = gc.isenabled()
+    gc.collect()
+    gc.disable()
+    try:
+        for _ in range(100):
+            assert stroke(x) == 1.0
+        assert gc.collect() == 0
+    finally:
+        if enabled:
+            gc.enable()

@@ -201,3 +201,25 @@ def test_too_few_samples_is_a_clear_data_error():
 def test_nan_is_a_clear_data_error():
     with pytest.raises(DataError, match=r"position: sample 1 is nan"):
         features.stroke([0.0, np.nan, 1.0])
+
+
+def test_the_loop_features_found_together_are_those_found_alone():
+    """``_pressure_features`` finds the last loop once for its six features: each value is
+    the one its own function gives, finding the loop itself, bit for bit."""
+    names = ("loop_width_pressure", "loop_width_position", "loop_area", "breakaway_pressure",
+             "sliding_speed", "presliding_travel")
+    for cycles in (1, 3):
+        time, pressure, position = coulomb_play(cycles)
+        # presliding: the rising branch creeps back before it slides
+        position = position + 1e-5 * np.tanh(np.gradient(pressure) / 40.0)
+        together = np.full(features.N_FEATURES, np.nan)
+        features._pressure_features(time, pressure, position, together)
+        alone = {"loop_width_pressure": features._loop_width_pressure(pressure, position),
+                 "loop_width_position": features._loop_width_position(pressure, position),
+                 "loop_area": features._loop_area(pressure, position),
+                 "breakaway_pressure": features._breakaway(pressure, position),
+                 "sliding_speed": features._sliding_speed(time, pressure, position),
+                 "presliding_travel": features._presliding_travel(pressure, position)}
+        assert all(np.isfinite(alone[n]) for n in names), alone
+        for name in names:
+            assert together[features.FEATURES.index(name)] == alone[name], name

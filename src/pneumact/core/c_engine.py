@@ -22,7 +22,9 @@ back end translates the model, numba otherwise, with a warning saying why).
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
+import math
 import os
 import re
 import tempfile
@@ -59,7 +61,8 @@ FLAGS = ("-O3", "-fno-tree-vectorize", "-std=c99", "-fPIC", "-shared")
 #: the functions the libraries carry: one library per group, built on the group's first use
 GROUPS = {"run": ("derive", "initial_state", "state_scales", "rhs", "jac", "outputs",
                   "integrate_rodas4"),
-          "sensitivities": ("integrate_rodas4_sens", "output_sensitivities")}
+          "sensitivities": ("integrate_rodas4_sens", "output_sensitivities"),
+          "states": ("integrate_rodas4_states",)}
 _GROUP_OF = {name: group for group, names in GROUPS.items() for name in names}
 PREFIX = "pa_"
 
@@ -114,13 +117,15 @@ _SCALARS: dict[str, Any] = {"double": ctypes.c_double, "float": ctypes.c_float,
                             "int64_t": ctypes.c_int64, "int": ctypes.c_int}
 
 
-def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]:
+def _array_converter(name: str, ctype: str) -> tuple[type, type, Callable[[Any], Any]]:
+    """(the struct a result comes back as, the struct an argument goes as, the converter
+    of an argument) for the C array type ``ctype``."""
     match = re.fullmatch(r"pa_arr_(\w+?)_(\d+)d", ctype)
     if match is None or match.group(1) not in _ELEMENTS:
         raise CBuildError(f"{name}: no ctypes mirror for the C type {ctype}")
     dtype, element = _ELEMENTS[match.group(1)]
     ndim = int(match.group(2))
-    struct = array_struct(element, ndim)
+    argument = _argument_struct(ndim)
     size = np.dtype(dtype).itemsize
 
     def convert(values: Any) -> ctypes.Structure:
@@ -128,11 +133,25 @@ def _array_converter(name: str, ctype: str) -> tuple[type, Callable[[Any], Any]]
             raise TypeError(f"{name}: expected a {ndim}-d {np.dtype(dtype).name} array, got "
                             f"{getattr(values, 'dtype', type(values).__name__)} with "
                             f"{getattr(values, 'ndim', '?')} dimensions")
-        return struct(values.ctypes.data_as(ctypes.POINTER(element)),
-                      (ctypes.c_int64 * ndim)(*values.shape),
-                      (ctypes.c_int64 * ndim)(*(s // size for s in values.strides)))
+        return argument(values.ctypes.data, *values.shape,
+                        *[s // size for s in values.strides])
 
-    return struct, convert
+    return array_struct(element, ndim), argument, convert
+
+
+@functools.cache
+def _argument_struct(ndim: int) -> type[ctypes.Structure]:
+    """An array argument as the library reads it (the back end's struct: data, shape[ndim],
+    strides[ndim] in elements), made of plain numbers: its data pointer as an address, each
+    extent and stride a field of its own. The same memory layout as
+    ``c_source.array_struct``'s typed pointer and arrays; a typed pointer from
+    ``ndarray.ctypes.data_as`` and arrays filled from tuples cost 2-3 times as much per
+    argument (a batch row on the C engine passes about 25) and the pointer left reference
+    cycles for the garbage collector."""
+    fields = [("data", ctypes.c_void_p),
+              *((f"shape{k}", ctypes.c_int64) for k in range(ndim)),
+              *((f"stride{k}", ctypes.c_int64) for k in range(ndim))]
+    return type(f"ArrayArgument{ndim}", (ctypes.Structure,), {"_fields_": fields})
 
 
 class CFunction:
@@ -159,8 +178,8 @@ class CFunction:
                 argtypes.append(_SCALARS[ctype])
                 self._converters.append(_scalar)
             else:
-                struct, convert = _array_converter(name, ctype)
-                argtypes.append(struct)
+                _, argument, convert = _array_converter(name, ctype)
+                argtypes.append(argument)
                 self._converters.append(convert)
         self._function.argtypes = argtypes
         self._result = self._result_reader(restype)
@@ -172,13 +191,17 @@ class CFunction:
         if restype in _SCALARS:
             self._function.restype = _SCALARS[restype]
             return (lambda value: bool(value)) if restype == "int" else (lambda value: value)
-        struct, _ = _array_converter(self.name, restype)
+        struct, _, _ = _array_converter(self.name, restype)
         self._function.restype = struct
-        dtype = _ELEMENTS[restype.split("_")[2]][0]
+        dtype, element = _ELEMENTS[restype.split("_")[2]]
 
         def copy_out(value: Any) -> np.ndarray:  # the array lives in the arena: copy it
             shape = tuple(value.shape)
-            count = int(np.prod(shape)) if shape else 1
+            count = math.prod(shape)
+            if tuple(value.strides) == _c_order(shape):  # one block: one copy
+                address = ctypes.cast(value.data, ctypes.c_void_p).value
+                return np.frombuffer((element * count).from_address(address) if count
+                                     else b"", dtype).reshape(shape).copy()
             flat = np.ctypeslib.as_array(value.data, shape=(max(count, 1),))[:count]
             strides = tuple(s * np.dtype(dtype).itemsize for s in value.strides)
             return np.lib.stride_tricks.as_strided(flat, shape, strides).copy()
@@ -210,9 +233,19 @@ def _scalar(value: Any) -> Any:
     return value
 
 
+def _c_order(shape: tuple[int, ...]) -> tuple[int, ...]:
+    """The strides, in elements, of a C-ordered array of ``shape``."""
+    strides, step = [], 1
+    for extent in reversed(shape):
+        strides.append(step)
+        step *= extent
+    return tuple(reversed(strides))
+
+
 class CKernel:
     """A kernel whose entry points run in C libraries: ``run``'s (everything a run needs)
-    at once, ``sensitivities``' on first use (a plain run does not wait for them);
+    at once, ``sensitivities``' and ``states``' (the batch's integrator without derived
+    outputs) on first use (a plain run does not wait for them);
     attributes no library carries (constants, other functions) are the numba kernel
     module's, as are a group's functions where the back end cannot translate them (with
     an ``EngineWarning``)."""
@@ -283,6 +316,7 @@ def _roots(module: ModuleType, group: str) -> dict[str, tuple[Callable, Sequence
         "state_scales": (vector, vector), "rhs": (*run, vector), "jac": (*run, matrix),
         "outputs": (*run, vector), "integrate_rodas4": integrate,
         "integrate_rodas4_sens": (*integrate, *directions, types.boolean[::1], matrix, cube),
+        "integrate_rodas4_states": (*integrate[:12], vector),
         "output_sensitivities": (vector, vector, matrix, cube, vector, vector, indices,
                                  *directions, cube)}
     return {PREFIX + name: (getattr(module, name), signatures[name]) for name in GROUPS[group]

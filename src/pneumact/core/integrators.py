@@ -22,6 +22,13 @@ the requested output times they write
   gives it at the solver's steps (friction force, flows), whatever the tolerance.
 
 They never raise: ``info`` reports the status, where and how the run failed.
+
+``integrate_rodas4_states`` and ``integrate_dopri5_states`` are the same runs without the
+derived outputs (``out`` is ``None``, and numba prunes every branch that computes them):
+the batch engine calls them where what it keeps is states only (the features read
+position, velocity and pressure, states of an actuator), saving three ``outputs`` calls
+per step that writes output points. The states are the same bit for bit: the outputs
+never feed back into the steps.
 """
 
 import math
@@ -179,16 +186,18 @@ def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out
     """Write every requested time in (t0, t0 + h] (and ≤ t_stop); returns the next j.
 
     ``slopes`` (2 × (NSTATE + NOUT)) receives the step's slopes, limited where needed;
-    interpolated states are projected onto the model's invariant bounds like the steps."""
+    interpolated states are projected onto the model's invariant bounds like the steps.
+    ``out`` ``None``: states only (the outputs' values and rates are not read)."""
     for i in range(NSTATE):
         m0, m1 = h * f0[i], h * f1[i]
         if MONOTONE[i]:
             m0, m1 = _limited(y0[i], m0, y1[i], m1)
         slopes[0, i] = m0
         slopes[1, i] = m1
-    for k in range(NOUT):
-        slopes[0, NSTATE + k], slopes[1, NSTATE + k] = _limited(o0[k], h * do0[k], o1[k],
-                                                                h * do1[k])
+    if out is not None:
+        for k in range(NOUT):
+            slopes[0, NSTATE + k], slopes[1, NSTATE + k] = _limited(o0[k], h * do0[k],
+                                                                    o1[k], h * do1[k])
     n_out = t_out.shape[0]
     while j < n_out and t_out[j] <= t_stop and t_out[j] <= t0 + h:
         # y0 + h01·(y1 − y0) + ...: the Hermite form with h00 = 1 − h01, exact for a
@@ -198,19 +207,22 @@ def _dense(t0, h, y0, f0, y1, f1, o0, do0, o1, do1, t_out, j, t_stop, y_out, out
             y_out[j, i] = (y0[i] + h01 * (y1[i] - y0[i]) + h10 * slopes[0, i]
                            + h11 * slopes[1, i])
         project(prm, y_out[j])
-        for k in range(NOUT):
-            out[j, k] = (o0[k] + h01 * (o1[k] - o0[k]) + h10 * slopes[0, NSTATE + k]
-                         + h11 * slopes[1, NSTATE + k])
+        if out is not None:
+            for k in range(NOUT):
+                out[j, k] = (o0[k] + h01 * (o1[k] - o0[k]) + h10 * slopes[0, NSTATE + k]
+                             + h11 * slopes[1, NSTATE + k])
         j += 1
     return j
 
 
 @kernel()
-def _write_point(t, ts, y, prm, sig, ptr, y_row, out_row):
-    """One output row at a step's end: the state and the outputs there."""
+def _write_point(t, ts, y, prm, sig, ptr, y_out, out, j):
+    """Output row j at a step's end: the state and (``out`` not ``None``) the outputs
+    there."""
     for i in range(NSTATE):
-        y_row[i] = y[i]
-    outputs(t, ts, y, prm, sig, ptr, out_row)
+        y_out[j, i] = y[i]
+    if out is not None:
+        outputs(t, ts, y, prm, sig, ptr, out[j])
 
 
 @kernel()
@@ -219,7 +231,7 @@ def _write_after_jump(t, ts, y, prm, sig, ptr, t_out, j, y_out, out):
     (a held value is right-continuous, as a zero-order hold's output is)."""
     n_out = t_out.shape[0]
     while j < n_out and t_out[j] <= t:
-        _write_point(t, ts, y, prm, sig, ptr, y_out[j], out[j])
+        _write_point(t, ts, y, prm, sig, ptr, y_out, out, j)
         j += 1
     return j
 
@@ -291,6 +303,15 @@ def integrate_rodas4(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, ma
 
 
 @kernel(nogil=True)
+def integrate_rodas4_states(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
+                            max_steps, y_out, info):
+    """``integrate_rodas4`` writing the states only (no derived outputs): the same states,
+    bit for bit, without the outputs' cost."""
+    return _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                  y_out, None, info, None, None)
+
+
+@kernel(nogil=True)
 def integrate_rodas4_sens(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
                           max_steps, y_out, out, info, w_ptr, w_idx, w_val, needed, s0,
                           s_out):
@@ -352,6 +373,15 @@ def _mark_events(at, first, forced, count, cut):
         forced[i] = here if cut else (forced[i] or here)
 
 
+@kernel(nogil=True)
+def integrate_dopri5_states(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max,
+                            max_steps, y_out, info):
+    """``integrate_dopri5`` writing the states only, as ``integrate_rodas4_states``."""
+    n = NSTATE
+    return _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_steps,
+                  y_out, None, info, None, DopriWork(np.empty(n), np.empty(n)))
+
+
 #: Dormand-Prince's work arrays: a stage's state (cont) and the error estimate (err).
 #: ``None`` in their place selects RODAS4.
 DopriWork = namedtuple("DopriWork", ["cont", "err"])
@@ -407,7 +437,7 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
     j = np.int64(0)
     t = tb[0]
     while not HAS_JUMPS and j < n_out and t_out[j] <= t:
-        _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out[j], out[j])
+        _write_point(t, 0.5 * (tb[0] + tb[1]), y, prm, sig, ptr, y_out, out, j)
         if sens is not None:
             _sens_point(s, sens.s_out, j)
         j += 1
@@ -548,21 +578,23 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
                                         yst, prm, sig, ptr, sens, work, s)
                 if j < n_out and t_out[j] <= t_new:
                     hh = t_new - t
-                    if not o0_valid:
-                        outputs(t, ts, y, prm, sig, ptr, o0)
-                    _output_rate(t, ts, y, f0, OUTPUT_FD * hh, prm, sig, ptr, o0, do0, ybuf,
-                                 obuf)
-                    outputs(t_new, ts, ynew, prm, sig, ptr, o1)
-                    _output_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1, do1,
-                                 ybuf, obuf)
+                    if out is not None:
+                        if not o0_valid:
+                            outputs(t, ts, y, prm, sig, ptr, o0)
+                        _output_rate(t, ts, y, f0, OUTPUT_FD * hh, prm, sig, ptr, o0, do0,
+                                     ybuf, obuf)
+                        outputs(t_new, ts, ynew, prm, sig, ptr, o1)
+                        _output_rate(t_new, ts, ynew, f1, -OUTPUT_FD * hh, prm, sig, ptr, o1,
+                                     do1, ybuf, obuf)
                     j0 = j
                     j = _dense(t, hh, y, f0, ynew, f1, o0, do0, o1, do1, t_out, j, t_stop,
                                y_out, out, slopes, prm)
                     if sens is not None:
                         _sens_dense(t, hh, t_out, j0, j, work, s, sens.s_out)
-                    for k in range(NOUT):
-                        o0[k] = o1[k]
-                    o0_valid = True
+                    if out is not None:
+                        for k in range(NOUT):
+                            o0[k] = o1[k]
+                        o0_valid = True
                 else:
                     o0_valid = False
                 for a in range(n):
@@ -618,7 +650,7 @@ def _integrate(y0, prm, sig, ptr, tb, t_out, rtol, atol, h_init, h_max, max_step
             break
     # points beyond the last breakpoint (if any) get the final state
     while status == STATUS_OK and j < n_out:
-        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, y_out[j], out[j])
+        _write_point(t_out[j], 0.5 * (tb[-2] + tb[-1]), y, prm, sig, ptr, y_out, out, j)
         if sens is not None:
             _sens_point(s, sens.s_out, j)
         j += 1

@@ -44,6 +44,9 @@ class Solver:
     h_max: float = math.inf
     max_steps: int | None = None
     kernel_function = "integrate_rodas4"
+    #: the same integrator writing the states only (the batch engine's, where it keeps
+    #: no derived output)
+    states_function = "integrate_rodas4_states"
     explicit = False
 
     def __post_init__(self):
@@ -98,6 +101,7 @@ class Rodas4(Solver):
     """Rosenbrock RODAS4 (L-stable, order 4) with the analytic Jacobian; the default."""
 
     kernel_function = "integrate_rodas4"
+    states_function = "integrate_rodas4_states"
 
 
 @dataclass(frozen=True)
@@ -105,4 +109,5 @@ class DormandPrince(Solver):
     """Explicit Dormand-Prince 5(4); fine for non-stiff set-ups (no bristle stiffness)."""
 
     kernel_function = "integrate_dopri5"
+    states_function = "integrate_dopri5_states"
     explicit = True

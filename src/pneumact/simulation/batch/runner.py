@@ -3,7 +3,9 @@
 For each row the runner sets the row's values into a copy of the base vector, re-derives,
 finds the initial state, sets the tolerances from the row's state scales, and calls the
 model kernel's compiled integrator, the same function a single run calls (the integrator
-releases the GIL: threads running chunks run in parallel); then the features
+releases the GIL: threads running chunks run in parallel; where the features and the
+kept signals read states only, its states-only form, which skips the derived outputs);
+then the features
 (``core.features``, compiled once per machine) and the requested signals. The loop over
 the rows is Python: a compiled loop was measured no faster (1 000 rows of the
 valve-driven cycle: 2.95 ms per row on one thread and 665 rows/s on two either way,
@@ -42,6 +44,7 @@ STATUS_ERROR = "error"  # the row's run raised
 FEATURE_SIGNALS = ("position", "velocity", "pressure")
 #: where a signal is read: a state column or a derived-output column
 FROM_STATE = 0
+FROM_OUTPUT = 1
 
 
 def _feature_source(assembly, name: str) -> tuple[int, int]:
@@ -161,14 +164,16 @@ class ChunkRunner:
         features and signals (rows that succeed) and solver info into the arrays; returns
         the rows whose run raised, with the error (their results stay NaN)."""
         kernel, n_t = self.prep.kernel, self.prep.t_out.size
-        work = _RowWork(np.empty((n_t, kernel.NSTATE)), np.empty((n_t, kernel.NOUT)),
+        states_only = self.reads_states_only()
+        work = _RowWork(np.empty((n_t, kernel.NSTATE)),
+                        np.empty((0 if states_only else n_t, kernel.NOUT)),
                         np.zeros(kernel.INFO_LENGTH), np.empty(kernel.NSTATE),
                         np.empty(kernel.NSTATE))
         crashed: dict[int, str] = {}
         for r in np.flatnonzero(valid):
             raise_if_stopped()  # Ctrl-C: the chunk ends at its next row
             try:
-                self._row(values[r], work)
+                self._row(values[r], work, states_only)
             except Exception as exc:
                 crashed[int(r)] = f"{type(exc).__name__} in this row's run: {exc}"
                 continue
@@ -181,9 +186,16 @@ class ChunkRunner:
                 signals[r, k] = (work.y_out if kind == FROM_STATE else work.out)[:, index]
         return crashed
 
-    def _row(self, row: np.ndarray, work: _RowWork) -> None:
+    def reads_states_only(self) -> bool:
+        """Whether the features and the kept signals read states alone: then the rows
+        run the integrator that writes no derived output (the same states, bit for bit,
+        without three ``outputs`` calls per step that writes output points)."""
+        read = [*(self.sources if self.spec.features else ()), *self.signal_sources]
+        return all(kind != FROM_OUTPUT for kind, _ in read)
+
+    def _row(self, row: np.ndarray, work: _RowWork, states_only: bool = False) -> None:
         """One row: its vector, its initial state and tolerances, then the integrator
-        (states, outputs and solver info into ``work``)."""
+        (states, outputs unless ``states_only``, and solver info into ``work``)."""
         prep, solver, kernel = self.prep, self.spec.solver, self.prep.kernel
         # a closed loop writes its controller output into its own copy of the inputs
         sig = prep.sig.copy() if kernel.PRIVATE_INPUTS else prep.sig
@@ -198,9 +210,12 @@ class ChunkRunner:
             kernel.initial_state(tb[0], 0.5 * (tb[0] + tb[1]), prm, sig, prep.ptr, work.y0)
         kernel.state_scales(prm, work.scales)
         atol = np.where(self.atol_given > 0.0, self.atol_given, solver.rtol * work.scales)
-        integrate = getattr(kernel, solver.kernel_function)
-        integrate(work.y0, prm, sig, prep.ptr, tb, prep.t_out, solver.rtol, atol,
-                  solver.h_init, solver.h_max, prep.max_steps, work.y_out, work.out, work.info)
+        arguments = (work.y0, prm, sig, prep.ptr, tb, prep.t_out, solver.rtol, atol,
+                     solver.h_init, solver.h_max, prep.max_steps, work.y_out)
+        if states_only:
+            getattr(kernel, solver.states_function)(*arguments, work.info)
+        else:
+            getattr(kernel, solver.kernel_function)(*arguments, work.out, work.info)
 
     def _features(self, y_out: np.ndarray, out: np.ndarray) -> np.ndarray:
         """Every feature of one run, from the columns ``sources`` points at."""
