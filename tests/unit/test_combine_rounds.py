@@ -70,7 +70,11 @@ def test_disagreeing_rounds_are_refused_with_the_reason():
     table = combined.to_pandas()
     assert table.loc["Fc", "verdict"] == POORLY
     assert "the rounds disagree" in table.loc["Fc", "reason"]
-    assert not np.isfinite(table.loc["Fc", "ci95_low"])  # no interval: none would hold
+    # not a tight interval about a mean: one that covers both rounds' intervals
+    assert table.loc["Fc", "ci95_low"] == pytest.approx(2.50 - 1.96 * 0.02, rel=1e-3)
+    assert table.loc["Fc", "ci95_high"] == pytest.approx(2.50 + apart + 1.96 * 0.02,
+                                                         rel=1e-3)
+    assert "rounds 1 and 2 (disagree): Fc" in combined.summary()
     assert table.loc["F0", "verdict"] == IDENTIFIED  # the others still combine
     assert not combined.ok
     with pytest.raises(ParameterError, match="not checked"):

@@ -11,8 +11,11 @@ results combine, parameter by parameter (``combine_rounds(first, second)``):
   the interval of that mean, when the two agree: |a − b| ≤ ``CONSISTENCY_Z`` ·
   √(σa² + σb²); its verdict is judged again from the combined interval (the rules of
   ``diagnostics.verdicts``). When they do not agree, the parameter is refused ("the
-  rounds disagree"): one of them is wrong, and a weighted mean of a wrong value and a
-  right one is a wrong value with a tight interval;
+  rounds disagree", poorly identified): one of them is wrong, and a weighted mean of a
+  wrong value and a right one is a wrong value with a tight interval. What it reports
+  instead is the interval that covers both rounds' intervals, about its middle (as
+  ``optima.cover_optima`` does for two optima of one fit): the truth is not known to be
+  nearer either;
 - a parameter without an interval in either round keeps the better of the two verdicts
   (identified, poorly identified, not identifiable; the later round on a tie) with its
   reason and remedy, and no interval.
@@ -139,13 +142,20 @@ def read_round(folder: str | PathLike[str], number: int = 1) -> RoundEstimates:
 @dataclass(frozen=True)
 class Combined:
     """One parameter combined: its value, the weight of each round's estimate, its
-    verdict and the rounds it rests on."""
+    verdict, the rounds it rests on, whether it has an interval, and (rounds that
+    disagree) the variance of the interval covering both."""
 
     value: float
     weights: tuple[float, float]
     verdict: Verdict
     rounds: str
     has_interval: bool
+    covering: float | None = None
+
+    @property
+    def agreed(self) -> bool:
+        """A weighted mean of two rounds that agree."""
+        return "+" in self.rounds and self.has_interval and self.covering is None
 
 
 def combine_parameter(name: str, first: pd.Series | None, second: pd.Series | None,
@@ -185,9 +195,13 @@ def _weighted_mean(name: str, first: pd.Series, second: pd.Series) -> Combined:
         reason = (f"the rounds disagree: round {first['round']} {a:.6g} ± "
                   f"{1.96 * np.sqrt(var_a):.2g}, round {second['round']} {b:.6g} ± "
                   f"{1.96 * np.sqrt(var_b):.2g} (95 %), {apart:.1f} standard deviations of "
-                  f"their difference apart (at most {CONSISTENCY_Z:g})")
-        return Combined(value, (w_a, 1 - w_a), Verdict(name, POORLY, reason,
-                                                       DISAGREE_REMEDY), rounds, False)
+                  f"their difference apart (at most {CONSISTENCY_Z:g}); the interval "
+                  "covers both")
+        low = min(a - 1.96 * np.sqrt(var_a), b - 1.96 * np.sqrt(var_b))
+        high = max(a + 1.96 * np.sqrt(var_a), b + 1.96 * np.sqrt(var_b))
+        return Combined((low + high) / 2, (w_a, 1 - w_a), Verdict(
+            name, POORLY, reason, DISAGREE_REMEDY), rounds, True,
+            ((high - low) / 2 / 1.96) ** 2)
     stderr = np.sqrt(var_a * var_b / (var_a + var_b))
     judged = verdicts([name], np.array([value]), np.array([1.96 * stderr]), [False])[0]
     reason = (f"rounds {first['round']} and {second['round']} agree ({apart:.1f} standard "
@@ -199,18 +213,22 @@ def _weighted_mean(name: str, first: pd.Series, second: pd.Series) -> Combined:
 def combined_covariance(names: list[str], combined: dict[str, Combined],
                         rounds: tuple[RoundEstimates, RoundEstimates]) -> np.ndarray:
     """cov = W₁C₁W₁ + W₂C₂W₂ over ``names`` (each round's covariance where it reports an
-    interval, zero elsewhere); infinite for a parameter without a combined interval."""
+    interval, zero elsewhere); infinite for a parameter without a combined interval; a
+    covering interval's variance alone (uncorrelated) for rounds that disagree."""
     n = len(names)
     out = np.zeros((n, n))
     for k, part in enumerate(rounds):
         shown = [i for i, name in enumerate(names) if name in part.with_interval
-                 and combined[name].weights[k] > 0]
+                 and combined[name].weights[k] > 0 and combined[name].covering is None]
         if not shown:
             continue
         picked = [names[i] for i in shown]
         block = part.covariance.loc[picked, picked].to_numpy(float)
         weights = np.array([combined[names[i]].weights[k] for i in shown])
         out[np.ix_(shown, shown)] += block * np.outer(weights, weights)
+    for i, name in enumerate(names):
+        if combined[name].covering is not None:
+            out[i, i] = combined[name].covering
     dead = np.array([not combined[name].has_interval for name in names])
     out[dead, :] = np.inf
     out[:, dead] = np.inf
@@ -264,7 +282,7 @@ def combine_rounds(first: PaperIdentification | RoundEstimates,
         rows = tuple(p.table.loc[name] if name in p.table.index else None for p in parts)
         usable = tuple(name in p.with_interval for p in parts)
         combined[name] = combine_parameter(name, rows[0], rows[1], usable)
-    agreed = [n for n in names if combined[n].rounds.count("+") and combined[n].has_interval]
+    agreed = [n for n in names if combined[n].agreed]
     joint = joint_disagreement(agreed, parts)
     return _result(names, combined, parts, first, second, [joint] if joint else [])
 
@@ -316,7 +334,8 @@ def _result(names, combined, parts, first, second: PaperIdentification,
     return CombinedIdentification(
         {}, None, estimates, [combined[n].verdict for n in names], diagnostics, residuals,
         params, initial, records, None, None,
-        {**keep, "no_interval": [n for n in names if not combined[n].has_interval]},
+        {**keep, "no_interval": [n for n in names if not combined[n].has_interval],
+         "disagree": [n for n in names if combined[n].covering is not None]},
         rounds={n: combined[n].rounds for n in names}, parts=parts)
 
 
@@ -326,7 +345,7 @@ def _labels(parts) -> set[str]:
 
 
 def _source_words(one: Combined) -> str:
-    if "+" in one.rounds and one.has_interval:
+    if one.agreed:
         return f"identified, rounds {one.rounds.replace('+', ' and ')}: weighted mean"
     if "+" in one.rounds:
         return f"rounds {one.rounds.replace('+', ' and ')} disagree: not identified"
@@ -396,10 +415,10 @@ class CombinedIdentification(PaperIdentification):
         lines = super().summary().split("\n")
         groups: dict[str, list[str]] = {}
         for n, label in self.rounds.items():
-            key = (f"rounds {label.replace('+', ' and ')} (weighted mean)"
-                   if "+" in label and n not in self.extra.get("no_interval", ())
-                   else f"rounds {label.replace('+', ' and ')} (disagree)" if "+" in label
-                   else f"round {label}")
+            key = (f"rounds {label.replace('+', ' and ')} (disagree)"
+                   if n in self.extra.get("disagree", ())
+                   else f"rounds {label.replace('+', ' and ')} (weighted mean)"
+                   if "+" in label else f"round {label}")
             groups.setdefault(key, []).append(n)
         where = "; ".join(f"{key}: {', '.join(names)}" for key, names in groups.items())
         return "\n".join([lines[0], f"  from {where}", *lines[1:]])
