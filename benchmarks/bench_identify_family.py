@@ -2,6 +2,7 @@
 
 Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
 [--bench] [--rounds 2 [--together]] [--validation] [--keep DIR]
+[--recombine DIR]
 
 Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
 0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
@@ -29,6 +30,9 @@ and identified from its records with the first round's estimates as the prior (w
 the two rounds combined per parameter (``combine_rounds``, round "1+2"; not with
 ``--together``, whose rounds share records). ``--keep DIR`` pickles each campaign's
 rounds as ``combine.RoundEstimates`` (with the truth) for a later look.
+
+``--recombine DIR``: no identification; the rounds kept in ``DIR`` combined again with
+the current rules (``combine.combined_table``), and the "1+2" table printed.
 
 ``--validation``: the setting of ``tests/validation/test_identification_family.py``
 (one noise seed per actuator, its index; 6 ramp pairs; 16 input replicates; the second
@@ -61,7 +65,7 @@ from pneumact.identification import (
     identify_paper,
     synthetic_campaign,
 )
-from pneumact.identification.combine import round_estimates
+from pneumact.identification.combine import combined_table, round_estimates
 from pneumact.parameters.family import ActuatorFamily
 
 FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
@@ -210,8 +214,12 @@ def main() -> None:
                              "(its index), 6 ramp pairs, 16 input replicates")
     parser.add_argument("--keep", type=Path, default=None,
                         help="with --rounds 2: pickle each campaign's rounds here")
+    parser.add_argument("--recombine", type=Path, default=None,
+                        help="combine the rounds kept in this folder (--keep) again")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
+    if args.recombine:
+        return recombine(args)
     if args.keep:
         args.keep.mkdir(parents=True, exist_ok=True)
     family = ActuatorFamily().draw(args.actuators, seed=args.seed)
@@ -237,6 +245,29 @@ def main() -> None:
         report(every[every["round"] == round_number], len(family), args, total)
     if args.csv:
         every.to_csv(args.csv, index=False)
+
+
+def recombine(args) -> None:
+    """The rounds kept by ``--keep`` combined with the current rules: the "1+2" table."""
+    rows = []
+    kept = sorted(args.recombine.glob("*.pickle"))
+    for path in kept:
+        stored = pickle.loads(path.read_bytes())
+        table = combined_table(*stored["rounds"])
+        truth = stored["truth"]
+        for name in FREE:
+            row = table.loc[name]
+            reported = bool(np.isfinite(row["ci95_low"]) and np.isfinite(row["ci95_high"]))
+            rows.append({"actuator": path.stem, "seed": 0, "round": "1+2", "parameter": name,
+                         "verdict": row["verdict"],
+                         "error_%": 100 * (row["value"] / truth[name] - 1),
+                         "reported": reported, "wall_s": 0.0,
+                         "covered": bool(row["ci95_low"] <= truth[name] <= row["ci95_high"])
+                         if reported else None})
+        print(f"{path.stem}: {sum(table.loc[list(FREE), 'verdict'] == 'identified')} of 8 "
+              "identified, rounds " + " ".join(f"{n}:{table.loc[n, 'round']}" for n in FREE))
+    print("\n--- rounds 1+2, recombined")
+    report(pd.DataFrame(rows), len(kept), args, 0.0)
 
 
 def report(table: pd.DataFrame, actuators: int, args, total: float) -> None:

@@ -136,3 +136,20 @@ def test_a_folder_round_trip_and_shared_records_are_refused(tmp_path):
         read_round(tmp_path / "nowhere")
     with pytest.raises(ParameterError, match="independent records"):
         combine_rounds(first, first)
+
+
+def test_the_table_alone_combines_as_the_result_does():
+    """``combined_table`` (two rounds' tables, no identification result) and
+    ``combine_rounds`` give one combination."""
+    from pneumact.identification.combine import combined_table, round_estimates
+
+    first = identification([30.0, 12000.0, 2.5], [0.03, 60.0, 0.02], [IDENTIFIED] * 3,
+                           correlation=-0.9)
+    second = identification([30.01, 12010.0, 2.6], [0.01, 20.0, 0.02], [IDENTIFIED] * 3,
+                            record="b")
+    alone = combined_table(round_estimates(first, 1), round_estimates(second, 2))
+    result = combine_rounds(first, second).to_pandas()
+    for column in ("value", "ci95_low", "ci95_high"):
+        np.testing.assert_allclose(alone[column], result.loc[alone.index, column],
+                                   rtol=1e-6)
+    assert (alone["verdict"] == result.loc[alone.index, "verdict"]).all()

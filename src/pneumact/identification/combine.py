@@ -58,7 +58,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["CONSISTENCY_Z", "CombinedIdentification", "RoundEstimates", "combine_rounds",
-           "read_round", "round_estimates"]
+           "combined_table", "read_round", "round_estimates"]
 
 #: Two rounds agree on a parameter when they differ by at most this many standard
 #: deviations of the difference (95 %, two-sided): an honest pair is called
@@ -273,8 +273,18 @@ def combine_rounds(first: PaperIdentification | RoundEstimates,
     earlier = first if isinstance(first, RoundEstimates) else round_estimates(first, 1)
     if isinstance(first, PaperIdentification):
         _check_independent(first, second)
-    number = _next_number(earlier)
-    later = round_estimates(second, number)
+    later = round_estimates(second, _next_number(earlier))
+    combined = combine_parameters(earlier, later)
+    names = list(combined)
+    joint = joint_disagreement([n for n in names if combined[n].agreed], (earlier, later))
+    return _result(names, combined, (earlier, later), first, second,
+                   [joint] if joint else [])
+
+
+def combine_parameters(earlier: RoundEstimates, later: RoundEstimates
+                       ) -> dict[str, Combined]:
+    """Each parameter of either round combined (``combine_parameter``), the later
+    round's parameters first."""
     parts = (earlier, later)
     names = list(dict.fromkeys([*later.table.index, *earlier.table.index]))
     combined = {}
@@ -282,9 +292,26 @@ def combine_rounds(first: PaperIdentification | RoundEstimates,
         rows = tuple(p.table.loc[name] if name in p.table.index else None for p in parts)
         usable = tuple(name in p.with_interval for p in parts)
         combined[name] = combine_parameter(name, rows[0], rows[1], usable)
-    agreed = [n for n in names if combined[n].agreed]
-    joint = joint_disagreement(agreed, parts)
-    return _result(names, combined, parts, first, second, [joint] if joint else [])
+    return combined
+
+
+def combined_table(earlier: RoundEstimates, later: RoundEstimates) -> pd.DataFrame:
+    """Per parameter: the round, the combined value, its standard error and 95 %
+    interval (NaN without one), the verdict and its reason: the combination without an
+    identification result (from two rounds' tables alone)."""
+    combined = combine_parameters(earlier, later)
+    names = list(combined)
+    estimates = _estimates(names, combined, (earlier, later))
+    ci = estimates.interval(0.95)
+    shown = np.isfinite(estimates.stderr)
+    return pd.DataFrame({
+        "round": [combined[n].rounds for n in names], "value": estimates.values,
+        "stderr": np.where(shown, estimates.stderr, np.nan),
+        "ci95_low": np.where(shown, ci[:, 0], np.nan),
+        "ci95_high": np.where(shown, ci[:, 1], np.nan),
+        "verdict": [combined[n].verdict.verdict for n in names],
+        "reason": [combined[n].verdict.reason for n in names]},
+        index=pd.Index(names, name="parameter"))
 
 
 def _next_number(earlier: RoundEstimates) -> int:
@@ -308,13 +335,7 @@ def _result(names, combined, parts, first, second: PaperIdentification,
     """The combined values as a ``PaperIdentification``: estimates with the combined
     covariance, a verdict and a round per parameter, both rounds' diagnostics and
     residuals, the later round's bench."""
-    units = tuple(str(parts[1].table.loc[n, "unit"]) if n in parts[1].table.index else
-                  str(parts[0].table.loc[n, "unit"]) for n in names)
-    covariance = combined_covariance(names, combined, parts)
-    stderr = np.sqrt(np.diag(covariance))
-    dofs = [p.dof for p in parts if p.dof > 0]
-    estimates = Estimates(tuple(names), np.array([combined[n].value for n in names]),
-                          stderr, covariance, min(dofs) if dofs else 0, units)
+    estimates = _estimates(names, combined, parts)
     sources = {n: _source_words(combined[n]) for n in names}
     base = second.parameters_unchecked
     params = with_estimates(base, estimates, sources, base.name,
@@ -337,6 +358,18 @@ def _result(names, combined, parts, first, second: PaperIdentification,
         {**keep, "no_interval": [n for n in names if not combined[n].has_interval],
          "disagree": [n for n in names if combined[n].covering is not None]},
         rounds={n: combined[n].rounds for n in names}, parts=parts)
+
+
+def _estimates(names: list[str], combined: dict[str, Combined], parts) -> Estimates:
+    """The combined values as ``Estimates``: the combined covariance, the fewer degrees
+    of freedom of the two rounds (none known: the normal quantile)."""
+    units = tuple(str(parts[1].table.loc[n, "unit"]) if n in parts[1].table.index else
+                  str(parts[0].table.loc[n, "unit"]) for n in names)
+    covariance = combined_covariance(names, combined, parts)
+    dofs = [p.dof for p in parts if p.dof > 0]
+    return Estimates(tuple(names), np.array([combined[n].value for n in names]),
+                     np.sqrt(np.diag(covariance)), covariance, min(dofs) if dofs else 0,
+                     units)
 
 
 def _labels(parts) -> set[str]:
