@@ -221,15 +221,15 @@ def _verdict_table(result) -> Table:
     table = Table(title="identification: " + result.headline())
     estimates = result.to_pandas()
     rounds = "round" in estimates.columns  # combined rounds: where each value comes from
-    for column in ("parameter", "value", "95 % interval", "unit", *(("round",) * rounds),
-                   "verdict", "reason"):
+    for column in ("parameter", "value", "95 % interval", "unit",
+                   *(["round"] if rounds else []), "verdict", "reason"):
         table.add_column(column, overflow="fold")
     for name, row in estimates.iterrows():
         style = {"identified": "green", "poorly identified": "yellow"}.get(row["verdict"],
                                                                             "red")
         table.add_row(str(name), fmt(row["value"], 6),
                       f"{fmt(row['ci95_low'], 5)} .. {fmt(row['ci95_high'], 5)}",
-                      str(row["unit"]), *((str(row["round"]),) * rounds),
+                      str(row["unit"]), *([str(row["round"])] if rounds else []),
                       Text(row["verdict"], style=style), escape(str(row["reason"])))
     return table
 

@@ -163,23 +163,22 @@ def combine_parameter(name: str, first: pd.Series | None, second: pd.Series | No
     """The rules of the module docstring for one parameter; ``first``, ``second``: its
     row in each round's table (None where a round has no estimate of it), ``usable``:
     whether each has a reported interval."""
-    rows = (first, second)
-    if usable[0] and usable[1]:
+    if usable[0] and usable[1] and first is not None and second is not None:
         return _weighted_mean(name, first, second)
-    for k in (0, 1):
-        if usable[k]:
-            row = rows[k]
-            weights = (1.0, 0.0) if k == 0 else (0.0, 1.0)
-            verdict = Verdict(name, row["verdict"], f"round {row['round']}: {row['reason']}",
-                              row["remedy"])
-            return Combined(float(row["value"]), weights, verdict, str(row["round"]), True)
-    present = [k for k in (0, 1) if rows[k] is not None]
-    best = min(present, key=lambda k: (RANK.get(rows[k]["verdict"], 3), -k))
-    row = rows[best]
+    present = [(k, row) for k, row in enumerate((first, second)) if row is not None]
+    with_interval = [(k, row) for k, row in present if usable[k]]
+    if with_interval:
+        return _carried(name, *with_interval[0], True)
+    k, row = min(present, key=lambda pair: (RANK.get(pair[1]["verdict"], 3), -pair[0]))
+    return _carried(name, k, row, False)
+
+
+def _carried(name: str, k: int, row: pd.Series, has_interval: bool) -> Combined:
+    """Round ``k``'s (0: the earlier) value and verdict, saying its round."""
     verdict = Verdict(name, row["verdict"], f"round {row['round']}: {row['reason']}",
                       row["remedy"] or "")
-    return Combined(float(row["value"]), (1.0, 0.0) if best == 0 else (0.0, 1.0), verdict,
-                    str(row["round"]), False)
+    return Combined(float(row["value"]), (1.0, 0.0) if k == 0 else (0.0, 1.0), verdict,
+                    str(row["round"]), has_interval)
 
 
 def _weighted_mean(name: str, first: pd.Series, second: pd.Series) -> Combined:
@@ -290,7 +289,7 @@ def combine_parameters(earlier: RoundEstimates, later: RoundEstimates
     combined = {}
     for name in names:
         rows = tuple(p.table.loc[name] if name in p.table.index else None for p in parts)
-        usable = tuple(name in p.with_interval for p in parts)
+        usable = (name in earlier.with_interval, name in later.with_interval)
         combined[name] = combine_parameter(name, rows[0], rows[1], usable)
     return combined
 
