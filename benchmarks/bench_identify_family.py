@@ -1,7 +1,8 @@
 """Identification on a family of actuators: accuracy, verdicts, interval coverage, time.
 
 Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
-[--bench] [--rounds 2 [--together]]
+[--bench] [--rounds 2 [--together]] [--validation] [--keep DIR]
+[--recombine DIR]
 
 Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
 0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
@@ -25,7 +26,18 @@ resampled); the table then adds whether each fault was named.
 With ``--rounds 2`` each campaign gets a second round designed from the first round's
 result (``PaperIdentification.next_round``), simulated on the same actuator (and bench),
 and identified from its records with the first round's estimates as the prior (with
-``--together``, from both rounds' records); the tables are printed per round.
+``--together``, from both rounds' records); the tables are printed per round, and for
+the two rounds combined per parameter (``combine_rounds``, round "1+2"; not with
+``--together``, whose rounds share records). ``--keep DIR`` pickles each campaign's
+rounds as ``combine.RoundEstimates`` (with the truth) for a later look.
+
+``--recombine DIR``: no identification; the rounds kept in ``DIR`` combined again with
+the current rules (``combine.combined_table``), and the "1+2" table printed.
+
+``--validation``: the setting of ``tests/validation/test_identification_family.py``
+(one noise seed per actuator, its index; 6 ramp pairs; 16 input replicates; the second
+round's noise seeded with 1000 + the index) instead of seeds 0.. for every actuator,
+10 ramp pairs and 64 replicates.
 
 The same study, smaller, is the validation test
 ``tests/validation/test_identification_family.py``.
@@ -35,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import pickle
 import statistics
 import sys
 import time
@@ -47,10 +60,12 @@ import pandas as pd
 
 from pneumact.identification import (
     Noise,
+    combine_rounds,
     design_campaign,
     identify_paper,
     synthetic_campaign,
 )
+from pneumact.identification.combine import combined_table, round_estimates
 from pneumact.parameters.family import ActuatorFamily
 
 FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
@@ -97,28 +112,44 @@ def with_faults(exact, faults, seed: int):
     return out
 
 
+#: The validation test's setting (``--validation``): ramp pairs, input replicates.
+VALIDATION_RAMPS = 6
+VALIDATION_REPLICATES = 16
+
+
 def run_one(job):
-    index, seed, truth, family_seed, bench, rounds, together = job
-    rng = np.random.default_rng(family_seed * 1000 + index)
+    index, seed, truth, args = job
+    rng = np.random.default_rng(args.seed * 1000 + index)
     prior = prior_of(truth, rng)
-    faults = bench_faults(np.random.default_rng([family_seed, index, seed])) if bench \
+    faults = bench_faults(np.random.default_rng([args.seed, index, seed])) if args.bench \
         else None
+    setting = ({"ramps": VALIDATION_RAMPS}, {"replicates": VALIDATION_REPLICATES}) \
+        if args.validation else ({}, {})
     tic = time.perf_counter()
-    records = campaign_records(truth, design_campaign(prior, spread=SPREAD).tests, faults,
-                               seed)
-    result = identify_paper(records, prior, seed=seed, executor=1)
+    records = campaign_records(truth, design_campaign(prior, spread=SPREAD,
+                                                      **setting[0]).tests, faults, seed)
+    result = identify_paper(records, prior, seed=seed, executor=1, **setting[1])
     wall = time.perf_counter() - tic
-    rows = rows_of(result, truth, seed, 1, wall, named(faults, result))
+    rows = rows_of(result, truth, seed, "1", wall, named(faults, result))
     summary = result.summary()
-    if rounds == 2:  # designed from round 1's result, run on the same bench
+    if args.rounds == 2:  # designed from round 1's result, run on the same bench
         tic = time.perf_counter()
-        plan = result.next_round()
+        plan = result.next_round(**setting[0])
         second = campaign_records(truth, plan.tests, faults, seed + SECOND_ROUND_SEED)
-        again = identify_paper((records if together else []) + second, plan.prior,
-                               seed=seed, executor=1)
-        rows += rows_of(again, truth, seed, 2, time.perf_counter() - tic,
+        again = identify_paper((records if args.together else []) + second, plan.prior,
+                               seed=seed, executor=1, **setting[1])
+        rows += rows_of(again, truth, seed, "2", time.perf_counter() - tic,
                         named(faults, again))
         summary += "\n  round 2: " + again.headline()
+        if args.keep:
+            keep = args.keep / f"{truth.name}-seed{seed}.pickle"
+            keep.write_bytes(pickle.dumps({"truth": dict(truth.values),
+                                           "rounds": (round_estimates(result, 1),
+                                                      round_estimates(again, 2))}))
+        if not args.together:  # independent records: the rounds combine
+            combined = combine_rounds(result, again)
+            rows += rows_of(combined, truth, seed, "1+2", 0.0, named(faults, again))
+            summary += "\n  rounds 1+2: " + combined.headline()
     return rows, summary
 
 
@@ -135,7 +166,7 @@ def campaign_records(truth, tests, faults, seed: int):
 SECOND_ROUND_SEED = 1000
 
 
-def rows_of(result, truth, seed: int, round_number: int, wall: float, faults: dict
+def rows_of(result, truth, seed: int, round_number: str, wall: float, faults: dict
             ) -> list[dict]:
     """One row per free parameter: verdict, error, interval reported and covering."""
     table = result.to_pandas(truth=truth)
@@ -178,29 +209,65 @@ def main() -> None:
                         help="identify round 2 from both rounds' records (default: from "
                              "the second round's, with the first round's estimates as "
                              "its prior)")
+    parser.add_argument("--validation", action="store_true",
+                        help="the validation test's setting: one noise seed per actuator "
+                             "(its index), 6 ramp pairs, 16 input replicates")
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="with --rounds 2: pickle each campaign's rounds here")
+    parser.add_argument("--recombine", type=Path, default=None,
+                        help="combine the rounds kept in this folder (--keep) again")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
+    if args.recombine:
+        return recombine(args)
+    if args.keep:
+        args.keep.mkdir(parents=True, exist_ok=True)
     family = ActuatorFamily().draw(args.actuators, seed=args.seed)
-    jobs = [(i, s, truth, args.seed, args.bench, args.rounds, args.together)
-            for i, truth in enumerate(family) for s in range(args.seeds)]
+    jobs = [(i, i if args.validation else s, truth, args)
+            for i, truth in enumerate(family)
+            for s in range(1 if args.validation else args.seeds)]
     rows = []
     started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         for (_index, seed, truth, *_), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
-            errors = " | round 2: ".join(
-                " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%" for r in result_rows
-                         if r["round"] == n) for n in sorted({r["round"] for r in result_rows}))
+            errors = " | ".join(
+                f"round {n}: " + " ".join(f"{r['parameter']}:{r['error_%']:+.2g}%"
+                                          for r in result_rows if r["round"] == n)
+                for n in dict.fromkeys(r["round"] for r in result_rows))
             print(f"{truth.name} seed {seed}: {result_rows[0]['wall_s']:.1f} s; {summary}; "
                   f"{errors}", flush=True)
     total = time.perf_counter() - started
     every = pd.DataFrame(rows)
-    for round_number in sorted(set(every["round"])):
+    for round_number in dict.fromkeys(every["round"]):
         print(f"\n--- round {round_number}")
         report(every[every["round"] == round_number], len(family), args, total)
     if args.csv:
         every.to_csv(args.csv, index=False)
+
+
+def recombine(args) -> None:
+    """The rounds kept by ``--keep`` combined with the current rules: the "1+2" table."""
+    rows = []
+    kept = sorted(args.recombine.glob("*.pickle"))
+    for path in kept:
+        stored = pickle.loads(path.read_bytes())
+        table = combined_table(*stored["rounds"])
+        truth = stored["truth"]
+        for name in FREE:
+            row = table.loc[name]
+            reported = bool(np.isfinite(row["ci95_low"]) and np.isfinite(row["ci95_high"]))
+            rows.append({"actuator": path.stem, "seed": 0, "round": "1+2", "parameter": name,
+                         "verdict": row["verdict"],
+                         "error_%": 100 * (row["value"] / truth[name] - 1),
+                         "reported": reported, "wall_s": 0.0,
+                         "covered": bool(row["ci95_low"] <= truth[name] <= row["ci95_high"])
+                         if reported else None})
+        print(f"{path.stem}: {sum(table.loc[list(FREE), 'verdict'] == 'identified')} of 8 "
+              "identified, rounds " + " ".join(f"{n}:{table.loc[n, 'round']}" for n in FREE))
+    print("\n--- rounds 1+2, recombined")
+    report(pd.DataFrame(rows), len(kept), args, 0.0)
 
 
 def report(table: pd.DataFrame, actuators: int, args, total: float) -> None:
@@ -219,12 +286,13 @@ def report(table: pd.DataFrame, actuators: int, args, total: float) -> None:
     print(per.to_string(float_format=lambda x: f"{x:.3g}"))
     wrong = identified[identified["error_%"].abs() > identified["parameter"].map(TOLERANCE)]
     walls = table.drop_duplicates(["actuator", "seed"])["wall_s"]
-    print(f"\n{actuators} actuators × {args.seeds} seeds: identified "
+    print(f"\n{actuators} actuators, {len(walls)} campaigns: identified "
           f"{100 * len(identified) / len(table):.1f} % of the parameters, "
           f"{len(wrong)} identified but out of tolerance; reported intervals "
           f"{len(reported)}, coverage {100 * reported['covered'].mean():.1f} %; "
           f"wall per identification median {statistics.median(walls):.1f} s, "
-          f"max {walls.max():.1f} s; total {total:.0f} s on {os.cpu_count()} cores")
+          f"max {walls.max():.1f} s; total {total:.0f} s on {os.cpu_count()} cores, "
+          f"{time.process_time():.0f} s of CPU (the process, all rounds)")
     if args.bench:
         runs = table.drop_duplicates(["actuator", "seed"])
         for fault, column, present in (

@@ -101,6 +101,8 @@ BAD_VALUES: dict[str, list[str]] = {
     "--simulate": ["nowhere", "+--plan"],  # no plan there; with --plan: contradictory
     "--staged-only": [],
     "--partial": [],
+    # no folder there; a folder without an identification's estimates.csv
+    "--previous": [str(BAD / "missing"), str(BAD)],
     "identify paper --chamber": [],  # behind the regulator of the set-point records: legal
     "--pressure-noise": ["-1"],
     "--position-noise": ["-1"],

@@ -49,6 +49,15 @@ def test_the_identification_page_runs(tmp_path, monkeypatch):
     assert ((identified["value"] / identified["truth"] - 1).abs() * 100 <= tolerance).all()
     assert (table.loc[table["verdict"] != "identified", "reason"].str.len() > 0).all()
     assert (tmp_path / "identification" / "report.html").exists()
+    combined = namespace["by_round"]  # §2c: the two rounds combined, against the truth
+    right = combined[combined["verdict"] == "identified"]
+    tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in right.index])
+    assert ((right["value"] / right["truth"] - 1).abs() * 100 <= tolerance).all()
+    assert set(combined["round"]) <= {"1", "2", "1+2"}
+    refused = combined[combined["verdict"] != "identified"]
+    assert (refused["reason"].str.len() > 0).all()
+    written = (tmp_path / "identification-combined" / "identified.toml").read_text()
+    assert "round" in written
 
 
 def _run_page(name: str, tmp_path, monkeypatch) -> dict:

@@ -6,6 +6,7 @@ import dataclasses
 import warnings
 
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -308,6 +309,39 @@ def test_cli_identification_that_cannot_identify_exits_3(tmp_path, monkeypatch,
                                  "--out", "ident2"])
     assert result.exit_code == EXIT_NOT_IDENTIFIED, result.output
     assert "no longer needed" in result.output
+
+
+def test_cli_a_second_round_combined_with_the_first(tmp_path, monkeypatch, no_stribeck, vgt):
+    """`identify paper --previous`: the second round's records identified from the first
+    round's identified.toml, combined per parameter with the first round's folder; each
+    value says its round (estimates.csv, identified.toml, the terminal's table)."""
+    from pneumact.parameters import write_params
+
+    monkeypatch.chdir(tmp_path)
+    for record in no_stribeck.records:
+        record.save(f"fast/{record.source}.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PassivityWarning)
+        write_params(vgt.replace(Fs=vgt["Fc"]), tmp_path / "truth.toml")  # no_stribeck's
+    steps = [["identify", "paper", "fast", "--staged-only", "--out", "ident"],
+             ["campaign", "--plan", "--params", "ident/identified.toml", "--round", "2",
+              "--out", "plan2"],
+             ["campaign", "--simulate", "plan2", "--params", "truth.toml", "--seed", "5",
+              "--out", "bench2"],
+             ["identify", "paper", "bench2", "--staged-only", "--params",
+              "ident/identified.toml", "--previous", "ident", "--out", "combined"]]
+    for step in steps:
+        result = runner.invoke(app, step)
+        assert result.exit_code in (0, EXIT_NOT_IDENTIFIED), (step, result.output)
+    assert "this round:" in result.output and "round" in result.output
+    table = pd.read_csv(tmp_path / "combined" / "estimates.csv", index_col="parameter")
+    assert set(table["round"].astype(str)) <= {"1", "2", "1+2"}
+    assert (tmp_path / "combined" / "covariance.csv").exists()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PassivityWarning)
+        written = pa.load_params(tmp_path / "combined" / "identified.toml")
+    identified = table.index[table["verdict"] == "identified"]
+    assert len(identified) and all("round" in written.info[n].source for n in identified)
 
 
 def test_cli_bad_records_leave_nothing(tmp_path, monkeypatch):

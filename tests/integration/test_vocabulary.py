@@ -104,6 +104,20 @@ def _paper():
         pd.DataFrame(), params, params, [_record()])
 
 
+def _combined():
+    from pneumact.identification import Estimates, PaperIdentification, combine_rounds
+    from pneumact.identification.diagnostics import Verdict
+
+    params = _params()
+    later = Estimates(("Fc", "k"), np.array([2.65, 12860.0]), np.array([0.05, 20.0]),
+                      np.diag([0.0025, 400.0]), 38, ("N", "N/m"))
+    second = PaperIdentification(
+        {"spring": _stage()}, None, later,
+        [Verdict("Fc", "identified", "tight"), Verdict("k", "identified", "tight")], [],
+        pd.DataFrame(), params, params, [_record("sweep_round2.csv")])
+    return combine_rounds(_paper(), second)
+
+
 def _signature():
     from pneumact.identification import Estimates, SignatureIdentification, StageResult
     from pneumact.identification.diagnostics import Verdict
@@ -328,6 +342,7 @@ FACTORIES = {
     "pneumact.identification.stages.StageResult": lambda f: _stage(),
     "pneumact.identification.paper.PaperIdentification": lambda f: _paper(),
     "pneumact.identification.paper.SignatureIdentification": lambda f: _signature(),
+    "pneumact.identification.combine.CombinedIdentification": lambda f: _combined(),
     "pneumact.identification.inverse.InverseFriction": lambda f: _inverse(),
     "pneumact.identification.campaign.CampaignPlan": lambda f: _campaign(),
     "pneumact.sensitivity.methods.StudyResult": lambda f: _study(),

@@ -9,7 +9,8 @@
   a way to pass: most parameters must be identified.
 - A thinner campaign of one of them, whose slow ramps stick-slip: Fs and vs refused.
 - A second round (issue 38, ``next_round``) on two of them whose first round identified
-  nothing: it identifies more, nothing wrongly.
+  nothing: it identifies more, nothing wrongly, and the two rounds combined
+  (``combine_rounds``) identify at least as many as either, nothing wrongly.
 
 Records its model cannot explain: ``test_identification_mismatch.py``. The family is this
 suite's longest computation: this module is marked ``long`` (it starts first in a parallel
@@ -157,3 +158,11 @@ def test_a_second_round_identifies_what_the_first_could_not(index):
     assert (trusted["error_%"].abs() <= tolerance).all(), trusted
     assert len(second.identified) >= len(first.identified) + ref.SECOND_ROUND_GAIN, (
         first.headline(), second.headline())
+    # the two rounds combined per parameter (combine_rounds): at least what either round
+    # identifies, none wrong, each value with its round
+    combined = first.combine(second).to_pandas(truth=truth)
+    right = combined[combined["verdict"] == "identified"]
+    tolerance = np.array([ref.FAMILY_TOLERANCE_PERCENT[n] for n in right.index])
+    assert (right["error_%"].abs() <= tolerance).all(), right
+    assert len(right) >= max(len(first.identified), len(second.identified)), combined
+    assert set(right["round"]) <= {"1", "2", "1+2"}

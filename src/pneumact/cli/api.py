@@ -105,6 +105,8 @@ OWN: dict[str, str] = {
     "simulate": "campaign: run a plan written by --plan (from a prior) on --params",
     "round": "campaign: which round of tests (from 2 on every test's name ends in "
              "_round<N>; design_campaign's suffix)",
+    "previous": "identify paper: the folder of an earlier round's identification, combined "
+                "per parameter with this one (identification.combine_rounds)",
     "partial": "identify paper: no longer needed (hidden; identified.toml is always "
                "written, the prior's values marked)",
     "validate": "identify friction: a second record to validate the estimates on",

@@ -223,16 +223,18 @@ def _simulate_plan(tests, parameter_set, out: Path, seed: int, noise, source: Pa
 # --------------------------------------------------------------------------- identify
 def _verdict_table(result) -> Table:
     table = Table(title="identification: " + result.headline())
-    for column in ("parameter", "value", "95 % interval", "unit", "verdict", "reason"):
-        table.add_column(column, overflow="fold")
     estimates = result.to_pandas()
+    rounds = "round" in estimates.columns  # combined rounds: where each value comes from
+    for column in ("parameter", "value", "95 % interval", "unit",
+                   *(["round"] if rounds else []), "verdict", "reason"):
+        table.add_column(column, overflow="fold")
     for name, row in estimates.iterrows():
         style = {"identified": "green", "poorly identified": "yellow"}.get(row["verdict"],
                                                                             "red")
         table.add_row(str(name), fmt(row["value"], 6),
                       f"{fmt(row['ci95_low'], 5)} .. {fmt(row['ci95_high'], 5)}",
-                      str(row["unit"]), Text(row["verdict"], style=style),
-                      escape(str(row["reason"])))
+                      str(row["unit"]), *([str(row["round"])] if rounds else []),
+                      Text(row["verdict"], style=style), escape(str(row["reason"])))
     return table
 
 
@@ -260,13 +262,20 @@ def identify_paper_command(
                                        "prior's, marked.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the input-noise replicates.")] = 0,
     workers: WorkersOption = Executor.workers,
+    previous: Annotated[Path | None, typer.Option(
+        "--previous", help="The folder an earlier round's `identify paper --out` wrote: "
+                           "its results and these records' are combined per parameter "
+                           "(the weighted mean where both rounds agree, refused where they "
+                           "disagree, else the round that has an interval), each value "
+                           "saying its round.")] = None,
 ) -> None:
     """Identify the actuator from bench records named sweep*, ramp* and presliding*: the
     paper's staged procedure (section III.2), then a joint refinement of every spring and
     friction parameter, intervals that include the noise on the measured inputs, and a
     verdict per parameter. Exits 3 when a parameter is not identified; identified.toml
     holds the identified values and the prior's for the others, each marked. A folder
-    with a sweep and no ramp is a signature (see ``pneumact identify signature``)."""
+    with a sweep and no ramp is a signature (see ``pneumact identify signature``). With
+    --previous, the result is this round's combined with the earlier round's."""
     with user_errors():
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
@@ -277,6 +286,7 @@ def identify_paper_command(
         check_seed("--seed", seed)
         executor = executor_of(workers, None)
         out = check_out_dir("--out", out)
+        earlier = None if previous is None else _previous_round(previous, out)
         parameter_set = load_quietly(params)
         refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
         recs = read_records(records, required=("pressure", "position"),
@@ -291,7 +301,22 @@ def identify_paper_command(
             err_console.print("note: --partial is no longer needed: identified.toml always "
                               "holds the identified values, the others at the prior's, "
                               "marked", style="yellow", soft_wrap=True)
+        if earlier is not None:
+            from pneumact.identification import combine_rounds
+
+            out_console.print("this round: " + result.headline())
+            result = combine_rounds(earlier, result)
         _finish_identification(result, out, the_call(ctx))
+
+
+def _previous_round(previous: Path, out: Path):
+    """The earlier round ``--previous`` names, read before the long work starts."""
+    from pneumact.identification.combine import read_round
+
+    if previous.resolve() == out.resolve():
+        raise ParameterError(f"--previous = {previous} is also --out: writing would replace "
+                             "the round it combines with; give another --out")
+    return read_round(previous)
 
 
 def _finish_identification(result, out: Path, call: str) -> None:

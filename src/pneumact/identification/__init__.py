@@ -12,7 +12,8 @@
   technician can run); ``synthetic_campaign``: those tests simulated with realistic
   measurement noise (``paper_campaign``: the paper's fixed set of speeds);
   ``PaperIdentification.next_round`` (``rounds``): a second campaign designed from a
-  first identification's result.
+  first identification's result; ``combine_rounds`` (``combine``): two rounds'
+  results combined per parameter, each value saying its round.
 """
 
 from .campaign import (
@@ -23,6 +24,7 @@ from .campaign import (
     paper_campaign,
     synthetic_campaign,
 )
+from .combine import CombinedIdentification, combine_rounds
 from .estimates import Estimates, linear_least_squares
 from .fit import FitResult, ProfileLikelihood, experiment_for, fit
 from .inverse import InverseFriction, inverse_friction
@@ -38,6 +40,7 @@ from .paper import (
 __all__ = [
     "BenchTest",
     "CampaignPlan",
+    "CombinedIdentification",
     "Estimates",
     "FitResult",
     "InverseFriction",
@@ -46,6 +49,7 @@ __all__ = [
     "ProfileLikelihood",
     "SignatureIdentification",
     "StageResult",
+    "combine_rounds",
     "design_campaign",
     "experiment_for",
     "fit",

@@ -364,6 +364,26 @@ class PaperIdentification(ResultVocabulary):
         return pd.DataFrame(rows, columns=["parameter", "value", "ci95_low", "ci95_high",
                                            "unit", "how"])
 
+    def covariance_table(self) -> pd.DataFrame:
+        """The covariance [SI²] of the estimates that have a reported interval (see
+        ``to_pandas``), rescaled to their reported standard errors (a widening for a
+        misfit or a second optimum enlarges the variance, not the correlations): what a
+        later round combines with (``identification.combine``)."""
+        table = self.to_pandas()
+        shown = [n for n in table.index if np.isfinite(table.loc[n, "ci95_low"])
+                 and np.isfinite(table.loc[n, "ci95_high"])]
+        stderr = table.loc[shown, "stderr"].to_numpy(float)
+        idx = [self.estimates.names.index(n) for n in shown]
+        covariance = self.estimates.covariance[np.ix_(idx, idx)].copy()
+        spread = np.sqrt(np.abs(np.diag(covariance)))
+        usable = np.isfinite(covariance).all() and np.all(spread > 0)
+        if usable:
+            covariance *= np.outer(stderr / spread, stderr / spread)
+        else:  # no correlations to keep: the variances alone
+            covariance = np.diag(stderr**2)
+        return pd.DataFrame(covariance, index=pd.Index(shown, name="parameter"),
+                            columns=shown)
+
     def diagnostics_table(self) -> pd.DataFrame:
         return pd.DataFrame([{"severity": d.severity, "stage": d.stage,
                               "message": d.message, "remedy": d.remedy}
@@ -458,7 +478,8 @@ class PaperIdentification(ResultVocabulary):
     # -- output ------------------------------------------------------------------------
     def writers(self, truth=None, call: str = "", partial: bool = True) -> dict:
         """File name -> writer: estimates.csv, verdicts.csv, diagnostics.csv,
-        residuals.csv, bench.csv (``bench_table``), stage_*.png, joint_fit.png, band.png,
+        residuals.csv, covariance.csv (``covariance_table``), bench.csv
+        (``bench_table``), stage_*.png, joint_fit.png, band.png,
         report.md, report.html, and identified.toml: the identified values, the prior's
         for the others, each marked in its source (``parameter_set(partial=True)``;
         ``partial=False``: only when every parameter is identified)."""
@@ -479,6 +500,7 @@ class PaperIdentification(ResultVocabulary):
         writers["verdicts.csv"] = lambda p: self.verdicts_table().to_csv(p)
         writers["diagnostics.csv"] = lambda p: self.diagnostics_table().to_csv(p, index=False)
         writers["residuals.csv"] = lambda p: self.residuals.to_csv(p, index=False)
+        writers["covariance.csv"] = lambda p: self.covariance_table().to_csv(p)
         if len(self.bench_table()):
             writers["bench.csv"] = lambda p: self.bench_table().to_csv(p, index=False)
         for name in self.figures():
@@ -544,6 +566,15 @@ class PaperIdentification(ResultVocabulary):
         from .rounds import next_round
 
         return next_round(self, spread, ramps, number)
+
+    def combine(self, later: PaperIdentification) -> PaperIdentification:
+        """This round's result combined per parameter with a ``later`` round's, identified
+        from other records (``identification.combine.combine_rounds``: a value from one
+        round with its interval, the weighted mean where both rounds agree, refused where
+        they disagree; each value says its round)."""
+        from .combine import combine_rounds
+
+        return combine_rounds(self, later)
 
     def _fallback(self, name: str, values: dict[str, float]) -> tuple[float, str]:
         """The value a parameter that is not identified takes in the partial set, and
