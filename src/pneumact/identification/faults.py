@@ -58,6 +58,7 @@ __all__ = [
     "REGULATOR_RATIO",
     "PositionZero",
     "PressureSide",
+    "SensorOffset",
     "lag_search",
     "position_zero",
     "pressure_side",
@@ -105,11 +106,11 @@ DELAG_SAMPLES = 7
 
 
 @dataclass(frozen=True)
-class PressureSide:
-    """What the set-point/pressure pairs say: the pressure sensor's ``offset`` [Pa] and
-    its standard error, per record the regression at the prior (``table``), the records as
-    corrected (``records``: the offset taken off where it is named) and the
-    ``diagnostics``."""
+class SensorOffset:
+    """What the records say of one sensor's offset: the ``offset`` (reading − the model's
+    value) and its standard error, whether it was taken off (``applied``), per record what
+    it was read from (``table``), the records as corrected (``records``) and the
+    ``diagnostics`` naming it."""
 
     offset: float
     offset_stderr: float
@@ -117,23 +118,18 @@ class PressureSide:
     table: pd.DataFrame
     records: list[Record]
     diagnostics: list[Diagnostic] = field(default_factory=list)
-
 
 
 @dataclass(frozen=True)
-class PositionZero:
-    """What the records at rest on the lower stop say of the position sensor's zero: its
-    ``offset`` [m] (reading − the model's position) and standard error, per record the
-    offset and the samples it rests on (``table``), the records as corrected
-    (``records``: the offset taken off where it is significant) and the
-    ``diagnostics``."""
+class PressureSide(SensorOffset):
+    """The pressure sensor's offset [Pa] from the set-point/pressure pairs; ``table``: per
+    record the regression at the prior."""
 
-    offset: float
-    offset_stderr: float
-    applied: bool
-    table: pd.DataFrame
-    records: list[Record]
-    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+@dataclass(frozen=True)
+class PositionZero(SensorOffset):
+    """The position sensor's offset [m] from the records at rest on the lower stop;
+    ``table``: per record the offset and the samples it rests on."""
 
 
 def _rest_offset(record: Record, prior, prior_spread: float) -> dict | None:
