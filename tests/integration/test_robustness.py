@@ -85,10 +85,10 @@ def test_a_row_that_raises_is_that_row_s_error(vgt, monkeypatch):
     plain = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
     real = batch_runner.ChunkRunner._row
 
-    def flaky(self, row, work):
+    def flaky(self, row, work, *rest):
         if row[0] == 2.5:
             raise ZeroDivisionError("division by zero")
-        return real(self, row, work)
+        return real(self, row, work, *rest)
 
     monkeypatch.setattr(batch_runner.ChunkRunner, "_row", flaky)
     batch = pa.simulate_batch(model, experiment, table, features=["stroke"], executor=1)
