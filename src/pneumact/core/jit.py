@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import sys
 import threading
 from collections.abc import Callable
 from typing import Any, TypeGuard
@@ -99,8 +100,6 @@ def is_compiled_function(value: Any) -> TypeGuard[Any]:
     without importing numba when it is not loaded yet."""
     if isinstance(value, LazyDispatcher):
         return True
-    import sys
-
     registry = sys.modules.get("numba.core.registry")
     return registry is not None and isinstance(value, registry.CPUDispatcher)
 

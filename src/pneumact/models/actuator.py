@@ -11,7 +11,7 @@ from ..core.component import Part, StateSpec, required_parameters
 from ..core.signals import Constant, Signal
 from ..errors import ArgumentError
 from ..parameters.files import as_parameter_set
-from .fmu_interface import FmuInterface, drive_input, force_input
+from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
 from .friction import FrictionModel, LuGre
 from .mechanics import MECHANICS_BLOCK, explicit_step
 from .pneumatics import ChamberLaw, Isothermal
@@ -184,10 +184,7 @@ class Actuator:
     def fmu_form(self) -> Actuator:
         """This actuator as its FMU runs it: the external force an input channel (a load
         against time is refused: in the FMU it is the input)."""
-        if self.load is not None:
-            raise ArgumentError("export_fmu: the actuator has a load against time; in the FMU "
-                                "the external force is an input: export it without load= "
-                                "and drive the input 'external_force'")
+        refuse_load_against_time("actuator", self.load)
         return replace(self, load=Constant(0.0))
 
     def fmu_interface(self) -> FmuInterface:

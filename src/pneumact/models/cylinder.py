@@ -32,7 +32,7 @@ from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_eval
 from ..errors import ExperimentError
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
-from .fmu_interface import FmuInterface, drive_input, force_input
+from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
 from .friction import FrictionModel, LuGre
 from .mechanics import explicit_step, stop_force, stop_force_params
 from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
@@ -1005,12 +1005,7 @@ class Cylinder:
     def fmu_form(self) -> Cylinder:
         """This cylinder as its FMU runs it (its load channel is there already; a load
         against time is refused: in the FMU it is the input)."""
-        from ..errors import ArgumentError
-
-        if self.load is not None:
-            raise ArgumentError("export_fmu: the cylinder has a load against time; in the FMU "
-                                "the external force is an input: export it without load= "
-                                "and drive the input 'external_force'")
+        refuse_load_against_time("cylinder", self.load)
         return self
 
     def fmu_interface(self) -> FmuInterface:

@@ -59,6 +59,17 @@ def drive_input(name: str, unit: str, description: str, start: float, nominal: f
                     pressure)
 
 
+def refuse_load_against_time(kind: str, load) -> None:
+    """In an FMU the external force is an input: a model holding a load against time is
+    refused, naming its ``kind``, rather than exported with the load silently dropped."""
+    if load is not None:
+        from ..errors import ArgumentError
+
+        raise ArgumentError(f"export_fmu: the {kind} has a load against time; in the FMU "
+                            "the external force is an input: export it without load= "
+                            "and drive the input 'external_force'")
+
+
 def force_input(nominal: float) -> FmuInput:
     """The external force's FMU input (the load-against-time channel), starting at 0."""
     return FmuInput(*FORCE_INPUT, channel=CH_LOAD_T, start=0.0, nominal=nominal)
