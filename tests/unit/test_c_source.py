@@ -325,6 +325,25 @@ def test_the_stand_ins_give_the_code_that_compiling_the_callees_gives():
              "c_inlined": (with_inlined, (I64, I64)),
              "c_last": (last_and_sum, (types.float64[::1],)),
              "c_allocating": (allocating, (types.float64[::1], types.none))}
-    typed = translate(roots).source
+    typed = _translate(roots, _Shadows(inline=True)).source  # numba inlines compiling
     compiled = _translate(roots, _Shadows(enabled=False)).source
     assert _same_code(typed) == _same_code(compiled)
+
+
+def test_an_inline_function_is_one_c_function_that_computes_the_same(tmp_path):
+    """The translation types an ``inline="always"`` function once and writes it as a C
+    function of its own (numba's inlining would copy it, and type it, at every call):
+    the C calls it and computes what the inlined C and numba compute."""
+    roots = {"c_inlined": (with_inlined, (I64, I64))}
+    called, inlined = translate(roots).source, _translate(roots, _Shadows(inline=True)).source
+    assert re.search(r"\b\w*_inlined_pair\w*\(", called)
+    assert not re.search(r"\b\w*_inlined_pair\w*\(", inlined)
+    for name, source in (("called", called), ("inlined", inlined)):
+        (tmp_path / f"{name}.c").write_text(source)
+        subprocess.run([CC, "-O2", "-std=c99", "-shared", "-fPIC", "-o",
+                        str(tmp_path / f"{name}.so"), str(tmp_path / f"{name}.c"), "-lm"],
+                       check=True)
+        lib = ctypes.CDLL(str(tmp_path / f"{name}.so"))
+        lib.c_inlined.restype = ctypes.c_int64
+        for a, b in ((7, 2), (-7, 3), (0, 5)):
+            assert lib.c_inlined(ctypes.c_int64(a), ctypes.c_int64(b)) == with_inlined(a, b)

@@ -133,15 +133,14 @@ def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():
 
 
 @pytest.mark.parametrize("index", ref.SECOND_ROUND_ACTUATORS)
-def test_a_second_round_identifies_what_the_first_could_not(index):
+def test_a_second_round_identifies_what_the_first_could_not(index, family_results):
     """Issue 38: an actuator whose first campaign, designed from a prior far off, left its
     friction unidentified (slow ramps that stick-slip, too few steady segments for stages
     (b, c)). The second round, designed from the first round's result
     (``next_round``: its estimates where they have an interval, the prior elsewhere, ramps
     above the speeds that stick-slipped) and identified from its records with the first
     round's estimates as the prior, identifies more, and nothing wrongly."""
-    truth = ActuatorFamily().draw(ref.FAMILY_SIZE, seed=ref.FAMILY_SEED)[index]
-    _, first = identify_one((index, truth))
+    truth, first = family_results[index]  # the family's own first round of this actuator
     plan = first.next_round(ramps=ref.FAMILY_RAMPS)
     assert all(t.name.endswith("_round2") for t in plan.tests)
     assert any("prior" in plan.prior.info[n].source for n in FREE
