@@ -347,3 +347,30 @@ def test_an_inline_function_is_one_c_function_that_computes_the_same(tmp_path):
         lib.c_inlined.restype = ctypes.c_int64
         for a, b in ((7, 2), (-7, 3), (0, 5)):
             assert lib.c_inlined(ctypes.c_int64(a), ctypes.c_int64(b)) == with_inlined(a, b)
+
+
+def test_translations_sharing_a_name_type_each_function_once_and_write_the_same_c(
+        monkeypatch):
+    """Two translations under one ``share`` name (one kernel's libraries and its FMU)
+    type what they both call once; each writes the C it writes alone."""
+    from pneumact.core import c_source
+
+    typings: list[str] = []
+    typed_ir = c_source._typed_ir
+    monkeypatch.setattr(c_source, "_typed_ir", lambda f, args: (
+        typings.append(f.__name__), typed_ir(f, args))[1])
+
+    first = {"c_inlined": (with_inlined, (I64, I64))}
+    second = {"c_pair": (_pair, (I64, I64)), "c_inlined": (with_inlined, (I64, I64))}
+    alone = [_same_code(translate(roots).source) for roots in (first, second)]
+    shared = [_same_code(translate(roots, share="test kernel").source)
+              for roots in (first, second)]
+    assert shared == alone
+    typings.clear()
+    translate(second, share="test kernel")
+    assert typings == []  # nothing typed again
+    translate(second)
+    assert sorted(typings) == ["_inlined_pair", "_pair", "with_inlined"]
+    for k in range(c_source.SHARED_KEPT):
+        translate(first, share=f"other {k}")
+    assert "test kernel" not in c_source._SHARED  # only the last few are kept

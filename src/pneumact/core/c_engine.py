@@ -264,8 +264,9 @@ class CKernel:
             if group in self._groups:
                 return
             target = library_path(self._spec, self._compiler, group)
-            library, header = cached_library(
-                target, self._compiler, lambda: _roots(self._module, group))
+            library, header = cached_library(  # the groups share their typing
+                target, self._compiler, lambda: _roots(self._module, group),
+                self._module.__name__)
             for name, function in library_functions(library, header).items():
                 if name in GROUPS[group]:
                     setattr(self, name, function)
@@ -334,12 +335,14 @@ def library_path(spec: codegen.KernelSpec, compiler: str, group: str = "run") ->
         f"{tail}{_suffix()}"
 
 
-def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: str) -> None:
-    """Translate the entry points ``roots`` and compile them into ``target``, its header
-    beside it (both atomically, the header first)."""
+def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: str,
+           share: str | None = None) -> None:
+    """Translate the entry points ``roots`` (sharing the typing of earlier translations
+    named ``share``) and compile them into ``target``, its header beside it (both
+    atomically, the header first)."""
     from .c_source import translate
 
-    unit = translate(roots)
+    unit = translate(roots, share)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".cbuild-") as tmp:
         source = Path(tmp) / "kernel.c"
         source.write_text(unit.source, encoding="utf-8")
@@ -352,18 +355,19 @@ def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: 
 
 
 def cached_library(target: Path, compiler: str,
-                   roots: Callable[[], dict[str, tuple[Callable, Sequence]]]
-                   ) -> tuple[Path, str]:
+                   roots: Callable[[], dict[str, tuple[Callable, Sequence]]],
+                   share: str | None = None) -> tuple[Path, str]:
     """(library, header text) at ``target``: from the disk cache, else ``roots()`` (entry
-    name -> (function, numba argument types)) translated and built by ``compiler`` once
-    per machine (several processes at once build it once)."""
+    name -> (function, numba argument types)) translated (``share``: as in
+    ``c_source.translate``) and built by ``compiler`` once per machine (several
+    processes at once build it once)."""
     header = target.with_suffix(".h")
     if not (target.exists() and header.exists()):
         target.parent.mkdir(parents=True, exist_ok=True)
         with file_lock(target.with_name(f".{target.stem}.lock")):
             if not (target.exists() and header.exists()):
                 announce_build()
-                _build(roots(), target, compiler)
+                _build(roots(), target, compiler, share)
     return target, header.read_text(encoding="utf-8")
 
 

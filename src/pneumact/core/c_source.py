@@ -35,7 +35,9 @@ import itertools
 import math
 import operator
 import re
+import threading
 import types as pytypes
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -84,6 +86,12 @@ PRELUDE = r"""
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+
+#if defined(__GNUC__)
+#define PA_INLINE static inline __attribute__((always_inline))
+#else
+#define PA_INLINE static inline
+#endif
 
 typedef struct { int64_t start, stop, step; } pa_range;
 typedef struct { int64_t first; int second; } pa_pair;
@@ -263,7 +271,7 @@ class _Translator:
     def entry(self, name: str, inner: _Function) -> str:
         """An exported function ``name`` that calls the (static) ``inner``; one that
         allocates takes the arena (``pa_arena *``) first, as ``inner`` does."""
-        prototype = inner.prototype.replace("static ", "", 1).replace(
+        prototype = re.sub(r"^(static|PA_INLINE) ", "", inner.prototype).replace(
             f" {inner.name}(", f" {name}(", 1)
         arguments = ", ".join(re.findall(r"[ *](pa_mem|a\d+)(?=[,)])", inner.prototype))
         call = f"{inner.name}({arguments})"
@@ -354,8 +362,9 @@ class _TypingOnly(registry.CPUDispatcher):
     function of its own, which the C compiler inlines where it pays. numba's inlining
     copies the callee into every call site before typing, so each copy is typed again
     (one actuator's kernel: 9.1 s of typing and 540 kB of C inlined, 5.0 s and 344 kB
-    not). The arithmetic is the same either way (C99 does not contract across calls
-    or within them: ``-std=c99``)."""
+    not). It is declared ``PA_INLINE`` (always inlined by GCC and clang), so the
+    machine code is what it was; the arithmetic is the same either way (``-std=c99``
+    contracts nothing)."""
 
     def __init__(self, original: Any, py_func: Callable, shadows: _Shadows):
         options = dict(original.targetoptions)
@@ -404,6 +413,12 @@ class _Shadows:
         self.namespaces: dict[int, tuple[dict, dict]] = {}  # id -> (original, copy)
         self.functions: dict[int, tuple[Callable, Callable]] = {}  # id -> (original, rebound)
         self.typed: dict[tuple, tuple] = {}
+        self.inline_always: set[int] = set()  # ids of rebound functions declared so
+
+    def inlined(self, py_func: Callable) -> bool:
+        """Whether ``py_func`` was declared ``inline="always"`` (numba inlines it; the C
+        compiler is told to: ``PA_INLINE``)."""
+        return id(py_func) in self.inline_always
 
     def typed_ir(self, py_func: Callable, argtypes: tuple) -> tuple:
         key = (py_func, argtypes)
@@ -448,8 +463,11 @@ class _Shadows:
         if id(dispatcher) not in self.dispatchers:
             py_func = self.function(dispatcher.py_func)
             if id(dispatcher) not in self.dispatchers:  # else made meanwhile, for its module
-                shadow = _TypingOnly(dispatcher_of(dispatcher), py_func, self)
+                original = dispatcher_of(dispatcher)
+                shadow = _TypingOnly(original, py_func, self)
                 self.dispatchers[id(dispatcher)] = (dispatcher, shadow)
+                if original.targetoptions.get("inline") == "always":
+                    self.inline_always.add(id(py_func))
         return self.dispatchers[id(dispatcher)][1]
 
 
@@ -517,7 +535,8 @@ class _FunctionWriter:
                 lines.extend("    " + s for s in self.statement(stmt, rtype))
         if self.out.arena:  # known once the body is written
             params.insert(0, "pa_arena *pa_mem")
-        self.out.prototype = f"static {rtype} {self.out.name}({', '.join(params) or 'void'})"
+        storage = "PA_INLINE" if self.unit.shadows.inlined(self.py_func) else "static"
+        self.out.prototype = f"{storage} {rtype} {self.out.name}({', '.join(params) or 'void'})"
         declarations = []
         for name, cname in self.names.items():
             ctype = self.unit.ctype(self.typemap[name]) if name in self.typemap else None
@@ -926,11 +945,32 @@ class _FunctionWriter:
         raise self.fail(f"a call of {fn!r}")
 
 
-def translate(roots: dict[str, tuple[Callable, Sequence]]) -> CUnit:
+#: the typing of the last few translations shared by name (``translate``'s ``share``)
+_SHARED: OrderedDict[str, _Shadows] = OrderedDict()
+#: how many shared typings are kept (one kernel's: ~8 MB)
+SHARED_KEPT = 4
+_SHARED_LOCK = threading.RLock()
+
+
+def translate(roots: dict[str, tuple[Callable, Sequence]], share: str | None = None
+              ) -> CUnit:
     """C source of the functions ``roots`` (entry name -> (a compiled kernel function
     or its Python function, numba argument types)) and of everything they call. The
-    functions are typed, not compiled: numba compiles none of them for this."""
-    return _translate(roots, _Shadows())
+    functions are typed, not compiled: numba compiles none of them for this.
+
+    ``share``: a name under which the typing is kept for the next translations that
+    give it (one kernel's libraries, run, sensitivities, states, and its FMU, call the
+    same functions: typed once, a later group's translation costs a half to a third);
+    the last ``SHARED_KEPT`` names are kept, and translations sharing one run one at a
+    time."""
+    if share is None:
+        return _translate(roots, _Shadows())
+    with _SHARED_LOCK:
+        shadows = _SHARED.pop(share, None) or _Shadows()
+        _SHARED[share] = shadows
+        while len(_SHARED) > SHARED_KEPT:
+            _SHARED.popitem(last=False)
+        return _translate(roots, shadows)
 
 
 def _translate(roots: dict[str, tuple[Callable, Sequence]], shadows: _Shadows) -> CUnit:

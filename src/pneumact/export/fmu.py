@@ -527,7 +527,9 @@ def export_fmu(model, path: str | os.PathLike[str], *,
     guards = guard_counts(kernel, vec, sig, ptr, len(asm.states))
     if fmi == 3:
         variables = fmi3_variables(variables, guards)
-    unit = translate(kernel_roots(kernel, guards[1] > 0, cosimulation=KINDS[kind][1]))
+    # what the FMU calls, the model's run-time C library calls too: typed once
+    unit = translate(kernel_roots(kernel, guards[1] > 0, cosimulation=KINDS[kind][1]),
+                     share=kernel.__name__)
     identifier = identifier_for(path)
     guid = str(uuid.UUID(hashlib.md5(unit.source.encode() + repr(
         [dataclasses.astuple(v) for v in variables]).encode()).hexdigest()))
