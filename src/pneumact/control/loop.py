@@ -25,7 +25,8 @@ from ..models.actuator import Actuator
 from ..models.controllers import Controller, LuGreObserver, StaticCompensation
 from ..models.cylinder import Cylinder
 from ..models.rig import FrictionRig
-from .plants import CONTROLLABLE, input_kind, input_range
+from ..models.valves import PRESSURE_INPUT
+from .plants import input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
@@ -157,11 +158,12 @@ class ClosedLoop(DeclaredInputs):
     @property
     def action(self) -> float:
         """+1, or −1 for a plant whose position falls as its input rises (pressure)."""
-        return -1.0 if self.plant_kind == "pressure" else 1.0
+        return -1.0 if self.plant_kind == PRESSURE_INPUT.name else 1.0
 
     @property
     def input_unit(self) -> str:
-        return CONTROLLABLE[self.plant_kind]
+        """The unit of the plant's declared drive."""
+        return self.plant.drive_unit
 
     @property
     def command_unit(self) -> str:
@@ -181,7 +183,7 @@ class ClosedLoop(DeclaredInputs):
         kind = self.plant_kind
         if kind == "force":
             return 1.0 / self.drive_gain
-        if kind == "pressure":
+        if kind == PRESSURE_INPUT.name:
             return -1.0 / (float(self.params["A_d"]) * self.drive_gain)
         return None
 

@@ -66,6 +66,11 @@ class Model(Protocol):
         """The inputs it declares, its drive first."""
         ...
 
+    @property
+    def drive_input(self) -> InputChannel:
+        """The input an experiment drives (the first declared)."""
+        ...
+
     def declared_input(self, name: str, who: str, /) -> InputChannel:
         """Its input named ``name``; refused naming ``who``, the model and its inputs."""
         ...
