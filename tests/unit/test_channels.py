@@ -39,7 +39,7 @@ def test_an_input_declaration_states_a_name_a_record_signal_and_a_range():
 
     with pytest.raises(ArgumentError, match=r"record_signals = \(\)"):
         InputChannel("command", "1", 0.0, 1.0)
-    with pytest.raises(ArgumentError, match="low = 1.0, high = 0.0"):
+    with pytest.raises(ArgumentError, match=r"low = 1\.0, high = 0\.0"):
         InputChannel("command", "1", 1.0, 0.0, record_signals=("command",))
 
 
