@@ -810,3 +810,10 @@ META_SRC_R2_MIN = 0.99
 #: 4e-5 to 2e-3 of their size (the loop's the largest), against SENS_RMS_FRACTION.
 META_REST_RATE = 1e-6
 META_EIGEN_RTOL = 1e-9
+
+# ------------------------------------------ inputs declared by the model (issue 41, item 2)
+#: a drive this far inside a declared range's end (relative to max(|end|, 1)) passes, as
+#: far outside it is refused: the range checked is the declared one, to the last digits
+INPUT_EDGE_REL = 1e-9
+#: a value an unbounded input (a rig's drive, a loop around it) takes: any size
+INPUT_UNBOUNDED_PROBE = 1e12

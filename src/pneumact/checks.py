@@ -29,6 +29,7 @@ from pneumact.errors import ArgumentError, ArgumentTypeError, PneumactError
 _Option = TypeVar("_Option")
 
 __all__ = [
+    "ABSOLUTE_PRESSURE_PLAUSIBLE",
     "ATMOSPHERE_PLAUSIBLE",
     "MAX_ABSOLUTE_PRESSURE",
     "as_instance",
@@ -53,6 +54,9 @@ __all__ = [
 #: Highest absolute pressure pneumact accepts anywhere [Pa]: 10 MPa (100 bar), five times
 #: the rating of industrial pneumatics; beyond it a value is a unit mistake, not a test.
 MAX_ABSOLUTE_PRESSURE = 10e6
+#: The absolute pressures an input takes [Pa]: below 1 kPa only a unit mistake (kPa or
+#: bar typed as Pa), above ``MAX_ABSOLUTE_PRESSURE`` not a test.
+ABSOLUTE_PRESSURE_PLAUSIBLE = (1e3, MAX_ABSOLUTE_PRESSURE)
 #: Atmospheric pressures met on Earth where machines run [Pa]: 50 kPa (5.5 km altitude) to
 #: 110 kPa (a deep mine, a strong high); outside it p_atm is suspicious, not impossible.
 ATMOSPHERE_PLAUSIBLE = (50e3, 110e3)
@@ -334,7 +338,7 @@ def pressure_hint(value: float, plausible: tuple[float, float] = ATMOSPHERE_PLAU
 
 def check_absolute_pressure(name: str, value: Any, *, where: str = "",
                             error: type[PneumactError] = ArgumentError,
-                            plausible: tuple[float, float] = (1e3, MAX_ABSOLUTE_PRESSURE)
+                            plausible: tuple[float, float] = ABSOLUTE_PRESSURE_PLAUSIBLE
                             ) -> float:
     """An absolute pressure [Pa]: finite, > 0 and <= MAX_ABSOLUTE_PRESSURE; a value that
     is only possible as a unit mistake (below ``plausible``) is refused with the hint."""

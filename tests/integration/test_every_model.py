@@ -272,3 +272,105 @@ def test_each_model_refuses_the_drives_its_components_cannot_take(kind):
     with pytest.raises(pa.ExperimentError, match=message):
         check_drive(model, _ramp_to(quantity, value))
     check_drive(_make("rig").model, _ramp_to("force", 1e6))
+
+
+# ------------------------------------------------- inputs declared by the model (item 2)
+def _declaring_models() -> dict[str, Model]:
+    """Every model kind with each of its components that owns an input: the actuator
+    behind each valve, the rig with each drive, the cylinder, a loop around the cylinder
+    (a stroke) and around the force rig (none)."""
+    from pneumact.models import VALVES
+    from pneumact.models.rig import DRIVES
+
+    vgt, canudas = load_quietly("vgt-paper"), load_quietly("canudas1995")
+    cylinder = pa.Cylinder(load_quietly("iso15552-32"))
+    force_rig = pa.FrictionRig(canudas, drive="force")
+    return {**{f"actuator-{name}": pa.Actuator(vgt, valve=cls())
+               for name, cls in VALVES.items()},
+            **{f"rig-{drive}": pa.FrictionRig(canudas, drive=drive) for drive in DRIVES},
+            "cylinder": cylinder, "loop-cylinder": _cylinder_loop(cylinder),
+            "loop-rig": ClosedLoop(force_rig, PID(kp=1.0))}
+
+
+#: per model, the range its drive declares (None: the plant's stroke, 0 to x_max)
+DECLARED_RANGES = {
+    "actuator-source": (1e3, 10e6), "actuator-regulator": (1e3, 10e6),
+    "actuator-command": (0.0, 1.0), "actuator-iso6358": (0.0, 1.0),
+    "rig-force": (-np.inf, np.inf), "rig-spring": (-np.inf, np.inf),
+    "rig-velocity": (-np.inf, np.inf), "rig-position": (-np.inf, np.inf),
+    "cylinder": (-1.0, 1.0), "loop-cylinder": None, "loop-rig": (-np.inf, np.inf),
+}
+
+
+def _span_to(start: float, value: float, quantity: str) -> Experiment:
+    """An experiment of ``quantity`` from ``start`` to ``value``: its extremes."""
+    return Experiment(PiecewiseLinear([0.0, 0.1], [start, value]), quantity, 0.1)
+
+
+def _inside_and_outside(end: float, upper: bool) -> tuple[float, float]:
+    step = ref.INPUT_EDGE_REL * max(abs(end), 1.0)
+    return (end - step, end + step) if upper else (end + step, end - step)
+
+
+def test_the_model_kinds_are_those_declaring_inputs():
+    """Each kind of ``KINDS`` is among the models whose declared inputs are checked."""
+    declaring = {type(model) for model in _declaring_models().values()}
+    assert declaring == {type(_make(kind).model) for kind in KINDS}
+    assert set(DECLARED_RANGES) == set(_declaring_models())
+
+
+@pytest.mark.parametrize("name", list(DECLARED_RANGES))
+def test_every_model_declares_its_inputs_and_enforces_their_ranges(name):
+    """The protocol's drive questions read the one declaration (name, unit, range, record
+    signal); a drive just inside its declared range passes ``check_drive``, just outside
+    it is refused, at each finite end; an unbounded one takes any value; an experiment of
+    a quantity the model does not declare is refused naming it, the model and its
+    inputs."""
+    from pneumact.core.channels import InputChannel
+    from pneumact.experiments import QUANTITIES
+    from pneumact.simulation.simulate import check_drive
+
+    model = _declaring_models()[name]
+    declared = model.inputs()
+    assert declared and all(isinstance(c, InputChannel) for c in declared)
+    drive = declared[0]
+    assert (model.drive_quantity, model.drive_unit) == (drive.name, drive.unit)
+    assert drive.unit == QUANTITIES[drive.name]  # one unit per quantity, the declared one
+    assert model.input_signal == drive.record_signals[0]
+    assert model.input_signal in model.input_signals
+    low, high = DECLARED_RANGES[name] or (0.0, model.params["x_max"])
+    assert (drive.low, drive.high) == (low, high)
+    span = model.input_range
+    assert span == drive.span and low <= span[0] < span[1] <= high
+    start = 0.5 * (span[0] + span[1]) if np.isfinite(span).all() else 0.0
+    for end, upper in ((low, False), (high, True)):
+        if not np.isfinite(end):
+            check_drive(model, _span_to(start, np.copysign(ref.INPUT_UNBOUNDED_PROBE, end),
+                                        drive.name))
+            continue
+        inside, outside = _inside_and_outside(end, upper)
+        check_drive(model, _span_to(start, inside, drive.name))
+        model.check_drive_values(min(start, inside), max(start, inside), "probe")
+        with pytest.raises(pa.ExperimentError, match=f"its {drive.label}"):
+            check_drive(model, _span_to(start, outside, drive.name))
+        with pytest.raises(pa.ExperimentError, match="probe"):
+            model.check_drive_values(min(start, outside), max(start, outside), "probe")
+    other = next(q for q in QUANTITIES if q not in {c.name for c in declared})
+    with pytest.raises(pa.ExperimentError, match=(
+            rf"drives '{other}', but the .* of this {type(model).__name__} needs a "
+            rf"'{drive.name}' signal \(its declared inputs: '{drive.name}' \[")):
+        check_drive(model, _span_to(1e5, 1e5, other))
+
+
+def test_each_valve_declares_its_own_input():
+    """The component that owns an input declares it: a valve's ``drive`` and
+    ``input_signal`` are its declaration's, and an actuator's input is its valve's."""
+    from pneumact.models import VALVES
+
+    vgt = load_quietly("vgt-paper")
+    for cls in VALVES.values():
+        assert (cls.drive, cls.input_signal) == (cls.declared.name,
+                                                 cls.declared.record_signal)
+        assert pa.Actuator(vgt, valve=cls()).inputs() == (cls().declared_input(vgt),)
+    regulator = pa.PressureRegulator().declared_input(vgt)
+    assert regulator.span == (vgt["p_res"], vgt["p_atm"])  # acts there, clips beyond

@@ -29,3 +29,31 @@ def test_the_actuator_channels_sit_where_the_kernels_read_them(vgt):
     assert channels[CH_DRIVE] is drive
     assert channels[CH_LOAD_T] is load
     assert channels[CH_LOAD_X] is load_map
+
+
+def test_an_input_declaration_states_a_name_a_record_signal_and_a_range():
+    """A declaration without a record signal, or with an empty range, is refused naming
+    the field and its value."""
+    from pneumact.core.channels import InputChannel
+    from pneumact.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match=r"record_signals = \(\)"):
+        InputChannel("command", "1", 0.0, 1.0)
+    with pytest.raises(ArgumentError, match=r"low = 1\.0, high = 0\.0"):
+        InputChannel("command", "1", 1.0, 0.0, record_signals=("command",))
+
+
+def test_an_input_refusal_shows_the_values_in_its_display_unit():
+    """A refusal names the experiment, the input and the span in the declared display
+    unit, and the rule with the declared range there; inside, nothing is refused."""
+    from pneumact.core.channels import InputChannel
+
+    setpoint = InputChannel("position", "m", 0.0, 0.004, record_signals=("position_setpoint",),
+                            label="set-point", rule="stroke {low:g} to {high:g} mm",
+                            shown_in=("mm", 1e3))
+    setpoint.check(0.0, 0.004, "exp")
+    with pytest.raises(ExperimentError, match=r"^exp: its set-point spans 1 to 5 mm; "
+                                              r"stroke 0 to 4 mm$"):
+        setpoint.check(0.001, 0.005, "exp")
+    assert setpoint.describe() == "'position' [m] in [0, 0.004]"
+    assert setpoint.span == (0.0, 0.004) and setpoint.record_signal == "position_setpoint"

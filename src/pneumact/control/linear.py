@@ -37,8 +37,9 @@ import numpy as np
 
 from ..core.signals import Constant, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
-from ..experiments.actuator import QUANTITIES, Experiment
+from ..experiments.actuator import Experiment
 from ..io.report import ResultVocabulary
+from ..models.valves import PRESSURE_INPUT
 from .plants import input_kind, input_range
 
 if TYPE_CHECKING:
@@ -72,14 +73,14 @@ def _require_control():
 
 # --------------------------------------------------------------------------- the plant
 def _input_scale(plant, kind: str) -> float:
-    if kind == "pressure":
+    if kind == PRESSURE_INPUT.name:
         return float(plant.params["p_atm"])
     return 1.0
 
 
 def _check_input(plant, kind: str, value, what: str = "input_value") -> float:
     lo, hi = input_range(plant)
-    unit = QUANTITIES[plant.drive_quantity]
+    unit = plant.drive_unit
     if not (isinstance(value, int | float | np.floating) and math.isfinite(value)):
         raise ExperimentError(f"linearise: {what} = {value!r}; must be a finite "
                               f"{plant.drive_quantity} [{unit}]")
@@ -379,7 +380,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     iv = names.index("velocity")
     friction_states = list(assembly.role_states("friction"))
     friction_words = _friction_words(plant)
-    unit = QUANTITIES[plant.drive_quantity]
+    unit = plant.drive_unit
     applied = _quantity(plant.drive_quantity, u, unit)
     if regime == "presliding":
         _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
@@ -522,7 +523,7 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
         })
     frame = pd.DataFrame(rows)
     frame.attrs.update(input_name=plant.drive_quantity, input_value=u0,
-                       input_unit=QUANTITIES[plant.drive_quantity], output=output)
+                       input_unit=plant.drive_unit, output=output)
     return frame
 
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
 
-from ..core.channels import CHANNELS, LOOP_CHANNELS, in_order
+from ..core.channels import CHANNELS, LOOP_CHANNELS, DeclaredInputs, InputChannel, in_order
 from ..core.codegen import Child
 from ..core.component import Part
 from ..core.signals import Constant, Signal
@@ -25,7 +25,8 @@ from ..models.actuator import Actuator
 from ..models.controllers import Controller, LuGreObserver, StaticCompensation
 from ..models.cylinder import Cylinder
 from ..models.rig import FrictionRig
-from .plants import CONTROLLABLE, input_kind, input_range
+from ..models.valves import PRESSURE_INPUT
+from .plants import input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
@@ -38,6 +39,13 @@ SNAP = 1e-6
 #: (8 bytes, and 4-8 µs of compiled work measured: 2e6 samples ≈ 10 s), which runs
 #: between Ctrl-C checks; more is a sample time typed in the wrong unit
 MAX_CONTROLLER_SAMPLES = 2_000_000
+
+#: the position set-point a loop declares as its input (its range: the plant's stroke)
+SETPOINT_INPUT = InputChannel(
+    "position", "m", record_signals=("position_setpoint",),
+    description="position set-point of the controller", label="set-point",
+    rule="the actuator's stroke is {low:g} to x_max = {high:g} mm (positions in m: 4 mm is "
+         "0.004)", shown_in=("mm", 1e3))
 
 
 def _check_samples(period: float, t_start: float, t_end: float) -> None:
@@ -61,7 +69,7 @@ def _check_samples(period: float, t_start: float, t_end: float) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class ClosedLoop:
+class ClosedLoop(DeclaredInputs):
     """``plant`` (an ``Actuator`` behind any valve, a ``Cylinder`` through its spool
     command, or a ``FrictionRig`` with a force drive) under ``controller`` (``PID`` or
     ``Cascade``), as one model. Behind a cylinder, ``PID(..., derivative="velocity",
@@ -150,11 +158,12 @@ class ClosedLoop:
     @property
     def action(self) -> float:
         """+1, or −1 for a plant whose position falls as its input rises (pressure)."""
-        return -1.0 if self.plant_kind == "pressure" else 1.0
+        return -1.0 if self.plant_kind == PRESSURE_INPUT.name else 1.0
 
     @property
     def input_unit(self) -> str:
-        return CONTROLLABLE[self.plant_kind]
+        """The unit of the plant's declared drive."""
+        return self.plant.drive_unit
 
     @property
     def command_unit(self) -> str:
@@ -174,17 +183,26 @@ class ClosedLoop:
         kind = self.plant_kind
         if kind == "force":
             return 1.0 / self.drive_gain
-        if kind == "pressure":
+        if kind == PRESSURE_INPUT.name:
             return -1.0 / (float(self.params["A_d"]) * self.drive_gain)
         return None
 
     # -- the model protocol (``simulation.Model``) ------------------------------------------
-    drive_quantity: ClassVar[str] = "position"
-    drive_unit: ClassVar[str] = "m"
-    #: the record signal that drives it: the position set-point (m)
-    input_signal: ClassVar[str] = "position_setpoint"
-    input_signals: ClassVar[tuple[str, ...]] = ("position_setpoint",)
-    drive_label: ClassVar[str] = "position set-point"
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """Its position set-point, within the plant's stroke (any, for a plant without
+        one): ``drive_quantity``, ``input_signal`` and ``check_drive_values`` read it."""
+        stroke = self.stroke
+        if stroke is None:
+            return (SETPOINT_INPUT,)
+        return (replace(SETPOINT_INPUT, low=0.0, high=stroke),)
+
+    @property
+    def input_signals(self) -> tuple[str, ...]:
+        return SETPOINT_INPUT.record_signals
+
+    @property
+    def drive_label(self) -> str:
+        return "position set-point"
 
     def driven_by(self, signal: str) -> ClosedLoop:
         """This loop, when ``signal`` is its position set-point."""
@@ -197,15 +215,6 @@ class ClosedLoop:
     def stroke(self) -> float | None:
         """Its plant's stroke: a set-point beyond it is impossible."""
         return self.plant.stroke
-
-    def check_drive_values(self, low: float, high: float, where: str) -> None:
-        """A set-point beyond its plant's stroke is refused."""
-        stroke = self.stroke
-        if stroke is not None and (low < 0.0 or high > stroke):
-            raise ExperimentError(
-                f"{where}: its set-point spans {low * 1e3:g} to {high * 1e3:g} mm; the "
-                f"actuator's stroke is 0 to x_max = {stroke * 1e3:g} mm (positions in m: "
-                "4 mm is 0.004)")
 
     @property
     def summary_kind(self) -> str:

@@ -5,11 +5,16 @@ loop and the linearisation). Both are asked of the plant itself (the model proto
 from __future__ import annotations
 
 from ..errors import ParameterError
+from ..models.cylinder import SPOOL_INPUT
+from ..models.rig import DRIVE_INPUTS
+from ..models.valves import COMMAND_INPUT, PRESSURE_INPUT
 
 __all__ = ["CONTROLLABLE", "input_kind", "input_range"]
 
-#: the plant inputs a position controller can act on, with their units
-CONTROLLABLE = {"force": "N", "pressure": "Pa", "command": "1", "spool": "1"}
+#: the plant inputs a position controller can act on, with their units (as the
+#: components that own them declare them: a rig's force, a valve's, the 5/3 valve's)
+CONTROLLABLE = {channel.name: channel.unit for channel in (
+    DRIVE_INPUTS["force"], PRESSURE_INPUT, COMMAND_INPUT, SPOOL_INPUT)}
 ALLOWED = ("an Actuator, a Cylinder, or a FrictionRig with drive='force' (a kinematic "
            "drive has no input to act on)")
 

@@ -9,14 +9,21 @@ plant's drive channel then holds one value, the controller's output, which the l
 writes at ``INPUT_OFFSET`` past the channel's start.
 
 Models name their channels (``in_order``); only the packing puts them in this order.
+
+What drives a model is declared too: ``InputChannel`` says an input's name (the quantity
+an experiment drives it with), unit, range, the record signals that drive it and how a
+refusal reads; the component that owns the input declares it (a valve, the 5/3 valve,
+the rig's drive, a loop's set-point) and the model lists them (``inputs()``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import ExperimentError
+from ..errors import ArgumentError, ExperimentError
 
 #: a model's channels, in order
 CHANNELS = ("drive", "load_t", "load_x", "map_res", "map_atm")
@@ -43,3 +50,126 @@ def in_order(named: Mapping[str, Any], names: tuple[str, ...] = CHANNELS) -> lis
     if unknown:
         raise ExperimentError(f"channels {unknown}: not among the declared {list(names)}")
     return [named.get(name) for name in names]
+
+
+@dataclass(frozen=True)
+class InputChannel:
+    """One input a model declares: what an experiment drives it with and what it takes.
+
+    ``name`` is the quantity an experiment names (``Experiment.quantity``), ``unit`` its SI
+    unit; values outside [``low``, ``high``] are refused; ``acts_within`` is a narrower span
+    where the component acts (beyond it the value is clipped: a regulator's set-point);
+    ``record_signals`` are the record signals that drive it, its own first. A refusal
+    says ``"{where}: its {label} spans a to b; {rule}"`` with the values (and ``{low}``,
+    ``{high}`` in ``rule``) shown in ``shown_in`` (unit, factor), or, where the owner
+    gives ``check_value`` (a pressure's check, whose hint names a unit mistake), that
+    check's message.
+    """
+
+    name: str
+    unit: str
+    low: float = -math.inf
+    high: float = math.inf
+    record_signals: tuple[str, ...] = ()
+    description: str = ""
+    label: str = ""
+    rule: str = ""
+    shown_in: tuple[str, float] = ("", 1.0)
+    acts_within: tuple[float, float] | None = None
+    check_value: Callable[..., object] | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if not self.name or not self.record_signals:
+            raise ArgumentError(f"InputChannel: name = {self.name!r}, record_signals = "
+                                f"{self.record_signals!r}: a name and at least one record "
+                                "signal are required")
+        if not self.low < self.high:
+            raise ArgumentError(f"InputChannel {self.name!r}: low = {self.low!r}, high = "
+                                f"{self.high!r}: low must be below high")
+
+    @property
+    def record_signal(self) -> str:
+        """The record signal that drives this input as declared (its first)."""
+        return self.record_signals[0]
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """The values the input acts over: ``acts_within``, else [low, high]."""
+        return self.acts_within if self.acts_within is not None else (self.low, self.high)
+
+    def accepts(self, low: float, high: float) -> bool:
+        """Whether a signal spanning ``low`` to ``high`` stays within the declared range."""
+        return self.low <= low and high <= self.high
+
+    def check(self, low: float, high: float, where: str) -> None:
+        """Refuse a signal spanning ``low`` to ``high`` outside [low, high] with one
+        ExperimentError (``where`` names the experiment)."""
+        if self.accepts(low, high):
+            return
+        if self.check_value is not None:
+            for value in (low, high):
+                self.check_value(f"its {self.label}", value, where=where, error=ExperimentError)
+        unit, factor = self.shown_in
+        shown = f" {unit}" if unit else ""
+        rule = self.rule.format(low=self.low * factor, high=self.high * factor)
+        raise ExperimentError(f"{where}: its {self.label} spans {low * factor:g} to "
+                              f"{high * factor:g}{shown}; {rule}")
+
+    def describe(self) -> str:
+        """"'command' [1] in [0, 1]": the name, unit and range, for messages."""
+        return f"{self.name!r} [{self.unit}] in [{self.low:g}, {self.high:g}]"
+
+
+class DeclaredInputs:
+    """The model protocol's questions about what drives a model, answered from its
+    declared ``inputs()`` (the first is its drive): one place says name, unit, range and
+    record signal."""
+
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """The inputs this model declares, its drive first."""
+        raise NotImplementedError
+
+    @property
+    def drive_input(self) -> InputChannel:
+        """The input an experiment drives (the first declared)."""
+        return self.inputs()[0]
+
+    @property
+    def drive_quantity(self) -> str:
+        return self.drive_input.name
+
+    @property
+    def drive_unit(self) -> str:
+        return self.drive_input.unit
+
+    @property
+    def input_signal(self) -> str:
+        """The record signal that drives it (its drive's own)."""
+        return self.drive_input.record_signal
+
+    @property
+    def input_range(self) -> tuple[float, float]:
+        """The values its drive acts over (``InputChannel.span``)."""
+        return self.drive_input.span
+
+    def check_drive_values(self, low: float, high: float, where: str) -> None:
+        """Refuse a drive spanning ``low`` to ``high`` outside its declared range."""
+        self.drive_input.check(low, high, where)
+
+    def declared_input(self, name: str, who: str) -> InputChannel:
+        """The input named ``name``; one ExperimentError naming ``who`` (the experiment),
+        this model and its declared inputs when it declares none of that name."""
+        declared = self.inputs()
+        for channel in declared:
+            if channel.name == name:
+                return channel
+        listed = ", ".join(c.describe() for c in declared)
+        raise ExperimentError(
+            f"{who} drives {name!r}, but the {self.drive_label} of this "
+            f"{type(self).__name__} needs a {declared[0].name!r} signal (its declared "
+            f"inputs: {listed})")
+
+    @property
+    def drive_label(self) -> str:
+        """What takes its drive, for messages."""
+        return self.drive_input.label

@@ -19,11 +19,11 @@ from ..checks import (
 )
 from ..core.signals import PiecewiseLinear, Signal, Step, Triangle
 from ..errors import ExperimentError
+from ..models.cylinder import SPOOL_INPUT
+from ..models.inputs import DECLARED_INPUTS, quantity_driven_by
+from ..models.valves import COMMAND_INPUT, PRESSURE_INPUT
 
-QUANTITIES = {
-    "pressure": "Pa", "command": "1", "force": "N", "velocity": "m/s", "position": "m",
-    "spring": "m", "spool": "1",
-}
+QUANTITIES = {channel.name: channel.unit for channel in DECLARED_INPUTS}
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +89,7 @@ def PressureCycle(high: float = 100e3, low: float = 20e3, period: float = 20.0,
                               f"high = {high:g} Pa")
     check_positive("period", period, unit="s", where="PressureCycle", error=ExperimentError)
     check_int("cycles", cycles, minimum=1, where="PressureCycle", error=ExperimentError)
-    return Experiment(Triangle(high, low, period, cycles), "pressure", period * cycles,
+    return Experiment(Triangle(high, low, period, cycles), PRESSURE_INPUT.name, period * cycles,
                       n_points=n_points, name="PressureCycle")
 
 
@@ -105,7 +105,7 @@ def CommandCycle(low: float = 0.0, high: float = 1.0, period: float = 20.0, cycl
                               f"high = {high:g}")
     check_positive("period", period, unit="s", where="CommandCycle", error=ExperimentError)
     check_int("cycles", cycles, minimum=1, where="CommandCycle", error=ExperimentError)
-    return Experiment(Triangle(low, high, period, cycles), "command", period * cycles,
+    return Experiment(Triangle(low, high, period, cycles), COMMAND_INPUT.name, period * cycles,
                       n_points=n_points, name="CommandCycle")
 
 
@@ -136,7 +136,7 @@ def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:
     from ..io.records import read_signal_csv
 
     name, time, values = read_signal_csv(path, p_atm=p_atm)
-    quantity = "pressure" if name == "setpoint" else name
+    quantity = quantity_driven_by(name)
     return from_samples(time, values, quantity, name=f"{Path(path).name}")
 
 
@@ -153,5 +153,5 @@ def SpoolStep(before: float = -1.0, after: float = 0.5, t_step: float = 0.1,
         raise ExperimentError(f"SpoolStep: t_end = {t_end:g} s: must be > t_step = "
                               f"{t_step:g} s")
     check_int("n_points", n_points, minimum=2, where="SpoolStep", error=ExperimentError)
-    return Experiment(Step(t_step, before, after), "spool", t_end, n_points=n_points,
+    return Experiment(Step(t_step, before, after), SPOOL_INPUT.name, t_end, n_points=n_points,
                       name="SpoolStep")

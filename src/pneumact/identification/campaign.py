@@ -41,6 +41,7 @@ from ..experiments import Experiment, PiecewiseLinear
 from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import first_order_lag
+from ..models.valves import PRESSURE_INPUT  # the regulator's and the source's input
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -106,8 +107,8 @@ def _test(name, kind, points, valve, rate) -> BenchTest:
     drive = _piecewise(points, rate)
     t_end = float(drive.breakpoints()[-1])
     n = round(t_end * rate) + 1
-    return BenchTest(name, kind, Experiment(drive, "pressure", t_end, n_points=n, name=name),
-                     valve, rate)
+    experiment = Experiment(drive, PRESSURE_INPUT.name, t_end, n_points=n, name=name)
+    return BenchTest(name, kind, experiment, valve, rate)
 
 
 def paper_campaign(params, speeds: Sequence[float] = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3,
@@ -287,7 +288,7 @@ def read_plan(folder: str | PathLike[str]) -> list[BenchTest]:
                                   f"absolute (> 0) and the sample rate ({rate}) > 0")
         t_end = float(times[-1])
         drive = PiecewiseLinear(times, values)
-        tests.append(BenchTest(name, kind, Experiment(drive, "pressure", t_end,
+        tests.append(BenchTest(name, kind, Experiment(drive, PRESSURE_INPUT.name, t_end,
                                                       n_points=round(t_end * rate) + 1,
                                                       name=name),
                                "regulator" if valve == "regulator" else "source", rate))

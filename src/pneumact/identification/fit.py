@@ -270,11 +270,11 @@ def experiment_for(model, record: Record, smooth: bool = False):
     fewer breakpoints than one per sample."""
     from ..experiments import from_record, from_samples
 
-    signal = _input_name(model)
+    drive = model.drive_input  # the declared input the record's signal drives
     if not smooth:
-        return from_record(record, model.drive_quantity, signal=signal)
+        return from_record(record, drive.name, signal=drive.record_signal)
     knots_t, knots_v = rebuilt_input(model, record)
-    return from_samples(knots_t, knots_v, model.drive_quantity,
+    return from_samples(knots_t, knots_v, drive.name,
                         name=os.path.basename(record.source) or "record",
                         n_points=record.time.size)
 
@@ -284,17 +284,17 @@ def rebuilt_input(model, record: Record) -> tuple[np.ndarray, np.ndarray]:
     linear (``identification.inputs``) to drive ``model``; computed once per record."""
     from .inputs import piecewise_linear_input
 
-    signal = _input_name(model)
+    signal = model.input_signal
     per_record = _REBUILT_INPUTS.setdefault(record, {})
     if signal not in per_record:  # records are immutable: rebuild each input once
         per_record[signal] = piecewise_linear_input(record.time, record[signal])
     return per_record[signal]
 
 
-def input_signal(model) -> str:
-    """The record signal that drives ``model``: the regulator's set-point, else the
-    model's drive quantity (pressure, command)."""
-    return _input_name(model)
+def input_signal(model: Model) -> str:
+    """The record signal that drives ``model``: its declared drive's (a regulator's
+    set-point, a pressure, a command, a rig's drive)."""
+    return model.input_signal
 
 
 def _models_per_record(model, n: int) -> list:
@@ -325,11 +325,6 @@ def _parameter_names(model) -> frozenset[str]:
     from ..core.assembly import assemble
 
     return frozenset(assemble(model).parameter_names)
-
-
-def _input_name(model: Model) -> str:
-    """The record signal that drives ``model`` (its valve's, or a rig's drive)."""
-    return model.input_signal
 
 
 # --------------------------------------------------------------------------- results
@@ -816,7 +811,7 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
         raise ParameterError(f"fit: covariance = {covariance!r}; allowed: hac, iid")
     signals = tuple(signals)
     for rec, own in zip(records, models, strict=True):
-        rec.require([*signals, _input_name(own)], "this fit")
+        rec.require([*signals, own.input_signal], "this fit")
     from ..core.assembly import assemble
     from ..simulation import Rodas4
 

@@ -15,7 +15,7 @@ from .friction import (
     friction_law,
     friction_models,
 )
-from .inputs import INPUT_SIGNALS, input_signal, valve_for_signal
+from .inputs import DECLARED_INPUTS, INPUT_SIGNALS, input_signal, valve_for_signal
 from .pneumatics import (
     Adiabatic,
     ChamberLaw,
@@ -38,10 +38,10 @@ from .valves import (
 )
 
 __all__ = [
-    "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen", "ChamberLaw",
-    "CommandValve", "CoulombViscous", "Cylinder", "Dahl", "ElastoPlastic", "FrictionModel",
-    "FrictionRig", "HeatTransfer", "Iso6358Valve", "Isothermal", "LuGre", "Polytropic",
-    "PressureRegulator", "PressureSource", "StribeckMap", "Valve", "conductance_of_area",
-    "flow_function_values", "friction_law", "friction_models", "input_signal", "iso6358_mass_flow",
-    "orifice_mass_flow", "valve_for_signal"
+    "DECLARED_INPUTS", "GMS", "INPUT_SIGNALS", "VALVES", "Actuator", "Adiabatic", "BoucWen",
+    "ChamberLaw", "CommandValve", "CoulombViscous", "Cylinder", "Dahl", "ElastoPlastic",
+    "FrictionModel", "FrictionRig", "HeatTransfer", "Iso6358Valve", "Isothermal", "LuGre",
+    "Polytropic", "PressureRegulator", "PressureSource", "StribeckMap", "Valve",
+    "conductance_of_area", "flow_function_values", "friction_law", "friction_models",
+    "input_signal", "iso6358_mass_flow", "orifice_mass_flow", "valve_for_signal"
 ]

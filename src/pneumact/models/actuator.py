@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, ClassVar
 
 from ..checks import as_instance, check_type
-from ..core.channels import in_order
+from ..core.channels import DeclaredInputs, InputChannel, in_order
 from ..core.component import Part, StateSpec, required_parameters
 from ..core.signals import Constant, Signal
 from ..errors import ArgumentError
@@ -21,17 +21,16 @@ if TYPE_CHECKING:
     from ..parameters.files import ParameterSetLike
     from ..parameters.parameter_set import ParameterSet
 
-#: the FMU input that takes what drives each valve (the record signal it replaces)
-FMU_DRIVES = {"pressure": ("pressure_input", "Pa", "chamber pressure imposed by the source"),
-              "setpoint": ("pressure_setpoint", "Pa", "set-point of the pressure regulator"),
-              "command": ("valve_command", "1", "valve command (0 closed to atmosphere, 1 "
-                                                "open to the vacuum reservoir)")}
+#: the FMU input that takes what drives each valve (the record signal it replaces); its
+#: unit and description are the valve's declared input's
+FMU_DRIVES = {"pressure": "pressure_input", "setpoint": "pressure_setpoint",
+              "command": "valve_command"}
 #: the mechanics' parameters the FMU's end-stop check reads, in the template's order
 STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
 
 
 @dataclass(frozen=True, eq=False)
-class Actuator:
+class Actuator(DeclaredInputs):
     """A spring-return vacuum diaphragm actuator.
 
     ``friction``, ``valve`` and ``chamber`` are strategy objects; ``load`` is an external
@@ -91,15 +90,11 @@ class Actuator:
         return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
-    @property
-    def drive_quantity(self) -> str:
-        return self.valve.drive
-
-    @property
-    def input_signal(self) -> str:
-        """The record signal that drives it: its valve's (a regulator's set-point, a
-        pressure, a command)."""
-        return self.valve.input_signal
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """Its valve's input (a source's pressure, a regulator's set-point, a command in
+        [0, 1]), with the range the parameters give it: ``drive_quantity``,
+        ``input_signal``, ``input_range`` and ``check_drive_values`` read it."""
+        return (self.valve.declared_input(self.params),)
 
     @property
     def input_signals(self) -> tuple[str, ...]:
@@ -126,16 +121,6 @@ class Actuator:
     def drive_label(self) -> str:
         """What takes its input, for messages: its valve."""
         return self.valve.name
-
-    @property
-    def input_range(self) -> tuple[float, float]:
-        """The values its input takes (its valve's: a command in [0, 1], a regulator's
-        set-point in [p_res, p_atm], a prescribed pressure > 0)."""
-        return self.valve.input_range(self.params)
-
-    def check_drive_values(self, low: float, high: float, where: str) -> None:
-        """Refuse a signal spanning ``low`` to ``high`` that its valve cannot take."""
-        self.valve.check_drive_values(self.params, low, high, where)
 
     #: what ``Result.summary()`` computes of its runs: the pressure-position hysteresis
     summary_kind: ClassVar[str] = "hysteresis"
@@ -196,12 +181,15 @@ class Actuator:
 
         p = self.params
         p_atm = float(p["p_atm"])
-        name, unit, description = FMU_DRIVES[self.input_signal]
+        declared = self.drive_input
+        name, unit, description = (FMU_DRIVES[declared.record_signal], declared.unit,
+                                   declared.description)
         if unit == "Pa":
             drive = drive_input(name, unit, description, p_atm, p_atm, 0.0,
                                 MAX_ABSOLUTE_PRESSURE, pressure=True)
         else:
-            drive = drive_input(name, unit, description, 0.0, 1.0, 0.0, 1.0)
+            drive = drive_input(name, unit, description, 0.0, 1.0, declared.low,
+                                declared.high)
         step = explicit_step(float(p["m"]), float(p["k"]), float(p["F0"]),
                              float(p["k_stop"]), float(p["c_stop"]))
         return FmuInterface((drive, force_input(p_atm * float(p["A_d"]))),

@@ -26,11 +26,10 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
-from ..core.channels import CH_DRIVE, in_order
+from ..core.channels import CH_DRIVE, DeclaredInputs, InputChannel, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_eval
-from ..errors import ExperimentError
 from ..parameters.catalogue import ParameterSpec, declare, declare_relation
 from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
 from .friction import FrictionModel, LuGre
@@ -869,8 +868,17 @@ def thermal_part(chamber: ChamberLaw) -> Part:
                 key=f"chambers_{kind}")
 
 
+#: the 5/3 valve's input: the spool command u in [-1, 1]
+SPOOL_INPUT = InputChannel(
+    "spool", "1", -1.0, 1.0, record_signals=("spool",),
+    description="spool command of the 5/3 valve (-1 supply to B, 0 centred, 1 supply to A: "
+                "extends)",
+    label="spool command", rule="a 5/3 valve's command must stay within [{low:g}, {high:g}] "
+                                "(1 extends, -1 retracts, 0 closes the centre)")
+
+
 @dataclass(frozen=True, eq=False)
-class Cylinder:
+class Cylinder(DeclaredInputs):
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
@@ -922,47 +930,30 @@ class Cylinder:
         return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
-    @property
-    def drive_quantity(self) -> str:
-        return "spool"
-
-    @property
-    def input_signal(self) -> str:
-        """The record signal that drives it: the valve's spool command."""
-        return "spool"
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """Its 5/3 valve's spool command u in [-1, 1] (``SPOOL_INPUT``)."""
+        return (SPOOL_INPUT,)
 
     @property
     def input_signals(self) -> tuple[str, ...]:
-        return ("spool",)
+        return SPOOL_INPUT.record_signals
 
     def driven_by(self, signal: str) -> Cylinder:
         """This cylinder, when ``signal`` is its spool command (its only input)."""
         from ..errors import DataError
 
-        if signal != "spool":
+        if signal not in SPOOL_INPUT.record_signals:
             raise DataError(f"a Cylinder is driven by a record's spool command, not its "
                             f"{signal}")
         return self
 
     @property
     def plant_kind(self) -> str:
-        return "spool"
+        return SPOOL_INPUT.name
 
     @property
     def drive_label(self) -> str:
         return "5/3 valve"
-
-    @property
-    def input_range(self) -> tuple[float, float]:
-        """The spool command u ∈ [−1, 1]."""
-        return -1.0, 1.0
-
-    def check_drive_values(self, low: float, high: float, where: str) -> None:
-        """A spool command outside [−1, 1] is refused."""
-        if low < -1.0 or high > 1.0:
-            raise ExperimentError(f"{where}: its spool command spans {low:g} to {high:g}; a "
-                                  "5/3 valve's command must stay within [-1, 1] (1 extends, "
-                                  "-1 retracts, 0 closes the centre)")
 
     #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
     summary_kind: ClassVar[str] = "motion"
@@ -1015,8 +1006,8 @@ class Cylinder:
         step its stops allow resting under that force."""
         p = self.params
         push = (float(p["p_supply"]) - float(p["p_atm"])) * QUARTER_PI * float(p["D_bore"]) ** 2
-        spool = drive_input("spool_command", "1", "spool command of the 5/3 valve (-1 supply to B, "
-                            "0 centred, 1 supply to A: extends)", 0.0, 1.0, -1.0, 1.0)
+        spool = drive_input("spool_command", SPOOL_INPUT.unit, SPOOL_INPUT.description, 0.0,
+                            1.0, SPOOL_INPUT.low, SPOOL_INPUT.high)
         step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
         return FmuInterface((spool, force_input(push)), None, step)
 

@@ -5,10 +5,20 @@ validation and fitting use them to drive a model the way a record was made."""
 
 from __future__ import annotations
 
+from ..core.channels import InputChannel
 from ..errors import DataError
+from .cylinder import SPOOL_INPUT
+from .rig import DRIVE_INPUTS
 from .valves import VALVES, PressureRegulator, PressureSource, Valve
 
-__all__ = ["DEFAULT_INPUT", "INPUTS", "INPUT_SIGNALS", "input_signal", "valve_for_signal"]
+__all__ = ["DECLARED_INPUTS", "DEFAULT_INPUT", "INPUTS", "INPUT_SIGNALS", "input_signal",
+           "quantity_driven_by", "valve_for_signal"]
+
+#: every input a component of the package declares (a valve's, the 5/3 valve's spool
+#: command, the rig's drives): the quantities an experiment may name, with their units
+DECLARED_INPUTS: tuple[InputChannel, ...] = (
+    *dict.fromkeys(cls.declared for cls in VALVES.values()), *DRIVE_INPUTS.values(),
+    SPOOL_INPUT)
 
 #: The record signal that drives each valve (by its ``cli_name``), in the order a record's
 #: input is chosen when it carries several: a logged set-point first (the record was made
@@ -39,3 +49,14 @@ def valve_for_signal(signal: str) -> Valve:
             return cls()
     raise DataError(f"no valve is driven by a record's {signal!r}; the input signals are "
                     f"{', '.join(dict.fromkeys(INPUT_SIGNALS.values()))}")
+
+
+def quantity_driven_by(signal: str) -> str:
+    """The input (an experiment's quantity) a record's ``signal`` drives: a regulator's
+    ``setpoint`` drives its pressure input, any other signal the input of its name."""
+    for channel in DECLARED_INPUTS:
+        if signal in channel.record_signals:
+            return channel.name
+    known = sorted({s for c in DECLARED_INPUTS for s in c.record_signals})
+    raise DataError(f"no declared input is driven by a record's {signal!r}; the record "
+                    f"signals that drive one are {', '.join(known)}")

@@ -9,11 +9,10 @@ offset ``o`` of the vector ``p``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
-from ..core.channels import CH_DRIVE, in_order
+from ..core.channels import CH_DRIVE, DeclaredInputs, InputChannel, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
 from ..core.signals import channel_eval
@@ -104,17 +103,24 @@ def drive_start(t, ts, p, o, sig, ptr):  # pragma: no cover - compiled
     return 0.0, 0.0
 
 
+#: the rig's drives, each the input it declares (any value: unbounded)
+DRIVE_INPUTS = {channel.name: channel for channel in (
+    InputChannel("force", "N", record_signals=("force",),
+                 description="force applied to the mass", label="force drive"),
+    InputChannel("spring", "m", record_signals=("spring",),
+                 description="position of the pulling spring's free end",
+                 label="spring drive"),
+    InputChannel("velocity", "m/s", record_signals=("velocity",),
+                 description="prescribed velocity of the mass", label="velocity drive"),
+    InputChannel("position", "m", record_signals=("position",),
+                 description="prescribed position of the mass", label="position drive"),
+)}
 #: drive name -> (unit of the drive signal, meaning)
-DRIVES = {
-    "force": ("N", "force applied to the mass"),
-    "spring": ("m", "position of the pulling spring's free end"),
-    "velocity": ("m/s", "prescribed velocity of the mass"),
-    "position": ("m", "prescribed position of the mass"),
-}
+DRIVES = {name: (c.unit, c.description) for name, c in DRIVE_INPUTS.items()}
 
 
 @dataclass(frozen=True, eq=False)
-class FrictionRig:
+class FrictionRig(DeclaredInputs):
     """A mass ``m`` with a friction law, driven by ``drive`` (force, spring, velocity or
     position) — the set-up of Canudas de Wit et al. (1995) for the classic experiments."""
 
@@ -148,14 +154,10 @@ class FrictionRig:
         return self.friction.sensitivity_refusal
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
-    @property
-    def drive_quantity(self) -> str:
-        return self.drive
-
-    @property
-    def input_signal(self) -> str:
-        """The record signal that drives it: its drive quantity."""
-        return self.drive
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """Its drive (force, spring, velocity or position), any value: the record signal
+        of the same name drives it."""
+        return (DRIVE_INPUTS[self.drive],)
 
     @property
     def input_signals(self) -> tuple[str, ...]:
@@ -175,18 +177,6 @@ class FrictionRig:
         """What its input acts on: the drive (force, spring, velocity, position)."""
         return self.drive
 
-    @property
-    def drive_label(self) -> str:
-        return f"{self.drive} drive"
-
-    @property
-    def input_range(self) -> tuple[float, float]:
-        """A force (or a prescribed motion) is unbounded."""
-        return -math.inf, math.inf
-
-    def check_drive_values(self, low: float, high: float, where: str) -> None:
-        """Any force or motion can drive it."""
-
     #: what ``Result.summary()`` computes of its runs: the mass's motion
     summary_kind: ClassVar[str] = "motion"
 
@@ -205,10 +195,6 @@ class FrictionRig:
     def breakpoints(self, bp, channels, t_start: float, t_end: float):
         """The experiment's breakpoints: a rig adds none."""
         return bp
-
-    @property
-    def drive_unit(self) -> str:
-        return DRIVES[self.drive][0]
 
     @property
     def required(self) -> tuple[str, ...]:

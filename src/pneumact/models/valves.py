@@ -23,16 +23,14 @@ functions (``chamber_rate``, ``orifice``): see ``models.friction`` on why.
 from __future__ import annotations
 
 import functools
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
-from ..checks import check_absolute_pressure
-from ..core.channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES
+from ..checks import ABSOLUTE_PRESSURE_PLAUSIBLE, check_absolute_pressure
+from ..core.channels import CH_DRIVE, CH_MAP_ATM, CH_MAP_RES, InputChannel
 from ..core.component import Block, Part, StateSpec
 from ..core.jit import njit
 from ..core.signals import Signal, channel_eval, map_eval
-from ..errors import ExperimentError
 from ..parameters.catalogue import ParameterSpec, declare
 from .pneumatics import (
     CHAMBER_BLOCK,
@@ -547,31 +545,44 @@ _FUNCTIONS = ("pressure", "rates", "partials", "params", "flows", "derive", "equ
 class Valve:
     """Strategy object: which compiled valve functions feed the chamber.
 
-    ``drive`` is what the experiment's signal means for this valve (a pressure, or the
-    command u); ``input_signal`` the record signal that drives it (a record made through
-    the regulator logs its set-point); ``cli_name`` its ``--valve`` choice on the command
-    line.
+    ``declared`` is the input it owns (``core.channels.InputChannel``): its name, what the
+    experiment's signal means for this valve (a pressure, or the command u), its unit and
+    range, and the record signal that drives it (a record made through the regulator logs
+    its set-point); ``drive`` and ``input_signal`` are read from it. ``cli_name`` is its
+    ``--valve`` choice on the command line.
     """
 
     prefix: ClassVar[str]
     block: ClassVar[Block]
     states: ClassVar[tuple[StateSpec, ...]]
+    declared: ClassVar[InputChannel]
     drive: ClassVar[str]
     input_signal: ClassVar[str]
     cli_name: ClassVar[str]
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        """``drive`` and ``input_signal`` from the input the class declares."""
+        super().__init_subclass__(**kwargs)
+        if "declared" in vars(cls):
+            cls.drive = cls.declared.name
+            cls.input_signal = cls.declared.record_signal
 
     def maps(self) -> tuple[Signal | None, Signal | None]:
         """Area maps against the command (reservoir, atmosphere); None when unused."""
         return None, None
 
+    def declared_input(self, params) -> InputChannel:
+        """Its input with the parameters' values where they set its range."""
+        return self.declared
+
     def input_range(self, params) -> tuple[float, float]:
-        """The values its input takes: a prescribed pressure, any positive one."""
-        return 0.0, math.inf
+        """The values its input acts over (``InputChannel.span``)."""
+        return self.declared_input(params).span
 
     def check_drive_values(self, params, low: float, high: float, where: str) -> None:
-        """Refuse an experiment whose signal spans ``low`` to ``high`` where this valve
-        cannot take it (``where`` names the experiment): a pressure must be absolute."""
-        _check_pressures(low, high, where)
+        """Refuse an experiment whose signal spans ``low`` to ``high`` outside its declared
+        input (``where`` names the experiment)."""
+        self.declared_input(params).check(low, high, where)
 
     @property
     def required(self) -> tuple[str, ...]:
@@ -595,9 +606,20 @@ class Valve:
         return type(self).__name__
 
 
-def _check_pressures(low: float, high: float, where: str) -> None:
-    for value in (low, high):
-        check_absolute_pressure("its pressure", value, where=where, error=ExperimentError)
+#: an imposed absolute pressure (refused below 1 kPa: a unit mistake; the hint says so)
+PRESSURE_INPUT = InputChannel(
+    "pressure", "Pa", *ABSOLUTE_PRESSURE_PLAUSIBLE, record_signals=("pressure",),
+    description="chamber pressure imposed by the source", label="pressure",
+    check_value=check_absolute_pressure)
+#: the regulator's set-point: an absolute pressure, clipped to [p_res, p_atm]
+SETPOINT_INPUT = replace(PRESSURE_INPUT, record_signals=("setpoint",),
+                         description="set-point of the pressure regulator")
+#: the command u of a valve between the chamber, the reservoir and the atmosphere
+COMMAND_INPUT = InputChannel(
+    "command", "1", 0.0, 1.0, record_signals=("command",),
+    description="valve command (0 closed to atmosphere, 1 open to the vacuum reservoir)",
+    label="command", rule="a valve command must stay within [{low:g}, {high:g}] (0 vents "
+                          "the chamber, 1 opens it to the reservoir)")
 
 
 @dataclass(frozen=True)
@@ -608,8 +630,7 @@ class PressureSource(Valve):
     prefix: ClassVar[str] = "source"
     block: ClassVar[Block] = SOURCE_BLOCK
     states: ClassVar[tuple[StateSpec, ...]] = ()
-    drive: ClassVar[str] = "pressure"
-    input_signal: ClassVar[str] = "pressure"
+    declared: ClassVar[InputChannel] = PRESSURE_INPUT
     cli_name: ClassVar[str] = "source"
 
 
@@ -636,24 +657,12 @@ class CommandValve(Valve):
     prefix: ClassVar[str] = "command"
     block: ClassVar[Block] = COMMAND_BLOCK
     states: ClassVar[tuple[StateSpec, ...]] = (StateSpec("pressure", "Pa"),)
-    drive: ClassVar[str] = "command"
-    input_signal: ClassVar[str] = "command"
+    declared: ClassVar[InputChannel] = COMMAND_INPUT
     cli_name: ClassVar[str] = "command"
 
     def maps(self) -> tuple[Signal, Signal]:
         return (self.reservoir_map or _linear_map(True),
                 self.atmosphere_map or _linear_map(False))
-
-    def input_range(self, params) -> tuple[float, float]:
-        """The command u ∈ [0, 1]."""
-        return 0.0, 1.0
-
-    def check_drive_values(self, params, low: float, high: float, where: str) -> None:
-        """A command outside [0, 1] is refused."""
-        if low < 0.0 or high > 1.0:
-            raise ExperimentError(f"{where}: its command spans {low:g} to {high:g}; a valve "
-                                  "command must stay within [0, 1] (0 vents the chamber, 1 "
-                                  "opens it to the reservoir)")
 
 
 @dataclass(frozen=True)
@@ -667,17 +676,13 @@ class PressureRegulator(CommandValve):
     states: ClassVar[tuple[StateSpec, ...]] = (
         StateSpec("pressure", "Pa"), StateSpec("opening", "1", monotone=True),
         StateSpec("integral", "1"))
-    drive: ClassVar[str] = "pressure"
-    input_signal: ClassVar[str] = "setpoint"
+    declared: ClassVar[InputChannel] = SETPOINT_INPUT
     cli_name: ClassVar[str] = "regulator"
 
-    def input_range(self, params) -> tuple[float, float]:
-        """A set-point in [p_res, p_atm] (it is clipped there)."""
-        return float(params["p_res"]), float(params["p_atm"])
-
-    def check_drive_values(self, params, low: float, high: float, where: str) -> None:
-        """A set-point must be an absolute pressure (one beyond the supply is clipped)."""
-        _check_pressures(low, high, where)
+    def declared_input(self, params) -> InputChannel:
+        """An absolute pressure, acting within [p_res, p_atm] (it is clipped there)."""
+        return replace(self.declared,
+                       acts_within=(float(params["p_res"]), float(params["p_atm"])))
 
 
 @dataclass(frozen=True)

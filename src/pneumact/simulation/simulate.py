@@ -27,6 +27,7 @@ from .result import Result, SolverStats
 from .solvers import Rodas4, Solver
 
 if TYPE_CHECKING:
+    from ..core.channels import InputChannel
     from ..core.component import Part
     from ..core.signals import Signal
     from ..parameters.parameter_set import ParameterSet
@@ -40,9 +41,12 @@ class Model(Protocol):
     """What the simulation asks of a model: an ``Actuator``, a ``FrictionRig``, a
     ``Cylinder`` or a ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
 
-    ``drive_quantity`` is what the experiment's signal is (pressure, command, force,
-    position...); ``input_signal`` the record signal that drives the model (a regulator's
-    logged ``setpoint``, a ``pressure``, a ``command``, a loop's ``position_setpoint``);
+    ``inputs()`` declares what drives it (``core.channels.InputChannel``: name, unit,
+    range, record signals; its drive first, declared by the component that owns it), and
+    the rest is read from there: ``drive_quantity`` is what the experiment's signal is
+    (pressure, command, force, position...); ``input_signal`` the record signal that
+    drives the model (a regulator's logged ``setpoint``, a ``pressure``, a ``command``, a
+    loop's ``position_setpoint``); ``input_range`` the values it acts over;
     ``input_signals`` every record signal it can be driven by, and ``driven_by(signal)``
     the same model driven by one of them (an actuator behind another valve);
     ``plant_kind`` what its input acts on (pressure, command, force...); ``stroke`` the
@@ -57,6 +61,19 @@ class Model(Protocol):
 
     @property
     def params(self) -> ParameterSet: ...
+
+    def inputs(self) -> tuple[InputChannel, ...]:
+        """The inputs it declares, its drive first."""
+        ...
+
+    @property
+    def drive_input(self) -> InputChannel:
+        """The input an experiment drives (the first declared)."""
+        ...
+
+    def declared_input(self, name: str, who: str, /) -> InputChannel:
+        """Its input named ``name``; refused naming ``who``, the model and its inputs."""
+        ...
 
     @property
     def drive_quantity(self) -> str: ...
@@ -75,9 +92,12 @@ class Model(Protocol):
     @property
     def drive_label(self) -> str: ...
 
+    @property
+    def input_range(self) -> tuple[float, float]: ...
+
     def check_drive_values(self, low: float, high: float, where: str, /) -> None:
-        """Refuse a drive signal spanning ``low`` to ``high`` the model cannot take (its
-        components own the limits and the message; ``where`` names the experiment)."""
+        """Refuse a drive signal spanning ``low`` to ``high`` outside its declared drive
+        (its components own the limits and the message; ``where`` names the experiment)."""
 
     @property
     def stroke(self) -> float | None: ...
@@ -111,19 +131,15 @@ def check_experiment(experiment, where: str = "simulate") -> None:
 
 
 def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
-    """The experiment's signal must be what the model's valve or drive expects, with
-    values the model can take (an absolute pressure, a command in [0, 1], a set-point
-    within the stroke)."""
+    """The experiment must drive an input the model declares, by name, with values in its
+    declared range (an absolute pressure, a command in [0, 1], a set-point within the
+    stroke); one ExperimentError otherwise, naming the input, the model and its inputs."""
     check_model(model, where)
     check_experiment(experiment, where)
-    expected = model.drive_quantity
-    if experiment.quantity != expected:
-        raise ExperimentError(
-            f"experiment '{experiment.name}' drives {experiment.quantity!r}, but the "
-            f"{model.drive_label} of this {type(model).__name__} needs a {expected!r} "
-            "signal")
+    who = f"experiment '{experiment.name}'"
+    declared = model.declared_input(experiment.quantity, who)
     low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
-    model.check_drive_values(low, high, f"experiment '{experiment.name}'")
+    declared.check(low, high, who)
 
 
 def model_stroke(model: Model) -> float | None:

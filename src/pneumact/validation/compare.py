@@ -41,6 +41,7 @@ from ..identification.diagnostics import verdicts
 from ..identification.estimates import long_run_variance
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.inputs import INPUT_SIGNALS
 from ..options import Executor, Multistart, Optimizer
 from ..progress import ProgressCallback, notify, stop_threads
 from .loops import loop_measures
@@ -124,7 +125,7 @@ def _whiteness(errors: Sequence[np.ndarray]) -> float:
 def _loop_error(model, records, predictions, signal: str) -> float:
     """Mean relative error of the loop width in pressure over the held-out records (an
     actuator's pressure-position loops), NaN for a model without them."""
-    if model.input_signal not in ("pressure", "command", "setpoint") or signal != "position":
+    if model.input_signal not in INPUT_SIGNALS.values() or signal != "position":  # no valve
         return np.nan
     errors = []
     for rec, pred in zip(records, predictions, strict=True):
