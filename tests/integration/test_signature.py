@@ -119,6 +119,25 @@ def test_a_signature_result_hands_out_only_what_is_identified(results):
     assert len(result.summary().splitlines()) <= ref.SUMMARY_MAX_LINES
 
 
+def test_a_position_offset_on_a_signature_is_read_on_the_stop_and_taken_off(cases):
+    """A position sensor that reads ``ref.BENCH_POSITION_OFFSET`` too far: the sweep
+    starts at rest on the lower stop, where the offset is read (``ref.BENCH_SIZE_RTOL``), named,
+    taken off, and the spring line's intervals hold the truth."""
+    truth, prior, records = cases[0]
+    offset = ref.BENCH_POSITION_OFFSET
+    shifted = [pa.Record.from_arrays(r.time, {**r.signals, "position": r["position"] + offset},
+                                     r.units, r.source, r.meta) for r in records]
+    result = identify_signature(shifted, prior)
+    bench = result.bench_table().set_index("parameter")
+    assert bench.loc["position_offset", "value"] == pytest.approx(
+        offset, rel=ref.BENCH_SIZE_RTOL), bench
+    assert any("position sensor reads" in d.message for d in result.diagnostics)
+    table = result.to_pandas(truth=truth)
+    for name in ("F0", "k"):  # left on, F0 is k·offset low: −0.15 %, its interval missing
+        assert table.loc[name, "verdict"] == "identified", table
+        assert table.loc[name, "truth_in_ci95"], table
+
+
 def test_static_friction_in_the_level_widens_fc_not_biases_it(cases):
     """A deep Stribeck dip (Fs = 2·Fc, δ = 1) with vs at the top of the prior's range:
     a sweep at 2·vs, where the dip still adds 13 % of Fc to the level. Fc

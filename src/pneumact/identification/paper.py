@@ -1395,7 +1395,8 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     bound the Stribeck term the friction level may hold); Fs, vs, σ0 and σ1 stay at the
     prior's values, named as not identifiable from a signature with the test that would
     tell each; and the valve engineer's numbers (bench set, spring rate, friction band,
-    dead band)."""
+    dead band). A position sensor's offset is read where a sweep starts at rest on the
+    lower stop and taken off (``faults.position_zero``, in ``bench_table()``)."""
     from ..io.records import as_records
     from ..parameters import as_parameter_set
     from ..version import __version__
@@ -1413,9 +1414,11 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
                              "in [0, 1) (the prior's relative uncertainty)")
     check_progress(progress, "identify_signature")
     notify(progress, "signature", 0.0, 1.0)
+    zero = position_zero(records, params, prior_spread)  # a sweep starts on the stop
+    records = zero.records
     kinds = [record_kind(r) for r in records]
     sweeps = signature_records(records, kinds)
-    diagnostics: list[Diagnostic] = []
+    diagnostics: list[Diagnostic] = list(zero.diagnostics)
     unused = [Path(r.source).name for r, k in zip(records, kinds, strict=True) if k != "sweep"]
     if unused:
         diagnostics.append(Diagnostic(
@@ -1451,5 +1454,5 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     return SignatureIdentification(
         {"signature": fitted.stage}, None, estimates, judged, diagnostics, pd.DataFrame(),
         identified, params, list(records), None, None,
-        {"friction": None, "chamber": None, "joint_failed": False},
+        {"friction": None, "chamber": None, "joint_failed": False, "position_zero": zero},
         valve, fitted.structure)
