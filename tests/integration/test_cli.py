@@ -56,8 +56,10 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
-def test_simulate_the_cylinder_writes_its_step_response(tmp_path):
-    """--model cylinder: the shipped cylinder set, a spool step, the API's run as CSV."""
+@pytest.mark.parametrize("chamber", ["adiabatic", "heat-transfer"])
+def test_simulate_the_cylinder_writes_its_step_response(tmp_path, chamber):
+    """--model cylinder: the shipped cylinder set, a spool step, the API's run as CSV
+    (with --chamber heat-transfer, the chambers' gas temperatures too)."""
     import numpy as np
     import pandas as pd
 
@@ -66,15 +68,19 @@ def test_simulate_the_cylinder_writes_its_step_response(tmp_path):
     from reference import CLI_CHUNKED_RUN_RTOL
 
     out = tmp_path / "cylinder"
-    result = invoke("simulate", "--model", "cylinder", "--chamber", "adiabatic", "--t-end",
+    result = invoke("simulate", "--model", "cylinder", "--chamber", chamber, "--t-end",
                     "0.5", "--out", str(out))
     assert result.exit_code == 0, result.output
     assert "95 % of the stroke" in result.stdout
     assert (out / "response.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     frame = pd.read_csv(out / "simulation.csv")
-    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), chamber=pa.Adiabatic()),
+    law = pa.Adiabatic() if chamber == "adiabatic" else pa.HeatTransfer()
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), chamber=law),
                       pa.experiments.SpoolStep(t_end=0.5))
-    for name, unit in (("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")):
+    signals = [("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")]
+    if chamber == "heat-transfer":
+        signals += [("temperature_a", "K"), ("temperature_b", "K")]
+    for name, unit in signals:
         cli = frame[f"{name} [{unit}]"].to_numpy()  # run in chunks (its progress): rtol apart
         assert np.abs(cli - api[name]).max() <= CLI_CHUNKED_RUN_RTOL * np.ptp(api[name]), name
     refused = invoke("simulate", "--model", "cylinder", "--valve", "command")

@@ -72,11 +72,13 @@ def command_driven(valve: Valve) -> bool:
 
 
 class Chamber(StrEnum):
-    """The chamber laws (``pneumact.models``): Isothermal, Adiabatic, Polytropic."""
+    """The chamber laws (``pneumact.models``): Isothermal, Adiabatic, Polytropic, and the
+    cylinder's HeatTransfer (its chambers' energy equations, temperatures as states)."""
 
     isothermal = "isothermal"
     adiabatic = "adiabatic"
     polytropic = "polytropic"
+    heat_transfer = "heat-transfer"
 
 
 def _friction_choices() -> type[StrEnum]:
@@ -106,7 +108,9 @@ ValveOption = Annotated[Valve, typer.Option(
          "pressure set-point; iso6358: the command valve with ISO 6358 flows (iso_C_res, "
          "iso_C_atm, iso_b, iso_m).")]
 FrictionOption = Annotated[Friction, typer.Option(help="Friction model.")]
-ChamberOption = Annotated[Chamber, typer.Option(help="Chamber gas law (behind a valve).")]
+ChamberOption = Annotated[Chamber, typer.Option(
+    help="Chamber gas law (behind a valve); heat-transfer: the cylinder's chambers with "
+         "their energy equations and the wall's heat transfer (heat_transfer_coefficient).")]
 ExponentOption = Annotated[float, typer.Option(
     help="Polytropic exponent n of --chamber polytropic, between 1 (isothermal) and γ.")]
 DecayingDampingOption = Annotated[bool, typer.Option(
@@ -296,7 +300,7 @@ def build_cylinder(options: ModelOptions, params=None):
     friction = friction_of(options)
     _check_friction_parameters(friction, params, options)
     return params, Cylinder(params, friction=friction,
-                            chamber=build_chamber(options.chamber, options.exponent))
+                            chamber=build_chamber(options.chamber, options.exponent, True))
 
 
 def cylinder_experiment(options: ModelOptions, params):
@@ -346,10 +350,19 @@ def friction_of(options: ModelOptions):
     return law()
 
 
-def build_chamber(chamber: Chamber, exponent: float = DEFAULT_EXPONENT):
-    """The chamber law --chamber (and --exponent) name."""
-    from pneumact.models import Adiabatic, Isothermal, Polytropic
+def build_chamber(chamber: Chamber, exponent: float = DEFAULT_EXPONENT,
+                  cylinder: bool = False):
+    """The chamber law --chamber (and --exponent) name; heat transfer for the cylinder's
+    chambers only (``cylinder``)."""
+    from pneumact.models import Adiabatic, HeatTransfer, Isothermal, Polytropic
 
+    if chamber is Chamber.heat_transfer:
+        if not cylinder:
+            raise ArgumentError("--chamber heat-transfer: only the cylinder's chambers carry "
+                                "a gas temperature (--model cylinder); the "
+                                "diaphragm actuator's chamber is isothermal, adiabatic or "
+                                "polytropic")
+        return HeatTransfer()
     if chamber is Chamber.polytropic:
         return Polytropic(exponent)
     return Adiabatic() if chamber is Chamber.adiabatic else Isothermal()
