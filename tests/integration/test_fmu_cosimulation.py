@@ -135,6 +135,21 @@ def test_the_cylinder_exports_and_its_cs_fmu_steps_like_pa_simulate(cylinder_fmu
     _steps_like_pa_simulate({"cylinder": cylinder_fmu}, "cylinder", step, experiment)
 
 
+def test_the_heat_transfer_cylinder_s_cs_fmu_steps_like_pa_simulate(tmp_path):
+    """Chambers with heat transfer (their gas temperatures as states, issue 41): the
+    exporter needs nothing of its own for them; a held spool step runs as pa.simulate
+    runs it, the chambers' gas temperatures (which move by kelvins) with it."""
+    model = pa.Cylinder(load_quietly("iso15552-32"), chamber=pa.HeatTransfer())
+    fmu = pa.export_fmu(model, tmp_path / "heat.fmu", kind="cs")
+    assert {"temperature_a", "temperature_b"} <= set(fmu.names("output"))
+    experiment = pa.experiments.SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=1.0)
+    temperatures = ("temperature_a", "temperature_b")
+    run = pa.simulate(model, experiment)
+    assert all(np.ptp(run[name]) > 1.0 for name in temperatures)  # K: they do move
+    _steps_like_pa_simulate({"heat": (model, fmu)}, "heat", ref.CS_STEPS[0], experiment,
+                            also=temperatures)
+
+
 def test_the_cylinder_me_fmu_follows_pa_simulate(cylinder_fmu):
     """Model Exchange: FMPy's CVode on the same spool step (its corner in the input
     table) against pa.simulate, within what the actuator's ME FMU is held to."""
@@ -156,7 +171,10 @@ def test_the_cylinder_me_fmu_follows_pa_simulate(cylinder_fmu):
 
 
 def _steps_like_pa_simulate(cosimulation, case: str, step: float,
-                            experiment: pa.Experiment) -> None:
+                            experiment: pa.Experiment, also: tuple[str, ...] = ()) -> None:
+    """The CS FMU's position (and the outputs ``also``) on a held input against
+    pa.simulate of the same staircase, within ``ref.CS_POSITION_RMS_OF_TRAVEL`` of
+    each one's span."""
     model, fmu = cosimulation[case]
     grid, drive = held(experiment, step)
     name = fmu.names("input")[0]
@@ -164,7 +182,8 @@ def _steps_like_pa_simulate(cosimulation, case: str, step: float,
                      dtype=[("time", float), (name, float), ("external_force", float)])
     out = fmpy.simulate_fmu(str(fmu.path), fmi_type="CoSimulation", stop_time=experiment.t_end,
                             input=table, start_values={name: float(drive[0])},
-                            step_size=step, output_interval=step, output=["position"])
+                            step_size=step, output_interval=step,
+                            output=["position", *also])
     assert np.allclose(out["time"], grid, rtol=0, atol=1e-9 * experiment.t_end)
     run = pa.simulate(model, staircase(experiment, grid, drive), t_eval=grid)
     x = run["position"]
@@ -172,6 +191,9 @@ def _steps_like_pa_simulate(cosimulation, case: str, step: float,
     assert travel > 0.2 * float(model.params["x_max"])  # the actuator does move
     rms = np.sqrt(np.mean((out["position"] - x) ** 2))
     assert rms <= ref.CS_POSITION_RMS_OF_TRAVEL * travel
+    for name in also:
+        rms = np.sqrt(np.mean((out[name] - run[name]) ** 2))
+        assert rms <= ref.CS_POSITION_RMS_OF_TRAVEL * float(np.ptp(run[name])), name
     if step == ref.CS_STEPS[0]:
         assert validate_fmu(str(fmu.path)) == []
 
