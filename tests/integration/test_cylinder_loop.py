@@ -159,6 +159,32 @@ def test_the_piston_rings_on_bristle_and_gas_springs(linear, cylinder):
 
 
 def test_the_eigenvalues_are_those_of_a_difference_jacobian(linear, cylinder):
+    _eigenvalues_are_those_of_a_difference_jacobian(linear, cylinder)
+
+
+def test_with_heat_transfer_each_chamber_is_an_adiabatic_gas_spring(cylinder):
+    """Chambers with their energy equations (``HeatTransfer``): on the piston's time
+    scale each is the adiabatic gas spring γ·p·A²/V (the heat flows through the
+    temperature states, whose modes are slow and real), and the eigenvalues are those of
+    a difference Jacobian."""
+    heated = pa.Cylinder(cylinder.params, chamber=pa.HeatTransfer())
+    balanced = ClosedLoop(heated, state_feedback(0.0)).holding_input(POSITION)
+    linear = linearise(heated, balanced, position=POSITION)
+    assert {"temperature_a", "temperature_b"} <= set(linear.state_names)
+    names, gamma = linear.state_names, float(heated.params["gamma"])
+    iv = names.index("velocity")
+    for chamber, isothermal in zip(("pressure_a", "pressure_b"),
+                                   _chamber_stiffness(heated.params, linear), strict=True):
+        ip = names.index(chamber)
+        stiffness = -float(heated.params["m"]) * linear.A[iv, ip] * linear.A[ip, iv]
+        assert stiffness == pytest.approx(gamma * isothermal, rel=ref.CYLINDER_STIFFNESS_RTOL)
+    poles = linear.poles()
+    ringing = np.abs(poles[np.abs(poles.imag) > 0].real).min()
+    assert np.abs(poles[poles.imag == 0].real).max() < ringing  # thermal modes: slower
+    _eigenvalues_are_those_of_a_difference_jacobian(linear, heated)
+
+
+def _eigenvalues_are_those_of_a_difference_jacobian(linear, cylinder) -> None:
     from pneumact.core.assembly import assemble
     from pneumact.core.signals import Constant, pack_channels
 
