@@ -475,7 +475,8 @@ def test_a_second_joint_optimum_within_the_noise_widens_the_interval(campaign, s
                for d in result.diagnostics)
 
 
-def test_runs_repeated_within_an_identification_are_done_once(vgt, clean_presliding):
+def test_runs_repeated_within_an_identification_are_done_once(vgt, clean_presliding,
+                                                              monkeypatch):
     """Issue 38: a record's rebuilt input is made once per content (a crop to the same
     samples shares it, another input does not), and within ``memo.remembering`` a
     sensitivity run at the same values is reused, bit for bit what a fresh run gives,
@@ -510,5 +511,13 @@ def test_runs_repeated_within_an_identification_are_done_once(vgt, clean_preslid
         assert moved is not first
         assert not np.array_equal(moved["position"], first["position"])
     assert run(every) is not first  # forgotten when the identification ends
+    from pneumact.identification import memo
+
+    monkeypatch.setattr(memo, "MEMO_BYTES", 1)  # room for one run: the last is kept
+    with remembering():
+        first = run(every)
+        moved = run({**every, "sigma1": 1.5 * every["sigma1"]})
+        assert run({**every, "sigma1": 1.5 * every["sigma1"]}) is moved
+        assert run(every) is not first
     np.testing.assert_array_equal(first["position"], fresh["position"])
     np.testing.assert_array_equal(first.result["position"], fresh.result["position"])

@@ -22,15 +22,25 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["MEMO_ENTRIES", "content_key", "remembered", "remembering", "sensitivities"]
+__all__ = ["MEMO_BYTES", "MEMO_ENTRIES", "content_key", "remembered", "remembering",
+           "sensitivities"]
 
 #: Sensitivity runs remembered at most (the least recently used are forgotten first):
 #: a round's records twice over (the last evaluation of one round, the screen of the
 #: next), 12 records per campaign.
 MEMO_ENTRIES = 32
+#: and at most this many bytes of their arrays (a run of 8 parameters holds ~465 bytes
+#: per sample: the vgt-paper campaign's 32 runs ~140 MiB; long records keep fewer runs)
+MEMO_BYTES = 256 * 2**20
 
 _LOCK = threading.Lock()
-_STATE: dict = {"depth": 0, "runs": OrderedDict()}
+_STATE: dict = {"depth": 0, "runs": OrderedDict(), "bytes": 0}
+
+
+def _nbytes(run) -> int:
+    """The bytes of a sensitivity run's arrays: its sensitivities and its signals."""
+    return (sum(a.nbytes for a in run.sensitivities.values())
+            + run.result.time.nbytes + sum(a.nbytes for a in run.result.signals.values()))
 
 
 def content_key(*arrays: np.ndarray) -> bytes:
@@ -56,6 +66,7 @@ def remembering() -> Iterator[None]:
             _STATE["depth"] -= 1
             if _STATE["depth"] == 0:
                 _STATE["runs"].clear()
+                _STATE["bytes"] = 0
 
 
 def remembered(function: Callable) -> Callable:
@@ -91,8 +102,11 @@ def sensitivities(model, experiment, knots: tuple[np.ndarray, np.ndarray], time:
     run = simulate_sensitivities(model, experiment, list(names), solver, t_eval=time,
                                  values=dict(values))
     with _LOCK:
-        if _STATE["depth"] > 0:
-            _STATE["runs"][key] = run
-            while len(_STATE["runs"]) > MEMO_ENTRIES:
-                _STATE["runs"].popitem(last=False)
+        runs = _STATE["runs"]
+        if _STATE["depth"] > 0 and key not in runs:
+            runs[key] = run
+            _STATE["bytes"] += _nbytes(run)
+            while len(runs) > 1 and (len(runs) > MEMO_ENTRIES
+                                     or _STATE["bytes"] > MEMO_BYTES):
+                _STATE["bytes"] -= _nbytes(runs.popitem(last=False)[1])
     return run
