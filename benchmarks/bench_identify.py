@@ -40,10 +40,13 @@ START = {"F0": 0.92, "k": 0.86, "Fc": 0.77, "sigma2": 1.5, "Fs": 1.25, "vs": 2.0
 
 
 def fresh(records):
-    """New record objects with the same data: each timed run rebuilds its inputs (a fit
-    caches the rebuilt input of a record it has seen; a user's first fit pays for it)."""
+    """New record objects with the same data, their rebuilt inputs forgotten: each timed
+    run rebuilds its inputs (a fit remembers the rebuilt input of data it has seen; a
+    user's first fit pays for it)."""
+    from pneumact.identification.fit import forget_rebuilt_inputs
     from pneumact.io import Record
 
+    forget_rebuilt_inputs()
     return [Record.from_arrays(r.time, r.signals, r.units, r.source, r.meta) for r in records]
 
 

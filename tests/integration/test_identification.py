@@ -473,3 +473,51 @@ def test_a_second_joint_optimum_within_the_noise_widens_the_interval(campaign, s
     assert table.loc["k", "verdict"] == "identified"
     assert any("more than one optimum within the noise for F0" in d.message
                for d in result.diagnostics)
+
+
+def test_runs_repeated_within_an_identification_are_done_once(vgt, clean_presliding,
+                                                              monkeypatch):
+    """Issue 38: a record's rebuilt input is made once per content (a crop to the same
+    samples shares it, another input does not), and within ``memo.remembering`` a
+    sensitivity run at the same values is reused, bit for bit what a fresh run gives,
+    while a run at other values is not taken for it."""
+    from pneumact.core.assembly import assemble
+    from pneumact.identification.fit import experiment_for, rebuilt_input
+    from pneumact.identification.memo import remembering, sensitivities
+
+    model = pa.Actuator(vgt, valve=pa.PressureSource())
+    record = clean_presliding
+    knots = rebuilt_input(model, record)
+    crop = record.crop(None, float(record.time[-1]))
+    assert crop is not record and rebuilt_input(model, crop) is knots
+    other = Record.from_arrays(record.time, {**record.signals,
+                                             "pressure": 1.01 * record["pressure"]},
+                               record.units, record.source, record.meta)
+    assert not np.array_equal(rebuilt_input(model, other)[1], knots[1])
+    experiment = experiment_for(model, record, smooth=True)
+    assembly = assemble(model)
+    every = {n: v for n, v in assembly.values(assembly.pack()).items()
+             if n in assembly.parameter_names}
+    names, solver = ["sigma0", "sigma1"], pa.Rodas4()
+    fresh = pa.simulate_sensitivities(model, experiment, names, solver, t_eval=record.time)
+
+    def run(values):
+        return sensitivities(model, experiment, knots, record.time, names, solver, values)
+
+    with remembering():
+        first = run(every)
+        assert run(dict(every)) is first
+        moved = run({**every, "sigma1": 1.5 * every["sigma1"]})
+        assert moved is not first
+        assert not np.array_equal(moved["position"], first["position"])
+    assert run(every) is not first  # forgotten when the identification ends
+    from pneumact.identification import memo
+
+    monkeypatch.setattr(memo, "MEMO_BYTES", 1)  # room for one run: the last is kept
+    with remembering():
+        first = run(every)
+        moved = run({**every, "sigma1": 1.5 * every["sigma1"]})
+        assert run({**every, "sigma1": 1.5 * every["sigma1"]}) is moved
+        assert run(every) is not first
+    np.testing.assert_array_equal(first["position"], fresh["position"])
+    np.testing.assert_array_equal(first.result["position"], fresh.result["position"])

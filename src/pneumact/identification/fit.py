@@ -22,7 +22,7 @@ import math
 import os
 import threading
 import time as _time
-import weakref
+from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -92,6 +92,7 @@ class _Problem:
         self.model_parameters = [_parameter_names(m) for m in self.models]
         #: the sensors each record's model states (lags held unless fitted)
         self.sensors = [Sensors.from_params(getattr(m, "params", None)) for m in self.models]
+        self.smooth_input = smooth_input
         self.experiments = [experiment_for(m, r, smooth_input)
                             for m, r in zip(self.models, self.records, strict=True)]
         self.masks = []
@@ -104,12 +105,15 @@ class _Problem:
             self.masks.append(mask)
         self.simulations = 0
         self._cache: dict[bytes, tuple[np.ndarray, np.ndarray | None, list]] = {}
+        #: the last evaluation with a Jacobian (the optimizer's last accepted point, where
+        #: ``fit`` evaluates again), kept when the cache is cleared
+        self._kept: tuple[bytes, tuple] | None = None
         self._last_trial: bytes | None = None  # see ``new_optimizer_run``
         self._accepting = True
 
     def __getstate__(self) -> dict:
         """Pickled (for Dask) without the cache of simulated results."""
-        return {**self.__dict__, "_cache": {}}
+        return {**self.__dict__, "_cache": {}, "_kept": None}
 
     # -- parameter spaces
     def theta(self, phi: np.ndarray) -> np.ndarray:
@@ -164,6 +168,8 @@ class _Problem:
         records run on ``workers`` threads (the compiled integrators release the GIL)."""
         key = theta.tobytes()
         cached = self._cache.get(key)
+        if cached is None and self._kept is not None and self._kept[0] == key:
+            cached = self._kept[1]
         if cached is not None and (cached[1] is not None or not with_jacobian):
             return cached
         runs = map_on_threads(self.workers, lambda i: self._run(theta, i, with_jacobian),
@@ -183,16 +189,23 @@ class _Problem:
         if len(self._cache) > 8:
             self._cache.clear()
         self._cache[key] = out
+        if with_jacobian:
+            self._kept = (key, out)
         return out
 
     def _run(self, theta: np.ndarray, i: int, with_jacobian: bool):
         """(Result, SensitivityResult or None) of record ``i`` at ``theta``."""
         from ..simulation import simulate, simulate_sensitivities
+        from .memo import sensitivities
 
         model, record, experiment = self.models[i], self.records[i], self.experiments[i]
         values = self.values_for(theta, i)
         names = self.free_names(i)
         try:
+            if with_jacobian and names and self.smooth_input:
+                sens = sensitivities(model, experiment, rebuilt_input(model, record),
+                                     record.time, names, self.solver, values)
+                return sens.result, sens
             if with_jacobian and names:
                 sens = simulate_sensitivities(model, experiment, names, self.solver,
                                               t_eval=record.time, values=values)
@@ -260,8 +273,13 @@ class _Problem:
         return jac * np.where(self.log, theta, 1.0)[None, :]
 
 
-#: record -> {input signal: (knot times, knot values)}, forgotten with the record
-_REBUILT_INPUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: content of a measured input (``memo.content_key`` of its times and values) -> (knot
+#: times, knot values): a record and its crops (a windowed fit's) share their rebuilt
+#: input, which costs 0.4 s on a presliding test; the least recently used are forgotten
+_REBUILT_INPUTS: OrderedDict[bytes, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+_REBUILT_LOCK = threading.Lock()
+#: Rebuilt inputs remembered at most (knots only: a few kB each).
+REBUILT_ENTRIES = 256
 
 
 def experiment_for(model, record: Record, smooth: bool = False):
@@ -281,14 +299,31 @@ def experiment_for(model, record: Record, smooth: bool = False):
 
 def rebuilt_input(model, record: Record) -> tuple[np.ndarray, np.ndarray]:
     """(knot times, knot values) of the record's measured input as rebuilt piecewise
-    linear (``identification.inputs``) to drive ``model``; computed once per record."""
+    linear (``identification.inputs``) to drive ``model``; computed once per content
+    (of its times and values: the same input cropped to the same samples is the same)."""
     from .inputs import piecewise_linear_input
+    from .memo import content_key
 
-    signal = model.input_signal
-    per_record = _REBUILT_INPUTS.setdefault(record, {})
-    if signal not in per_record:  # records are immutable: rebuild each input once
-        per_record[signal] = piecewise_linear_input(record.time, record[signal])
-    return per_record[signal]
+    values = record[model.input_signal]
+    key = content_key(record.time, values)
+    with _REBUILT_LOCK:
+        found = _REBUILT_INPUTS.get(key)
+        if found is not None:
+            _REBUILT_INPUTS.move_to_end(key)
+            return found
+    knots = piecewise_linear_input(record.time, values)
+    with _REBUILT_LOCK:
+        _REBUILT_INPUTS[key] = knots
+        while len(_REBUILT_INPUTS) > REBUILT_ENTRIES:
+            _REBUILT_INPUTS.popitem(last=False)
+    return knots
+
+
+def forget_rebuilt_inputs() -> None:
+    """Forget every rebuilt input (``rebuilt_input``): a benchmark's timed run pays for
+    rebuilding, as a user's first fit of new records does."""
+    with _REBUILT_LOCK:
+        _REBUILT_INPUTS.clear()
 
 
 def input_signal(model: Model) -> str:
@@ -956,8 +991,9 @@ def _run_starts(problem, starts, lo, hi, optimizer: Optimizer, executor: Executo
 #: evaluations of the records (each with its Jacobian) one start of a multistart
 #: typically takes: the range of the estimate said before the first start has finished
 EVALUATIONS_PER_START = (5, 50)
-#: results a problem's cache holds at most (``_Problem.evaluate``), per thread's copy
-CACHE_ENTRIES = 9
+#: results a problem's cache holds at most (``_Problem.evaluate``: 9, and the last one
+#: with a Jacobian), per thread's copy
+CACHE_ENTRIES = 10
 
 
 def _announce_multistart(problem: _Problem, starts: list, threads: int) -> None:
@@ -1005,6 +1041,7 @@ def _own_copy(problem: _Problem) -> _Problem:
     records run one after the other."""
     own = copy.copy(problem)
     own._cache = {}
+    own._kept = None
     own.new_optimizer_run()
     own.simulations = 0
     own.workers = 1

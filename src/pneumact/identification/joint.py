@@ -35,6 +35,7 @@ from ..options import Executor, Offsets, Optimizer, Weights
 from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import SENSOR_LAGS, FitResult, fit
+from .memo import remembered
 from .optima import RESTART_SPREAD, spread_starts, stuck_reason
 from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
 
@@ -90,15 +91,20 @@ MAX_EXCLUDED_SHARE = 1 / 3
 
 def amplification(model, record: Record, params, free: Sequence[str], solver) -> float:
     """max over the parameters and the samples of |θ·∂x/∂θ| / the record's travel, from
-    the forward sensitivities at ``params`` (see ``CHAOS_AMPLIFICATION``)."""
-    from ..simulation import simulate_sensitivities
-    from .fit import experiment_for
+    the forward sensitivities at ``params`` (see ``CHAOS_AMPLIFICATION``; within
+    ``memo.remembering`` the fit that starts at ``params`` reuses them)."""
+    from ..core.assembly import assemble
+    from .fit import experiment_for, rebuilt_input
+    from .memo import sensitivities
 
-    names = [n for n in free if n in _parameters_of(model)]
+    assembly = assemble(model)
+    names = [n for n in free if n in assembly.parameter_names]
     values = {n: params[n] for n in names}
+    every = {n: v for n, v in assembly.values(assembly.pack()).items()
+             if n in assembly.parameter_names}
     try:
-        sens = simulate_sensitivities(model, experiment_for(model, record, smooth=True),
-                                      names, solver, t_eval=record.time)
+        sens = sensitivities(model, experiment_for(model, record, smooth=True),
+                             rebuilt_input(model, record), record.time, names, solver, every)
     except SolverError:
         return np.inf
     travel = max(float(np.ptp(record["position"])), 1e-12)
@@ -106,12 +112,7 @@ def amplification(model, record: Record, params, free: Sequence[str], solver) ->
     return float(np.nanmax(scaled) / travel) if np.all(np.isfinite(scaled)) else np.inf
 
 
-def _parameters_of(model) -> frozenset[str]:
-    from ..core.assembly import assemble
-
-    return frozenset(assemble(model).parameter_names)
-
-
+@remembered  # the screens' and the rounds' runs, reused (``memo``)
 def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      friction=None, chamber=None, free: Sequence[str] = SPRING_AND_FRICTION,
                      solver=None, replicates: int | None = None, seed: int = 0,
@@ -299,9 +300,15 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     from .uncertainty import INPUT_REPLICATES, input_noise_weights
 
     solver = Rodas4(rtol=JOINT_RTOL) if solver is None else solver
-    if drop_chaotic:
+    bounds = prior_bounds(params if prior is None else prior,
+                          [n for n in free if n not in SENSOR_LAGS])
+    bounds.update({n: (params[n] / PRIOR_FACTOR, params[n] * PRIOR_FACTOR)
+                   for n in free if n in SENSOR_LAGS})
+    start = within({n: params[n] for n in free}, bounds)
+    if drop_chaotic:  # screened where the fit starts: the fit reuses the runs (``memo``)
+        seen = params.with_values(_as_fitted(start))
         chaotic = [r.source for r in records if r.source not in screened and amplification(
-            bench_model(r, params, friction, chamber), r, params, free, solver)
+            bench_model(r, seen, friction, chamber), r, seen, free, solver)
             > CHAOS_AMPLIFICATION]
         screened.update(r.source for r in records)
         if chaotic:
@@ -332,12 +339,18 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
                                     solver=solver, workers=workers)
         weights.update({records[i].source: w for i, w in zip(new, found, strict=True)})
     record_weights = [weights[r.source] for r in records]
-    bounds = prior_bounds(params if prior is None else prior,
-                          [n for n in free if n not in SENSOR_LAGS])
-    bounds.update({n: (params[n] / PRIOR_FACTOR, params[n] * PRIOR_FACTOR)
-                   for n in free if n in SENSOR_LAGS})
     return fit(models, list(records), list(free), window=windows,
                offsets=Offsets(["position"] if offset_records else (), offset_records),
                solver=solver, weights=Weights(records=record_weights),
                optimizer=Optimizer(max_nfev=max_evaluations), bounds=bounds,
-               start=within({n: params[n] for n in free}, bounds))
+               start=start)
+
+
+def _as_fitted(start: dict[str, float]) -> dict[str, float]:
+    """The values ``fit`` simulates first from ``start``: it searches positive values in
+    log scale, and exp(log(v)) can differ from v in the last bit (computed as ``fit``
+    does, on the array of the positive values in order)."""
+    values = np.array(list(start.values()), dtype=float)
+    positive = values > 0
+    values[positive] = np.exp(np.log(values[positive]))
+    return dict(zip(start, map(float, values), strict=True))

@@ -78,6 +78,7 @@ from .joint import (
     refit_without,
     restart_at_bounds,
 )
+from .memo import remembered
 from .optima import cover_optima
 from .stages import (
     STAGES,
@@ -997,6 +998,7 @@ def _stribeck_dip_check(ramp_records, residuals, estimate, judged, diagnostics):
 
 
 @one_blas_thread
+@remembered  # runs repeated across stages, restarts and rounds are done once (``memo``)
 def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=None,
                    fit_delta: bool = False, sliding_speed: float | None = None,
                    prior_spread: float = 0.5, refine: bool = True,
