@@ -255,7 +255,7 @@ def test_a_model_the_back_end_cannot_translate_runs_on_numba_naming_the_construc
     from pneumact.core import c_source
     from pneumact.core.c_source import CSourceError
 
-    def refuse(roots):
+    def refuse(roots, share=None):
         raise CSourceError("kernel.rhs: the C back end does not translate a call of <gamma>")
 
     monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))  # nothing built yet
