@@ -84,6 +84,7 @@ BAD_VALUES: dict[str, list[str]] = {
     # diaphragm's chamber does not have
     "--chamber": ["adiabatic", "heat-transfer"],
     "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
+    "--spool-lag": ["1", "3"],  # the cylinder's spool: not the actuator's valves
     "--decaying-damping": [],
     "--elements": ["0", "4"],  # with the default --friction lugre: not a GMS
     "--chunk-size": ["0"],

@@ -56,10 +56,11 @@ def test_default_simulate_writes_csv_and_png_and_summarises(tmp_path):
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # nor beside
 
 
-@pytest.mark.parametrize("chamber", ["adiabatic", "heat-transfer"])
-def test_simulate_the_cylinder_writes_its_step_response(tmp_path, chamber):
+@pytest.mark.parametrize(("chamber", "spool_lag"), [("adiabatic", 0), ("heat-transfer", 2)])
+def test_simulate_the_cylinder_writes_its_step_response(tmp_path, chamber, spool_lag):
     """--model cylinder: the shipped cylinder set, a spool step, the API's run as CSV
-    (with --chamber heat-transfer, the chambers' gas temperatures too)."""
+    (with --chamber heat-transfer, the chambers' gas temperatures too; --spool-lag 2, a
+    second-order spool); --spool-lag beyond 2 is refused."""
     import numpy as np
     import pandas as pd
 
@@ -68,16 +69,19 @@ def test_simulate_the_cylinder_writes_its_step_response(tmp_path, chamber):
     from reference import CLI_CHUNKED_RUN_RTOL
 
     out = tmp_path / "cylinder"
-    result = invoke("simulate", "--model", "cylinder", "--chamber", chamber, "--t-end",
-                    "0.5", "--out", str(out))
+    result = invoke("simulate", "--model", "cylinder", "--chamber", chamber, "--spool-lag",
+                    str(spool_lag), "--t-end", "0.5", "--out", str(out))
     assert result.exit_code == 0, result.output
     assert "95 % of the stroke" in result.stdout
     assert (out / "response.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     frame = pd.read_csv(out / "simulation.csv")
     law = pa.Adiabatic() if chamber == "adiabatic" else pa.HeatTransfer()
-    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), chamber=law),
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), chamber=law,
+                                  spool_lag=spool_lag),
                       pa.experiments.SpoolStep(t_end=0.5))
     signals = [("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")]
+    if spool_lag:
+        signals += [("spool_position", "1")]
     if chamber == "heat-transfer":
         signals += [("temperature_a", "K"), ("temperature_b", "K")]
     for name, unit in signals:
@@ -85,6 +89,8 @@ def test_simulate_the_cylinder_writes_its_step_response(tmp_path, chamber):
         assert np.abs(cli - api[name]).max() <= CLI_CHUNKED_RUN_RTOL * np.ptp(api[name]), name
     refused = invoke("simulate", "--model", "cylinder", "--valve", "command")
     assert refused.exit_code != 0 and "own 5/3 valve" in refused.output
+    refused = invoke("simulate", "--model", "cylinder", "--spool-lag", "3")
+    assert refused.exit_code != 0 and "order 0" in refused.output
 
 
 @pytest.mark.parametrize("valve", ["command", "iso6358"])

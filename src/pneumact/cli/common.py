@@ -162,6 +162,7 @@ class ModelOptions:
     exponent: float = DEFAULT_EXPONENT
     decaying_damping: bool = DEFAULT_DECAYING_DAMPING
     elements: int | None = None
+    spool_lag: int = 0
 
 
 def executor_of(workers: int | None, scheduler: str | None, chunk_size: int | None = None):
@@ -242,6 +243,10 @@ def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
     from pneumact.models import VALVES, Actuator
 
+    if options.spool_lag != 0:
+        raise ArgumentError(f"--spool-lag {options.spool_lag} is the cylinder's 5/3 valve's "
+                            "spool (--model cylinder); the diaphragm actuator's valves have "
+                            "no spool: drop --spool-lag")
     check_model_options(options)
     params = load_quietly(options.params) if params is None else params
     refuse_cylinder_set(params)
@@ -262,6 +267,10 @@ ModelOption = Annotated[ModelKind, typer.Option(
     "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
                     "double-acting cylinder behind its 5/3 valve (--params default "
                     "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
+SpoolLagOption = Annotated[int, typer.Option(
+    "--spool-lag", help="--model cylinder: the 5/3 valve's spool dynamics, 0 (it follows "
+                        "its command), 1 (a first-order lag, spool_tau) or 2 (second "
+                        "order, spool_omega and spool_zeta).")]
 
 
 def build_model_of(kind: ModelKind, options: ModelOptions):
@@ -299,8 +308,13 @@ def build_cylinder(options: ModelOptions, params=None):
     params = load_quietly(name) if params is None else params
     friction = friction_of(options)
     _check_friction_parameters(friction, params, options)
+    if options.spool_lag not in (0, 1, 2):
+        raise ArgumentError(f"--spool-lag {options.spool_lag}: the spool's dynamics are of "
+                            "order 0 (it follows its command), 1 (spool_tau) or 2 "
+                            "(spool_omega, spool_zeta)")
     return params, Cylinder(params, friction=friction,
-                            chamber=build_chamber(options.chamber, options.exponent, True))
+                            chamber=build_chamber(options.chamber, options.exponent, True),
+                            spool_lag=options.spool_lag)
 
 
 def cylinder_experiment(options: ModelOptions, params):

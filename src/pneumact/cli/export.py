@@ -26,6 +26,7 @@ from pneumact.cli.common import (
     ModelOption,
     ModelOptions,
     ParamsOption,
+    SpoolLagOption,
     ValveOption,
     build_model_of,
     out_console,
@@ -50,6 +51,7 @@ class FmuKind(StrEnum):
 def export_fmu_command(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
+    spool_lag: SpoolLagOption = 0,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -86,7 +88,7 @@ def export_fmu_command(
             target = check_out_dir("--out", target) / name
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements)
+                               elements=elements, spool_lag=spool_lag)
         _, built, _ = build_model_of(model, options)
         fmu = export_fmu(built, target, binary=binary, compiler=compiler,
                          kind=FmuKind(kind).value, fmi=fmi)

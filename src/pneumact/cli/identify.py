@@ -29,6 +29,7 @@ from pneumact.cli.common import (
     ModelOptions,
     ParamsOption,
     SchedulerOption,
+    SpoolLagOption,
     ValveOption,
     WorkersOption,
     build_chamber,
@@ -497,6 +498,7 @@ def fit_command(
     free: Annotated[str, typer.Option(help="Comma-separated parameters to fit.")],
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
+    spool_lag: SpoolLagOption = 0,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -563,7 +565,8 @@ def fit_command(
             check_window(span, where="--window")
         parameter_set, built, _ = build_model_of(model, ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
-            exponent=exponent, decaying_damping=decaying_damping, elements=elements))
+            exponent=exponent, decaying_damping=decaying_damping, elements=elements,
+            spool_lag=spool_lag))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
             built, recs, free_names, per_record=names(per_record, "--per-record") or (),

@@ -35,6 +35,7 @@ from pneumact.cli.common import (
     ParamsOption,
     ResumeOption,
     SchedulerOption,
+    SpoolLagOption,
     TEndOption,
     Valve,
     ValveOption,
@@ -107,6 +108,7 @@ def sensitivity(
                                                   "(eq. 14) or rbd_fast.")],
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
+    spool_lag: SpoolLagOption = 0,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -160,7 +162,7 @@ def sensitivity(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, exponent=exponent,
                                decaying_damping=decaying_damping,
-                               elements=elements)
+                               elements=elements, spool_lag=spool_lag)
         parameter_set, actuator, experiment = build_model_of(model, options)
         if conditions and model is ModelKind.cylinder:
             raise ArgumentError("--conditions varies the actuator's pressure cycle (period, "

@@ -29,6 +29,7 @@ from pneumact.cli.common import (
     ModelOptions,
     ParamsOption,
     RtolOption,
+    SpoolLagOption,
     TEndOption,
     ValveOption,
     build_cylinder,
@@ -47,6 +48,7 @@ from pneumact.cli.common import (
 def simulate(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
+    spool_lag: SpoolLagOption = 0,
     out: Annotated[Path, typer.Option(help="Output directory (simulation.csv, "
                                            "hysteresis.png).")] = Path("pneumact-out"),
     input_csv: InputOption = None,
@@ -70,7 +72,7 @@ def simulate(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements)
+                               elements=elements, spool_lag=spool_lag)
         if model is ModelKind.cylinder:
             _simulate_cylinder(options, out)
             return

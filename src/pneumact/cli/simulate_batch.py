@@ -39,6 +39,7 @@ from pneumact.cli.common import (
     ResumeOption,
     RtolOption,
     SchedulerOption,
+    SpoolLagOption,
     TEndOption,
     ValveOption,
     WorkersOption,
@@ -97,6 +98,7 @@ def simulate_batch(
     out: Annotated[Path, typer.Option("--out", help="output directory (resumable)")],
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
+    spool_lag: SpoolLagOption = 0,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -127,7 +129,7 @@ def simulate_batch(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements)
+                               elements=elements, spool_lag=spool_lag)
         _, built, experiment = build_model_of(model, options)
         with batch_progress() as progress:
             result = pa.simulate_batch(built, experiment, table,

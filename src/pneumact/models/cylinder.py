@@ -884,15 +884,15 @@ class Cylinder(DeclaredInputs):
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
     chambers (``HeatTransfer()``: their energy equations, temperatures as states);
     ``load`` an external force F_load(t) [N] against extension (zero by default);
-    ``spool_lag`` the order of the spool's dynamics: False (0) follows the
-    command at once, True (1) with the time constant ``spool_tau`` (a state), 2 as a
+    ``spool_lag`` the order of the spool's dynamics: 0 (or False, the default) follows the
+    command at once, 1 (or True) with the time constant ``spool_tau`` (a state), 2 as a
     second-order system (``spool_omega``, ``spool_zeta``; two states)."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
-    spool_lag: bool | int = False
+    spool_lag: bool | int = 0
     template: ClassVar[str] = "pneumact.models.cylinder_template"
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
