@@ -49,7 +49,7 @@ import functools
 import os
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -107,6 +107,11 @@ class Sizes:
     sobol_min_n: int = 64
     #: shorter cycles behind the pressure source only (the valves cannot slide that fast)
     fast_source_periods: tuple[float, ...] = (0.5, 1.0, 2.0)
+    #: longer cycles behind the pressure source only: the slow end of the speed axis,
+    #: where the statements' v ≲ vs verdicts are read, without the valves' slow cycles
+    #: (their stiff chamber makes the command valve's 320 s cycle the costliest study:
+    #: the quick mode leaves it out)
+    slow_source_periods: tuple[float, ...] = ()
     #: the models that make Fig. 6's held-back record (``RICHER_CASES``)
     richer_cases: tuple[str, ...] = ("self-consistent", "δ = 2", "GMS-4",
                                      "adiabatic chamber", "5 µm steps, 5 ms lag")
@@ -122,6 +127,23 @@ class Sizes:
     #: the cycle period [s] from which SRC² across conditions runs in the worker
     global_apart_from: float = GLOBAL_SLOW_FROM
 
+    def periods_of(self, valve: str, fast: bool = True) -> tuple[float, ...]:
+        """The cycle periods [s] run behind ``valve``, shortest first: ``periods``, and
+        behind the source also ``slow_source_periods`` and (``fast``)
+        ``fast_source_periods``."""
+        if valve != "source":
+            return self.periods
+        return tuple(sorted({*(self.fast_source_periods if fast else ()), *self.periods,
+                             *self.slow_source_periods}))
+
+    def conditions(self, valves: Sequence[str], fast: bool = True) -> list:
+        """The conditions (``sensitivity.Condition``) behind each of ``valves`` at its
+        periods (``periods_of``)."""
+        from .sensitivity import conditions
+
+        return [c for valve in valves
+                for c in conditions(self.periods_of(valve, fast), valves=(valve,))]
+
     @classmethod
     def full(cls) -> Sizes:
         return cls((1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 3e-2, 4e-2), 60.0, 512,
@@ -131,9 +153,10 @@ class Sizes:
 
     @classmethod
     def quick(cls) -> Sizes:
-        return cls((2e-4, 1e-3, 5e-3, 2e-2), 30.0, 64, 32, (20.0, 320.0),
+        return cls((2e-4, 1e-3, 5e-3, 2e-2), 30.0, 64, 32, (20.0,),
                    ("source", "command"), 32, (2.0, 10.0, 100.0),
-                   fast_source_periods=(1.0,), sobol_min_n=8, richer_identification=(),
+                   fast_source_periods=(1.0,), slow_source_periods=(320.0,), sobol_min_n=8,
+                   richer_identification=(),
                    richer_cases=("self-consistent", "δ = 2", "5 µm steps, 5 ms lag"),
                    apart=("Fig. 5", "Figs. 2 and 3", "Fig. 5 across conditions",
                           "pneumatics"), global_apart_from=np.inf)
@@ -265,9 +288,12 @@ class _Beside:
     another in one spawned worker process while the sections run here (where more than
     one CPU is available; ``worker`` and ``BESIDE``); ``result(name)`` waits for one.
     Without a worker (one CPU, or the worker could not start or died) a job runs here
-    when its result is asked for. Leaving the ``with`` block stops the worker."""
+    when its result is asked for, and so do the jobs named in ``here`` (those with
+    nothing to do: queued behind the worker's others, their result would keep a section
+    waiting for all of them). Leaving the ``with`` block stops the worker."""
 
-    def __init__(self, jobs: dict[str, tuple[Callable, tuple]], worker: bool = True) -> None:
+    def __init__(self, jobs: dict[str, tuple[Callable, tuple]], worker: bool = True,
+                 here: Collection[str] = ()) -> None:
         self.jobs = jobs
         self.futures: dict = {}
         self.pool = None
@@ -280,7 +306,7 @@ class _Beside:
             self.pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
                                             initializer=_beside_worker_start)
             self.futures = {name: self.pool.submit(job, *args)
-                            for name, (job, args) in jobs.items()}
+                            for name, (job, args) in jobs.items() if name not in here}
         except OSError:
             self.close()
 
@@ -352,6 +378,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     from .io.tables import write_files
     from .parameters import ParameterSet, load_params
     from .parameters.validation import lugre_passivity_problem
+    from .statements import eq13_bias
 
     matplotlib.use("Agg")
     started = time.perf_counter()
@@ -361,10 +388,18 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
+    # eq. 13's bias first: the identification section asks for it early, and it needs
+    # numba, which Figs. 2 and 3 load (in the worker where they run there)
     jobs: dict[str, tuple[Callable, tuple]] = {
-        name: (_section_apart, (name, params, sizes)) for name in sizes.apart}
+        "eq13": (eq13_bias, (params, sizes.eq13_lowest_vs)),
+        **{name: (_section_apart, (name, params, sizes)) for name in sizes.apart}}
     jobs["identification_richer"] = (_richer_rows, (params, sizes, seed))
     jobs["global_across"] = (_global_across, (params, sizes, seed, True))
+    run_here = {"eq13": "Figs. 2 and 3" not in sizes.apart,
+                "identification_richer": not sizes.richer_identification,
+                "global_across": not any(c.period >= sizes.global_apart_from
+                                         for c in sizes.conditions(GLOBAL_VALVES,
+                                                                   fast=False))}
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
                     call=call or f"pneumact.reproduce(quick={quick}, seed={seed})",
                     parameters=params)
@@ -372,7 +407,8 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     _introduction(report, params, sizes, quick)
     headline_at = len(report.blocks)  # the statements' verdicts lead: filled in at the end
     done: dict[str, tuple[_Parts, object]] = {}
-    with _Beside(jobs) as beside:
+    with _Beside(jobs, here=[name for name, here in run_here.items() if here]) \
+            as beside:
 
         def section(name: str,
                     run: Callable[[_Parts, ParameterSet, Sizes], Any] | None = None) -> Any:
@@ -394,7 +430,8 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
                 section(name)
 
         def identification(own: _Parts, *_) -> tuple:
-            return _identification(own, params, sizes, seed, beside), _eq13(own, params, sizes)
+            return (_identification(own, params, sizes, seed, beside),
+                    _eq13(own, beside.result("eq13")))
 
         def validation(own: _Parts, *_) -> None:
             _validation(own, params, identified, sizes, seed)
@@ -455,7 +492,7 @@ def _introduction(report, params, sizes: Sizes, quick: bool) -> None:
         "pressure at a cycle speed it does not give, and LuGre friction changes character "
         "around the Stribeck velocity vs, so its statements are read first across cycle "
         f"speeds under the applied pressure (the pressure source; periods "
-        f"{', '.join(f'{p:g}' for p in (*sizes.fast_source_periods, *sizes.periods))} s), "
+        f"{', '.join(f'{p:g}' for p in sizes.periods_of('source'))} s), "
         f"then behind the other valves ({', '.join(v for v in sizes.valves if v != 'source')}"
         "), each condition read as its sliding speed v (measured over 20–80 % of the stroke "
         "of the nominal run) in units of vs = "
@@ -547,9 +584,7 @@ def _loops_across_conditions(parts: _Parts, params, sizes: Sizes):
         variations_for,
     )
 
-    conditions = sa.conditions(sizes.periods, valves=sizes.valves)
-    if "source" in sizes.valves:
-        conditions = sa.conditions(sizes.fast_source_periods, valves=("source",)) + conditions
+    conditions = sizes.conditions(sizes.valves)
     model = Actuator(params)
     study = sa.across_conditions(model, conditions, "oat", features=LOOP_FEATURES,
                                  variations=variations_for(params))
@@ -597,10 +632,10 @@ def _loops_across_conditions(parts: _Parts, params, sizes: Sizes):
     return study, floor
 
 
-def _eq13(parts: _Parts, params, sizes: Sizes) -> pd.DataFrame:
-    from .statements import EQ13_FC_RTOL, EQ13_TOP_SPEED, eq13_bias
+def _eq13(parts: _Parts, bias: pd.DataFrame) -> pd.DataFrame:
+    """Eq. 13's text and table from its ``bias`` (``statements.eq13_bias``)."""
+    from .statements import EQ13_FC_RTOL, EQ13_TOP_SPEED
 
-    bias = eq13_bias(params, sizes.eq13_lowest_vs)
     parts.report.text(
         "Eq. 13 (Fc·sgn(v) + σ2·v) holds only where g(v) has dropped to Fc. Fitted to the "
         f"model's own steady-state curve from a lowest speed up to {1e3 * EQ13_TOP_SPEED:g} "
@@ -921,7 +956,7 @@ def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes,
         src = sa.src(problem, evaluate, sizes.src_n, seed)
         sobol, convergence = sobol_by_convergence(problem, evaluate, sizes.sobol_min_n,
                                                   sizes.sobol_n, seed)
-    order = [c.label for c in sa.conditions(sizes.periods, valves=GLOBAL_VALVES)]
+    order = [c.label for c in sizes.conditions(GLOBAL_VALVES, fast=False)]
     across = _joined([_global_across(params, sizes, seed, slow=False),
                       beside.result("global_across")], order)
     ranking = ranking_table(src, sobol)
@@ -953,9 +988,8 @@ def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes,
                      f"Sobol S1 and ST of {feature}, with 95 % confidence intervals")
     parts.report.text(
         f"Across conditions: SRC² of the loop width ({sizes.condition_n} runs per condition, "
-        f"the same ranges) at cycle periods {', '.join(f'{p:g}' for p in sizes.periods)} s "
-        "of the command valve. Below v ≈ vs static friction takes over from Coulomb "
-        "friction.")
+        f"the same ranges) at cycle periods {_periods_by_valve(sizes, GLOBAL_VALVES)}. "
+        "Below v ≈ vs static friction takes over from Coulomb friction.")
     parts.figure("src_by_speed", lambda: _labelled(across.plot("loop_width_pressure"),
                                                    "sliding speed v / vs [1] (nominal run)",
                                                    "SRC² of the loop width [1]"),
@@ -977,6 +1011,15 @@ def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes,
     return across
 
 
+def _periods_by_valve(sizes: Sizes, valves: Sequence[str]) -> str:
+    """"5, 20 s behind the source and 20 s behind the command valve"."""
+    return " and ".join(
+        f"{', '.join(f'{p:g}' for p in periods)} s behind the "
+        f"{valve}{'' if valve == 'source' else ' valve'}"
+        for valve in valves
+        for periods in [sizes.periods_of(valve, fast=False)])
+
+
 def _global_across(params, sizes: Sizes, seed: int, slow: bool):
     """SRC² of the loop width across conditions (the sensitivity section's last study)
     at the ``slow`` cycles (periods from ``sizes.global_apart_from``, a job of ``_Beside``)
@@ -985,13 +1028,13 @@ def _global_across(params, sizes: Sizes, seed: int, slow: bool):
     from . import sensitivity as sa
     from .models import Actuator
 
-    periods = [p for p in sizes.periods if (p >= sizes.global_apart_from) == slow]
-    if not periods:
+    conditions = [c for c in sizes.conditions(GLOBAL_VALVES, fast=False)
+                  if (c.period >= sizes.global_apart_from) == slow]
+    if not conditions:
         return None
     with warnings.catch_warnings():  # small samples: their warnings go in the table
         warnings.simplefilter("ignore", sa.SensitivityWarning)
-        return sa.across_conditions(Actuator(params),
-                                    sa.conditions(periods, valves=GLOBAL_VALVES), "src",
+        return sa.across_conditions(Actuator(params), conditions, "src",
                                     features=["loop_width_pressure"], n=sizes.condition_n,
                                     seed=seed)
 

@@ -211,15 +211,20 @@ def test_the_sigma0_claim_read_as_written(quick):
 
 def test_fs_and_fc_matter_most_only_below_the_stribeck_velocity(quick):
     """Issue #19: the paper's conclusion holds at slow rates, not on the 20 s cycle; per
-    parameter (issue #40) it is Fs that drops out above vs, Fc stays ahead."""
+    parameter (issue #40) it is Fs that drops out above vs, Fc stays ahead there. Read
+    under the applied pressure (issue #40 item 2: the paper's conditions; the quick mode
+    runs its slowest cycle behind the source only), and on the command valve's 20 s
+    cycle."""
     per = quick.tables["statement_conditions"]
-    command = per[per["valve"] == "command"]
+    source = per[per["valve"] == "source"]
     for key in ("conclusion_oat_Fs", "conclusion_global_Fs"):
-        rows = command[command["statement"] == key].sort_values("x")
+        rows = source[source["statement"] == key].sort_values("x")
         assert rows["x"].iloc[0] < 1.0 and rows["holds"].iloc[0], key
-        assert rows["x"].iloc[-1] > 5.0 and not rows["holds"].iloc[-1], key
-    fc = command[command["statement"] == "conclusion_oat_Fc"]
-    assert fc["holds"].all()
+        assert rows["x"].iloc[-1] > 3.0 and not rows["holds"].iloc[-1], key
+        command = per[(per["valve"] == "command") & (per["statement"] == key)]
+        assert (command["x"] > 5.0).all() and not command["holds"].any(), key
+    fc = per[(per["statement"] == "conclusion_oat_Fc") & (per["x"] > 1.0)]
+    assert len(fc) >= 3 and fc["holds"].all()
     sigma2 = per[per["statement"] == "5c_sigma2"]
     assert sigma2[sigma2["x"] < 36]["holds"].all()  # σ2 ±90 % negligible up to 36·vs
     # ... but not beyond: the 1 s cycle under applied pressure (72·vs) shows its boundary
