@@ -54,8 +54,8 @@ def _areas(params):
 
 def _volumes(params, x):
     area_a, area_b = _areas(params)
-    return (params["V_dead_a"] + area_a * x,
-            params["V_dead_b"] + area_b * (params["x_max"] - x))
+    return (params["chamber_a.V_dead"] + area_a * x,
+            params["chamber_b.V_dead"] + area_b * (params["x_max"] - x))
 
 
 # ------------------------------------------------------------------ chamber mass balance

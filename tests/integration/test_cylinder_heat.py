@@ -60,8 +60,8 @@ def _geometry(params, x):
     cylinders of length V/A with both ends (docs/model.md)."""
     bore, rod = params["D_bore"], params["d_rod"]
     area_a, area_b = math.pi * bore**2 / 4.0, math.pi * (bore**2 - rod**2) / 4.0
-    vol_a = params["V_dead_a"] + area_a * x
-    vol_b = params["V_dead_b"] + area_b * (params["x_max"] - x)
+    vol_a = params["chamber_a.V_dead"] + area_a * x
+    vol_b = params["chamber_b.V_dead"] + area_b * (params["x_max"] - x)
     return (vol_a, vol_b, 2.0 * area_a + math.pi * bore * vol_a / area_a,
             2.0 * area_b + math.pi * (bore + rod) * vol_b / area_b)
 
