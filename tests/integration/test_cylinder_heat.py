@@ -232,10 +232,12 @@ def test_the_actuator_refuses_heat_transfer(vgt):
         pa.Actuator(vgt, valve=pa.CommandValve(), chamber=HeatTransfer())
 
 
-@pytest.mark.parametrize("name", ["heat_transfer_coefficient", "valve_C", "D_bore"])
+@pytest.mark.parametrize("name", ["heat_transfer_coefficient", "valve_C", "D_bore",
+                                  "chamber_a.V_dead"])
 def test_forward_sensitivities_match_central_differences(name, cylinder_set):
     """∂(p_a, T_a, x)/∂θ carried through a spool step against central differences of two
-    runs: the heat transfer coefficient, a flow entry and the bore (the wall's perimeter)."""
+    runs: the heat transfer coefficient, a flow entry, the bore (the wall's perimeter) and
+    chamber A's dead volume (an instance's parameter)."""
     experiment = SpoolStep(before=-0.3, after=0.4, t_step=0.02, t_end=0.15, n_points=151)
     signals = ("pressure_a", "temperature_a", "position")
     sens = pa.simulate_sensitivities(_cylinder(cylinder_set), experiment, [name],
