@@ -18,7 +18,6 @@ from pneumact.models.cylinder import CHAMBER_BLOCK, CYLINDER_BLOCK
 from pneumact.parameters import load_params, params_to_toml
 from pneumact.parameters.catalogue import catalogue
 
-
 DEAD = ("chamber_a.V_dead", "chamber_b.V_dead")
 
 

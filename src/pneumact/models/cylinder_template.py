@@ -3,10 +3,11 @@
 States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
 position (and velocity) when it lags | the chambers' temperatures with heat transfer],
 the parameter vector is [cylinder block | chamber_a's block | chamber_b's block |
-friction block | spool block | heat transfer block]; the generator binds the friction law, the spool (``spool_*``: direct, lagged or
-second-order) and the chambers (``thermal_*``: polytropic, whose functions do nothing, or
-with heat transfer, whose energy equations replace the pressure rates, rows and columns
-the polytropic code wrote). The equations are ``models.cylinder``'s.
+friction block | spool block | heat transfer block]; the generator binds the friction
+law, the spool (``spool_*``: direct, lagged or second-order) and the chambers
+(``thermal_*``: polytropic, whose functions do nothing, or with heat transfer, whose
+energy equations replace the pressure rates, rows and columns the polytropic code
+wrote). The equations are ``models.cylinder``'s.
 """
 
 from pneumact.core import kernel

@@ -18,8 +18,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, TypeAlias
 
-from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.core.component import instance_entry
+from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
 from pneumact.parameters.parameter_set import ParameterInfo, ParameterSet
