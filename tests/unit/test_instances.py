@@ -7,6 +7,7 @@ compiled here."""
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import pytest
 
@@ -73,6 +74,14 @@ def test_one_instance_name_placed_twice_is_refused_naming_both():
     with pytest.raises(pa.ComponentError, match=r"components 'A' and 'B' both claim the "
                                                 r"instance 'chamber_a'"):
         Assembly(_Parts(_two_chambers(second="chamber_a")))
+
+
+@pytest.mark.parametrize("instance", ["chamber-a", "chamber.a", "1chamber"])
+def test_an_instance_name_that_is_no_identifier_is_refused(instance):
+    with pytest.raises(pa.ComponentError, match=rf"Part\(role='chamber'\): instance = "
+                                                rf"'{re.escape(instance)}': must be a name "
+                                                rf"of letters, digits and underscores"):
+        Part(role="chamber", instance=instance, block=CHAMBER_BLOCK)
 
 
 def test_the_cylinder_places_its_chambers_as_instances(cylinder_set):

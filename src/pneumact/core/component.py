@@ -26,6 +26,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+from ..errors import ComponentError
+
 PARAMETER = "parameter"
 SETTING = "setting"
 DERIVED = "derived"
@@ -112,6 +114,13 @@ class Part:
     values: Mapping[str, float] = field(default_factory=dict)
     units: Mapping[str, str] = field(default_factory=dict)
     instance: str = ""
+
+    def __post_init__(self) -> None:
+        if self.instance and not self.instance.isidentifier():
+            raise ComponentError(
+                f"Part(role={self.role!r}): instance = {self.instance!r}: must be a name of "
+                f"letters, digits and underscores, not starting with a digit (it names the "
+                f"component's parameters, instance.name, and its kernel constants)")
 
     @property
     def name(self) -> str:
