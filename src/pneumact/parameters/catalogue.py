@@ -30,7 +30,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from pneumact.core.component import instance_entry
+from ..core.component import instance_entry
 
 __all__ = [
     "ParameterSpec",
