@@ -68,10 +68,11 @@ def test_simulate_batch_runs_the_cylinder(tmp_path):
 def test_sensitivity_runs_the_cylinder_and_refuses_the_actuator_s_conditions(tmp_path):
     out = tmp_path / "src"
     result = invoke("sensitivity", "src", "--model", "cylinder", "--t-end", T_END,
-                    "--variations", "sigma2=20%,valve_C=10%", "--n", "8", "--workers", "1",
-                    "--out", str(out))
+                    "--variations", "sigma2=20%,valve_C=10%,chamber_a.V_dead=10%", "--n", "8",
+                    "--workers", "1", "--out", str(out))
     assert result.exit_code == 0, result.output
     indices = pd.read_csv(out / "indices.csv").set_index("parameter")
+    assert "chamber_a.V_dead" in indices.index  # an instance's parameter, by its name
     assert set(indices["output"]) == {"top_speed_out"}  # the cylinder's default feature
     assert indices.loc["valve_C", "SRC"] > 0  # a wider valve, a faster piston
     for args, words in (

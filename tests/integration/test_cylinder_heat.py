@@ -60,8 +60,8 @@ def _geometry(params, x):
     cylinders of length V/A with both ends (docs/model.md)."""
     bore, rod = params["D_bore"], params["d_rod"]
     area_a, area_b = math.pi * bore**2 / 4.0, math.pi * (bore**2 - rod**2) / 4.0
-    vol_a = params["V_dead_a"] + area_a * x
-    vol_b = params["V_dead_b"] + area_b * (params["x_max"] - x)
+    vol_a = params["chamber_a.V_dead"] + area_a * x
+    vol_b = params["chamber_b.V_dead"] + area_b * (params["x_max"] - x)
     return (vol_a, vol_b, 2.0 * area_a + math.pi * bore * vol_a / area_a,
             2.0 * area_b + math.pi * (bore + rod) * vol_b / area_b)
 
@@ -232,10 +232,12 @@ def test_the_actuator_refuses_heat_transfer(vgt):
         pa.Actuator(vgt, valve=pa.CommandValve(), chamber=HeatTransfer())
 
 
-@pytest.mark.parametrize("name", ["heat_transfer_coefficient", "valve_C", "D_bore"])
+@pytest.mark.parametrize("name", ["heat_transfer_coefficient", "valve_C", "D_bore",
+                                  "chamber_a.V_dead"])
 def test_forward_sensitivities_match_central_differences(name, cylinder_set):
     """∂(p_a, T_a, x)/∂θ carried through a spool step against central differences of two
-    runs: the heat transfer coefficient, a flow entry and the bore (the wall's perimeter)."""
+    runs: the heat transfer coefficient, a flow entry, the bore (the wall's perimeter) and
+    chamber A's dead volume (an instance's parameter)."""
     experiment = SpoolStep(before=-0.3, after=0.4, t_step=0.02, t_end=0.15, n_points=151)
     signals = ("pressure_a", "temperature_a", "position")
     sens = pa.simulate_sensitivities(_cylinder(cylinder_set), experiment, [name],

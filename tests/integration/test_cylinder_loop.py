@@ -117,8 +117,8 @@ def _chamber_stiffness(params, linear):
     """n·p·A²/V of each chamber at the point (isothermal: n = 1)."""
     bore, rod = float(params["D_bore"]), float(params["d_rod"])
     area_a, area_b = np.pi * bore**2 / 4, np.pi * (bore**2 - rod**2) / 4
-    volume_a = float(params["V_dead_a"]) + area_a * POSITION
-    volume_b = float(params["V_dead_b"]) + area_b * (float(params["x_max"]) - POSITION)
+    volume_a = float(params["chamber_a.V_dead"]) + area_a * POSITION
+    volume_b = float(params["chamber_b.V_dead"]) + area_b * (float(params["x_max"]) - POSITION)
     point = linear.operating_point
     return (point["pressure_a"] * area_a**2 / volume_a,
             point["pressure_b"] * area_b**2 / volume_b)

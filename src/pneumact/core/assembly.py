@@ -5,7 +5,10 @@ layout, so no other module indexes states, parameters or outputs by position:
 
 - the parameter vector: the blocks the components declare, one after another, each
   holding the component's parameters, its settings and its derived quantities; a
-  parameter shared by two components (the diaphragm area) has a slot in each block;
+  parameter shared by two components (the diaphragm area) has a slot in each block; a
+  component placed under an instance name (``Part.instance``) names its entries
+  ``instance.name`` (``chamber_a.V_dead``), and its block's constants by the instance
+  (``CHAMBER_A_LO``);
 - ``pack`` (values by name -> vector, settings filled, derived quantities computed) and
   ``update`` (change values by name, re-derive), ``values`` (vector -> names);
 - the state and output names with units, and their columns;
@@ -42,7 +45,8 @@ INTEGRATORS = "pneumact.core.integrators"
 
 @dataclass(frozen=True)
 class Slot:
-    """One entry of the parameter vector: its index, name, kind and component role."""
+    """One entry of the parameter vector: its index, name (the model's: ``instance.name``
+    for an instance's), kind and component (its instance, else its role)."""
 
     index: int
     name: str
@@ -64,8 +68,8 @@ class Assembly:
         for part in self.parts:
             lo = len(entries)
             for name, kind in part.block.entries:
-                entries.append(Slot(len(entries), name, kind, part.role))
-            self.block_ranges[part.role] = (lo, len(entries))
+                entries.append(Slot(len(entries), part.qualified(name), kind, part.name))
+            self.block_ranges[part.name] = (lo, len(entries))
         self.entries: tuple[Slot, ...] = tuple(entries)
         slots: dict[str, list[int]] = {}
         for slot in entries:
@@ -74,9 +78,10 @@ class Assembly:
         self.slots: dict[str, tuple[int, ...]] = {k: tuple(v) for k, v in slots.items()}
         #: parameters whose values the components fix (a controller's gains), and the
         #: units the model gives them
-        self.own_values: dict[str, float] = {n: float(v) for part in self.parts
+        self.own_values: dict[str, float] = {part.qualified(n): float(v)
+                                             for part in self.parts
                                              for n, v in part.values.items()}
-        self.parameter_units: dict[str, str] = {n: u for part in self.parts
+        self.parameter_units: dict[str, str] = {part.qualified(n): u for part in self.parts
                                                 for n, u in part.units.items()}
         self.states: tuple[StateSpec, ...] = tuple(s for part in self.parts for s in part.states)
         module = importlib.import_module(self.template)
@@ -112,7 +117,7 @@ class Assembly:
         """Columns of the states of the component ``role`` (a friction law's: any number)."""
         first = 0
         for part in self.parts:
-            if part.role == role:
+            if part.name == role:
                 return tuple(range(first, first + len(part.states)))
             first += len(part.states)
         raise KeyError(f"{self.describe()} has no component {role!r}")
@@ -151,7 +156,8 @@ class Assembly:
         controller's gains, from the component), settings from the components, derived
         quantities computed."""
         params = self.model.params if params is None else params
-        settings = {name: value for part in self.parts for name, value in part.settings.items()}
+        settings = {part.qualified(name): value for part in self.parts
+                    for name, value in part.settings.items()}
         own = self.own_values
         vec = np.zeros(self.size)
         for slot in self.entries:
@@ -221,7 +227,7 @@ class Assembly:
             constants += [(f"{role.upper()}_LO", lo), (f"{role.upper()}_HI", hi)]
         first = 0
         for part in self.parts:  # where each component's states start (even if it has none)
-            constants.append((f"S_{part.role.upper()}", first))
+            constants.append((f"S_{part.name.upper()}", first))
             first += len(part.states)
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
@@ -278,16 +284,17 @@ def part_name(part: Part) -> str:
 
 
 def refuse_duplicates(parts: Sequence[Part], model: str) -> None:
-    """One ComponentError, naming both components, if two of ``parts`` have one role or
-    bind one kernel name (a function or a constant: one namespace, the generated
-    module's): the kernel would otherwise silently take the last one's."""
+    """One ComponentError, naming both components, if two of ``parts`` have one role (or
+    instance name: a role placed twice needs one per placement) or bind one kernel name (a
+    function or a constant: one namespace, the generated module's): the kernel would
+    otherwise silently take the last one's."""
     claims: dict[tuple[bool, str], int] = {}
     for index, part in enumerate(parts):
-        names = [("role", part.role)]
+        names = [("instance" if part.instance else "role", part.name)]
         names += [("kernel function", name) for name in part.functions]
         names += [("kernel constant", name) for name in part.constants]
         for what, name in names:
-            first = claims.setdefault((what == "role", name), index)
+            first = claims.setdefault((what in ("role", "instance"), name), index)
             if first != index:
                 raise ComponentError(
                     f"{model}: components {part_name(parts[first])!r} and "

@@ -13,12 +13,20 @@ block lists, in order:
 
 A model assembly (``pneumact.core.assembly``) places the blocks of a model's
 components one after another and binds their compiled functions into one kernel.
+
+A component placed more than once in one model (the cylinder's two chambers) is placed
+under an *instance* name: its entries are then named ``instance.name`` in the model
+(``chamber_a.V_dead``), while its compiled functions still read its block by local index
+at the offset the model passes (``CHAMBER_A_LO``), so one component's code serves every
+instance.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+
+from ..errors import ComponentError
 
 PARAMETER = "parameter"
 SETTING = "setting"
@@ -105,8 +113,37 @@ class Part:
     templates: tuple[str, ...] = ()
     values: Mapping[str, float] = field(default_factory=dict)
     units: Mapping[str, str] = field(default_factory=dict)
+    instance: str = ""
+
+    def __post_init__(self) -> None:
+        if self.instance and not self.instance.isidentifier():
+            raise ComponentError(
+                f"Part(role={self.role!r}): instance = {self.instance!r}: must be a name of "
+                f"letters, digits and underscores, not starting with a digit (it names the "
+                f"component's parameters, instance.name, and its kernel constants)")
+
+    @property
+    def name(self) -> str:
+        """What names the component in its model: its instance, else its role."""
+        return self.instance or self.role
+
+    def qualified(self, entry: str) -> str:
+        """The model's name of the block entry ``entry``: ``instance.entry`` for an
+        instance, else ``entry``."""
+        return instance_entry(self.instance, entry) if self.instance else entry
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """The block's parameters as the model names them."""
+        return tuple(self.qualified(n) for n in self.block.parameters)
+
+
+def instance_entry(instance: str, entry: str) -> str:
+    """The name of an instance's entry: ``chamber_a.V_dead`` (a dot, FMI's structured
+    naming)."""
+    return f"{instance}.{entry}"
 
 
 def required_parameters(parts: Sequence[Part]) -> tuple[str, ...]:
     """The parameters a model of ``parts`` reads: every block's, each once, in order."""
-    return tuple(dict.fromkeys(p for part in parts for p in part.block.parameters))
+    return tuple(dict.fromkeys(p for part in parts for p in part.parameter_names))

@@ -1,8 +1,8 @@
 """A double-acting pneumatic cylinder fed by a 5/3 proportional valve (issue 41, item 4).
 
     m·dv/dt = (p_a − p_atm)·A_a − (p_b − p_atm)·A_b − F_f − F_load(t) + F_stop(x, v)
-    dp_a/dt = n/V_a·(R·T·ṁ_a − p_a·A_a·v),   V_a = V_dead_a + A_a·x
-    dp_b/dt = n/V_b·(R·T·ṁ_b + p_b·A_b·v),   V_b = V_dead_b + A_b·(x_max − x)
+    dp_a/dt = n/V_a·(R·T·ṁ_a − p_a·A_a·v),   V_a = chamber_a.V_dead + A_a·x
+    dp_b/dt = n/V_b·(R·T·ṁ_b + p_b·A_b·v),   V_b = chamber_b.V_dead + A_b·(x_max − x)
 
 x ∈ [0, x_max] is the rod's extension from the cap-end stop; chamber A is the cap side
 (A_a = π·D²/4), chamber B the rod side (A_b = π·(D² − d²)/4); the atmosphere acts on
@@ -17,6 +17,11 @@ mid-position leakage keeps a chamber's pressure defined at u = 0. The chamber la
 ``HeatTransfer()`` each chamber's energy equation replaces it, its temperature a state
 (``thermal_part``, docs/model.md).
 
+The two chambers are two instances of one chamber component (``chamber_part``:
+``chamber_a``, ``chamber_b``), each with its block ``CHAMBER_BLOCK`` (its dead volume,
+``chamber_a.V_dead``), read by ``chamber_dead_volume`` at the instance's offset; the
+cylinder's ``derive`` copies them into derived entries of its own block, which its
+equations read (the assembly carries a parameter's sensitivity through such entries).
 The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p``.
 """
 
@@ -30,7 +35,14 @@ from ..core.channels import CH_DRIVE, DeclaredInputs, InputChannel, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_eval
-from ..parameters.catalogue import ParameterSpec, declare, declare_relation
+from ..parameters.catalogue import (
+    ParameterSpec,
+    declare,
+    declare_instances,
+    declare_kind,
+    declare_relation,
+    declare_renamed,
+)
 from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
 from .friction import FrictionModel, LuGre
 from .mechanics import explicit_step, stop_force, stop_force_params
@@ -46,12 +58,6 @@ declare(
       group="cylinder", plausible=(2e-3, 0.5)),
     P("d_rod", "m", "piston rod diameter (0: a rodless, equal-area piston)", None, 0.0,
       False, 2.0, group="cylinder", plausible=(0.0, 0.2)),
-    P("V_dead_a", "m^3", "dead volume of the cap-side chamber A at x = 0 (end cap, port, "
-      "tubing to the valve)", None, 0.0, True, 10.0, group="cylinder",
-      plausible=(1e-8, 1e-2)),
-    P("V_dead_b", "m^3", "dead volume of the rod-side chamber B at x = x_max (end cap, "
-      "port, tubing to the valve)", None, 0.0, True, 10.0, group="cylinder",
-      plausible=(1e-8, 1e-2)),
     P("p_supply", "Pa", "supply pressure of the 5/3 valve (absolute)", None, 0.0, True, 1e8,
       group="cylinder", plausible=(1.5e5, 1.6e6)),
     P("valve_C", "m^3/(s*Pa)", "ISO 6358 sonic conductance of each path of the 5/3 valve, "
@@ -76,6 +82,13 @@ declare(
       "command (Cylinder(spool_lag=True))", None, 0.0, True, 10.0, group="cylinder",
       plausible=(1e-5, 1.0)),
 )
+#: a cylinder chamber, placed as chamber_a and chamber_b: its parameters, declared once
+declare_kind("chamber", P("V_dead", "m^3", "dead volume of a cylinder chamber when the "
+                          "piston is on its end stop (end cap, port, tubing to the valve)",
+                          None, 0.0, True, 10.0, group="cylinder", plausible=(1e-8, 1e-2)))
+declare_instances("chamber", chamber_a="chamber A, the cap side, empty at x = 0",
+                  chamber_b="chamber B, the rod side, empty at x = x_max")
+declare_renamed(V_dead_a="chamber_a.V_dead", V_dead_b="chamber_b.V_dead")
 declare_relation(("d_rod", "D_bore"), lambda rod, bore: rod < bore,
                  lambda rod, bore: f"must be < D_bore = {bore:g} m (the rod passes "
                                    "through the piston)")
@@ -84,18 +97,18 @@ declare_relation(("p_supply", "p_atm"), lambda supply, atm: supply > atm,
                                      "air into the chambers)")
 
 CYLINDER_BLOCK = Block.of(
-    "m", "D_bore", "d_rod", "x_max", "V_dead_a", "V_dead_b", "p_atm", "p_supply",
+    "m", "D_bore", "d_rod", "x_max", "p_atm", "p_supply",
     "valve_C", "valve_leak", "spool_overlap", "iso_b", "iso_m", "r_lin", "gamma", "R", "T",
     "k_stop", "c_stop",
     settings=("chamber_n_offset", "chamber_n_gamma"),
-    derived=("n_poly", "area_a", "area_b"),
+    derived=("n_poly", "area_a", "area_b", "dead_volume_a", "dead_volume_b"),
 )
 CY_M = CYLINDER_BLOCK.index("m")
 CY_BORE = CYLINDER_BLOCK.index("D_bore")
 CY_ROD = CYLINDER_BLOCK.index("d_rod")
 CY_XMAX = CYLINDER_BLOCK.index("x_max")
-CY_VDA = CYLINDER_BLOCK.index("V_dead_a")
-CY_VDB = CYLINDER_BLOCK.index("V_dead_b")
+CY_VDA = CYLINDER_BLOCK.index("dead_volume_a")
+CY_VDB = CYLINDER_BLOCK.index("dead_volume_b")
 CY_PATM = CYLINDER_BLOCK.index("p_atm")
 CY_PSUP = CYLINDER_BLOCK.index("p_supply")
 CY_C = CYLINDER_BLOCK.index("valve_C")
@@ -120,9 +133,28 @@ QUARTER_PI = 0.25 * math.pi
 REST_ITERATIONS = 60
 
 
+#: a chamber instance's block: its dead volume
+CHAMBER_BLOCK = Block.of("V_dead")
+CH_V_DEAD = CHAMBER_BLOCK.index("V_dead")
+
+
 @njit(cache=True)
-def derive_cylinder(p, o):  # pragma: no cover - compiled
-    """The piston areas and the polytropic index from the block's values and settings."""
+def chamber_dead_volume(p, o):  # pragma: no cover - compiled
+    """The dead volume of the chamber whose block is at offset ``o``."""
+    return p[o + CH_V_DEAD]
+
+
+def chamber_part(instance: str, label: str) -> Part:
+    """One chamber of the cylinder, placed under ``instance`` (chamber_a, chamber_b)."""
+    return Part(role="chamber", instance=instance, block=CHAMBER_BLOCK, label=label)
+
+
+@njit(cache=True)
+def derive_cylinder(p, o, o_a, o_b):  # pragma: no cover - compiled
+    """The piston areas and the polytropic index from the block's values and settings,
+    and the dead volumes of the chambers whose blocks are at ``o_a`` and ``o_b``."""
+    p[o + CY_VDA] = chamber_dead_volume(p, o_a)
+    p[o + CY_VDB] = chamber_dead_volume(p, o_b)
     bore = p[o + CY_BORE]
     rod = p[o + CY_ROD]
     p[o + CY_AA] = QUARTER_PI * bore * bore
@@ -796,7 +828,7 @@ def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area,
                               + kt * g1 * heat_area)
     g[row_p, o + col_dead] = rates[5]
     g[row_t, o + col_dead] = rates[9]
-    if col_xmax >= 0:  # chamber B: V = V_dead_b + A_b·(x_max − x)
+    if col_xmax >= 0:  # chamber B: V = chamber_b.V_dead + A_b·(x_max − x)
         g[row_p, o + col_xmax] = rates[5] * area
         g[row_t, o + col_xmax] = rates[9] * area
     g[row_p, o + CY_BORE] = g1 * heat_perimeter * d_bore / volume
@@ -985,8 +1017,9 @@ class Cylinder(DeclaredInputs):
             states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
             settings=self.chamber.settings(), label="double-acting cylinder")
-        return (cylinder, self.friction.part(), spool_part(self.spool_lag),
-                thermal_part(self.chamber))
+        return (cylinder, chamber_part("chamber_a", "cap-side chamber A"),
+                chamber_part("chamber_b", "rod-side chamber B"), self.friction.part(),
+                spool_part(self.spool_lag), thermal_part(self.chamber))
 
     def channels(self, drive: Signal) -> list[Signal | None]:
         load = self.load if self.load is not None else Constant(0.0)

@@ -2,11 +2,12 @@
 
 States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
 position (and velocity) when it lags | the chambers' temperatures with heat transfer],
-the parameter vector is [cylinder block | friction block | spool block | heat transfer
-block]; the generator binds the friction law, the spool (``spool_*``: direct, lagged or
-second-order) and the chambers (``thermal_*``: polytropic, whose functions do nothing, or
-with heat transfer, whose energy equations replace the pressure rates, rows and columns
-the polytropic code wrote). The equations are ``models.cylinder``'s.
+the parameter vector is [cylinder block | chamber_a's block | chamber_b's block |
+friction block | spool block | heat transfer block]; the generator binds the friction
+law, the spool (``spool_*``: direct, lagged or second-order) and the chambers
+(``thermal_*``: polytropic, whose functions do nothing, or with heat transfer, whose
+energy equations replace the pressure rates, rows and columns the polytropic code
+wrote). The equations are ``models.cylinder``'s.
 """
 
 from pneumact.core import kernel
@@ -46,6 +47,7 @@ THERMAL_STATE = -1
 NSTATE = 5
 CYLINDER_LO = CYLINDER_HI = FRICTION_LO = FRICTION_HI = VALVE_LO = VALVE_HI = 0
 THERMAL_LO = THERMAL_HI = 0
+CHAMBER_A_LO = CHAMBER_A_HI = CHAMBER_B_LO = CHAMBER_B_HI = 0
 S_POSITION = 0
 S_VELOCITY = 1
 S_PRESSURE_A = 2
@@ -71,8 +73,9 @@ def _spool(t, ts, y, prm, sig, ptr):
 
 @kernel()
 def derive(prm):
-    """The piston areas and the polytropic index (after any change of a value)."""
-    derive_cylinder(prm, CYLINDER_LO)
+    """The piston areas, the polytropic index and the chambers' dead volumes (after any
+    change of a value)."""
+    derive_cylinder(prm, CYLINDER_LO, CHAMBER_A_LO, CHAMBER_B_LO)
 
 
 @kernel()

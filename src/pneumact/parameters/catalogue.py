@@ -8,6 +8,13 @@ lookup of those declarations (name -> unit, meaning, default, range): it fixes n
 layout. A model assembly lays out the parameters its components declare
 (``pneumact.core.assembly``).
 
+A component placed more than once in one model (the cylinder's chambers) declares its
+parameters once, for its *kind* (``declare_kind("chamber", P("V_dead", ...))``), and the
+instance names it is placed under (``declare_instances("chamber", chamber_a=...)``): the
+catalogue then lists ``chamber_a.V_dead`` with the kind's entry (unit, ranges, meaning,
+the instance's description added). A name that was renamed (``V_dead_a``) is refused
+with its new name (``renamed``).
+
 ``catalogue()`` imports the model modules on first use so that every declaration is
 made before a name is looked up.
 """
@@ -18,17 +25,23 @@ import importlib
 import math
 import threading
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 
 import numpy as np
+
+from ..core.component import instance_entry
 
 __all__ = [
     "ParameterSpec",
     "Relation",
     "catalogue",
     "declare",
+    "declare_instances",
+    "declare_kind",
     "declare_relation",
+    "declare_renamed",
+    "explain_unknown",
     "relations",
 ]
 
@@ -144,6 +157,12 @@ class Relation:
 
 
 _SPECS: dict[str, ParameterSpec] = {}
+#: a component kind's parameters by their local names (chamber: V_dead)
+_KINDS: dict[str, dict[str, ParameterSpec]] = {}
+#: instance name -> its kind (chamber_a -> chamber)
+_INSTANCES: dict[str, str] = {}
+#: old name -> new name, for names refused with their new one
+_RENAMED: dict[str, str] = {}
 _RELATIONS: list[Relation] = []
 _LOCK = threading.Lock()
 _LOADED = False
@@ -162,6 +181,63 @@ def declare(*specs: ParameterSpec) -> tuple[str, ...]:
                                f" {old} and {spec}")
         _SPECS[spec.name] = spec
     return tuple(s.name for s in specs)
+
+
+def declare_kind(kind: str, *specs: ParameterSpec) -> tuple[str, ...]:
+    """Register the parameters of a component ``kind`` that a model places under instance
+    names (``declare_instances``); their names are local (``V_dead``) and, alone, not
+    parameters of any model. Returns the local names."""
+    entries = _KINDS.setdefault(kind, {})
+    for spec in specs:
+        old = entries.get(spec.name)
+        if old is not None and old != spec:
+            raise RuntimeError(f"parameter {spec.name!r} of kind {kind!r} declared twice "
+                               f"with different specs: {old} and {spec}")
+        entries[spec.name] = spec
+    return tuple(s.name for s in specs)
+
+
+def declare_instances(kind: str, **instances: str) -> tuple[str, ...]:
+    """Register instance names of the declared ``kind``, each with what it is
+    (``chamber_a="the cap-side chamber A"``): ``instance.name`` is then a parameter with
+    the kind's entry of ``name``, the instance's description added. Returns the names."""
+    if kind not in _KINDS:
+        raise RuntimeError(f"declare_instances: kind {kind!r} is not declared "
+                           f"(declare_kind first); kinds: {sorted(_KINDS)}")
+    names = []
+    for instance, what in instances.items():
+        if _INSTANCES.setdefault(instance, kind) != kind:
+            raise RuntimeError(f"instance {instance!r} declared of kinds "
+                               f"{_INSTANCES[instance]!r} and {kind!r}")
+        for local, spec in _KINDS[kind].items():
+            name = instance_entry(instance, local)
+            declare(replace(spec, name=name, description=f"{spec.description}; {what}"))
+            names.append(name)
+    return tuple(names)
+
+
+def declare_renamed(**renamed: str) -> None:
+    """Register old names (``V_dead_a="chamber_a.V_dead"``): a set or an argument using one
+    is refused naming the new name (``explain_unknown``)."""
+    _RENAMED.update(renamed)
+
+
+def explain_unknown(name: str) -> str:
+    """Why ``name`` is no parameter, where more can be said than that: its new name (a
+    renamed one), the known instances (an unknown instance), or the parameters of the
+    instance's kind (an unknown one); '' otherwise."""
+    _load()
+    if name in _RENAMED:
+        return f"renamed: use '{_RENAMED[name]}'"
+    instance, dot, local = name.partition(".")
+    if not dot:
+        return ""
+    kind = _INSTANCES.get(instance)
+    if kind is None:
+        return (f"no component instance '{instance}'; instances: "
+                f"{', '.join(_INSTANCES) or 'none'}")
+    return (f"'{local}' is no parameter of {instance}, a {kind}; a {kind}'s parameters: "
+            f"{', '.join(_KINDS[kind])}")
 
 
 def declare_relation(names: tuple[str, ...], holds: Callable[..., object],

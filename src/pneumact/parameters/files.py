@@ -3,7 +3,9 @@
 In a parameter file every dimensional value is a string with its unit ("60 cm^3",
 "4 N*s/m"); a bare number is accepted only for a dimensionless parameter. A unit-less
 number in a file is the classic way to be off by 1e6, so it is refused with a message
-showing the fix. Each value may carry its ``source`` and a ``note``.
+showing the fix. Each value may carry its ``source`` and a ``note``. A component
+instance's parameters are dotted keys (``chamber_a.V_dead = ...``) or its table
+(``[parameters.chamber_a]``), both read as ``chamber_a.V_dead``.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, TypeAlias
 
+from pneumact.core.component import instance_entry
 from pneumact.errors import ArgumentTypeError, ParameterError
 from pneumact.io.quantities import parse_value
 from pneumact.parameters.catalogue import catalogue
@@ -84,7 +87,7 @@ def _entries(table: dict[str, Any], file_name: str, found: list[str]
     specs = catalogue()
     values: dict[str, float] = {}
     info: dict[str, ParameterInfo] = {}
-    for pname, entry in table.items():
+    for pname, entry in _flattened(table, specs).items():
         if pname not in specs:
             found.append(unknown_name(pname, file_name))
             continue
@@ -108,6 +111,21 @@ def _entries(table: dict[str, Any], file_name: str, found: list[str]
             continue
         info[pname] = ParameterInfo(raw if isinstance(raw, str) else repr(raw), source, note)
     return values, info
+
+
+def _flattened(table: dict[str, Any], specs: Mapping[str, Any]) -> dict[str, Any]:
+    """``table`` with each instance's table (``[parameters.chamber_a]``, or the dotted
+    keys ``chamber_a.V_dead = ...``, which TOML reads as one) as entries
+    ``chamber_a.V_dead``: a key that is no parameter and holds a table of no entry's
+    keys."""
+    flat: dict[str, Any] = {}
+    for key, entry in table.items():
+        if (key not in specs and isinstance(entry, dict)
+                and not any(k in _ENTRY_KEYS for k in entry)):
+            flat.update({instance_entry(key, local): e for local, e in entry.items()})
+        else:
+            flat[key] = entry
+    return flat
 
 
 def _from_document(doc: dict[str, Any], label: str, default_name: str,

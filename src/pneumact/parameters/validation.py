@@ -18,7 +18,7 @@ import numpy as np
 
 from pneumact.errors import ParameterError, PassivityWarning, PlausibilityWarning
 from pneumact.io.quantities import NUMBER_THEN_UNIT
-from pneumact.parameters.catalogue import catalogue, relations
+from pneumact.parameters.catalogue import catalogue, explain_unknown, relations
 
 __all__ = [
     "check_plausibility",
@@ -36,14 +36,18 @@ __all__ = [
 
 def unknown_name(name: str, where: str, known: Iterable[str] | None = None,
                  what: str = "parameter") -> str:
-    """'unknown parameter 'Fss' in vgt-paper.toml (did you mean 'Fs'?)'."""
+    """'unknown parameter 'Fss' in vgt-paper.toml (did you mean 'Fs'?)'; a renamed name
+    with its new one, an instance's name with the instances or its kind's parameters."""
     candidates = list(catalogue() if known is None else known)
+    text = f"unknown {what} '{name}'" + (f" in {where}" if where else "")
+    explanation = explain_unknown(name) if known is None else ""
+    if explanation:
+        return f"{text}: {explanation}"
     lowered = {c.lower(): c for c in candidates}
     guess = lowered.get(name.lower())
     if guess is None:
         close = difflib.get_close_matches(name.lower(), list(lowered), n=1, cutoff=0.6)
         guess = lowered[close[0]] if close else None
-    text = f"unknown {what} '{name}'" + (f" in {where}" if where else "")
     if guess is not None:
         return f"{text} (did you mean '{guess}'?)"
     return f"{text} (known: {', '.join(candidates)})"

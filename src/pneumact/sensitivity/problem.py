@@ -88,12 +88,13 @@ class Problem:
     def around(cls, params, variations: Mapping[str, object],
                distribution: str = "uniform") -> Problem:
         from ..parameters import catalogue
+        from ..parameters.validation import unknown_name
 
         specs = catalogue()
         factors = []
         for name, spec in variations.items():
             if name not in specs:
-                raise ParameterError(f"unknown parameter {name!r} in the variations")
+                raise ParameterError(unknown_name(name, "the variations"))
             nominal = float(params[name])
             low, high = parse_variation(name, spec, nominal)
             factors.append(Factor(name, low, high, nominal, distribution))

@@ -99,7 +99,7 @@ class Result(ResultVocabulary):
             "wall_time_s": wall,
             "summary": assembly.model.summary_kind,
         }
-        components = {part.role: part.label for part in assembly.parts if part.label}
+        components = {part.name: part.label for part in assembly.parts if part.label}
         return cls(np.asarray(prep.t_out, dtype=float).copy(), signals, units, meta,
                    assembly.values(prep.vector), components)
 
