@@ -58,6 +58,7 @@ import numpy as np
 import pandas as pd
 
 from .io.report import NotebookDisplay
+from .plotting import tight_layout
 from .progress import ProgressCallback, check_progress, notify
 
 if TYPE_CHECKING:
@@ -858,7 +859,7 @@ def _seal_figure(validation):
         ax.set_xlabel("velocity [mm/s]")
         ax.grid(True, alpha=0.3)
     axes[0, 0].set_ylabel("friction [N]")
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -898,7 +899,7 @@ def _fig6(validation):
     twin.plot(time, record.residual("pressure"), "C2-", lw=0.4, alpha=0.6)
     twin.set_ylabel("pressure residual [Pa]", color="C2")
     axes[2].grid(True, alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -935,7 +936,7 @@ def _richer_figure(results: dict):
         for ax in (top, bottom):
             ax.grid(True, alpha=0.3)
             ax.tick_params(labelsize=7)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -1328,7 +1329,7 @@ def _flow_figure(params):
     axes[2].legend(fontsize=7)
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -1355,7 +1356,7 @@ def _step_figure(params, step: dict):
     axes[1].set_ylabel("diaphragm position [mm]")
     for ax in axes:
         ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -1390,7 +1391,7 @@ def _fig2(params):
     ax.set_ylabel("friction [N]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -1565,7 +1566,7 @@ def _presliding_window_figure(fit):
         for ax in (top, bottom):
             ax.grid(True, alpha=0.3)
     axes[0, 0].legend(fontsize=8)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 

@@ -45,6 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .plotting import tight_layout
+
 __all__ = ["COMPARISONS", "EQ13_FC_RTOL", "HEADLINE_VALVE", "LAW_CLAIMS", "LUGRE", "MEASURES",
            "SIGMA0_FACTORS",
            "STATEMENTS", "VISIBLE", "Statement", "eq13_bias", "evaluate_statements",
@@ -776,5 +778,5 @@ def plot_loop_changes(changes: pd.DataFrame, floor: pd.DataFrame | None = None):
         ax.set_title(title, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
     axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig

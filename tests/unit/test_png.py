@@ -63,3 +63,46 @@ def test_the_png_is_savefig_s_drawn_once(monkeypatch, bottom):
     best = min(np.abs(a[i:i + h, j:j + w] - b[k:k + h, m:m + w]).mean()
                for i in range(2) for j in range(2) for k in range(2) for m in range(2))
     assert best <= ref.PNG_MEAN_DIFFERENCE, best
+
+
+def _grid() -> Figure:
+    """Panels whose ticks and labels differ (the layout depends on each one's width)."""
+    fig = Figure(figsize=(9, 7))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, 3, sharex="col")
+    for k, ax in enumerate(axes.flat):
+        ax.plot(np.linspace(0, 10 ** k, 20), np.linspace(-(10 ** (k - 4)), 7 ** k, 20))
+        ax.set_xlabel("pressure [kPa]")
+        ax.set_ylabel("position [mm]")
+        ax.set_title(f"panel {k}")
+    return fig
+
+
+def test_ticks_computed_once_lay_out_and_draw_as_matplotlib_does(monkeypatch):
+    """``plotting.tight_layout`` places the panels where ``Figure.tight_layout`` does and
+    the one-draw PNG has the same bytes as with ticks recomputed at every call; after
+    either, matplotlib computes ticks again (a later change of limits is drawn)."""
+    import contextlib
+
+    import pneumact.plotting
+    from pneumact.plotting import tight_layout
+
+    ours, theirs = _grid(), _grid()
+    tight_layout(ours)
+    theirs.tight_layout()
+    for a, b in zip(ours.axes, theirs.axes, strict=True):
+        assert a.get_position().bounds == b.get_position().bounds
+        assert "_update_ticks" not in vars(a.xaxis) and "_update_ticks" not in vars(a.yaxis)
+
+    def pngs(fig: Figure) -> tuple[bytes, bytes]:
+        first, second = io.BytesIO(), io.BytesIO()
+        write_png(fig, first, DPI)
+        fig.axes[0].set_xlim(0, 0.5)
+        write_png(fig, second, DPI)
+        return first.getvalue(), second.getvalue()
+
+    cached = pngs(ours)
+    monkeypatch.setattr(pneumact.plotting, "_ticks_computed_once",
+                        lambda fig: contextlib.nullcontext())
+    assert cached == pngs(theirs)
+    assert cached[0] != cached[1]  # the new limits were drawn

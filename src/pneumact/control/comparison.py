@@ -25,6 +25,7 @@ import pandas as pd
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
 from ..models.controllers import Controller, Dither, LuGreObserver, StaticCompensation
+from ..plotting import tight_layout
 from .loop import ClosedLoop
 from .specs import Move, Specs, default_moves
 
@@ -156,7 +157,7 @@ class DesignComparison(ResultVocabulary):
             ax.set_ylabel("position [mm]")
             ax.grid(True, alpha=0.3)
         panels[-1][0].legend(fontsize=7, loc="best")
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

@@ -68,6 +68,7 @@ import pandas as pd
 from ..errors import DataError, ParameterError
 from ..io.records import Record
 from ..io.report import NotebookDisplay
+from ..plotting import tight_layout
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -162,7 +163,7 @@ class DriveReplay(NotebookDisplay):
         for a in axes:
             a.grid(True, alpha=0.3)
             a.legend(fontsize=7, loc="upper right")
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def report(self, *, call: str = "", title: str = ""):

@@ -40,6 +40,7 @@ from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import Experiment
 from ..io.report import ResultVocabulary
 from ..models.valves import PRESSURE_INPUT
+from ..plotting import tight_layout
 from .plants import input_kind, input_range
 
 if TYPE_CHECKING:
@@ -586,5 +587,5 @@ def plot_bode(linear: LinearPlant, measured: pd.DataFrame | None = None, *,
     point = linear.operating_point.get(linear.input_name, float("nan"))
     ax_mag.set_title(f"{linear.regime.capitalize()} linearisation at "
                      f"{_quantity(linear.input_name, point, linear.input_unit)}", fontsize=10)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig

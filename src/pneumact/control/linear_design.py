@@ -43,6 +43,7 @@ import pandas as pd
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
 from ..models.controllers import PID
+from ..plotting import tight_layout
 from .linear import LinearPlant, linearise
 from .loop import ClosedLoop
 from .specs import Specs
@@ -185,7 +186,7 @@ class LinearDesign(ResultVocabulary):
         axes[2].grid(True, alpha=0.3)
         axes[2].legend(fontsize=7)
         fig.suptitle("PID designed on the linearised plant", fontsize=10)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

@@ -65,6 +65,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.report import ResultVocabulary
+from ..plotting import tight_layout
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -208,7 +209,7 @@ class LoopMetrics(ResultVocabulary):
             ax.invert_yaxis()
             ax.grid(True, axis="x", alpha=0.3)
         fig.suptitle(self.summary(), fontsize=8)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def to_pandas(self, name: str | None = None):

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..plotting import display_values, has_signal, new_axes, signal_values
+from ..plotting import display_values, has_signal, new_axes, signal_values, tight_layout
 from .metrics import LoopMetrics, _rise_times
 
 if TYPE_CHECKING:
@@ -77,7 +77,7 @@ def plot_loop(result: Any, metrics: LoopMetrics | None = None) -> Figure:
         ax.grid(True, alpha=0.3)
     if metrics is not None:
         fig.suptitle(metrics.summary(), fontsize=9)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 

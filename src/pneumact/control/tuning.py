@@ -35,6 +35,7 @@ import pandas as pd
 
 from ..errors import ParameterError, SolverError
 from ..io.report import ResultVocabulary
+from ..plotting import tight_layout
 from ..progress import ProgressCallback, check_progress, notify
 from .loop import ClosedLoop
 from .metrics import step_metrics
@@ -456,7 +457,7 @@ class TuningResult(ResultVocabulary):
             ax.set_ylabel("position [mm]")
             ax.grid(True, alpha=0.3)
         panels[0][0].legend(fontsize=7, loc="lower right")
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "") -> list[Path]:

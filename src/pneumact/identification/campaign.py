@@ -42,6 +42,7 @@ from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import first_order_lag
 from ..models.valves import PRESSURE_INPUT  # the regulator's and the source's input
+from ..plotting import tight_layout
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -205,7 +206,7 @@ class CampaignPlan(ResultVocabulary):
                          fontsize=8)
             ax.grid(True, alpha=0.3)
         axes[-1, 0].set_xlabel("time [s]")
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     tests: list[BenchTest]

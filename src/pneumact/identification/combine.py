@@ -50,6 +50,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import DataError, ParameterError
+from ..plotting import tight_layout
 from .diagnostics import IDENTIFIED, NOT_IDENTIFIABLE, POORLY, Diagnostic, Verdict, verdicts
 from .estimates import Estimates
 from .paper import PaperIdentification, with_estimates
@@ -479,7 +480,7 @@ class CombinedIdentification(PaperIdentification):
         ax.set_xlabel("value and 95 % interval [% from the combined value]")
         ax.grid(True, axis="x", alpha=0.3)
         ax.legend(fontsize=8, loc="lower right")
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

@@ -15,6 +15,7 @@ import pandas as pd
 
 from ..errors import DataError
 from ..io.report import ResultVocabulary
+from ..plotting import tight_layout
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -58,7 +59,7 @@ class Estimates(ResultVocabulary):
         ax.axvline(0.0, color="k", lw=0.6)
         ax.set_xlabel(f"{100 * level:g} % interval [% of the estimate]")
         ax.grid(True, axis="x", alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     names: tuple[str, ...]

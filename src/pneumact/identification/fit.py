@@ -38,6 +38,7 @@ from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import Sensors, first_order_lag, lag_derivative
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
+from ..plotting import tight_layout
 from ..progress import ProgressCallback, notify, stop_threads
 from .arguments import check_fit_arguments, check_window, fit_records
 from .estimates import Estimates, covariance_from_jacobian
@@ -625,7 +626,7 @@ class FitResult(ResultVocabulary):
             if prof.grid.min() > 0 and prof.grid.max() / prof.grid.min() > 20:
                 ax.set_xscale("log")
                 label_log_axis(ax)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

@@ -22,6 +22,7 @@ from scipy.signal import butter, sosfiltfilt
 from ..errors import DataError, ParameterError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..plotting import tight_layout
 from .estimates import Estimates, covariance_from_jacobian, linear_least_squares
 
 if TYPE_CHECKING:
@@ -208,7 +209,7 @@ class InverseFriction(ResultVocabulary):
             a.grid(True, alpha=0.3)
         ax1.set_title(f"relative force error {100 * self.relative_force_error:.1f} %, "
                       f"condition number {self.condition_number:.3g}", fontsize=9)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

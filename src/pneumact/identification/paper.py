@@ -38,6 +38,7 @@ from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
+from ..plotting import tight_layout
 from ..progress import ProgressCallback, check_progress, notify
 from .campaign import DEFAULT_SPREAD, RAMP_SPEEDS, CampaignPlan
 from .diagnostics import (
@@ -445,7 +446,7 @@ class PaperIdentification(ResultVocabulary):
         ax_zoom.legend(fontsize=8, loc="upper right")
         for a in (ax_loop, ax_time, ax_zoom):
             a.grid(True, alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def band(self, record: Record, draws: int = 60):
@@ -1375,7 +1376,7 @@ class SignatureIdentification(PaperIdentification):
         axr.set_xlabel("position [mm]")
         for a in (ax, axb, axr):
             a.grid(True, alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def figures(self) -> dict[str, Callable[[], Figure]]:

@@ -32,6 +32,7 @@ from scipy.optimize import least_squares
 from ..errors import DataError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..plotting import tight_layout
 from .bench import (
     drive_force,
     kinematics,
@@ -145,7 +146,7 @@ class StageResult(ResultVocabulary):
             a.grid(True, alpha=0.3)
         if self.name == "stribeck":
             ax.set_xscale("symlog", linthresh=1e-1)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

@@ -29,6 +29,8 @@ from pneumact.parameters.validation import (
     warn_passivity,
 )
 
+from ..plotting import tight_layout
+
 if TYPE_CHECKING:
     import os
 
@@ -304,7 +306,7 @@ class ParameterSet(ResultVocabulary, Mapping[str, float]):
         ax.set_xlabel("position in the plausible range (log scale; 0 low end, 1 high end)")
         ax.set_title(self._name, fontsize=10)
         ax.grid(True, axis="x", alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def write(self, out_dir: str | os.PathLike[str], *, call: str = "") -> list[Path]:

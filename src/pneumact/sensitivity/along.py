@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 from ..checks import check_int
 from ..errors import ArgumentError, ParameterError
 from ..options import Checkpoint, Executor
+from ..plotting import tight_layout
 from ..progress import ProgressCallback
 from .methods import (
     Evaluate,
@@ -141,7 +142,7 @@ def plot_along_time(study: StudyResult | pd.DataFrame, index: str | None = None)
     ax.set_ylabel(curves.columns.name)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -168,7 +169,7 @@ def plot_along_loop(curves: pd.DataFrame, x: ArrayLike, xlabel: str):
     ax.set_ylabel(curves.columns.name)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -190,5 +191,5 @@ def plot_convergence(table: pd.DataFrame, output: str):
     ax.legend(fontsize=7)
     for a in (ax, axw):
         a.grid(True, alpha=0.3)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig

@@ -23,6 +23,7 @@ from ..checks import check_int, check_range, check_seed, check_type
 from ..errors import ArgumentError, ArgumentTypeError, PneumactError, ResourceError
 from ..io.report import ResultVocabulary
 from ..options import Checkpoint, Executor
+from ..plotting import tight_layout
 from ..progress import ProgressCallback
 from .problem import Problem
 
@@ -159,7 +160,7 @@ class StudyResult(ResultVocabulary):
         ax.set_ylabel(f"{', '.join(keys)} {unit}")
         ax.legend(fontsize=8)
         ax.grid(True, axis="y", alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

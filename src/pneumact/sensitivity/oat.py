@@ -13,6 +13,7 @@ import pandas as pd
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
 from ..options import Executor
+from ..plotting import tight_layout
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -140,7 +141,7 @@ def _zoomed_grid(draw, params: list[str], windows: dict, xlabel: str, ylabel: st
             ax.set_ylabel(ylabel, fontsize=8)
             ax.tick_params(labelsize=7)
         row[0].legend(fontsize=7)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -164,7 +165,7 @@ def _finish(fig, axes, n: int):
     """Hide the unused panels, tighten, return the figure."""
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 

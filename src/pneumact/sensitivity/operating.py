@@ -38,6 +38,7 @@ from ..progress import Progress, ProgressCallback, notify
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 from ..options import Checkpoint, Executor
+from ..plotting import tight_layout
 
 __all__ = ["CONDITION_COLUMNS", "FULL_CYCLE_LOW_PRESSURE", "METHODS", "VALVE_NAMES",
            "Condition", "ConditionStudy", "across_conditions", "at_speeds", "conditions",
@@ -234,7 +235,7 @@ class ConditionStudy(ResultVocabulary):
             ax.set_title(f"{self.method}: {valve} valve{amp}", fontsize=9)
             ax.grid(True, which="both", alpha=0.3)
         panels[0][0].legend(fontsize=7)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def _key(self, index: str | None) -> str:

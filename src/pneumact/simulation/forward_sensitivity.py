@@ -30,6 +30,7 @@ from ..progress import raise_if_stopped
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
+from ..plotting import tight_layout
 from .memory import check_memory, simulate_bytes
 from .result import Result, SolverStats
 from .simulate import Prepared, failure, prepare
@@ -112,7 +113,7 @@ class SensitivityResult(ResultVocabulary):
         ax.set_ylabel(f"θ·∂{signal}/∂θ [{self.result.units.get(signal, '')}]")
         ax.legend(fontsize=8)
         ax.grid(True, alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def to_pandas(self, name: str | None = None):

@@ -43,6 +43,7 @@ from ..io.records import Record
 from ..io.report import ResultVocabulary
 from ..models.inputs import INPUT_SIGNALS
 from ..options import Executor, Multistart, Optimizer
+from ..plotting import tight_layout
 from ..progress import ProgressCallback, notify, stop_threads
 from .loops import loop_measures
 from .metrics import autocorrelation, error_metrics
@@ -613,7 +614,7 @@ class FrictionComparison(ResultVocabulary):
             ax.set_title(os.path.basename(rec.source), fontsize=9)
             ax.grid(True, alpha=0.3)
         panels[0][0].legend(fontsize=7, loc="upper left")  # "best" scans every sample: slow
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
 

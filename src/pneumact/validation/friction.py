@@ -22,6 +22,7 @@ import pandas as pd
 from ..errors import ArgumentError, DataError
 from ..io.records import Record
 from ..io.report import NotebookDisplay
+from ..plotting import tight_layout
 from .metrics import METRIC_NAMES, error_metrics
 
 if TYPE_CHECKING:
@@ -97,7 +98,7 @@ class FrictionValidation(NotebookDisplay):
             for ax in (ax_time, ax_vel):
                 ax.grid(True, alpha=0.3)
         panels[0][0].legend(fontsize=8)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def write(self, out_dir: str | os.PathLike, *, call: str = "", title: str = "") -> list[Path]:

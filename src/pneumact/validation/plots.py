@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.display import display_frame, display_unit
-from ..plotting import DISPLAY_UNITS, page_names, panel_grid
+from ..plotting import DISPLAY_UNITS, page_names, panel_grid, tight_layout
 from .metrics import metrics_for_reading
 
 __all__ = ["add_to_report", "plot_loops", "plot_residuals", "plot_time"]
@@ -33,7 +33,7 @@ def plot_loops(validation, records=None):
         ax.set_title(rv.name, fontsize=9)
         ax.grid(True, alpha=0.3)
     panels[0][0].legend(fontsize=8)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 
@@ -77,7 +77,7 @@ def plot_residuals(validation, records=None):
         for ax in (ax_res, ax_acf):
             ax.grid(True, alpha=0.3)
     panels[0][1].legend(fontsize=8)
-    fig.tight_layout()
+    tight_layout(fig)
     return fig
 
 

@@ -42,6 +42,7 @@ from ...progress import ProgressCallback, check_progress, notify, stop_threads
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 from ...options import Checkpoint, Executor, check_scheduler_address
+from ...plotting import tight_layout
 from ..memory import batch_bytes, check_memory
 from ..solvers import Rodas4, Solver
 from .runner import STATUS_OK, ChunkRunner, run_chunk
@@ -126,7 +127,7 @@ class BatchResult(ResultVocabulary):
                           if column != "set" else "set")
             ax.set_ylabel(f"{feature} [{FEATURE_UNITS[feature]}]", fontsize=8)
             ax.grid(True, alpha=0.3)
-        fig.tight_layout()
+        tight_layout(fig)
         return fig
 
     def to_pandas(self, name: str | None = None) -> pd.DataFrame:
