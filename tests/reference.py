@@ -824,3 +824,6 @@ META_EIGEN_RTOL = 1e-9
 INPUT_EDGE_REL = 1e-9
 #: a value an unbounded input (a rig's drive, a loop around it) takes: any size
 INPUT_UNBOUNDED_PROBE = 1e12
+#: numpy's Savitzky-Golay, first-order lag and autocorrelation against scipy.signal's
+#: (relative to the largest value): measured 6e-14, 5e-14 and 4e-17 at worst
+NUMPY_FILTER_RTOL = 1e-12

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..errors import DataError
 from ..io.records import Record
 from .inputs import sensor_noise
+from .smoothing import savgol_filter, savgol_weights
 
 __all__ = ["Kinematics", "drive_force", "kinematics", "smoothing_window", "steady_segments",
            "typical_speed", "velocity_noise"]
@@ -69,7 +69,7 @@ def _uniform(record: Record) -> Record:
 def velocity_noise(samples: int, dt: float, position_noise: float) -> float:
     """Standard deviation of the cubic Savitzky-Golay velocity over ``samples`` points
     when the position carries white noise of ``position_noise``."""
-    coefficients = savgol_coeffs(samples, 3, deriv=1, delta=dt)
+    coefficients = savgol_weights(samples, 3, deriv=1, delta=dt)
     return float(position_noise * np.linalg.norm(coefficients))
 
 

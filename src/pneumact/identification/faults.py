@@ -47,6 +47,7 @@ import pandas as pd
 from ..io.records import Record
 from .diagnostics import Diagnostic, named_list
 from .inputs import noise_level, resolution, sensor_noise
+from .smoothing import savgol_filter
 
 if TYPE_CHECKING:
     from ..parameters.parameter_set import ParameterSet
@@ -288,8 +289,6 @@ def without_lag(records: Sequence[Record], tau: float) -> list[Record]:
     """The ``records`` with a first-order position lag ``tau`` undone (x + τ·dx/dt, the
     slope of a cubic over ``DELAG_SAMPLES`` samples): a start for the stages, which
     read forces from positions, not a record to fit (its noise is no longer white)."""
-    from scipy.signal import savgol_filter
-
     out = []
     for record in records:
         x = record["position"]

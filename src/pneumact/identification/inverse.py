@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
-from scipy.signal import butter, sosfiltfilt
 
 from ..errors import DataError, ParameterError
 from ..io.records import Record
@@ -108,6 +107,8 @@ def _motion(time, position, force, cutoff, decimate) -> _Motion:
         if not 0 < cutoff < fs / 2:
             raise ParameterError(f"inverse_friction: cutoff = {cutoff} Hz; must be in "
                                  f"(0, {fs / 2:g}) Hz (the Nyquist frequency)")
+        from scipy.signal import butter, sosfiltfilt  # here: a 0.9 s import
+
         sos = butter(4, cutoff, fs=fs, output="sos")
         position, force = sosfiltfilt(sos, position), sosfiltfilt(sos, force)
     velocity = np.gradient(position, time)
