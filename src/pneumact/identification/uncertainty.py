@@ -36,7 +36,7 @@ from ..errors import ParameterError, SolverError
 from ..options import Executor
 from ..progress import stop_threads
 from .estimates import Estimates
-from .fit import FitResult, input_signal, rebuilt_input
+from .fit import FitResult, experiment_for, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
 
 __all__ = ["InputNoise", "PredictionBand", "input_noise", "input_noise_covariance",
@@ -108,8 +108,9 @@ def input_replicates(models, records, values: dict[str, float], masks, *,
             knots += move[n_in:]
             if np.any(np.diff(times) <= 0):
                 return None  # a knot moved past a neighbour: not a rebuilt input
+        others = experiment_for(model, record, smooth=True).drives  # its load, ...
         experiment = from_samples(times, knots, model.drive_quantity,
-                                  n_points=record.time.size)
+                                  n_points=record.time.size, drives=others)
         try:
             return simulate(model, experiment, solver, t_eval=record.time,
                             values=own)[signal][masks[i]]
