@@ -25,7 +25,13 @@ from pneumact.io.records import Record
 from pneumact.models.cylinder import LOAD_INPUT, SPOOL_INPUT
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import check_drive
-from reference import CYLINDER_INPUT_ECHO_ATOL, CYLINDER_RECORD_DRIVE_ATOL, CYLINDER_RTOL
+from reference import (
+    CYLINDER_INPUT_ECHO_ATOL,
+    CYLINDER_LOAD_ACTS_MIN,
+    CYLINDER_LOOP_LOAD_RETURN_ATOL,
+    CYLINDER_RECORD_DRIVE_ATOL,
+    CYLINDER_RTOL,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -55,7 +61,7 @@ def test_a_load_driven_as_an_input_runs_as_the_load_the_cylinder_holds(cylinder_
     free = pa.simulate(pa.Cylinder(cylinder_set), spool, SOLVER)
     for name in ("position", "velocity", "pressure_a", "pressure_b", "load", "spool"):
         assert np.array_equal(driven[name], held[name]), name
-    assert np.max(np.abs(driven["position"] - free["position"])) > 1e-3  # it pushed back
+    assert np.max(np.abs(driven["position"] - free["position"])) > CYLINDER_LOAD_ACTS_MIN
 
 
 def test_both_inputs_driven_at_once_reach_their_channels(cylinder_set):
@@ -162,3 +168,25 @@ def test_the_fmu_takes_the_load_as_its_external_force_input(cylinder_set):
     assert force.unit == LOAD_INPUT.unit
     with pytest.raises(pa.ArgumentError, match="drive the input 'external_force'"):
         pa.Cylinder(cylinder_set, load=Constant(1.0)).fmu_form()
+
+
+def test_a_closed_loop_drives_its_plants_load_by_name(cylinder_set):
+    """A position loop around the cylinder declares the plant's load beside its set-point:
+    driven by name, the load disturbs the loop exactly as the plant's held load does (bit
+    for bit), and the PID's integral brings the rod back to the set-point after it."""
+    from pneumact.control import PID, ClosedLoop
+    from pneumact.experiments import SetpointStep
+
+    pid = PID(kp=60.0, ki=300.0, kd=0.5, derivative="velocity", u_min=-1.0, u_max=1.0)
+    push = Step(1.0, 0.0, 150.0)
+    setpoint = SetpointStep(0.09, 0.11, t_step=0.2, t_end=2.0, n_points=801)
+    loop = ClosedLoop(pa.Cylinder(cylinder_set), pid)
+    assert loop.inputs()[1] == LOAD_INPUT
+    driven = pa.simulate(loop, Experiment(setpoint.drive, setpoint.quantity, setpoint.t_end,
+                                          n_points=801, drives={"load": push}))
+    held = pa.simulate(ClosedLoop(pa.Cylinder(cylinder_set, load=push), pid), setpoint)
+    for name in ("position", "velocity", "pressure_a", "pressure_b", "command", "load"):
+        assert np.array_equal(driven[name], held[name]), name
+    after = driven.time > 1.0
+    assert np.max(np.abs(driven["position"][after] - 0.11)) > CYLINDER_LOAD_ACTS_MIN
+    assert abs(driven["position"][-1] - 0.11) < CYLINDER_LOOP_LOAD_RETURN_ATOL
