@@ -190,3 +190,13 @@ def test_a_closed_loop_drives_its_plants_load_by_name(cylinder_set):
     after = driven.time > 1.0
     assert np.max(np.abs(driven["position"][after] - 0.11)) > CYLINDER_LOAD_ACTS_MIN
     assert abs(driven["position"][-1] - 0.11) < CYLINDER_LOOP_LOAD_RETURN_ATOL
+
+
+def test_an_experiment_stops_at_its_drives_corners_and_keeps_them_over_a_new_duration():
+    """The integrator stops at every driven input's corners (the load's step too), and
+    ``with_duration`` keeps the drives."""
+    experiment = Experiment(Step(0.1, -1.0, 0.5), "spool", 1.0, drives={"load": LOAD_STEP})
+    assert 0.15 in experiment.breakpoints() and 0.1 in experiment.breakpoints()
+    longer = experiment.with_duration(2.0)
+    assert longer.drives == {"load": LOAD_STEP} and longer.t_end == 2.0
+    assert experiment.inputs == {"spool": experiment.drive, "load": LOAD_STEP}
