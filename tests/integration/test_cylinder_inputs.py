@@ -200,3 +200,20 @@ def test_an_experiment_stops_at_its_drives_corners_and_keeps_them_over_a_new_dur
     longer = experiment.with_duration(2.0)
     assert longer.drives == {"load": LOAD_STEP} and longer.t_end == 2.0
     assert experiment.inputs == {"spool": experiment.drive, "load": LOAD_STEP}
+
+
+def test_a_batch_drives_the_load_as_a_run_does(cylinder_set):
+    """The batch engine runs an experiment's drives as ``simulate`` does: a row's motion
+    features are the run's summary, and the load shows in them (the unloaded batch's top
+    speed out differs)."""
+    import pandas as pd
+
+    model = pa.Cylinder(cylinder_set)
+    loaded = _loaded(SpoolStep(n_points=401), LOAD_STEP)
+    rows = pd.DataFrame({"Fc": [cylinder_set["Fc"]]})
+    batch = pa.simulate_batch(model, loaded, rows).table.iloc[0]
+    summary = pa.simulate(model, loaded).summary()
+    for name, value in summary.items():
+        assert batch[name] == value, name
+    free = pa.simulate_batch(model, SpoolStep(n_points=401), rows).table.iloc[0]
+    assert free["top_speed_out"] > batch["top_speed_out"]

@@ -42,8 +42,10 @@ class Model(Protocol):
     ``Cylinder`` or a ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
 
     ``inputs()`` declares what drives it (``core.channels.InputChannel``: name, unit,
-    range, record signals; its drive first, declared by the component that owns it), and
-    the rest is read from there: ``drive_quantity`` is what the experiment's signal is
+    range, record signals, channel; its drive first, declared by the component that owns
+    it; an experiment drives the others by name, ``Experiment.drives``, which
+    ``channels(drive, drives)`` puts on their channels), and the rest is read from there:
+    ``drive_quantity`` is what the experiment's signal is
     (pressure, command, force, position...); ``input_signal`` the record signal that
     drives the model (a regulator's logged ``setpoint``, a ``pressure``, a ``command``, a
     loop's ``position_setpoint``); ``input_range`` the values it acts over;
