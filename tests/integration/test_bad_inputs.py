@@ -516,6 +516,19 @@ def _api_cases(vgt, actuator, record, folder: Path):
             pa.experiments.Constant(5e4), "pressure", 1.0, t_start=-1.0)),
         ("Experiment quantity", lambda: pa.Experiment(
             pa.experiments.Constant(5e4), "presure", 1.0)),
+        ("Experiment drives=5", lambda: pa.Experiment(
+            pa.experiments.Constant(5e4), "pressure", 1.0, drives=5)),
+        ("Experiment drives unknown", lambda: pa.Experiment(
+            pa.experiments.Constant(5e4), "pressure", 1.0,
+            drives={"lode": pa.experiments.Constant(1.0)})),
+        ("Experiment drives its quantity", lambda: pa.Experiment(
+            pa.experiments.Constant(5e4), "pressure", 1.0,
+            drives={"pressure": pa.experiments.Constant(1e5)})),
+        ("Experiment drives a number", lambda: pa.Experiment(
+            pa.experiments.Constant(5e4), "pressure", 1.0, drives={"load": 3.0})),
+        ("a load drives an actuator", lambda: pa.simulate(actuator, pa.Experiment(
+            pa.experiments.Constant(5e4), "pressure", 1.0,
+            drives={"load": pa.experiments.Constant(1.0)}))),
         ("SetpointStep beyond the stroke", lambda: pa.simulate(
             pa.control.ClosedLoop(pa.Actuator(vgt, valve=pa.PressureRegulator()),
                                   pa.PID(kp=5e6, u_min=1e4, u_max=1e5)),

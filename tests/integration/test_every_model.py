@@ -325,7 +325,8 @@ def test_every_model_declares_its_inputs_and_enforces_their_ranges(name):
     signal); a drive just inside its declared range passes ``check_drive``, just outside
     it is refused, at each finite end; an unbounded one takes any value; an experiment of
     a quantity the model does not declare is refused naming it, the model and its
-    inputs."""
+    inputs; each input beside the drive (the cylinder's load), driven by name, likewise,
+    and reaches its channel."""
     from pneumact.core.channels import InputChannel
     from pneumact.experiments import QUANTITIES
     from pneumact.simulation.simulate import check_drive
@@ -360,6 +361,35 @@ def test_every_model_declares_its_inputs_and_enforces_their_ranges(name):
             rf"drives '{other}', but the .* of this {type(model).__name__} needs a "
             rf"'{drive.name}' signal \(its declared inputs: '{drive.name}' \[")):
         check_drive(model, _span_to(1e5, 1e5, other))
+    for beside in declared[1:]:
+        _check_input_beside_the_drive(model, beside, _span_to(start, start, drive.name))
+
+
+def _check_input_beside_the_drive(model, declared, held: Experiment) -> None:
+    """An input beside the drive (``held``, at rest mid-range), driven by name: just
+    inside its declared range it passes ``check_drive`` and reaches the channel it
+    declares, just outside it is refused naming it; as the experiment's quantity it is
+    refused naming the model's drive."""
+    from pneumact.core.channels import LOOP_CHANNELS
+    from pneumact.simulation.simulate import check_drive
+
+    def driving(value: float) -> Experiment:
+        signal = PiecewiseLinear([0.0, 0.1], [0.0, value])
+        return Experiment(held.drive, held.quantity, 0.1, drives={declared.name: signal})
+
+    for end, upper in ((declared.low, False), (declared.high, True)):
+        assert np.isfinite(end), f"{declared.name}: an input beside the drive is bounded"
+        inside, outside = _inside_and_outside(end, upper)
+        check_drive(model, driving(inside))
+        with pytest.raises(pa.ExperimentError, match=f"its {declared.label} spans"):
+            check_drive(model, driving(outside))
+    signal = driving(declared.high).drives[declared.name]
+    channels = model.channels(held.drive, {declared.name: signal})
+    assert channels[LOOP_CHANNELS.index(declared.channel)] is signal
+    with pytest.raises(pa.ExperimentError, match=f"but the drive of this {type(model).__name__}"
+                                                 f" is '{held.quantity}'"):
+        check_drive(model, Experiment(signal, declared.name, 0.1,
+                                      drives={held.quantity: held.drive}))
 
 
 def test_each_valve_declares_its_own_input():

@@ -179,6 +179,35 @@ def test_the_cylinder_me_fmu_follows_pa_simulate(cylinder_fmu, values):
         assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed
 
 
+def test_the_cylinder_fmu_s_external_force_is_its_load_input(cylinder_fmu):
+    """The FMU's input ``external_force`` is the cylinder's declared input ``load``
+    (issue 41, item 2): a load step in the FMU's input table runs as pa.simulate runs the
+    same step driven by name, within what the ME FMU is held to, and far from the run
+    without it."""
+    from pneumact.core.signals import Step
+
+    model, fmu = cylinder_fmu
+    spool = pa.experiments.SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=1.0)
+    push = Step(0.15, 0.0, 250.0)  # while the rod extends
+    loaded = pa.Experiment(spool.drive, spool.quantity, spool.t_end, n_points=spool.n_points,
+                           drives={"load": push})
+    table = np.array([(0.0, -1.0, 0.0), (0.1, -1.0, 0.0), (0.1, 0.5, 0.0), (0.15, 0.5, 0.0),
+                      (0.15, 0.5, 250.0), (1.0, 0.5, 250.0)],
+                     dtype=[("time", float), ("spool_command", float),
+                            ("external_force", float)])
+    out = fmpy.simulate_fmu(str(fmu.path), fmi_type="ModelExchange", stop_time=1.0,
+                            input=table, start_values={"spool_command": -1.0},
+                            relative_tolerance=ref.FMU_RTOL, output_interval=1e-3,
+                            output=["position"])
+    run = pa.simulate(model, loaded)
+    position = np.interp(run.time, out["time"], out["position"])
+    allowed = ref.FMU_POSITION_RMS_OF_STROKE * float(np.ptp(run["position"]))
+    assert np.sqrt(np.mean((position - run["position"]) ** 2)) <= allowed
+    free = pa.simulate(model, spool)["position"]
+    changed = np.sqrt(np.mean((free - run["position"]) ** 2))
+    assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed
+
+
 def _steps_like_pa_simulate(cosimulation, case: str, step: float,
                             experiment: pa.Experiment, also: tuple[str, ...] = ()) -> None:
     """The CS FMU's position (and the outputs ``also``) on a held input against

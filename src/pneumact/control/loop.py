@@ -192,9 +192,9 @@ class ClosedLoop(DeclaredInputs):
         """Its position set-point, within the plant's stroke (any, for a plant without
         one): ``drive_quantity``, ``input_signal`` and ``check_drive_values`` read it."""
         stroke = self.stroke
-        if stroke is None:
-            return (SETPOINT_INPUT,)
-        return (replace(SETPOINT_INPUT, low=0.0, high=stroke),)
+        setpoint = SETPOINT_INPUT if stroke is None else replace(SETPOINT_INPUT, low=0.0,
+                                                                 high=stroke)
+        return (setpoint, *self.plant.inputs()[1:])  # the controller drives the plant's drive
 
     @property
     def input_signals(self) -> tuple[str, ...]:
@@ -279,9 +279,13 @@ class ClosedLoop(DeclaredInputs):
 
         return (LOOP_TEMPLATE, INTEGRATORS)
 
-    def channels(self, setpoint: Signal) -> list[Signal | None]:
+    def channels(self, setpoint: Signal, drives: Mapping[str, Signal] | None = None
+                 ) -> list[Signal | None]:
+        """The plant's channels (its drive held at the bias: the controller writes it; the
+        plant's other inputs ``drives`` names on theirs), the set-point, the feed-forward
+        and the disturbance."""
         held = Constant(self.drive_gain * self.bias)
-        plant = dict(zip(CHANNELS, self.plant.channels(held), strict=True))
+        plant = dict(zip(CHANNELS, self.plant.channels(held, drives), strict=True))
         # with one of feed-forward and disturbance the other is zero: one kernel for both
         zero = Constant(0.0) if self.has_loop_inputs else None
         return in_order({**plant, "setpoint": setpoint,

@@ -11,9 +11,12 @@ writes at ``INPUT_OFFSET`` past the channel's start.
 Models name their channels (``in_order``); only the packing puts them in this order.
 
 What drives a model is declared too: ``InputChannel`` says an input's name (the quantity
-an experiment drives it with), unit, range, the record signals that drive it and how a
-refusal reads; the component that owns the input declares it (a valve, the 5/3 valve,
-the rig's drive, a loop's set-point) and the model lists them (``inputs()``).
+an experiment drives it with), unit, range, the record signals that drive it, the channel
+that carries it and how a refusal reads; the component that owns the input declares it (a
+valve, the 5/3 valve, the rig's drive, a loop's set-point, the cylinder's load force) and
+the model lists them (``inputs()``, its drive first). An experiment drives the first by
+its quantity and any other by name (``Experiment.drives``); ``DeclaredInputs.routed``
+puts each signal on its input's channel.
 """
 
 from __future__ import annotations
@@ -21,9 +24,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ArgumentError, ExperimentError
+
+if TYPE_CHECKING:
+    from .signals import Signal
 
 #: a model's channels, in order
 CHANNELS = ("drive", "load_t", "load_x", "map_res", "map_atm")
@@ -59,7 +65,9 @@ class InputChannel:
     ``name`` is the quantity an experiment names (``Experiment.quantity``), ``unit`` its SI
     unit; values outside [``low``, ``high``] are refused; ``acts_within`` is a narrower span
     where the component acts (beyond it the value is clipped: a regulator's set-point);
-    ``record_signals`` are the record signals that drive it, its own first. A refusal
+    ``record_signals`` are the record signals that drive it, its own first; ``channel`` the
+    kernel channel that carries it (one of ``LOOP_CHANNELS``: the drive's, or a load's,
+    ...). A refusal
     says ``"{where}: its {label} spans a to b; {rule}"`` with the values (and ``{low}``,
     ``{high}`` in ``rule``) shown in ``shown_in`` (unit, factor), or, where the owner
     gives ``check_value`` (a pressure's check, whose hint names a unit mistake), that
@@ -77,6 +85,7 @@ class InputChannel:
     shown_in: tuple[str, float] = ("", 1.0)
     acts_within: tuple[float, float] | None = None
     check_value: Callable[..., object] | None = field(default=None, compare=False)
+    channel: str = "drive"
 
     def __post_init__(self) -> None:
         if not self.name or not self.record_signals:
@@ -86,6 +95,9 @@ class InputChannel:
         if not self.low < self.high:
             raise ArgumentError(f"InputChannel {self.name!r}: low = {self.low!r}, high = "
                                 f"{self.high!r}: low must be below high")
+        if self.channel not in LOOP_CHANNELS:
+            raise ArgumentError(f"InputChannel {self.name!r}: channel = {self.channel!r}: "
+                                f"must be one of {', '.join(LOOP_CHANNELS)}")
 
     @property
     def record_signal(self) -> str:
@@ -173,3 +185,16 @@ class DeclaredInputs:
     def drive_label(self) -> str:
         """What takes its drive, for messages."""
         return self.drive_input.label
+
+    def routed(self, drive: Signal, drives: Mapping[str, Signal] | None = None
+               ) -> dict[str, Signal]:
+        """Channel name -> signal: ``drive`` on its drive's channel and each of ``drives``
+        (input name -> signal) on the channel its declared input names."""
+        routed = {self.drive_input.channel: drive}
+        for name, signal in (drives or {}).items():
+            if name == self.drive_quantity:
+                raise ExperimentError(f"drives = {{{name!r}: ...}}: {name!r} is the drive of "
+                                      f"this {type(self).__name__}, given as the drive; "
+                                      "drives names its other inputs")
+            routed[self.declared_input(name, "channels").channel] = signal
+        return routed

@@ -3,6 +3,7 @@ how long. An experiment is data; the actuator's valve says what its signal means
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -31,7 +32,9 @@ class Experiment:
     """A drive signal of a named quantity applied from ``t_start`` to ``t_end``.
 
     ``n_points`` output samples are written on a uniform grid unless ``t_eval`` is
-    given to ``simulate``.
+    given to ``simulate``. ``quantity`` names the model's drive (its first declared
+    input); ``drives`` drives its other inputs by name (input name -> signal: a
+    cylinder's ``load``), each where its model declares it.
     """
 
     drive: Signal
@@ -41,12 +44,14 @@ class Experiment:
     n_points: int = 2001
     name: str = "experiment"
     extra_breakpoints: tuple[float, ...] = field(default=())
+    drives: Mapping[str, Signal] = field(default_factory=dict)
 
     def __post_init__(self):
         name = str(self.name)
         check_type("drive", self.drive, Signal, where=name,
                    what="a Signal (Ramp, Step, Triangle, Sine, PiecewiseLinear, ...)")
         check_choice("quantity", self.quantity, QUANTITIES, where=name, error=ExperimentError)
+        object.__setattr__(self, "drives", self._checked_drives(name))
         t_start = check_finite("t_start", self.t_start, where=name, error=ExperimentError)
         if t_start < 0:
             raise ExperimentError(f"{name}: t_start = {t_start:g} s: must be >= 0 (a run "
@@ -58,14 +63,33 @@ class Experiment:
                                   f"{t_start:g} s")
         check_int("n_points", self.n_points, minimum=2, where=name, error=ExperimentError)
 
+    def _checked_drives(self, name: str) -> dict[str, Signal]:
+        """``drives`` as a dict of known quantities other than ``quantity`` to Signals."""
+        check_type("drives", self.drives, Mapping, where=name,
+                   what="a dict of input name -> Signal, e.g. {'load': Step(0.5, 0.0, 100.0)}")
+        for quantity, signal in self.drives.items():
+            check_choice("drives", quantity, QUANTITIES, where=name, error=ExperimentError)
+            if quantity == self.quantity:
+                raise ExperimentError(f"{name}: drives = {{{quantity!r}: ...}}: {quantity!r} "
+                                      "is the experiment's quantity, driven by drive; drives "
+                                      "names the model's other inputs")
+            check_type(f"drives[{quantity!r}]", signal, Signal, where=name,
+                       what="a Signal (Ramp, Step, Triangle, Sine, PiecewiseLinear, ...)")
+        return dict(self.drives)
+
     @property
     def unit(self) -> str:
         return QUANTITIES[self.quantity]
 
+    @property
+    def inputs(self) -> dict[str, Signal]:
+        """Every input it drives by name, its quantity first."""
+        return {self.quantity: self.drive, **self.drives}
+
     def breakpoints(self) -> np.ndarray:
         """Times the integrator must stop at, within [t_start, t_end]."""
-        bp = np.concatenate([self.drive.breakpoints(), self.extra_breakpoints,
-                             [self.t_start, self.t_end]])
+        bp = np.concatenate([*(signal.breakpoints() for signal in self.inputs.values()),
+                             self.extra_breakpoints, [self.t_start, self.t_end]])
         bp = np.unique(bp)
         return bp[(bp >= self.t_start) & (bp <= self.t_end)]
 
@@ -75,7 +99,7 @@ class Experiment:
     def with_duration(self, t_end: float) -> Experiment:
         """The same input over another duration."""
         return Experiment(self.drive, self.quantity, t_end, self.t_start, self.n_points,
-                          self.name, self.extra_breakpoints)
+                          self.name, self.extra_breakpoints, self.drives)
 
 
 def PressureCycle(high: float = 100e3, low: float = 20e3, period: float = 20.0,
@@ -110,24 +134,33 @@ def CommandCycle(low: float = 0.0, high: float = 1.0, period: float = 20.0, cycl
 
 
 def from_samples(time, values, quantity: str, name: str = "measured input",
-                 n_points: int | None = None) -> Experiment:
-    """A measured input (e.g. a recorded pressure), linear between samples."""
+                 n_points: int | None = None,
+                 drives: Mapping[str, Signal] | None = None) -> Experiment:
+    """A measured input (e.g. a recorded pressure), linear between samples; ``drives``
+    the model's other inputs by name (``Experiment.drives``)."""
     time = np.asarray(time, dtype=float)
     sig = PiecewiseLinear(time, values)
     n = int(n_points) if n_points else int(min(max(time.size, 2), 20001))
-    return Experiment(sig, quantity, float(time[-1]), float(time[0]), n, name)
+    return Experiment(sig, quantity, float(time[-1]), float(time[0]), n, name,
+                      drives=drives or {})
 
 
 def from_record(record, quantity: str, n_points: int | None = None,
-                signal: str | None = None) -> Experiment:
+                signal: str | None = None, drives: Mapping[str, str] | None = None
+                ) -> Experiment:
     """A measured record's ``signal`` (default: ``quantity``) as a simulation input of
     that ``quantity`` (pressure, command, ...), linear between samples; e.g. a
-    regulator's ``setpoint`` signal drives its ``pressure`` input."""
+    regulator's ``setpoint`` signal drives its ``pressure`` input. ``drives`` (input name
+    -> record signal) drives the model's other inputs with the record's signals, e.g.
+    ``{"load": "load"}``."""
     signal = quantity if signal is None else signal
-    record.require([signal], f"driving a simulation with its {signal}")
+    drives = dict(drives or {})
+    record.require([signal, *drives.values()], f"driving a simulation with its {signal}")
+    others = {name: PiecewiseLinear(record.time, record.signals[column])
+              for name, column in drives.items()}
     return from_samples(record.time, record.signals[signal], quantity,
                         name=Path(record.source).name or "record",
-                        n_points=n_points or record.time.size)
+                        n_points=n_points or record.time.size, drives=others)
 
 
 def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:

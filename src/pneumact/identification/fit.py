@@ -284,28 +284,47 @@ REBUILT_ENTRIES = 256
 
 
 def experiment_for(model, record: Record, smooth: bool = False):
-    """The record's measured input as the model's experiment; with ``smooth`` rebuilt
-    piecewise linear (``identification.inputs``), which also leaves the integrator far
-    fewer breakpoints than one per sample."""
+    """The record's measured input as the model's experiment, and each other input the
+    model declares whose record signal the record carries (a cylinder's ``load``) as
+    measured; with ``smooth`` the drive rebuilt piecewise linear
+    (``identification.inputs``), which also leaves the integrator far fewer breakpoints
+    than one per sample."""
+    from ..core.signals import PiecewiseLinear
     from ..experiments import from_record, from_samples
 
     drive = model.drive_input  # the declared input the record's signal drives
+    others = recorded_inputs(model, record)
     if not smooth:
-        return from_record(record, drive.name, signal=drive.record_signal)
+        return from_record(record, drive.name, signal=drive.record_signal, drives=others)
     knots_t, knots_v = rebuilt_input(model, record)
+    drives = {name: PiecewiseLinear(*rebuilt_signal(record, signal))
+              for name, signal in others.items()}
     return from_samples(knots_t, knots_v, drive.name,
                         name=os.path.basename(record.source) or "record",
-                        n_points=record.time.size)
+                        n_points=record.time.size, drives=drives)
+
+
+def recorded_inputs(model, record: Record) -> dict[str, str]:
+    """Input name -> record signal of each input of ``model`` beside its drive whose
+    record signal ``record`` carries."""
+    return {channel.name: channel.record_signal for channel in model.inputs()[1:]
+            if channel.record_signal in record}
 
 
 def rebuilt_input(model, record: Record) -> tuple[np.ndarray, np.ndarray]:
     """(knot times, knot values) of the record's measured input as rebuilt piecewise
     linear (``identification.inputs``) to drive ``model``; computed once per content
     (of its times and values: the same input cropped to the same samples is the same)."""
+    return rebuilt_signal(record, model.input_signal)
+
+
+def rebuilt_signal(record: Record, signal: str) -> tuple[np.ndarray, np.ndarray]:
+    """(knot times, knot values) of the record's ``signal`` rebuilt piecewise linear,
+    once per content (``rebuilt_input``)."""
     from .inputs import piecewise_linear_input
     from .memo import content_key
 
-    values = record[model.input_signal]
+    values = record[signal]
     key = content_key(record.time, values)
     with _REBUILT_LOCK:
         found = _REBUILT_INPUTS.get(key)

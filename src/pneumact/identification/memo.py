@@ -80,9 +80,13 @@ def remembered(function: Callable) -> Callable:
     return run
 
 
-def _key(model, knots: tuple[np.ndarray, np.ndarray], time: np.ndarray,
+def _key(model, experiment, knots: tuple[np.ndarray, np.ndarray], time: np.ndarray,
          names: Sequence[str], solver, values: Mapping[str, float]) -> tuple:
-    return (repr(model), content_key(*knots, time),
+    """The run's identity: the model, its drive's knots, its other inputs (a cylinder's
+    load), the output times, the parameters asked, the solver and the values."""
+    others = tuple((name, content_key(signal.encode()))
+                   for name, signal in experiment.drives.items())
+    return (repr(model), content_key(*knots, time), others,
             tuple(names), repr(solver), tuple(sorted((n, float(v)) for n, v in values.items())))
 
 
@@ -93,7 +97,7 @@ def sensitivities(model, experiment, knots: tuple[np.ndarray, np.ndarray], time:
     on ``knots``; remembered within ``remembering()`` (see the module docstring)."""
     from ..simulation import simulate_sensitivities
 
-    key = _key(model, knots, time, names, solver, values)
+    key = _key(model, experiment, knots, time, names, solver, values)
     with _LOCK:
         found = _STATE["runs"].get(key)
         if found is not None:

@@ -36,7 +36,7 @@ from ..errors import ParameterError, SolverError
 from ..options import Executor
 from ..progress import stop_threads
 from .estimates import Estimates
-from .fit import FitResult, input_signal, rebuilt_input
+from .fit import FitResult, experiment_for, input_signal, rebuilt_input
 from .inputs import knot_jacobian, noise_level, sensor_noise
 
 __all__ = ["InputNoise", "PredictionBand", "input_noise", "input_noise_covariance",
@@ -94,13 +94,14 @@ def input_replicates(models, records, values: dict[str, float], masks, *,
         knot_t, knot_v = rebuilt_input(model, record)
         projector = _knot_projector(record.time, knot_t, knot_v, sigma)
         own = {n: v for n, v in values.items() if n in _parameters_of(model)}
-        baselines[i] = (knot_t, knot_v, own)
+        others = experiment_for(model, record, smooth=True).drives  # its load, ...
+        baselines[i] = (knot_t, knot_v, own, others)
         jobs += [(i, projector @ rng.normal(0.0, sigma, record.time.size))
                  for _ in range(replicates)]
 
     def run(i: int, move: np.ndarray | None) -> np.ndarray | None:
         model, record = models[i], records[i]
-        knot_t, knot_v, own = baselines[i]
+        knot_t, knot_v, own, others = baselines[i]
         times, knots = knot_t.copy(), knot_v.copy()
         if move is not None:
             n_in = knot_t.size - 2
@@ -109,7 +110,7 @@ def input_replicates(models, records, values: dict[str, float], masks, *,
             if np.any(np.diff(times) <= 0):
                 return None  # a knot moved past a neighbour: not a rebuilt input
         experiment = from_samples(times, knots, model.drive_quantity,
-                                  n_points=record.time.size)
+                                  n_points=record.time.size, drives=others)
         try:
             return simulate(model, experiment, solver, t_eval=record.time,
                             values=own)[signal][masks[i]]

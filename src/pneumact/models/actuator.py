@@ -18,6 +18,8 @@ from .pneumatics import ChamberLaw, Isothermal
 from .valves import PressureSource, Valve
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from ..parameters.files import ParameterSetLike
     from ..parameters.parameter_set import ParameterSet
 
@@ -157,13 +159,16 @@ class Actuator(DeclaredInputs):
         that every loaded actuator of a combination shares one kernel."""
         return {"HAS_LOAD": self.has_load}
 
-    def channels(self, drive: Signal) -> list[Signal | None]:
+    def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
+                 ) -> list[Signal | None]:
+        """Its valve's drive (and any other input ``drives`` names: it declares none), its
+        loads and its valve's area maps."""
         res_map, atm_map = self.valve.maps()
         zero = Constant(0.0) if self.has_load else None
-        return in_order({"drive": drive,
-                         "load_t": self.load if self.load is not None else zero,
+        return in_order({"load_t": self.load if self.load is not None else zero,
                          "load_x": self.load_map if self.load_map is not None else zero,
-                         "map_res": res_map, "map_atm": atm_map})
+                         "map_res": res_map, "map_atm": atm_map,
+                         **self.routed(drive, drives)})
 
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Actuator:

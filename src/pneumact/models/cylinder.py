@@ -28,6 +28,7 @@ The compiled functions read the block ``CYLINDER_BLOCK`` at offset ``o`` of ``p`
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, ClassVar
 
@@ -909,13 +910,25 @@ SPOOL_INPUT = InputChannel(
                                 "(1 extends, -1 retracts, 0 closes the centre)")
 
 
+#: the external load force on the rod, against extension: an input beside the spool
+#: command, on the load-against-time channel the template reads; a record's ``load``
+#: drives it (a cylinder's run writes its load under that name). 1 MN bounds what a
+#: pneumatic cylinder meets (a 320 mm bore at 16 bar pushes 130 kN).
+LOAD_INPUT = InputChannel(
+    "load", "N", -1e6, 1e6, record_signals=("load",), channel="load_t",
+    description="external force on the rod, against extension",
+    label="load force", rule="a load force on a pneumatic cylinder must stay within "
+                             "[{low:g}, {high:g}] N (is it in N?)")
+
+
 @dataclass(frozen=True, eq=False)
 class Cylinder(DeclaredInputs):
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
     friction law on its piston, driven through a closed-centre 5/3 proportional valve by
     a spool command u ∈ [−1, 1] (u > 0 extends). ``chamber`` is the gas law of both
     chambers (``HeatTransfer()``: their energy equations, temperatures as states);
-    ``load`` an external force F_load(t) [N] against extension (zero by default);
+    ``load`` an external force F_load(t) [N] against extension (None, the default: the
+    input ``load``, which an experiment drives by name, zero where it does not);
     ``spool_lag`` the order of the spool's dynamics: 0 (or False, the default) follows the
     command at once, 1 (or True) with the time constant ``spool_tau`` (a state), 2 as a
     second-order system (``spool_omega``, ``spool_zeta``; two states)."""
@@ -963,8 +976,20 @@ class Cylinder(DeclaredInputs):
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
     def inputs(self) -> tuple[InputChannel, ...]:
-        """Its 5/3 valve's spool command u in [-1, 1] (``SPOOL_INPUT``)."""
-        return (SPOOL_INPUT,)
+        """Its 5/3 valve's spool command u in [-1, 1] (``SPOOL_INPUT``), then its load
+        force (``LOAD_INPUT``) unless the cylinder holds one (``load=``)."""
+        return (SPOOL_INPUT,) if self.load is not None else (SPOOL_INPUT, LOAD_INPUT)
+
+    def declared_input(self, name: str, who: str) -> InputChannel:
+        """Its input named ``name``; the load of a cylinder that holds one is refused
+        saying so (it is no input then)."""
+        if name == LOAD_INPUT.name and self.load is not None:
+            from ..errors import ExperimentError
+
+            raise ExperimentError(f"{who} drives {name!r}, but this Cylinder holds its load "
+                                  f"(load = {self.load!r}): drop load= to drive the input "
+                                  f"{LOAD_INPUT.describe()}")
+        return super().declared_input(name, who)
 
     @property
     def input_signals(self) -> tuple[str, ...]:
@@ -1021,9 +1046,12 @@ class Cylinder(DeclaredInputs):
                 chamber_part("chamber_b", "rod-side chamber B"), self.friction.part(),
                 spool_part(self.spool_lag), thermal_part(self.chamber))
 
-    def channels(self, drive: Signal) -> list[Signal | None]:
+    def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
+                 ) -> list[Signal | None]:
+        """The spool command ``drive`` and the inputs ``drives`` names (its load) on their
+        channels; the load it holds, or none, where no experiment drives it."""
         load = self.load if self.load is not None else Constant(0.0)
-        return in_order({"drive": drive, "load_t": load})
+        return in_order({LOAD_INPUT.channel: load, **self.routed(drive, drives)})
 
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Cylinder:

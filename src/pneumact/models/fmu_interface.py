@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Protocol
 from ..core.channels import CH_DRIVE, CH_LOAD_T
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from ..core.signals import Signal
     from ..parameters.parameter_set import ParameterSet
 
@@ -83,7 +85,8 @@ class FmuModel(Protocol):
     @property
     def params(self) -> ParameterSet: ...
 
-    def channels(self, drive: Signal, /) -> list[Signal | None]: ...
+    def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None, /
+                 ) -> list[Signal | None]: ...
 
     def describe(self) -> str: ...
 

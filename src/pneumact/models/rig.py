@@ -20,6 +20,9 @@ from ..parameters.catalogue import ParameterSpec, declare
 from .friction import FrictionModel, LuGre
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from ..core.signals import Signal
     from ..parameters.files import ParameterSetLike
     from ..parameters.parameter_set import ParameterSet
 
@@ -214,8 +217,11 @@ class FrictionRig(DeclaredInputs):
                    label=f"{self.drive} drive", key="spring" if spring else "driven")
         return rig, self.friction.part()
 
-    def channels(self, drive_signal):
-        return in_order({"drive": drive_signal})
+    def channels(self, drive_signal: Signal, drives: Mapping[str, Signal] | None = None
+                 ) -> list[Signal | None]:
+        """Its drive on its channel (and any other input ``drives`` names: it declares
+        none)."""
+        return in_order(self.routed(drive_signal, drives))
 
     def describe(self) -> str:
         return f"FrictionRig(friction={self.friction!r}, drive={self.drive!r})"

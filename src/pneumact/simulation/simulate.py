@@ -42,8 +42,10 @@ class Model(Protocol):
     ``Cylinder`` or a ``control.ClosedLoop`` has it (``check_model`` checks it at run time).
 
     ``inputs()`` declares what drives it (``core.channels.InputChannel``: name, unit,
-    range, record signals; its drive first, declared by the component that owns it), and
-    the rest is read from there: ``drive_quantity`` is what the experiment's signal is
+    range, record signals, channel; its drive first, declared by the component that owns
+    it; an experiment drives the others by name, ``Experiment.drives``, which
+    ``channels(drive, drives)`` puts on their channels), and the rest is read from there:
+    ``drive_quantity`` is what the experiment's signal is
     (pressure, command, force, position...); ``input_signal`` the record signal that
     drives the model (a regulator's logged ``setpoint``, a ``pressure``, a ``command``, a
     loop's ``position_setpoint``); ``input_range`` the values it acts over;
@@ -107,7 +109,11 @@ class Model(Protocol):
 
     def parts(self) -> tuple[Part, ...]: ...
 
-    def channels(self, drive: Signal, /) -> list[Signal | None]: ...
+    def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None, /
+                 ) -> list[Signal | None]:
+        """The kernel's signals: ``drive`` on its drive's channel, each of ``drives``
+        (its other inputs by name) on its own."""
+        ...
 
     def breakpoints(self, bp: np.ndarray, channels: list[Signal | None], t_start: float,
                     t_end: float, /) -> np.ndarray: ...
@@ -131,15 +137,22 @@ def check_experiment(experiment, where: str = "simulate") -> None:
 
 
 def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
-    """The experiment must drive an input the model declares, by name, with values in its
-    declared range (an absolute pressure, a command in [0, 1], a set-point within the
-    stroke); one ExperimentError otherwise, naming the input, the model and its inputs."""
+    """The experiment must drive the model's drive by its quantity and only inputs the
+    model declares by name (``Experiment.drives``), each with values in its declared range
+    (an absolute pressure, a command in [0, 1], a set-point within the stroke, a load
+    force); one ExperimentError otherwise, naming the input, the model and its inputs."""
     check_model(model, where)
     check_experiment(experiment, where)
     who = f"experiment '{experiment.name}'"
-    declared = model.declared_input(experiment.quantity, who)
-    low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
-    declared.check(low, high, who)
+    for name, signal in experiment.inputs.items():
+        declared = model.declared_input(name, who)
+        if name == experiment.quantity and declared.name != model.drive_quantity:
+            raise ExperimentError(
+                f"{who} drives {name!r} as its quantity, but the drive of this "
+                f"{type(model).__name__} is {model.drive_quantity!r}: drive "
+                f"{model.drive_quantity!r} and give {name!r} in drives={{{name!r}: ...}}")
+        low, high = signal.extremes(experiment.t_start, experiment.t_end)
+        declared.check(low, high, who)
 
 
 def model_stroke(model: Model) -> float | None:
@@ -238,7 +251,7 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
         assembly.update(vec, values)
     else:
         kernel.derive(vec)
-    channels = model.channels(experiment.drive)
+    channels = model.channels(experiment.drive, experiment.drives)
     sig, ptr = pack_channels(channels)
     bp = _breakpoints(model, experiment, channels)
     t_out = _output_times(experiment, t_eval)

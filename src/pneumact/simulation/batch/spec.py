@@ -54,7 +54,7 @@ class BatchSpec:
 
         model, exp, solver = self.model, self.experiment, self.solver
         assembly = assemble(model)
-        channels = model.channels(exp.drive)
+        channels = model.channels(exp.drive, exp.drives)
         return {
             "model": {
                 "type": type(model).__name__,
