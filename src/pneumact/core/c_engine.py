@@ -44,12 +44,14 @@ from . import codegen
 from .c_abi import Arena, array_struct
 from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
 from .c_build import shared_library_suffix as _suffix
+from .c_shipped import read_shipped, translation_key
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
            "c_kernel", "cached_library", "check_engine", "current_engine", "engine_kernel",
-           "engine_scope", "engine_setting", "library_functions", "library_path",
-           "sources_digest"]
+           "engine_scope", "engine_setting", "kernel_translation_key", "library_functions",
+           "library_path", "shipped_name", "sources_digest", "translate_kernel",
+           "translate_roots"]
 
 ENGINES = ("auto", "c", "numba")
 ENGINE_VARIABLE = "PNEUMACT_ENGINE"
@@ -264,9 +266,8 @@ class CKernel:
             if group in self._groups:
                 return
             target = library_path(self._spec, self._compiler, group)
-            library, header = cached_library(  # the groups share their typing
-                target, self._compiler, lambda: _roots(self._module, group),
-                self._module.__name__)
+            library, header = cached_library(
+                target, self._compiler, lambda: _translation(self._module, self._spec, group))
             for name, function in library_functions(library, header).items():
                 if name in GROUPS[group]:
                     setattr(self, name, function)
@@ -335,39 +336,72 @@ def library_path(spec: codegen.KernelSpec, compiler: str, group: str = "run") ->
         f"{tail}{_suffix()}"
 
 
-def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: str,
-           share: str | None = None) -> None:
-    """Translate the entry points ``roots`` (sharing the typing of earlier translations
-    named ``share``) and compile them into ``target``, its header beside it (both
-    atomically, the header first)."""
+def kernel_translation_key(spec: codegen.KernelSpec, group: str = "run") -> str:
+    """The key of the C of ``spec``'s library ``group`` (``c_shipped.translation_key``
+    over the kernel's content key: the same on every machine)."""
+    return translation_key(f"{codegen.content_key(spec)} {group}", ())
+
+
+def shipped_name(spec: codegen.KernelSpec, group: str = "run") -> str:
+    """The name a shipped translation of ``spec``'s library ``group`` goes by."""
+    return f"{spec.label}-{group}"
+
+
+def _translation(module: ModuleType, spec: codegen.KernelSpec, group: str) -> tuple[str, str]:
+    """(C source, header) of ``spec``'s library ``group``: shipped with the package where
+    its key matches, else translated (the groups of one kernel share their typing)."""
+    shipped = read_shipped(shipped_name(spec, group), kernel_translation_key(spec, group))
+    return shipped if shipped is not None else _translate_module(module, group)
+
+
+def translate_kernel(spec: codegen.KernelSpec, group: str = "run") -> tuple[str, str]:
+    """(C source, header) of ``spec``'s library ``group`` translated now, never the
+    shipped one (what ``tools/ship_c.py`` ships, and what its test compares with)."""
+    return _translate_module(codegen.load(spec), group)
+
+
+def _translate_module(module: ModuleType, group: str) -> tuple[str, str]:
+    return translate_roots(_roots(module, group), module.__name__)
+
+
+def translate_roots(roots: dict[str, tuple[Callable, Sequence]],
+                    share: str | None = None) -> tuple[str, str]:
+    """(C source, header) of the entry points ``roots`` (entry name -> (function, numba
+    argument types)), translated by the back end (``share``: as in
+    ``c_source.translate``)."""
     from .c_source import translate
 
     unit = translate(roots, share)
+    return unit.source, unit.header
+
+
+def _build(translation: tuple[str, str], target: Path, compiler: str) -> None:
+    """Compile ``translation`` (C source, header) into ``target``, its header beside it
+    (both atomically, the header first)."""
+    source_text, header_text = translation
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".cbuild-") as tmp:
         source = Path(tmp) / "kernel.c"
-        source.write_text(unit.source, encoding="utf-8")
+        source.write_text(source_text, encoding="utf-8")
         built = Path(tmp) / f"kernel{_suffix()}"
         compile_library(compiler, [source], built, FLAGS)
         staged_header = Path(tmp) / "kernel.h"
-        staged_header.write_text(unit.header, encoding="utf-8")
+        staged_header.write_text(header_text, encoding="utf-8")
         os.replace(staged_header, target.with_suffix(".h"))
         os.replace(built, target)
 
 
 def cached_library(target: Path, compiler: str,
-                   roots: Callable[[], dict[str, tuple[Callable, Sequence]]],
-                   share: str | None = None) -> tuple[Path, str]:
-    """(library, header text) at ``target``: from the disk cache, else ``roots()`` (entry
-    name -> (function, numba argument types)) translated (``share``: as in
-    ``c_source.translate``) and built by ``compiler`` once per machine (several
-    processes at once build it once)."""
+                   translation: Callable[[], tuple[str, str]]) -> tuple[Path, str]:
+    """(library, header text) at ``target``: from the disk cache, else ``translation()``
+    (its C source and header: shipped, or translated) built by ``compiler`` once per
+    machine (several processes at once build it once)."""
     header = target.with_suffix(".h")
     if not (target.exists() and header.exists()):
         target.parent.mkdir(parents=True, exist_ok=True)
         with file_lock(target.with_name(f".{target.stem}.lock")):
             if not (target.exists() and header.exists()):
                 announce_build()
-                _build(roots(), target, compiler, share)
+                _build(translation(), target, compiler)
     return target, header.read_text(encoding="utf-8")
 
 
