@@ -80,3 +80,60 @@ print("TRANSLATED", "pneumact.core.c_source" in sys.modules, "NUMBA", "numba" in
     assert libraries[0].startswith("pneumact_common-"), libraries
     assert libraries[1].startswith("pneumact_kernel_actuator_lugre_source_"), libraries
     assert (tmp_path / "out" / "hysteresis.png").is_file()
+
+
+def _spec(valve):
+    from conftest import load_quietly
+    from pneumact.core.assembly import assemble
+
+    return assemble(pneumact.Actuator(load_quietly("vgt-paper"), valve=valve)).kernel_spec()
+
+
+@pytest.mark.skipif(compiler_path() is None, reason="no C compiler: the C engine cannot run")
+def test_the_kernel_is_built_ahead_in_a_thread_only_from_shipped_c(tmp_path, monkeypatch):
+    """``build_ahead``: the default model's library (shipped) is built by a thread while
+    the block runs; a model whose C is not shipped is left to the run (its translation
+    imports numba, which two threads must not import at once); nothing on numba."""
+    import threading
+
+    from pneumact.core.c_engine import build_ahead, engine_scope, library_path
+
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))
+    shipped, other = _spec(pneumact.PressureSource()), _spec(pneumact.PressureRegulator())
+    compiler = compiler_path()
+    assert compiler is not None
+    with engine_scope("numba"), build_ahead(shipped):
+        assert "pneumact-build-ahead" not in {t.name for t in threading.enumerate()}
+    with engine_scope("c"), build_ahead(other):
+        assert "pneumact-build-ahead" not in {t.name for t in threading.enumerate()}
+    with engine_scope("c"), build_ahead(shipped):
+        assert "pneumact-build-ahead" in {t.name for t in threading.enumerate()}
+    assert library_path(shipped, compiler).exists()  # built, and joined at the block's end
+    assert not library_path(other, compiler).exists()
+
+
+@pytest.mark.skipif(compiler_path() is None, reason="no C compiler: the C engine cannot run")
+def test_a_build_ahead_that_fails_is_raised_by_the_run_and_not_tried_twice(tmp_path,
+                                                                          monkeypatch):
+    from pneumact.core import c_engine
+    from pneumact.core.c_build import CBuildError
+    from pneumact.core.c_engine import build_ahead, c_kernel, engine_scope
+
+    calls = []
+
+    def failing(compiler, sources, output, flags):
+        calls.append(output)
+        raise CBuildError("cc: out of disk space")
+
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(c_engine, "compile_library", failing)
+    spec = _spec(pneumact.PressureSource())
+    with engine_scope("c"), build_ahead(spec):
+        pass
+    assert len(calls) == 1
+    with pytest.raises(CBuildError, match="out of disk space"):
+        c_kernel(spec)
+    assert len(calls) == 1  # the thread's error, not a second build
+    with pytest.raises(CBuildError, match="out of disk space"):
+        c_kernel(spec)  # a later call builds again
+    assert len(calls) == 2

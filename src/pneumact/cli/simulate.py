@@ -66,7 +66,7 @@ def simulate(
     cylinder (simulation.csv and response.png)."""
     with user_errors():
         import pneumact as pa
-        from pneumact.simulation.simulate import check_drive
+        from pneumact.simulation.simulate import check_drive_while_building
 
         out = check_out_dir("--out", out)
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
@@ -79,7 +79,8 @@ def simulate(
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)
-        check_drive(actuator, experiment)  # a clear error before any progress display
+        # a clear error before any progress display; the kernel's compiler runs meanwhile
+        check_drive_while_building(actuator, experiment)
         result = run_with_progress(
             lambda report: pa.simulate(actuator, experiment, solver, progress=report))
         summary = result.summary()
@@ -138,11 +139,11 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
 def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     """One run of the cylinder: simulation.csv, response.png and its summary."""
     import pneumact as pa
-    from pneumact.simulation.simulate import check_drive
+    from pneumact.simulation.simulate import check_drive_while_building
 
     parameter_set, cylinder = build_cylinder(options)
     experiment = cylinder_experiment(options, parameter_set)
-    check_drive(cylinder, experiment)
+    check_drive_while_building(cylinder, experiment)
     result = run_with_progress(lambda report: pa.simulate(
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
     use_agg()

@@ -21,6 +21,7 @@ back end translates the model, numba otherwise, with a warning saying why).
 
 from __future__ import annotations
 
+import contextvars
 import ctypes
 import functools
 import hashlib
@@ -48,10 +49,10 @@ from .c_shipped import read_shipped, translation_key
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
-           "c_kernel", "cached_library", "check_engine", "current_engine", "engine_kernel",
-           "engine_scope", "engine_setting", "kernel_translation_key", "library_functions",
-           "library_path", "shipped_name", "sources_digest", "translate_kernel",
-           "translate_roots"]
+           "build_ahead", "c_kernel", "cached_library", "check_engine", "current_engine",
+           "engine_kernel", "engine_scope", "engine_setting", "kernel_translation_key",
+           "library_functions", "library_path", "shipped_name", "sources_digest",
+           "translate_kernel", "translate_roots"]
 
 ENGINES = ("auto", "c", "numba")
 ENGINE_VARIABLE = "PNEUMACT_ENGINE"
@@ -71,6 +72,9 @@ PREFIX = "pa_"
 _LOCK = threading.RLock()
 _KERNELS: dict[str, CKernel] = {}
 _REFUSED: dict[tuple[str, str | None, str], str] = {}
+#: library path -> why a ``build_ahead`` thread could not build it (raised once, then retried)
+_FAILED_AHEAD: dict[str, Exception] = {}
+_TRIED_AHEAD: set[str] = set()
 #: the engine a call chose for everything it runs in this thread (None: the setting)
 _SCOPE: ContextVar[str | None] = ContextVar("pneumact_engine", default=None)
 
@@ -350,8 +354,12 @@ def shipped_name(spec: codegen.KernelSpec, group: str = "run") -> str:
 def _translation(module: ModuleType, spec: codegen.KernelSpec, group: str) -> tuple[str, str]:
     """(C source, header) of ``spec``'s library ``group``: shipped with the package where
     its key matches, else translated (the groups of one kernel share their typing)."""
-    shipped = read_shipped(shipped_name(spec, group), kernel_translation_key(spec, group))
+    shipped = _shipped_translation(spec, group)
     return shipped if shipped is not None else _translate_module(module, group)
+
+
+def _shipped_translation(spec: codegen.KernelSpec, group: str) -> tuple[str, str] | None:
+    return read_shipped(shipped_name(spec, group), kernel_translation_key(spec, group))
 
 
 def translate_kernel(spec: codegen.KernelSpec, group: str = "run") -> tuple[str, str]:
@@ -437,8 +445,52 @@ def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:
     with _LOCK:
         kernel = _KERNELS.get(key)
         if kernel is None:
+            failed = _FAILED_AHEAD.pop(key, None)
+            if failed is not None:  # build_ahead tried: not twice
+                raise failed
             kernel = _KERNELS[key] = CKernel(module, spec, path)
         return kernel
+
+
+@contextmanager
+def build_ahead(spec: codegen.KernelSpec) -> Iterator[None]:
+    """Build ``spec``'s C kernel in a thread while the block runs, where the engine in
+    force may run C, its run library is not on disk yet and its C is shipped
+    (``core.c_shipped``): on a fresh install's first run its compiler then runs beside
+    what the block builds (``check_drive``'s signal library), a second less to wait on
+    two cores. Only shipped C: the thread then never imports numba (two threads
+    importing it at once can see its modules half made). Joined when the block ends
+    (not on Ctrl-C); a failure is raised by the next ``c_kernel`` of ``spec``
+    (``engine_kernel`` warns or raises as usual), so nothing is built twice."""
+    thread = None
+    compiler = compiler_path()
+    if current_engine() != "numba" and compiler is not None:
+        target = str(library_path(spec, compiler))
+        with _LOCK:
+            start = target not in _TRIED_AHEAD and not Path(target).exists()
+            _TRIED_AHEAD.add(target)  # once per process
+        if start and _shipped_translation(spec, "run") is not None:
+            thread = threading.Thread(target=contextvars.copy_context().run,
+                                      args=(_build_quietly, spec, target),
+                                      name="pneumact-build-ahead", daemon=True)
+            thread.start()
+    try:
+        yield
+    except Exception:
+        if thread is not None:
+            thread.join()
+        raise
+    if thread is not None:
+        thread.join()
+
+
+def _build_quietly(spec: codegen.KernelSpec, key: str) -> None:
+    """``c_kernel(spec)``, its error kept for the next ``c_kernel`` to raise."""
+    try:
+        c_kernel(spec)
+    except Exception as error:  # raised where the run asks for the kernel
+        with _LOCK:
+            _FAILED_AHEAD[key] = error
 
 
 def engine_kernel(spec: codegen.KernelSpec, engine: str) -> Kernel:

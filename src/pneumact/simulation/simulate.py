@@ -16,7 +16,7 @@ from ..checks import (
     shown,
 )
 from ..core.assembly import Assembly, assemble
-from ..core.c_engine import Kernel, check_engine, engine_scope
+from ..core.c_engine import Kernel, build_ahead, check_engine, engine_scope
 from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     from ..core.signals import Signal
     from ..parameters.parameter_set import ParameterSet
 
-__all__ = ["Model", "Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
-           "model_stroke", "prepare", "run_kernel", "simulate"]
+__all__ = ["Model", "Prepared", "check_drive", "check_drive_while_building", "check_experiment",
+           "check_model", "checked_solver", "model_stroke", "prepare", "run_kernel", "simulate"]
 
 
 @runtime_checkable
@@ -142,6 +142,17 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
     declared.check(low, high, who)
 
 
+def check_drive_while_building(model, experiment: Experiment, where: str = "simulate"
+                               ) -> None:
+    """``check_drive``, with ``model``'s C kernel built meanwhile where the engine in force
+    may run C and it is not built yet (``core.c_engine.build_ahead``): on a cold start its
+    compiler runs beside the one building the signal library that ``check_drive`` reads
+    the drive with."""
+    check_model(model, where)
+    with build_ahead(assemble(model).kernel_spec()):
+        check_drive(model, experiment, where)
+
+
 def model_stroke(model: Model) -> float | None:
     """x_max of a model whose plant is an actuator (set-points beyond it are impossible)."""
     return model.stroke
@@ -220,7 +231,7 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
     ``vector``), the input channels, breakpoints, output times, initial state (the
     model's equilibrium unless ``y0``) and absolute tolerances. ``values`` overrides
     parameter values by name (SI) for this run only."""
-    check_drive(model, experiment)
+    check_drive_while_building(model, experiment)
     assembly = assemble(model)
     n_out = len(assembly.output_names)
     check_memory(simulate_bytes(_output_count(experiment, t_eval), len(assembly.states),
