@@ -55,7 +55,7 @@ def test_the_shipped_c_is_a_fresh_translation_of_the_current_code():
 def test_a_cold_first_simulate_compiles_the_shipped_c_and_types_nothing(tmp_path):
     """``pneumact simulate`` with empty caches, in a process of its own: both libraries
     are built, and the C back end (which types through numba) is never imported, nor
-    numba itself."""
+    numba itself, nor pyplot (the figure is drawn on its own Agg canvas)."""
     script = f"""
 import sys
 from pneumact.cli import app
@@ -63,7 +63,8 @@ try:
     app(["simulate", "--out", {str(tmp_path / "out")!r}])
 except SystemExit as exit:
     assert not exit.code, exit.code
-print("TRANSLATED", "pneumact.core.c_source" in sys.modules, "NUMBA", "numba" in sys.modules)
+print("TRANSLATED", "pneumact.core.c_source" in sys.modules, "NUMBA", "numba" in sys.modules,
+      "PYPLOT", "matplotlib.pyplot" in sys.modules)
 """
     src = str(Path(pneumact.__file__).resolve().parents[1])
     env = {**os.environ, "PNEUMACT_ENGINE": "c", "PNEUMACT_CACHE_DIR": str(tmp_path / "k"),
@@ -75,6 +76,7 @@ print("TRANSLATED", "pneumact.core.c_source" in sys.modules, "NUMBA", "numba" in
     assert "TRANSLATED False NUMBA False" in run.stdout, (
         f"a cold first simulate translated C instead of compiling the shipped C; "
         f"{REGENERATE}\n{run.stdout[-2000:]}")
+    assert "PYPLOT False" in run.stdout  # the figure is only written (plotting.off_screen)
     libraries = sorted(p.name for p in (tmp_path / "k").glob(f"*{shared_library_suffix()}"))
     assert len(libraries) == 2, libraries  # what the first run builds: both shipped
     assert libraries[0].startswith("pneumact_common-"), libraries

@@ -86,9 +86,10 @@ def simulate(
         summary = result.summary()
         use_agg()
 
-        from pneumact.plotting import plot_hysteresis
+        from pneumact.plotting import off_screen, plot_hysteresis
 
-        figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
+        with off_screen():  # written, never shown: no pyplot
+            figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
         written = _write_run(out, result, figure, "hysteresis.png")
         _print_summary(summary, result, parameter_set["p_atm"], written)
 
@@ -148,10 +149,11 @@ def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
     use_agg()
 
-    from pneumact.plotting import plot_time_series
+    from pneumact.plotting import off_screen, plot_time_series
 
-    figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
-                                       "pressure_b"])
+    with off_screen():  # written, never shown: no pyplot
+        figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
+                                           "pressure_b"])
     written = _write_run(out, result, figure, "response.png")
     _print_cylinder_summary(result, float(parameter_set["x_max"]), written)
 
@@ -182,12 +184,10 @@ def _print_cylinder_summary(result, stroke: float, written) -> None:
 def _write_run(out, result, figure, png: str):
     """The run's CSV and ``figure`` as ``png`` into ``out`` (all or nothing); the figure
     closed whatever happens."""
-    import matplotlib.pyplot as plt
-
-    from pneumact.plotting import save_figure
+    from pneumact.plotting import close_figure, save_figure
 
     try:
         return write_outputs(out, {"simulation.csv": result.save,
                                    png: lambda path: save_figure(figure, path)})
     finally:
-        plt.close(figure)
+        close_figure(figure)
