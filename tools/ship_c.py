@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         for path in write_shipped(name, key, *fresh):
             print(f"wrote {path} ({path.stat().st_size} bytes)")
     if stale:
-        print(f"stale shipped C: {', '.join(stale)}; run python tools/ship_c.py",
+        print(f"stale shipped C: {', '.join(stale)}; run PYTHONPATH=src python tools/ship_c.py",
               file=sys.stderr)
     return 1 if stale else 0
 

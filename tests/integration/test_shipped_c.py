@@ -39,13 +39,14 @@ def _tool():
 def test_the_shipped_c_is_a_fresh_translation_of_the_current_code():
     from importlib.metadata import version
 
+    versions = (f"numba {version('numba')}, numpy {version('numpy')}, Python "
+                f"{sys.version_info[0]}.{sys.version_info[1]}")
     for name, (key, translate) in _tool().shipped_libraries().items():
         shipped = read_shipped(name, key)
         assert shipped is not None, (
-            f"no shipped C of {name} for the current code (key {key[:24]}; numba "
-            f"{version('numba')}, Python {sys.version_info[0]}.{sys.version_info[1]}): a "
-            f"kernel source, the C back end or numba changed since it was shipped; "
-            f"{REGENERATE}")
+            f"no shipped C of {name} for the current code (key {key[:24]}; {versions}): "
+            f"a kernel source, the C back end, numba, numpy (major.minor) or Python "
+            f"changed since it was shipped; {REGENERATE}")
         assert shipped == translate(), (
             f"the shipped C of {name} differs from a fresh translation of the same code "
             f"(a source the key does not cover changed); {REGENERATE}")

@@ -1,7 +1,7 @@
 """The shipped C translations (``core.c_shipped``): found by a key over what decides the C.
 
 A shipped file is read only under the key of the code it was translated from: an edit
-to a source, another numba or another Python changes the key, and the file is not read
+to a source, another numba, numpy or Python changes the key, and the file is not read
 (a fresh translation is made instead). The key names no path, so an installed copy of
 the package finds what the repository shipped.
 """
@@ -36,11 +36,12 @@ def test_the_key_follows_the_sources_and_not_their_folder(source, tmp_path):
     assert translation_key("lib run", [source]) != key
 
 
-def test_the_key_follows_numba_and_python(source, monkeypatch):
+@pytest.mark.parametrize("package", ["numba", "numpy"])
+def test_the_key_follows_numba_numpy_and_python(source, monkeypatch, package):
     key = translation_key("lib run", [source])
     real = importlib.metadata.version
     monkeypatch.setattr(importlib.metadata, "version",
-                        lambda name: "0.0.1" if name == "numba" else real(name))
+                        lambda name: "0.1.0" if name == package else real(name))
     assert translation_key("lib run", [source]) != key
     monkeypatch.undo()
     monkeypatch.setattr(c_shipped.sys, "version_info", (3, 99, 0))

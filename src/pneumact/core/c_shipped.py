@@ -9,8 +9,8 @@ shipped here as package data: ``shipped_c/<name>-<key>.c.gz`` and its ``.h``.
 
 Each is found by its ``translation_key``: a digest of the sources it is translated from
 (the kernel's generated text and every source file it depends on), the C back end's own
-sources, numba's version and Python's (major.minor): what decides the C, and nothing of
-the machine's. A shipped file whose key no longer matches is never read (an edit to an
+sources, numba's version, numpy's and Python's (major.minor): what decides the C, and
+nothing of the machine's. A shipped file whose key no longer matches is never read (an edit to an
 equation, to the back end or another numba translates afresh, as before), and
 ``tests/integration/test_shipped_c.py`` fails until it is regenerated:
 
@@ -43,18 +43,25 @@ _LOG = logging.getLogger("pneumact.engine")
 def translation_key(what: str, sources: Iterable[Path]) -> str:
     """The key of a translation of ``what`` (a kernel's content key and library group, or
     a library's name) from the files ``sources``: a digest of those, of the back end's
-    sources, of numba's version and of Python's major.minor (its bytecode, which numba
-    reads); no path, no machine."""
-    from importlib.metadata import version
-
+    sources and of the versions that decide numba's typing (``_versions``); no path,
+    no machine."""
     digest = hashlib.sha256(f"{FORMAT}\n{what}\n".encode())
     here = Path(__file__).parent
     for path in (*sources, *(here / name for name in BACK_END)):
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
-    python = ".".join(map(str, sys.version_info[:2]))
-    digest.update(f"numba {version('numba')}; python {python}".encode())
+    digest.update(_versions().encode())
     return digest.hexdigest()
+
+
+def _versions() -> str:
+    """numba's version, numpy's and Python's major.minor: numba types the kernels (by
+    numpy's rules for its functions) from Python's bytecode."""
+    from importlib.metadata import version
+
+    numpy = ".".join(version("numpy").split(".")[:2])
+    python = ".".join(map(str, sys.version_info[:2]))
+    return f"numba {version('numba')}; numpy {numpy}; python {python}"
 
 
 def shipped_path(name: str, key: str, folder: Path | None = None) -> Path:
