@@ -16,7 +16,7 @@ from ..checks import (
     shown,
 )
 from ..core.assembly import Assembly, assemble
-from ..core.c_engine import Kernel, build_ahead, check_engine, engine_scope
+from ..core.c_engine import Kernel, check_engine, engine_scope
 from ..core.channels import CH_LOAD_T
 from ..core.signals import pack_channels
 from ..errors import ArgumentTypeError, ExperimentError, ParameterError, SolverError
@@ -135,11 +135,7 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
     declared range (an absolute pressure, a command in [0, 1], a set-point within the
     stroke); one ExperimentError otherwise, naming the input, the model and its inputs."""
     check_model(model, where)
-    check_experiment(experiment, where)
-    who = f"experiment '{experiment.name}'"
-    declared = model.declared_input(experiment.quantity, who)
-    low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
-    declared.check(low, high, who)
+    _check_drive_of(model, experiment, where)
 
 
 def check_drive_while_building(model, experiment: Experiment, where: str = "simulate"
@@ -149,8 +145,17 @@ def check_drive_while_building(model, experiment: Experiment, where: str = "simu
     compiler runs beside the one building the signal library that ``check_drive`` reads
     the drive with."""
     check_model(model, where)
-    with build_ahead(assemble(model).kernel_spec()):
-        check_drive(model, experiment, where)
+    with assemble(model).building_kernel():
+        _check_drive_of(model, experiment, where)
+
+
+def _check_drive_of(model: Model, experiment: Experiment, where: str) -> None:
+    """``check_drive`` of a model already checked."""
+    check_experiment(experiment, where)
+    who = f"experiment '{experiment.name}'"
+    declared = model.declared_input(experiment.quantity, who)
+    low, high = experiment.drive.extremes(experiment.t_start, experiment.t_end)
+    declared.check(low, high, who)
 
 
 def model_stroke(model: Model) -> float | None:
