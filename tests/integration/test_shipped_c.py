@@ -140,3 +140,24 @@ def test_a_build_ahead_that_fails_is_raised_by_the_run_and_not_tried_twice(tmp_p
     with pytest.raises(CBuildError, match="out of disk space"):
         c_kernel(spec)  # a later call builds again
     assert len(calls) == 2
+
+
+@pytest.mark.skipif(compiler_path() is None, reason="no C compiler: the C engine cannot run")
+def test_an_assembly_holding_its_kernel_builds_nothing_ahead(tmp_path, monkeypatch):
+    """``Assembly.building_kernel`` is a null block once the assembly holds the kernel of
+    the engine in force (every run checks its drive inside it: a warm run pays nothing),
+    even where the disk cache has gone."""
+    import threading
+
+    from conftest import load_quietly
+    from pneumact.core.assembly import assemble
+    from pneumact.core.c_engine import engine_scope
+
+    monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path / "first"))
+    assembly = assemble(pneumact.Actuator(load_quietly("vgt-paper")))
+    with engine_scope("c"):
+        assert assembly.kernel.engine == "c"
+        monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path / "second"))  # empty
+        with assembly.building_kernel():
+            assert "pneumact-build-ahead" not in {t.name for t in threading.enumerate()}
+        assert not (tmp_path / "second").exists()
