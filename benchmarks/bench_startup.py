@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -73,8 +74,19 @@ print("MARKS " + json.dumps(marks))
 """
 
 
+def children_cpu() -> float:
+    """CPU seconds (user + system) of the finished child processes so far (their own
+    children, the C compiler, included)."""
+    try:
+        import resource
+    except ImportError:  # Windows: not measured
+        return math.nan
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def run(args: list[str], env: dict, out: Path) -> dict:
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), children_cpu()
     env = dict(env, PNEUMACT_BENCH_LAUNCH=repr(time.time()))
     proc = subprocess.run([sys.executable, "-c", CHILD, *args, "--out", str(out)], env=env,
                           capture_output=True, text=True, check=False)
@@ -84,6 +96,7 @@ def run(args: list[str], env: dict, out: Path) -> dict:
         raise RuntimeError(f"{args} failed: {proc.stderr[-2000:]}")
     result = json.loads(marks[-1][len("MARKS "):])
     result["wall"] = wall  # includes the interpreter's start and its exit
+    result["cpu"] = children_cpu() - cpu  # the command's CPU, the compiler's included
     return result
 
 
@@ -101,7 +114,8 @@ def cold_line(label: str, cold: dict, target: float) -> str:
     since_compile = cold["total"] - cold["kernel"]
     verdict = "met" if cold["wall"] <= target else "NOT met"
     return (f"{label}: whole command {cold['wall']:.1f} s (target <= {target:g} s: "
-            f"{verdict}); from the first kernel generation to the end {since_compile:.1f} s")
+            f"{verdict}), {cold['cpu']:.1f} s of CPU; from the first kernel generation to "
+            f"the end {since_compile:.1f} s")
 
 
 def measure(engine: str, repeats: int, src: Path) -> None:
@@ -126,9 +140,11 @@ def measure(engine: str, repeats: int, src: Path) -> None:
     overhead = statistics.median(w["integrator"] for w in warm)
     startup = statistics.median(w["interpreter"] for w in warm)
     whole = statistics.median(w["wall"] for w in warm)
+    cpu = statistics.median(w["cpu"] for w in warm)
     print(f"  warm pneumact simulate: before the integrator {overhead:.2f} s + interpreter "
           f"start {startup:.2f} s; whole command {whole:.2f} s (target <= {TARGET_WARM_S:g} s: "
-          f"{'met' if whole <= TARGET_WARM_S else 'NOT met'}; median of {repeats})")
+          f"{'met' if whole <= TARGET_WARM_S else 'NOT met'}; median of {repeats}), "
+          f"{cpu:.2f} s of CPU")
     print(f"  import pneumact: {imported:.2f} s (target <= {TARGET_IMPORT_S:g} s: "
           f"{'met' if imported <= TARGET_IMPORT_S else 'NOT met'}; median of 5)")
 

@@ -14,7 +14,8 @@ import io
 import os
 import sys
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextvars import ContextVar
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -33,8 +34,10 @@ __all__ = [
     "MAX_PANEL_COLUMNS",
     "PANELS_PER_PAGE",
     "SMALL_LENGTH",
+    "close_figure",
     "figure_writer",
     "label_log_axis",
+    "off_screen",
     "page_name",
     "page_names",
     "panel_grid",
@@ -46,6 +49,9 @@ __all__ = [
     "save_figure",
     "shown_unit",
 ]
+
+#: whether figures are made off screen (``off_screen``), in this thread
+_OFF_SCREEN: ContextVar[bool] = ContextVar("pneumact_off_screen", default=False)
 
 #: SI unit -> (display unit, factor applied to SI values).
 DISPLAY_UNITS: dict[str, tuple[str, float]] = {
@@ -155,12 +161,47 @@ def display_values(source: Any, name: str) -> tuple[np.ndarray, str]:
     return values * factor, f"{label} [{shown}]" if shown else label
 
 
+@contextlib.contextmanager
+def off_screen() -> Iterator[None]:
+    """Figures made in the block (``new_axes``, ``panel_grid``) are drawn on an Agg canvas
+    of their own, without pyplot: for figures only written to files (the command line),
+    pyplot's import and figure manager (~0.05 s of a warm command) are not needed and the
+    PNG is the same. Release them with ``close_figure``."""
+    token = _OFF_SCREEN.set(True)
+    try:
+        yield
+    finally:
+        _OFF_SCREEN.reset(token)
+
+
+def _subplots(nrows: int, ncols: int, **kwargs: Any) -> tuple[Figure, np.ndarray]:
+    """``plt.subplots(nrows, ncols, **kwargs)``, or the same figure on an Agg canvas of its
+    own inside ``off_screen``."""
+    if not _OFF_SCREEN.get():
+        import matplotlib.pyplot as plt
+
+        return plt.subplots(nrows, ncols, **kwargs)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=kwargs.pop("figsize", None))
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
+def close_figure(fig: Figure) -> None:
+    """Let pyplot forget ``fig`` (nothing to do for a figure ``off_screen`` made, nor
+    where pyplot was never imported)."""
+    if "matplotlib.pyplot" in sys.modules:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+
+
 def new_axes(nrows: int = 1, sharex: bool = True, height: float = 4.0):
     """A figure of ``nrows`` stacked axes: (figure, list of axes)."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(nrows, 1, sharex=sharex, squeeze=False,
-                             figsize=(7.0, max(height, 2.2 * nrows)))
+    fig, axes = _subplots(nrows, 1, sharex=sharex, squeeze=False,
+                          figsize=(7.0, max(height, 2.2 * nrows)))
     return fig, list(axes[:, 0])
 
 
@@ -170,13 +211,11 @@ def panel_grid(n: int, rows_per: int = 1, width: float = 4.6, height: float = 3.
     its residual), at most ``columns`` side by side, wrapping into rows; ``width`` and
     ``height`` [in] of one axes. Returns (figure, panels): ``panels[i]`` the list of the
     i-th panel's axes, top first; the grid's unused axes are hidden."""
-    import matplotlib.pyplot as plt
-
     n = max(1, int(n))
     cols = max(1, min(n, columns))
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows * rows_per, cols, squeeze=False,
-                             figsize=(width * cols, height * rows_per * rows))
+    fig, axes = _subplots(rows * rows_per, cols, squeeze=False,
+                          figsize=(width * cols, height * rows_per * rows))
     panels = [[axes[(i // cols) * rows_per + j, i % cols] for j in range(rows_per)]
               for i in range(n)]
     for i in range(n, rows * cols):
@@ -532,12 +571,10 @@ def figure_writer(make):
     path it is given and closed (so a long study does not keep its figures open)."""
 
     def write(path):
-        import matplotlib.pyplot as plt
-
         fig = make()
         try:
             write_png(fig, path, PNG_DPI)
         finally:
-            plt.close(fig)
+            close_figure(fig)
 
     return write

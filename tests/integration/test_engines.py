@@ -260,12 +260,13 @@ def test_a_model_the_back_end_cannot_translate_runs_on_numba_naming_the_construc
 
     monkeypatch.setenv("PNEUMACT_CACHE_DIR", str(tmp_path))  # nothing built yet
     monkeypatch.setattr(c_source, "translate", refuse)
-    model, experiment = _models()["source"]
+    # the regulator: the default model's C is shipped (core.c_shipped), never translated
+    model, experiment = _models()["regulator"]
     with pytest.warns(EngineWarning, match=r"does not translate a call of <gamma>"):
         run = pa.simulate(model, experiment, engine="auto")
     assert run.meta["engine"] == "numba"
     with pytest.raises(CSourceError, match="<gamma>"):
-        pa.simulate(_models()["source"][0], experiment, engine="c")
+        pa.simulate(_models()["regulator"][0], experiment, engine="c")
 
 
 def _output_signal(model, experiment) -> str:

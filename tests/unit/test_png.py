@@ -106,3 +106,33 @@ def test_ticks_computed_once_lay_out_and_draw_as_matplotlib_does(monkeypatch):
                         lambda fig: contextlib.nullcontext())
     assert cached == pngs(theirs)
     assert cached[0] != cached[1]  # the new limits were drawn
+
+
+@pytest.mark.parametrize("panels", [1, 3])
+def test_a_figure_made_off_screen_writes_the_same_png_as_pyplot_s(panels):
+    """``plotting.off_screen`` (the command line's figures: no pyplot) makes the figure
+    pyplot would, on an Agg canvas of its own: the same PNG, byte for byte."""
+    import matplotlib.pyplot as plt
+
+    from pneumact.plotting import close_figure, new_axes, off_screen, panel_grid
+
+    def draw() -> Figure:
+        fig, axes = new_axes(panels) if panels == 1 else panel_grid(panels, rows_per=2)
+        for k, ax in enumerate(np.ravel(axes)):
+            ax.plot(np.linspace(0, 1, 80), np.cos(np.linspace(0, 5 + k, 80)), label="cos")
+            ax.set_xlabel("time [s]")
+        np.ravel(axes)[0].legend()
+        return fig
+
+    on_pyplot = draw()
+    with off_screen():
+        alone = draw()
+    assert plt.fignum_exists(on_pyplot.number) and alone.canvas.manager is None  # no pyplot
+    pngs = []
+    for fig in (on_pyplot, alone):
+        buffer = io.BytesIO()
+        write_png(fig, buffer, DPI)
+        pngs.append(buffer.getvalue())
+        close_figure(fig)
+    assert pngs[0] == pngs[1]
+    assert not plt.fignum_exists(on_pyplot.number)  # closed

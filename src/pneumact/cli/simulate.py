@@ -66,7 +66,7 @@ def simulate(
     cylinder (simulation.csv and response.png)."""
     with user_errors():
         import pneumact as pa
-        from pneumact.simulation.simulate import check_drive
+        from pneumact.simulation.simulate import check_drive_while_building
 
         out = check_out_dir("--out", out)
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
@@ -79,15 +79,17 @@ def simulate(
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)
-        check_drive(actuator, experiment)  # a clear error before any progress display
+        # a clear error before any progress display; the kernel's compiler runs meanwhile
+        check_drive_while_building(actuator, experiment)
         result = run_with_progress(
             lambda report: pa.simulate(actuator, experiment, solver, progress=report))
         summary = result.summary()
         use_agg()
 
-        from pneumact.plotting import plot_hysteresis
+        from pneumact.plotting import off_screen, plot_hysteresis
 
-        figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
+        with off_screen():  # written, never shown: no pyplot
+            figure = plot_hysteresis(result, label=f"{parameter_set.name}, {friction}")
         written = _write_run(out, result, figure, "hysteresis.png")
         _print_summary(summary, result, parameter_set["p_atm"], written)
 
@@ -138,19 +140,20 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
 def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     """One run of the cylinder: simulation.csv, response.png and its summary."""
     import pneumact as pa
-    from pneumact.simulation.simulate import check_drive
+    from pneumact.simulation.simulate import check_drive_while_building
 
     parameter_set, cylinder = build_cylinder(options)
     experiment = cylinder_experiment(options, parameter_set)
-    check_drive(cylinder, experiment)
+    check_drive_while_building(cylinder, experiment)
     result = run_with_progress(lambda report: pa.simulate(
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
     use_agg()
 
-    from pneumact.plotting import plot_time_series
+    from pneumact.plotting import off_screen, plot_time_series
 
-    figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
-                                       "pressure_b"])
+    with off_screen():  # written, never shown: no pyplot
+        figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
+                                           "pressure_b"])
     written = _write_run(out, result, figure, "response.png")
     _print_cylinder_summary(result, float(parameter_set["x_max"]), written)
 
@@ -181,12 +184,10 @@ def _print_cylinder_summary(result, stroke: float, written) -> None:
 def _write_run(out, result, figure, png: str):
     """The run's CSV and ``figure`` as ``png`` into ``out`` (all or nothing); the figure
     closed whatever happens."""
-    import matplotlib.pyplot as plt
-
-    from pneumact.plotting import save_figure
+    from pneumact.plotting import close_figure, save_figure
 
     try:
         return write_outputs(out, {"simulation.csv": result.save,
                                    png: lambda path: save_figure(figure, path)})
     finally:
-        plt.close(figure)
+        close_figure(figure)

@@ -23,10 +23,12 @@ consistent.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import threading
 import weakref
 from collections.abc import Mapping, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from functools import cached_property
 from types import ModuleType
@@ -35,7 +37,7 @@ import numpy as np
 
 from ..errors import ComponentError, ParameterError
 from . import codegen
-from .c_engine import Kernel, current_engine, engine_kernel
+from .c_engine import Kernel, build_ahead, current_engine, engine_kernel
 from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
 __all__ = ["Assembly", "assemble"]
@@ -262,6 +264,14 @@ class Assembly:
                 if kernel is None:
                     kernel = self._kernels[engine] = engine_kernel(self._spec, engine)
         return kernel
+
+    def building_kernel(self) -> AbstractContextManager[None]:
+        """A block during which the kernel of the engine in force is built in a thread
+        where it can be (``c_engine.build_ahead``: a cold start's compiler beside what
+        the block builds); nothing to do once this assembly holds that kernel."""
+        if current_engine() in self._kernels:
+            return contextlib.nullcontext()
+        return build_ahead(self._spec)
 
     @property
     def numba_kernel(self) -> ModuleType:

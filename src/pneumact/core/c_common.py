@@ -28,10 +28,13 @@ from .c_engine import (
     current_engine,
     library_functions,
     sources_digest,
+    translate_roots,
 )
+from .c_shipped import read_shipped, translation_key
 from .jit import dispatcher_of
 
-__all__ = ["COMMON", "common_functions", "common_library_path", "on_engine"]
+__all__ = ["COMMON", "SHIPPED_NAME", "SOURCES", "common_functions", "common_library_path",
+           "common_translation_key", "on_engine", "translate_common"]
 
 #: the functions the library carries: entry name -> (module, function name)
 COMMON = {"eval_many": ("signals", "_eval_many"), "stroke": ("features", "_stroke"),
@@ -45,6 +48,10 @@ COMMON = {"eval_many": ("signals", "_eval_many"), "stroke": ("features", "_strok
           "loop_area": ("features", "_loop_area"),
           "turning_points": ("features", "_turning_points")}
 
+#: the modules the library's functions come from
+SOURCES = ("pneumact.core.signals", "pneumact.core.features")
+#: the name its shipped translation goes by (``core.c_shipped``)
+SHIPPED_NAME = "common"
 #: numba function name -> its entry
 _ENTRIES = {function: entry for entry, (_, function) in COMMON.items()}
 #: what decides where the compiler and the cache are
@@ -75,6 +82,25 @@ def _roots() -> dict[str, tuple[Callable, Sequence]]:
     modules = {"signals": signals, "features": features}
     return {f"pa_{entry}": (getattr(modules[module], name), argtypes[entry])
             for entry, (module, name) in COMMON.items()}
+
+
+def common_translation_key() -> str:
+    """The key of the library's C (``c_shipped.translation_key`` over the sources of the
+    signals and features and every pneumact file they import)."""
+    return translation_key(SHIPPED_NAME, codegen.dependency_files(SOURCES))
+
+
+def _translation() -> tuple[str, str]:
+    """(C source, header) of the library: shipped with the package where its key
+    matches, else translated."""
+    shipped = read_shipped(SHIPPED_NAME, common_translation_key())
+    return shipped if shipped is not None else translate_common()
+
+
+def translate_common() -> tuple[str, str]:
+    """(C source, header) of the library translated now, never the shipped one (what
+    ``tools/ship_c.py`` ships, and what its test compares with)."""
+    return translate_roots(_roots())
 
 
 def common_library_path(compiler: str) -> Path:
@@ -115,7 +141,7 @@ def common_functions(compiler: str | None = None) -> dict[str, CFunction]:
         loaded = _LOADED.get(place)
         if loaded is None:
             target = common_library_path(path)
-            library, header = cached_library(target, path, _roots)
+            library, header = cached_library(target, path, _translation)
             loaded = _LOADED[place] = library_functions(library, header)
     return loaded
 

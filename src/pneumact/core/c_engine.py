@@ -21,6 +21,7 @@ back end translates the model, numba otherwise, with a warning saying why).
 
 from __future__ import annotations
 
+import contextvars
 import ctypes
 import functools
 import hashlib
@@ -44,12 +45,14 @@ from . import codegen
 from .c_abi import Arena, array_struct
 from .c_build import CBuildError, compile_library, compiler_path, missing_compiler
 from .c_build import shared_library_suffix as _suffix
+from .c_shipped import read_shipped, translation_key
 from .compile_lock import announce_build, file_lock
 
 __all__ = ["ENGINES", "ENGINE_VARIABLE", "CFunction", "CKernel", "EngineWarning", "Kernel",
-           "c_kernel", "cached_library", "check_engine", "current_engine", "engine_kernel",
-           "engine_scope", "engine_setting", "library_functions", "library_path",
-           "sources_digest"]
+           "build_ahead", "c_kernel", "cached_library", "check_engine", "current_engine",
+           "engine_kernel", "engine_scope", "engine_setting", "kernel_translation_key",
+           "library_functions", "library_path", "shipped_name", "sources_digest",
+           "translate_kernel", "translate_roots"]
 
 ENGINES = ("auto", "c", "numba")
 ENGINE_VARIABLE = "PNEUMACT_ENGINE"
@@ -69,6 +72,11 @@ PREFIX = "pa_"
 _LOCK = threading.RLock()
 _KERNELS: dict[str, CKernel] = {}
 _REFUSED: dict[tuple[str, str | None, str], str] = {}
+#: library path -> why a ``build_ahead`` thread could not build it (raised once, then retried)
+_FAILED_AHEAD: dict[str, Exception] = {}
+#: (kernel spec, the settings below) ``build_ahead`` has looked at: once each per process
+_LOOKED_AHEAD: set[tuple] = set()
+_AHEAD_SETTINGS = ("CC", "PATH", "PNEUMACT_CACHE_DIR", "XDG_CACHE_HOME", "HOME")
 #: the engine a call chose for everything it runs in this thread (None: the setting)
 _SCOPE: ContextVar[str | None] = ContextVar("pneumact_engine", default=None)
 
@@ -264,9 +272,8 @@ class CKernel:
             if group in self._groups:
                 return
             target = library_path(self._spec, self._compiler, group)
-            library, header = cached_library(  # the groups share their typing
-                target, self._compiler, lambda: _roots(self._module, group),
-                self._module.__name__)
+            library, header = cached_library(
+                target, self._compiler, lambda: _translation(self._module, self._spec, group))
             for name, function in library_functions(library, header).items():
                 if name in GROUPS[group]:
                     setattr(self, name, function)
@@ -335,39 +342,76 @@ def library_path(spec: codegen.KernelSpec, compiler: str, group: str = "run") ->
         f"{tail}{_suffix()}"
 
 
-def _build(roots: dict[str, tuple[Callable, Sequence]], target: Path, compiler: str,
-           share: str | None = None) -> None:
-    """Translate the entry points ``roots`` (sharing the typing of earlier translations
-    named ``share``) and compile them into ``target``, its header beside it (both
-    atomically, the header first)."""
+def kernel_translation_key(spec: codegen.KernelSpec, group: str = "run") -> str:
+    """The key of the C of ``spec``'s library ``group`` (``c_shipped.translation_key``
+    over the kernel's content key: the same on every machine)."""
+    return translation_key(f"{codegen.content_key(spec)} {group}", ())
+
+
+def shipped_name(spec: codegen.KernelSpec, group: str = "run") -> str:
+    """The name a shipped translation of ``spec``'s library ``group`` goes by."""
+    return f"{spec.label}-{group}"
+
+
+def _translation(module: ModuleType, spec: codegen.KernelSpec, group: str) -> tuple[str, str]:
+    """(C source, header) of ``spec``'s library ``group``: shipped with the package where
+    its key matches, else translated (the groups of one kernel share their typing)."""
+    shipped = _shipped_translation(spec, group)
+    return shipped if shipped is not None else _translate_module(module, group)
+
+
+def _shipped_translation(spec: codegen.KernelSpec, group: str) -> tuple[str, str] | None:
+    return read_shipped(shipped_name(spec, group), kernel_translation_key(spec, group))
+
+
+def translate_kernel(spec: codegen.KernelSpec, group: str = "run") -> tuple[str, str]:
+    """(C source, header) of ``spec``'s library ``group`` translated now, never the
+    shipped one (what ``tools/ship_c.py`` ships, and what its test compares with)."""
+    return _translate_module(codegen.load(spec), group)
+
+
+def _translate_module(module: ModuleType, group: str) -> tuple[str, str]:
+    return translate_roots(_roots(module, group), module.__name__)
+
+
+def translate_roots(roots: dict[str, tuple[Callable, Sequence]],
+                    share: str | None = None) -> tuple[str, str]:
+    """(C source, header) of the entry points ``roots`` (entry name -> (function, numba
+    argument types)), translated by the back end (``share``: as in
+    ``c_source.translate``)."""
     from .c_source import translate
 
     unit = translate(roots, share)
+    return unit.source, unit.header
+
+
+def _build(translation: tuple[str, str], target: Path, compiler: str) -> None:
+    """Compile ``translation`` (C source, header) into ``target``, its header beside it
+    (both atomically, the header first)."""
+    source_text, header_text = translation
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".cbuild-") as tmp:
         source = Path(tmp) / "kernel.c"
-        source.write_text(unit.source, encoding="utf-8")
+        source.write_text(source_text, encoding="utf-8")
         built = Path(tmp) / f"kernel{_suffix()}"
         compile_library(compiler, [source], built, FLAGS)
         staged_header = Path(tmp) / "kernel.h"
-        staged_header.write_text(unit.header, encoding="utf-8")
+        staged_header.write_text(header_text, encoding="utf-8")
         os.replace(staged_header, target.with_suffix(".h"))
         os.replace(built, target)
 
 
 def cached_library(target: Path, compiler: str,
-                   roots: Callable[[], dict[str, tuple[Callable, Sequence]]],
-                   share: str | None = None) -> tuple[Path, str]:
-    """(library, header text) at ``target``: from the disk cache, else ``roots()`` (entry
-    name -> (function, numba argument types)) translated (``share``: as in
-    ``c_source.translate``) and built by ``compiler`` once per machine (several
-    processes at once build it once)."""
+                   translation: Callable[[], tuple[str, str]]) -> tuple[Path, str]:
+    """(library, header text) at ``target``: from the disk cache, else ``translation()``
+    (its C source and header: shipped, or translated) built by ``compiler`` once per
+    machine (several processes at once build it once)."""
     header = target.with_suffix(".h")
     if not (target.exists() and header.exists()):
         target.parent.mkdir(parents=True, exist_ok=True)
         with file_lock(target.with_name(f".{target.stem}.lock")):
             if not (target.exists() and header.exists()):
                 announce_build()
-                _build(roots(), target, compiler, share)
+                _build(translation(), target, compiler)
     return target, header.read_text(encoding="utf-8")
 
 
@@ -403,8 +447,61 @@ def c_kernel(spec: codegen.KernelSpec, compiler: str | None = None) -> CKernel:
     with _LOCK:
         kernel = _KERNELS.get(key)
         if kernel is None:
+            failed = _FAILED_AHEAD.pop(key, None)
+            if failed is not None:  # build_ahead tried: not twice
+                raise failed
             kernel = _KERNELS[key] = CKernel(module, spec, path)
         return kernel
+
+
+@contextmanager
+def build_ahead(spec: codegen.KernelSpec) -> Iterator[None]:
+    """Build ``spec``'s C kernel in a thread while the block runs, where the engine in
+    force may run C, its run library is not on disk yet and its C is shipped
+    (``core.c_shipped``): on a fresh install's first run its compiler then runs beside
+    what the block builds (``check_drive``'s signal library), a second less to wait on
+    two cores. Only shipped C: the thread then never imports numba (two threads
+    importing it at once can see its modules half made). Joined when the block ends
+    (not on Ctrl-C); a failure is raised by the next ``c_kernel`` of ``spec``
+    (``engine_kernel`` warns or raises as usual), so nothing is built twice."""
+    thread = None
+    if current_engine() != "numba" and _first_look(spec):
+        compiler = compiler_path()
+        target = None if compiler is None else str(library_path(spec, compiler))
+        if target is not None and not Path(target).exists() \
+                and _shipped_translation(spec, "run") is not None:
+            thread = threading.Thread(target=contextvars.copy_context().run,
+                                      args=(_build_quietly, spec, target),
+                                      name="pneumact-build-ahead", daemon=True)
+            thread.start()
+    try:
+        yield
+    except Exception:
+        if thread is not None:
+            thread.join()
+        raise
+    if thread is not None:
+        thread.join()
+
+
+def _first_look(spec: codegen.KernelSpec) -> bool:
+    """Whether ``build_ahead`` sees ``spec`` for the first time where the compiler and the
+    cache are as the environment names them now (a later ``build_ahead`` then costs
+    ~13 us, not the ~0.5 ms of finding the compiler and the library)."""
+    seen = (spec, *(os.environ.get(name) for name in _AHEAD_SETTINGS))
+    with _LOCK:
+        first = seen not in _LOOKED_AHEAD
+        _LOOKED_AHEAD.add(seen)
+    return first
+
+
+def _build_quietly(spec: codegen.KernelSpec, key: str) -> None:
+    """``c_kernel(spec)``, its error kept for the next ``c_kernel`` to raise."""
+    try:
+        c_kernel(spec)
+    except Exception as error:  # raised where the run asks for the kernel
+        with _LOCK:
+            _FAILED_AHEAD[key] = error
 
 
 def engine_kernel(spec: codegen.KernelSpec, engine: str) -> Kernel:

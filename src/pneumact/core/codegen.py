@@ -38,12 +38,13 @@ import types
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .compile_lock import compile_one_process_at_a_time
 from .marks import kernel
 
-__all__ = ["Child", "KernelSpec", "cache_dir", "compile_lock_path", "dependency_files",
-           "import_time_imports", "kernel", "kernel_key", "load"]
+__all__ = ["Child", "KernelSpec", "cache_dir", "compile_lock_path", "content_key",
+           "dependency_files", "import_time_imports", "kernel", "kernel_key", "load"]
 
 #: a template's tuple of the placeholders it can do without (called only under a switch)
 OPTIONAL = "OPTIONAL_FUNCTIONS"
@@ -227,12 +228,8 @@ def kernel_key(spec: KernelSpec) -> str:
             return saved["key"]
     except (OSError, ValueError, KeyError, TypeError):
         pass
-    # the generator itself decides how the kernel is compiled (options, binding)
-    files = [*dependency_files(spec.modules()), Path(__file__).resolve()]
-    digest = hashlib.sha256(text.encode())
-    for path in files:
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
+    files = _key_files(spec)
+    digest = _content_digest(text, files)
     digest.update(_versions().encode())
     key = digest.hexdigest()
     with contextlib.suppress(OSError):
@@ -242,6 +239,26 @@ def kernel_key(spec: KernelSpec) -> str:
                                    "stamps": _stamps(files)}), encoding="utf-8")
         os.replace(tmp, memo)
     return key
+
+
+def content_key(spec: KernelSpec) -> str:
+    """Hex digest over the generated text and the dependency sources, without the numba
+    and Python versions ``kernel_key`` adds: what a kernel's code is made of, the same on
+    every machine (the shipped C, ``core.c_shipped``, is found by it)."""
+    return _content_digest(spec.source(), _key_files(spec)).hexdigest()
+
+
+def _key_files(spec: KernelSpec) -> list[Path]:
+    # the generator itself decides how the kernel is compiled (options, binding)
+    return [*dependency_files(spec.modules()), Path(__file__).resolve()]
+
+
+def _content_digest(text: str, files: Iterable[Path]) -> Any:
+    digest = hashlib.sha256(text.encode())
+    for path in files:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest
 
 
 # --------------------------------------------------------------------------- loading

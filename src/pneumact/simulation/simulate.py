@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     from ..core.signals import Signal
     from ..parameters.parameter_set import ParameterSet
 
-__all__ = ["Model", "Prepared", "check_drive", "check_experiment", "check_model", "checked_solver",
-           "model_stroke", "prepare", "run_kernel", "simulate"]
+__all__ = ["Model", "Prepared", "check_drive", "check_drive_while_building", "check_experiment",
+           "check_model", "checked_solver", "model_stroke", "prepare", "run_kernel", "simulate"]
 
 
 @runtime_checkable
@@ -142,6 +142,22 @@ def check_drive(model, experiment: Experiment, where: str = "simulate") -> None:
     (an absolute pressure, a command in [0, 1], a set-point within the stroke, a load
     force); one ExperimentError otherwise, naming the input, the model and its inputs."""
     check_model(model, where)
+    _check_drive_of(model, experiment, where)
+
+
+def check_drive_while_building(model, experiment: Experiment, where: str = "simulate"
+                               ) -> None:
+    """``check_drive``, with ``model``'s C kernel built meanwhile where the engine in force
+    may run C and it is not built yet (``core.c_engine.build_ahead``): on a cold start its
+    compiler runs beside the one building the signal library that ``check_drive`` reads
+    the drive with."""
+    check_model(model, where)
+    with assemble(model).building_kernel():
+        _check_drive_of(model, experiment, where)
+
+
+def _check_drive_of(model: Model, experiment: Experiment, where: str) -> None:
+    """``check_drive`` of a model already checked."""
     check_experiment(experiment, where)
     who = f"experiment '{experiment.name}'"
     for name, signal in experiment.inputs.items():
@@ -233,7 +249,7 @@ def prepare(model, experiment: Experiment, solver: Solver, t_eval=None, y0=None,
     ``vector``), the input channels, breakpoints, output times, initial state (the
     model's equilibrium unless ``y0``) and absolute tolerances. ``values`` overrides
     parameter values by name (SI) for this run only."""
-    check_drive(model, experiment)
+    check_drive_while_building(model, experiment)
     assembly = assemble(model)
     n_out = len(assembly.output_names)
     check_memory(simulate_bytes(_output_count(experiment, t_eval), len(assembly.states),
