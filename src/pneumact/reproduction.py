@@ -122,6 +122,9 @@ class Sizes:
                                               "5 µm steps, 5 ms lag")
     richer_ramp_speeds: tuple[float, ...] = (2e-4, 1e-3, 5e-3, 2e-2)
     richer_sweep_period: float = 30.0
+    #: the richer cases the main process identifies itself, after its other sections
+    #: (the others run in the worker): they balance the two processes' work
+    richer_here: tuple[str, ...] = ()
     #: the sections (``INDEPENDENT``) a worker process runs beside the others, in the
     #: order it runs them (``_Beside``; the full mode's worker has jobs of its own)
     apart: tuple[str, ...] = ()
@@ -150,7 +153,8 @@ class Sizes:
         return cls((1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 3e-2, 4e-2), 60.0, 512,
                    512, (5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0),
                    ("source", "command", "regulator"), 64,
-                   (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0))
+                   (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0),
+                   richer_here=("δ = 2", "adiabatic chamber"))
 
     @classmethod
     def quick(cls) -> Sizes:
@@ -250,6 +254,13 @@ class _Parts:
         self.writers[f"{name}.png"] = functools.partial(_write_bytes, png)
         self.report.image(png, caption)
 
+    def insert(self, part: _Parts, at: int) -> None:
+        """Put ``part``'s blocks (no headings) at ``at`` of this report, its tables and
+        files with these."""
+        self.report.blocks[at:at] = part.report.blocks
+        self.tables.update(part.tables)
+        self.writers.update(part.writers)
+
     def extend(self, section: _Parts) -> None:
         """Append a section's blocks (its headings numbered in this report), tables and
         files."""
@@ -344,6 +355,36 @@ class _Beside:
         self.close(stop=kind is not None or bool(self.futures))  # a failure, Ctrl-C
 
 
+#: the name of a richer case's job (``beside_jobs``): this prefix and the case
+RICHER_JOB = "richer: "
+
+
+def beside_jobs(params, sizes: Sizes, seed: int) -> tuple[dict[str, tuple[Callable, tuple]],
+                                                          list[str]]:
+    """The jobs no section's result feeds (``_Beside``), in the worker's order, and those
+    of them run here: eq. 13's bias first (the identification asks for it early; it
+    needs numba, which Figs. 2 and 3 load: here when they run here), the sections
+    ``sizes.apart``, SRC² across conditions at the slow cycles (the sensitivity section
+    asks for it), then each richer campaign's identification (asked for last; here those
+    of ``sizes.richer_here``); a job with nothing to do runs here (queued behind the
+    others, its result would keep a section waiting for all of them)."""
+    from .statements import eq13_bias
+
+    jobs: dict[str, tuple[Callable, tuple]] = {
+        "eq13": (eq13_bias, (params, sizes.eq13_lowest_vs)),
+        **{name: (_section_apart, (name, params, sizes)) for name in sizes.apart},
+        "global_across": (_global_across, (params, sizes, seed, True)),
+        **{f"{RICHER_JOB}{case}": (richer_row, (params, sizes, seed, case))
+           for case in richer_cases(sizes)}}
+    slow = [c for c in sizes.conditions(GLOBAL_VALVES, fast=False)
+            if c.period >= sizes.global_apart_from]
+    here = [name for name, run_here in (
+        ("eq13", "Figs. 2 and 3" not in sizes.apart), ("global_across", not slow),
+        *((f"{RICHER_JOB}{case}", case in sizes.richer_here)
+          for case in richer_cases(sizes))) if run_here]
+    return jobs, here
+
+
 def _cpus() -> int:
     """The CPUs this process may run on."""
     if hasattr(os, "sched_getaffinity"):  # not on macOS or Windows
@@ -379,7 +420,6 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     from .io.tables import write_files
     from .parameters import ParameterSet, load_params
     from .parameters.validation import lugre_passivity_problem
-    from .statements import eq13_bias
 
     matplotlib.use("Agg")
     started = time.perf_counter()
@@ -389,18 +429,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     passivity = [str(w.message) for w in caught if issubclass(w.category, PassivityWarning)]
     passivity = passivity or [lugre_passivity_problem(params.values) or ""]
     sizes = Sizes.quick() if quick else Sizes.full()
-    # eq. 13's bias first: the identification section asks for it early, and it needs
-    # numba, which Figs. 2 and 3 load (in the worker where they run there)
-    jobs: dict[str, tuple[Callable, tuple]] = {
-        "eq13": (eq13_bias, (params, sizes.eq13_lowest_vs)),
-        **{name: (_section_apart, (name, params, sizes)) for name in sizes.apart}}
-    jobs["identification_richer"] = (_richer_rows, (params, sizes, seed))
-    jobs["global_across"] = (_global_across, (params, sizes, seed, True))
-    run_here = {"eq13": "Figs. 2 and 3" not in sizes.apart,
-                "identification_richer": not sizes.richer_identification,
-                "global_across": not any(c.period >= sizes.global_apart_from
-                                         for c in sizes.conditions(GLOBAL_VALVES,
-                                                                   fast=False))}
+    jobs, here = beside_jobs(params, sizes, seed)
     report = Report("LuGre friction in a pneumatic diaphragm actuator: the paper reproduced",
                     call=call or f"pneumact.reproduce(quick={quick}, seed={seed})",
                     parameters=params)
@@ -408,8 +437,7 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
     _introduction(report, params, sizes, quick)
     headline_at = len(report.blocks)  # the statements' verdicts lead: filled in at the end
     done: dict[str, tuple[_Parts, object]] = {}
-    with _Beside(jobs, here=[name for name, here in run_here.items() if here]) \
-            as beside:
+    with _Beside(jobs, here=here) as beside:
 
         def section(name: str,
                     run: Callable[[_Parts, ParameterSet, Sizes], Any] | None = None) -> Any:
@@ -430,9 +458,12 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
             if name not in sizes.apart:
                 section(name)
 
+        richer_at: list[int] = []  # where the richer campaigns' table goes, at the end
+
         def identification(own: _Parts, *_) -> tuple:
-            return (_identification(own, params, sizes, seed, beside),
-                    _eq13(own, beside.result("eq13")))
+            identified = _identification(own, params, sizes, seed)
+            richer_at.append(len(own.report.blocks))
+            return identified, _eq13(own, beside.result("eq13"))
 
         def validation(own: _Parts, *_) -> None:
             _validation(own, params, identified, sizes, seed)
@@ -446,6 +477,10 @@ def reproduce(out_dir: str | os.PathLike = "pneumact-paper", *, quick: bool = Fa
             section(name)
         effects, friction_floor = section("Figs. 2 and 3")
         across, loop_floor = section("Fig. 5 across conditions")
+        richer = _Parts(Report("richer"))
+        _identification_richer(richer, sizes, [beside.result(f"{RICHER_JOB}{case}")
+                                               for case in richer_cases(sizes)])
+        done["identification"][0].insert(richer, richer_at[0])
     for name in SECTIONS[:SECTIONS.index("statements")]:
         parts.extend(done[name][0])
     notify(progress, "statements", len(done), len(SECTIONS))
@@ -1395,7 +1430,7 @@ def _fig2(params):
     return fig
 
 
-def _identification(parts: _Parts, params, sizes: Sizes, seed: int, beside: _Beside):
+def _identification(parts: _Parts, params, sizes: Sizes, seed: int):
     from .identification import Noise, identify_paper, paper_campaign, synthetic_campaign
 
     tests = paper_campaign(params, speeds=sizes.ramp_speeds, sweep_period=sizes.sweep_period)
@@ -1426,7 +1461,6 @@ def _identification(parts: _Parts, params, sizes: Sizes, seed: int, beside: _Bes
                      "Stage (d) zoomed on its fitted window: the position in µm from where "
                      "it rests at the window's start, measured (dots) and fitted (line), "
                      "and the residual")
-    _identification_richer(parts, sizes, beside.result("identification_richer"))
     return identified
 
 
@@ -1439,7 +1473,7 @@ def _identification_richer(parts: _Parts, sizes: Sizes, rows: list[dict]) -> pd.
     ``identify_paper`` says on each (its verdict, the errors against the values the
     records were made with, the faults it names). The model identified stays Table I's
     (LuGre δ = 1, isothermal, an ideal sensor): the procedure as the paper gives it.
-    ``rows``: ``_richer_rows``, run beside the other sections (``_Beside``)."""
+    ``rows``: ``richer_row`` of each case, most run beside the other sections."""
     skipped = [case for case, _ in RICHER_CASES[1:] if case not in sizes.richer_identification]
     speeds = sizes.richer_ramp_speeds
     parts.report.text(
@@ -1467,21 +1501,22 @@ def _identification_richer(parts: _Parts, sizes: Sizes, rows: list[dict]) -> pd.
     return table
 
 
-def _richer_rows(params, sizes: Sizes, seed: int) -> list[dict]:
-    """The rows of the richer campaigns' table (``identify_richer`` on each case of
-    ``sizes.richer_identification``, in ``RICHER_CASES``' order; a job of ``_Beside``).
-    The cases run one after another: two at a time on threads took 1.9-3.5× the CPU
-    time (97-185 s against 52 s on 2 cores)."""
-    cases = [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
-    if not cases:  # the quick mode: nor the identification's imports in the worker (1.2 s)
-        return []
+def richer_cases(sizes: Sizes) -> list[str]:
+    """The richer cases ``sizes`` identifies, in ``RICHER_CASES``' order."""
+    return [case for case, _ in RICHER_CASES[1:] if case in sizes.richer_identification]
+
+
+def richer_row(params, sizes: Sizes, seed: int, case: str) -> dict:
+    """One row of the richer campaigns' table: ``identify_richer`` on ``case``'s campaign
+    (a job of ``_Beside``, or run here: ``Sizes.richer_here``). One case at a time: two
+    at a time on threads took 1.9-3.5× the CPU time (97-185 s against 52 s on 2 cores)."""
     from .identification import paper_campaign
 
     tests = paper_campaign(params, speeds=sizes.richer_ramp_speeds,
                            sweep_period=sizes.richer_sweep_period)
     with warnings.catch_warnings():  # its findings go in the table, not on stderr
         warnings.simplefilter("ignore")
-        return [identify_richer(params, case, tests, seed) for case in cases]
+        return identify_richer(params, case, tests, seed)
 
 
 def _what_changes(row: dict) -> str:

@@ -188,17 +188,20 @@ def test_a_section_run_in_the_worker_joins_the_report_as_run_here(vgt):
     assert len(whole.blocks) == 1 + len(apart.report.blocks)
 
 
-def test_the_quick_mode_runs_no_richer_campaign_and_imports_nothing_for_it():
-    """The quick mode runs no richer campaign: its worker's job returns no rows without
-    importing the identification (1.2 s of CPU in the worker's lane)."""
-    import subprocess
-    import sys
+def test_the_worker_s_jobs_come_in_the_order_the_sections_ask_for_them(vgt):
+    """The quick mode sends no richer campaign and no SRC² at all (nothing to do: run
+    here, they would keep a section waiting behind the worker's sections); the full mode
+    sends SRC² at the slow cycles before the richer campaigns (asked for last), and keeps
+    ``richer_here`` in the main process."""
+    from pneumact.reproduction import RICHER_JOB, Sizes, beside_jobs, richer_cases
 
-    code = ("import sys, warnings; warnings.simplefilter('ignore'); "
-            "from pneumact.parameters import load_params; "
-            "from pneumact.reproduction import Sizes, _richer_rows; "
-            "assert _richer_rows(load_params('vgt-paper'), Sizes.quick(), 0) == []; "
-            "print('pneumact.identification' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
-    assert out.strip() == "False"
+    jobs, here = beside_jobs(vgt, Sizes.quick(), 0)
+    assert not richer_cases(Sizes.quick())
+    assert [n for n in jobs if n not in here] == ["eq13", *Sizes.quick().apart]
+    full = Sizes.full()
+    jobs, here = beside_jobs(vgt, full, 0)
+    sent = [n for n in jobs if n not in here]
+    assert sent == ["global_across", *(f"{RICHER_JOB}{case}" for case in richer_cases(full)
+                                       if case not in full.richer_here)]
+    assert {f"{RICHER_JOB}{case}" for case in full.richer_here} <= set(here)
+    assert set(full.richer_here) < set(richer_cases(full))  # both processes have some
