@@ -150,6 +150,20 @@ def test_the_heat_transfer_cylinder_s_cs_fmu_steps_like_pa_simulate(tmp_path):
                             also=temperatures)
 
 
+def test_the_cylinder_cs_fmu_runs_into_its_end_stop_as_pa_simulate_does(cylinder_fmu):
+    """Spool fully open: the rod runs out to the rod-end stop (x_max), bounces on its
+    spring and damper and rests there, in the FMU as in pa.simulate (the stop force is
+    the kernel's own, stiff: the FMU's integrator must take it too)."""
+    model, _ = cylinder_fmu
+    experiment = pa.experiments.SpoolStep(before=-1.0, after=1.0, t_step=0.1, t_end=1.0)
+    run = pa.simulate(model, experiment)
+    x_max = float(model.params["x_max"])
+    assert run["position"][-1] == pytest.approx(x_max, abs=ref.END_STOP_REST_ATOL)
+    assert float(run["position"].max()) > x_max  # on the stop's spring
+    _steps_like_pa_simulate({"cylinder": cylinder_fmu}, "cylinder", ref.CS_STEPS[0],
+                            experiment)
+
+
 @pytest.mark.parametrize("values", [{}, {"chamber_a.V_dead": ref.FMU_LARGE_DEAD_VOLUME}],
                          ids=["set", "chamber_a.V_dead set in the FMU"])
 def test_the_cylinder_me_fmu_follows_pa_simulate(cylinder_fmu, values):
