@@ -143,7 +143,7 @@ def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     from pneumact.simulation.simulate import check_drive_while_building
 
     parameter_set, cylinder = build_cylinder(options)
-    experiment = cylinder_experiment(options, parameter_set)
+    experiment = cylinder_experiment(options, parameter_set, cylinder)
     check_drive_while_building(cylinder, experiment)
     result = run_with_progress(lambda report: pa.simulate(
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))
