@@ -126,7 +126,9 @@ LowOption = Annotated[float | None, typer.Option(
     "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
                   "not with --valve command, iso6358 or --input-csv).")]
 InputOption = Annotated[Path | None, typer.Option(
-    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
+    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]'); "
+                        "--model cylinder: time, spool and optionally 'load [kN]' (other "
+                        "columns ignored).")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
 # the options of pneumact.options.Executor and Checkpoint (their defaults are the
 # objects'), shared by every command that runs batches
