@@ -13,7 +13,7 @@ import pneumact as pa
 import reference as ref
 from conftest import load_quietly
 from pneumact.cli import app
-from pneumact.core.signals import PiecewiseLinear
+from pneumact.core.signals import PiecewiseLinear, Step
 from pneumact.experiments import SpoolStep
 
 pytestmark = pytest.mark.integration
@@ -175,3 +175,33 @@ def test_simulate_drives_the_cylinder_from_a_csv_of_spool_and_load(tmp_path):
                          str(tmp_path / "refused"))
         assert refused.exit_code != 0 and said in refused.output, refused.output
         assert not (tmp_path / "refused").exists()
+
+
+def test_simulate_loads_the_cylinder_with_a_load_step(tmp_path):
+    """--load-step 300,0.3: the API's run of ``Cylinder(load=Step(0.3, 0, 300))`` (rtol
+    apart: the CLI runs in chunks); a force beyond 1 MN, a time outside the run, a load
+    column beside it and the actuator are refused in one line, nothing written."""
+    out = tmp_path / "out"
+    result = invoke("simulate", "--model", "cylinder", "--load-step", "300,0.3", "--t-end",
+                    "0.6", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(out / "simulation.csv")
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), load=Step(0.3, 0.0, 300.0)),
+                      SpoolStep(t_end=0.6))
+    np.testing.assert_array_equal(frame["load [N]"], api["load"])
+    for name, unit in (("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")):
+        cli = frame[f"{name} [{unit}]"].to_numpy()
+        assert np.abs(cli - api[name]).max() <= ref.CLI_CHUNKED_RUN_RTOL * np.ptp(api[name])
+    drive = tmp_path / "drive.csv"
+    drive.write_text("time [s],spool [1],load [N]\n0,0.5,0\n0.5,0.5,10\n")
+    for args, said in ((["--load-step", "3e6,0.3"], "its load force spans 0 to 3e+06"),
+                       (["--load-step", "300,2"], "--load-step TIME = 2 s: must be in (0, 1)"),
+                       (["--load-step", "300"], "give FORCE,TIME"),
+                       (["--load-step", "300,0.2", "--input-csv", str(drive)],
+                        "both drive the load; drop one")):
+        refused = invoke("simulate", "--model", "cylinder", *args, "--out",
+                         str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in refused.output, refused.output
+    refused = invoke("simulate", "--load-step", "300,0.2", "--out", str(tmp_path / "refused"))
+    assert refused.exit_code != 0 and "give --model cylinder" in refused.output
+    assert not (tmp_path / "refused").exists()

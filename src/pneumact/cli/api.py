@@ -88,6 +88,7 @@ SPELLED: dict[str, str] = {
     "observer": "pneumact.control:LuGreObserver",
     "observer_gain": "pneumact.control:LuGreObserver.gain",
     "dither": "pneumact.control:Dither",
+    "load_step": "pneumact.models:Cylinder.load",
     "plant": "pneumact.control:ClosedLoop.plant",
     "column": "pneumact.experiments:SetpointProfile",
     "atol_factor": "pneumact.simulation:Rodas4.atol",
