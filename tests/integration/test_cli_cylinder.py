@@ -13,6 +13,7 @@ import pneumact as pa
 import reference as ref
 from conftest import load_quietly
 from pneumact.cli import app
+from pneumact.core.signals import PiecewiseLinear, Step
 from pneumact.experiments import SpoolStep
 
 pytestmark = pytest.mark.integration
@@ -139,3 +140,68 @@ def test_a_cylinder_s_set_on_a_diaphragm_command_is_refused(tmp_path, command, w
     assert result.exit_code != 0 and said.count("error:") == 1, said
     assert "--params iso15552-32: a double-acting cylinder's set" in said and words in said
     assert "--model cylinder" in said and not (tmp_path / "out").exists()
+
+
+def test_simulate_drives_the_cylinder_from_a_csv_of_spool_and_load(tmp_path):
+    """--input-csv with time, spool and 'load [kN]': the run of the API's PiecewiseLinear
+    spool and load in N (the CLI runs in chunks for its progress: rtol apart); a file
+    without a spool column or with a load beyond 1 MN is refused in one line, nothing
+    written."""
+    time = np.array([0.0, 0.1, 0.12, 0.3, 0.31, 0.6])
+    spool = np.array([-1.0, -1.0, 0.5, 0.5, 0.5, 0.5])
+    load_kn = np.array([0.0, 0.0, 0.0, 0.0, 0.25, 0.25])
+    drive = tmp_path / "drive.csv"
+    pd.DataFrame({"time [s]": time, "spool [1]": spool, "load [kN]": load_kn}).to_csv(
+        drive, index=False)
+    out = tmp_path / "out"
+    result = invoke("simulate", "--model", "cylinder", "--input-csv", str(drive), "--out",
+                    str(out))
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(out / "simulation.csv")
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32")), pa.Experiment(
+        PiecewiseLinear(time, spool), "spool", 0.6, 0.0, time.size,
+        drives={"load": PiecewiseLinear(time, 1e3 * load_kn)}))
+    np.testing.assert_array_equal(frame["load [N]"], api["load"])
+    for name, unit in (("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")):
+        cli = frame[f"{name} [{unit}]"].to_numpy()
+        assert np.abs(cli - api[name]).max() <= ref.CLI_CHUNKED_RUN_RTOL * np.ptp(api[name])
+    for columns, said in (({"command [1]": np.abs(spool)}, "has no spool column (columns: "
+                                                           "time, command)"),
+                          ({"spool [1]": spool, "load [kN]": 8e3 * load_kn},
+                           "its load force spans 0 to 2e+06")):
+        bad = tmp_path / "bad.csv"
+        pd.DataFrame({"time [s]": time, **columns}).to_csv(bad, index=False)
+        refused = invoke("simulate", "--model", "cylinder", "--input-csv", str(bad), "--out",
+                         str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in refused.output, refused.output
+        assert not (tmp_path / "refused").exists()
+
+
+def test_simulate_loads_the_cylinder_with_a_load_step(tmp_path):
+    """--load-step 300,0.3: the API's run of ``Cylinder(load=Step(0.3, 0, 300))`` (rtol
+    apart: the CLI runs in chunks); a force beyond 1 MN, a time outside the run, a load
+    column beside it and the actuator are refused in one line, nothing written."""
+    out = tmp_path / "out"
+    result = invoke("simulate", "--model", "cylinder", "--load-step", "300,0.3", "--t-end",
+                    "0.6", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(out / "simulation.csv")
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), load=Step(0.3, 0.0, 300.0)),
+                      SpoolStep(t_end=0.6))
+    np.testing.assert_array_equal(frame["load [N]"], api["load"])
+    for name, unit in (("position", "m"), ("pressure_a", "Pa"), ("pressure_b", "Pa")):
+        cli = frame[f"{name} [{unit}]"].to_numpy()
+        assert np.abs(cli - api[name]).max() <= ref.CLI_CHUNKED_RUN_RTOL * np.ptp(api[name])
+    drive = tmp_path / "drive.csv"
+    drive.write_text("time [s],spool [1],load [N]\n0,0.5,0\n0.5,0.5,10\n")
+    for args, said in ((["--load-step", "3e6,0.3"], "its load force spans 0 to 3e+06"),
+                       (["--load-step", "300,2"], "--load-step TIME = 2 s: must be in (0, 1)"),
+                       (["--load-step", "300"], "give FORCE,TIME"),
+                       (["--load-step", "300,0.2", "--input-csv", str(drive)],
+                        "both drive the load; drop one")):
+        refused = invoke("simulate", "--model", "cylinder", *args, "--out",
+                         str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in refused.output, refused.output
+    refused = invoke("simulate", "--load-step", "300,0.2", "--out", str(tmp_path / "refused"))
+    assert refused.exit_code != 0 and "give --model cylinder" in refused.output
+    assert not (tmp_path / "refused").exists()

@@ -217,3 +217,65 @@ def test_a_batch_drives_the_load_as_a_run_does(cylinder_set):
         assert batch[name] == value, name
     free = pa.simulate_batch(model, SpoolStep(n_points=401), rows).table.iloc[0]
     assert free["top_speed_out"] > batch["top_speed_out"]
+
+
+#: a spool step and a load step (in kN, exact in binary) sampled for a CSV
+CSV_TIME = np.array([0.0, 0.1, 0.12, 0.3, 0.31, 0.6])
+CSV_SPOOL = np.array([-1.0, -1.0, 0.5, 0.5, 0.5, 0.5])
+CSV_LOAD_KN = np.array([0.0, 0.0, 0.0, 0.0, 0.25, 0.25])
+
+
+def write_cylinder_csv(path, columns: dict[str, np.ndarray]) -> None:
+    """A CSV of ``time [s]`` and ``columns`` (header cell -> values), as a user writes it."""
+    import pandas as pd
+
+    pd.DataFrame({"time [s]": CSV_TIME, **columns}).to_csv(path, index=False)
+
+
+def test_a_csv_drives_the_spool_and_its_load_in_kn_as_the_api_does(cylinder_set, tmp_path):
+    """``from_csv(path, model=cylinder)``: the cylinder's declared inputs pick the columns
+    (``spool``, and ``load`` converted from kN to N by its name); a measured position
+    beside them is ignored; the run equals the API's run of the same PiecewiseLinear spool
+    and load bit for bit."""
+    path = tmp_path / "drive.csv"
+    write_cylinder_csv(path, {"spool [1]": CSV_SPOOL, "load [kN]": CSV_LOAD_KN,
+                              "position [mm]": np.zeros(CSV_TIME.size)})
+    model = pa.Cylinder(cylinder_set)
+    from_file = pa.experiments.from_csv(path, model=model)
+    assert from_file.quantity == "spool" and set(from_file.drives) == {"load"}
+    np.testing.assert_array_equal(from_file.drives["load"](CSV_TIME), 1e3 * CSV_LOAD_KN)
+    api = Experiment(PiecewiseLinear(CSV_TIME, CSV_SPOOL), "spool", 0.6, 0.0, CSV_TIME.size,
+                     drives={"load": PiecewiseLinear(CSV_TIME, 1e3 * CSV_LOAD_KN)})
+    run, expected = pa.simulate(model, from_file, SOLVER), pa.simulate(model, api, SOLVER)
+    for name in ("position", "velocity", "pressure_a", "pressure_b", "load", "spool"):
+        assert np.array_equal(run[name], expected[name]), name
+    assert run["load"][-1] == 250.0
+
+
+@pytest.mark.parametrize(("columns", "error", "message"), [
+    ({"command [1]": np.abs(CSV_SPOOL)}, pa.DataError,
+     r"drive\.csv: has no spool column \(columns: time, command\); a Cylinder's input file "
+     r"needs time and its drive spool, optionally the other inputs it declares \(columns "
+     r"spool \[1\], load \[N\]\)"),
+    ({"spool [1]": CSV_SPOOL, "load [mm]": CSV_LOAD_KN}, pa.DataError,
+     r"column 'load' has unit 'mm' of dimension \[length\]; load needs a force unit such "
+     r"as N, kN or lbf"),
+    ({"spool [1]": CSV_SPOOL, "load": CSV_LOAD_KN}, pa.DataError,
+     r"column 'load' has no unit; write the header as 'load \[unit\]' with a force unit"),
+], ids=["no-spool", "load-not-a-force", "load-without-unit"])
+def test_a_csv_the_cylinder_cannot_run_is_refused_naming_the_column(
+        columns, error, message, cylinder_set, tmp_path):
+    path = tmp_path / "drive.csv"
+    write_cylinder_csv(path, columns)
+    with pytest.raises(error, match=message):
+        pa.experiments.from_csv(path, model=pa.Cylinder(cylinder_set))
+
+
+def test_a_csv_load_beyond_a_meganewton_is_refused_naming_the_file(cylinder_set, tmp_path):
+    """2000 kN read as 2 MN: the load input's range refuses it, naming the file."""
+    path = tmp_path / "drive.csv"
+    write_cylinder_csv(path, {"spool [1]": CSV_SPOOL, "load [kN]": 8e3 * CSV_LOAD_KN})
+    experiment = pa.experiments.from_csv(path, model=pa.Cylinder(cylinder_set))
+    with pytest.raises(pa.ExperimentError, match=r"experiment 'drive\.csv': its load force "
+                                                 r"spans 0 to 2e\+06; .* \[-1e\+06, 1e\+06\] N"):
+        check_drive(pa.Cylinder(cylinder_set), experiment)

@@ -88,6 +88,7 @@ SPELLED: dict[str, str] = {
     "observer": "pneumact.control:LuGreObserver",
     "observer_gain": "pneumact.control:LuGreObserver.gain",
     "dither": "pneumact.control:Dither",
+    "load_step": "pneumact.models:Cylinder.load",
     "plant": "pneumact.control:ClosedLoop.plant",
     "column": "pneumact.experiments:SetpointProfile",
     "atol_factor": "pneumact.simulation:Rodas4.atol",
@@ -100,7 +101,8 @@ SPELLED: dict[str, str] = {
 #: the command line's own options: what a command reads, where it writes, what it shows
 OWN: dict[str, str] = {
     "out": "the folder a command writes its files into (atomically, all or none)",
-    "input_csv": "a CSV of time and an input signal, read by experiments.from_csv",
+    "input_csv": "a CSV of time and an input signal, read by experiments.from_csv (the "
+                 "cylinder's: its declared inputs' columns, spool and optionally load)",
     "plan": "campaign: write the plan of the tests instead of simulating them",
     "simulate": "campaign: run a plan written by --plan (from a prior) on --params",
     "round": "campaign: which round of tests (from 2 on every test's name ends in "

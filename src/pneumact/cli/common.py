@@ -126,7 +126,9 @@ LowOption = Annotated[float | None, typer.Option(
     "--low", help="Lowest pressure of the default pressure cycle [kPa abs] (default 20; "
                   "not with --valve command, iso6358 or --input-csv).")]
 InputOption = Annotated[Path | None, typer.Option(
-    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]').")]
+    "--input-csv", help="CSV with time and an input signal (e.g. 'pressure [kPa]'); "
+                        "--model cylinder: time, spool and optionally 'load [kN]' (other "
+                        "columns ignored).")]
 RtolOption = Annotated[float, typer.Option(help="Relative tolerance of the solver.")]
 # the options of pneumact.options.Executor and Checkpoint (their defaults are the
 # objects'), shared by every command that runs batches
@@ -278,7 +280,7 @@ def build_model_of(kind: ModelKind, options: ModelOptions):
     ``build_experiment``) or the cylinder (``build_cylinder``, ``cylinder_experiment``)."""
     if kind is ModelKind.cylinder:
         params, model = build_cylinder(options)
-        return params, model, cylinder_experiment(options, params)
+        return params, model, cylinder_experiment(options, params, model)
     params, model = build_model(options)
     return params, model, build_experiment(options, params)
 
@@ -317,13 +319,13 @@ def build_cylinder(options: ModelOptions, params=None):
                             spool_lag=options.spool_lag)
 
 
-def cylinder_experiment(options: ModelOptions, params):
-    """The input CSV (a spool column), or a spool step from -1 to 0.5 at 0.1 s lasting
-    --t-end (default 1 s)."""
+def cylinder_experiment(options: ModelOptions, params, cylinder):
+    """The input CSV (a spool column, optionally a load: the columns ``cylinder``'s inputs
+    declare), or a spool step from -1 to 0.5 at 0.1 s lasting --t-end (default 1 s)."""
     import pneumact as pa
 
     if options.input_csv is not None:
-        return build_experiment(options, params)
+        return build_experiment(options, params, cylinder)
     t_end = CYLINDER_T_END if options.t_end is None else options.t_end
     return pa.experiments.SpoolStep(t_end=t_end)
 
@@ -382,13 +384,15 @@ def build_chamber(chamber: Chamber, exponent: float = DEFAULT_EXPONENT,
     return Adiabatic() if chamber is Chamber.adiabatic else Isothermal()
 
 
-def build_experiment(options: ModelOptions, params):
-    """The experiment the options describe: the input CSV, or the default slow cycle
-    (pressure p_atm → low → p_atm, or command 0 → 1 → 0 for a command valve)."""
+def build_experiment(options: ModelOptions, params, model=None):
+    """The experiment the options describe: the input CSV (its columns the ones ``model``'s
+    inputs declare, where given), or the default slow cycle (pressure p_atm → low → p_atm,
+    or command 0 → 1 → 0 for a command valve)."""
     import pneumact as pa
 
     if options.input_csv is not None:
-        experiment = pa.experiments.from_csv(options.input_csv, p_atm=params["p_atm"])
+        experiment = pa.experiments.from_csv(options.input_csv, p_atm=params["p_atm"],
+                                             model=model)
         if options.t_end is not None:
             if options.t_end > experiment.t_end:
                 raise ExperimentError(

@@ -19,7 +19,7 @@ from ..checks import (
     check_type,
 )
 from ..core.signals import PiecewiseLinear, Signal, Step, Triangle
-from ..errors import ExperimentError
+from ..errors import DataError, ExperimentError
 from ..models.cylinder import SPOOL_INPUT
 from ..models.inputs import DECLARED_INPUTS, quantity_driven_by
 from ..models.valves import COMMAND_INPUT, PRESSURE_INPUT
@@ -163,14 +163,38 @@ def from_record(record, quantity: str, n_points: int | None = None,
                         n_points=n_points or record.time.size, drives=others)
 
 
-def from_csv(path: str | Path, p_atm: float | None = None) -> Experiment:
+def from_csv(path: str | Path, p_atm: float | None = None, *, model=None) -> Experiment:
     """An input signal read from a CSV (``time [s]`` and one of pressure / command / ...);
-    ``p_atm`` [Pa] turns a ``pressure_gauge`` column into absolute pressure."""
-    from ..io.records import read_signal_csv
+    ``p_atm`` [Pa] turns a ``pressure_gauge`` column into absolute pressure. With a
+    ``model``, its declared inputs decide the columns: its drive's is required, each other
+    input's drives it by name where present (a cylinder: ``spool``, optionally ``load``);
+    other columns are ignored (a record's outputs may sit beside its inputs)."""
+    from ..io.records import read_record, read_signal_csv
 
+    if model is not None:
+        return _declared_from_record(read_record(path, p_atm=p_atm), model)
     name, time, values = read_signal_csv(path, p_atm=p_atm)
     quantity = quantity_driven_by(name)
     return from_samples(time, values, quantity, name=f"{Path(path).name}")
+
+
+def _declared_from_record(record, model) -> Experiment:
+    """The experiment a record's columns give ``model`` by its declared inputs (its drive
+    first): the drive's record signal required, the others' optional."""
+    inputs = model.inputs()
+    drive, *others = inputs
+    column = next((s for s in drive.record_signals if s in record.signals), None)
+    if column is None:
+        declared = ", ".join(f"{i.record_signal} [{i.unit}]" for i in inputs)
+        have = ", ".join(["time", *record.signals])
+        raise DataError(f"{record.source}: has no {drive.record_signal} column (columns: "
+                        f"{have}); a {type(model).__name__}'s input file needs time and its drive "
+                        f"{' or '.join(drive.record_signals)}, optionally the other "
+                        f"inputs it declares (columns {declared})")
+    drives = {i.name: PiecewiseLinear(record.time, record.signals[s])
+              for i in others for s in i.record_signals[:1] if s in record.signals}
+    return from_samples(record.time, record.signals[column], drive.name,
+                        name=Path(record.source).name, drives=drives)
 
 
 def SpoolStep(before: float = -1.0, after: float = 0.5, t_step: float = 0.1,

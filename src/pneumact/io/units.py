@@ -1,7 +1,8 @@
 """Units of measured records: pint converts each column to SI at the boundary.
 
 Known signal names (time, pressure, position, velocity, force, friction, command,
-setpoint: a regulator's, in Pa; position_setpoint: a position controller's, in m) are
+setpoint: a regulator's, in Pa; position_setpoint: a position controller's, in m; spool:
+a 5/3 valve's command; load: a cylinder's load force, in N) are
 converted to their SI unit; other columns to coherent SI. Pressures are
 absolute unless the column is named ``pressure_gauge`` (then ``records`` adds p_atm);
 a gauge-style unit spelling such as ``barg`` or ``kPa (g)`` is refused with a message
@@ -39,6 +40,8 @@ _TARGETS: dict[str, tuple[str, str]] = {
     "force": ("N", "a force unit such as N or kN"),
     "friction": ("N", "a force unit such as N or kN"),
     "command": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
+    "spool": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
+    "load": ("N", "a force unit such as N, kN or lbf"),
 }
 #: Known signal names -> (SI unit label, pint target unit, what the user may give); the
 #: SI label is the one of ``core.units`` (one unit per signal name everywhere).
@@ -109,7 +112,7 @@ def convert_column(path: Path, label: str, name: str, unit: str | None, raw: np.
     if unit is None:
         if known is None:
             return raw, ""
-        if name == "command":
+        if known[1] == "dimensionless":  # a command or spool command: a fraction
             return raw, "1"
         raise DataError(
             f"{path}: {label} has no unit; write the header as '{name} [unit]' with "
