@@ -64,6 +64,29 @@ def test_long_run_covariance_is_the_bartlett_sum():
     assert np.allclose(_long_run_covariance(g, lags), expected, rtol=1e-12, atol=1e-12)
 
 
+def _bartlett_sum(g: np.ndarray, bandwidth: int) -> np.ndarray:
+    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ, lag by lag."""
+    expected = g.T @ g
+    for lag in range(1, min(bandwidth, len(g) - 1) + 1):
+        cross = g[lag:].T @ g[:-lag]
+        expected += (1 - lag / (bandwidth + 1)) * (cross + cross.T)
+    return expected
+
+
+@pytest.mark.parametrize(("n", "bandwidth"), [(600, 40), (601, 150), (50, 80)])
+def test_long_run_covariance_in_the_frequency_domain_is_the_bartlett_sum(n, bandwidth):
+    """Bandwidths above ``DIRECT_BANDWIDTH`` take the spectral path: even and odd
+    padded lengths, and a bandwidth beyond the samples (lags without pairs)."""
+    from pneumact.identification.estimates import DIRECT_BANDWIDTH
+
+    assert bandwidth > DIRECT_BANDWIDTH
+    rng = np.random.default_rng(4)
+    g = np.cumsum(rng.normal(size=(n, 4)) * [1.0, 1e-3, 10.0, 0.5], axis=0)  # correlated
+    expected = _bartlett_sum(g, bandwidth)
+    np.testing.assert_allclose(_long_run_covariance(g, bandwidth), expected,
+                               rtol=0, atol=ref.HAC_SPECTRAL_RTOL * np.abs(expected).max())
+
+
 def test_bandwidth_follows_the_correlation_length():
     rng = np.random.default_rng(2)
     white = rng.normal(size=20_000)

@@ -179,24 +179,58 @@ def _with_infinite(covariance: np.ndarray, dead: np.ndarray) -> np.ndarray:
 
 
 def _long_run_covariance(g: np.ndarray, bandwidth: int) -> np.ndarray:
-    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ."""
-    n, p = g.shape
+    """Σ_{|l| ≤ L} (1 − |l|/(L+1))·Σ_t g_t·g_{t−l}ᵀ.
+
+    Beyond ``DIRECT_BANDWIDTH`` the lag sum is taken in the frequency domain: with the
+    columns' spectra S, zero-padded to a fast length N of at least n + L + 1 (so that no
+    lag within the bandwidth wraps onto another), and W the spectrum of the Bartlett
+    weights over the circular lags, Parseval gives Σ_l w_l·c_ab(l) =
+    Re(Σ_k S_a(k)·conj(S_b(k))·W_k)/N: one weighted product for all pairs instead of an
+    inverse FFT per pair (the 5 µm campaign of ``reproduction.identify_richer``: 38 HAC
+    covariances took 3.0 s of CPU in the inverse FFTs)."""
+    n = g.shape[0]
     if bandwidth <= DIRECT_BANDWIDTH:
         out = g.T @ g
         for lag in range(1, min(bandwidth, n - 1) + 1):
             cross = g[lag:].T @ g[:-lag]
             out += (1.0 - lag / (bandwidth + 1.0)) * (cross + cross.T)
         return out
-    spectra = np.fft.rfft(g, 2 * n, axis=0)
-    weights = 1.0 - np.arange(1, bandwidth + 1) / (bandwidth + 1.0)
-    out = np.empty((p, p))
-    for a in range(p):
-        for b in range(a, p):
-            cross = np.fft.irfft(spectra[:, a] * np.conj(spectra[:, b]), 2 * n)
-            # cross[l] = Σ_t g_a(t+l)·g_b(t); negative lags wrap to the end
-            value = cross[0] + weights @ (cross[1:bandwidth + 1] + cross[-bandwidth:][::-1])
-            out[a, b] = out[b, a] = value
-    return out
+    from scipy.fft import next_fast_len, rfft
+
+    lags = min(bandwidth, n - 1)  # longer lags have no pairs of samples
+    length = next_fast_len(n + lags + 1, real=True)
+    spectra = rfft(g, length, axis=0)
+    return _weighted_spectral_product(spectra, _bartlett_spectrum(bandwidth, lags, length),
+                                      length)
+
+
+def _bartlett_spectrum(bandwidth: int, lags: int, length: int) -> np.ndarray:
+    """The (real) rfft of the Bartlett weights 1 − |l|/(``bandwidth``+1) on the circular
+    lags |l| ≤ ``lags`` of a sequence of ``length`` (lag −l at ``length`` − l), zero
+    beyond."""
+    from scipy.fft import rfft
+
+    weights = np.zeros(length)
+    weights[0] = 1.0
+    ramp = 1.0 - np.arange(1, lags + 1) / (bandwidth + 1.0)
+    weights[1:lags + 1] = ramp
+    if lags:
+        weights[length - lags:] = ramp[::-1]
+    return rfft(weights).real
+
+
+def _weighted_spectral_product(spectra: np.ndarray, window: np.ndarray,
+                               length: int) -> np.ndarray:
+    """Re(Sᴴ·diag(W)·S)/length over the full spectrum of real sequences of ``length``,
+    from their half spectra (rfft): the bins other than 0 and length/2 count twice."""
+    count = np.full(window.size, 2.0)
+    count[0] = 1.0
+    if length % 2 == 0:
+        count[-1] = 1.0
+    scale = (count * window / length)[:, None]
+    real, imaginary = spectra.real, spectra.imag
+    out = real.T @ (scale * real) + imaginary.T @ (scale * imaginary)
+    return 0.5 * (out + out.T)
 
 
 def long_run_variance(series: np.ndarray) -> float:
