@@ -148,6 +148,14 @@ class Sizes:
         return [c for valve in valves
                 for c in conditions(self.periods_of(valve, fast), valves=(valve,))]
 
+    def global_conditions(self, slow: bool | None = None) -> list:
+        """SRC² across conditions' conditions (``GLOBAL_VALVES``, no fast cycles): all,
+        or those from ``global_apart_from`` (``slow``) or below it (not ``slow``)."""
+        every = self.conditions(GLOBAL_VALVES, fast=False)
+        if slow is None:
+            return every
+        return [c for c in every if (c.period >= self.global_apart_from) == slow]
+
     @classmethod
     def full(cls) -> Sizes:
         return cls((1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 3e-2, 4e-2), 60.0, 512,
@@ -376,8 +384,7 @@ def beside_jobs(params, sizes: Sizes, seed: int) -> tuple[dict[str, tuple[Callab
         "global_across": (_global_across, (params, sizes, seed, True)),
         **{f"{RICHER_JOB}{case}": (richer_row, (params, sizes, seed, case))
            for case in richer_cases(sizes)}}
-    slow = [c for c in sizes.conditions(GLOBAL_VALVES, fast=False)
-            if c.period >= sizes.global_apart_from]
+    slow = sizes.global_conditions(slow=True)
     here = [name for name, run_here in (
         ("eq13", "Figs. 2 and 3" not in sizes.apart), ("global_across", not slow),
         *((f"{RICHER_JOB}{case}", case in sizes.richer_here)
@@ -992,7 +999,7 @@ def _sensitivity(parts: _Parts, params, oat: Callable[[], object], sizes: Sizes,
         src = sa.src(problem, evaluate, sizes.src_n, seed)
         sobol, convergence = sobol_by_convergence(problem, evaluate, sizes.sobol_min_n,
                                                   sizes.sobol_n, seed)
-    order = [c.label for c in sizes.conditions(GLOBAL_VALVES, fast=False)]
+    order = [c.label for c in sizes.global_conditions()]
     across = _joined([_global_across(params, sizes, seed, slow=False),
                       beside.result("global_across")], order)
     ranking = ranking_table(src, sobol)
@@ -1064,8 +1071,7 @@ def _global_across(params, sizes: Sizes, seed: int, slow: bool):
     from . import sensitivity as sa
     from .models import Actuator
 
-    conditions = [c for c in sizes.conditions(GLOBAL_VALVES, fast=False)
-                  if (c.period >= sizes.global_apart_from) == slow]
+    conditions = sizes.global_conditions(slow)
     if not conditions:
         return None
     with warnings.catch_warnings():  # small samples: their warnings go in the table

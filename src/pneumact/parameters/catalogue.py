@@ -174,26 +174,26 @@ def declare(*specs: ParameterSpec) -> tuple[str, ...]:
     Declaring a name twice is allowed only with the identical spec (two components
     sharing one physical parameter, such as the diaphragm area).
     """
-    for spec in specs:
-        old = _SPECS.get(spec.name)
-        if old is not None and old != spec:
-            raise RuntimeError(f"parameter {spec.name!r} declared twice with different specs:"
-                               f" {old} and {spec}")
-        _SPECS[spec.name] = spec
-    return tuple(s.name for s in specs)
+    return _register(_SPECS, specs, "")
 
 
 def declare_kind(kind: str, *specs: ParameterSpec) -> tuple[str, ...]:
     """Register the parameters of a component ``kind`` that a model places under instance
     names (``declare_instances``); their names are local (``V_dead``) and, alone, not
     parameters of any model. Returns the local names."""
-    entries = _KINDS.setdefault(kind, {})
+    return _register(_KINDS.setdefault(kind, {}), specs, f" of kind {kind!r}")
+
+
+def _register(into: dict[str, ParameterSpec], specs: tuple[ParameterSpec, ...],
+              where: str) -> tuple[str, ...]:
+    """``specs`` into ``into`` by name, a name declared again only with the identical
+    spec; returns the names."""
     for spec in specs:
-        old = entries.get(spec.name)
+        old = into.get(spec.name)
         if old is not None and old != spec:
-            raise RuntimeError(f"parameter {spec.name!r} of kind {kind!r} declared twice "
-                               f"with different specs: {old} and {spec}")
-        entries[spec.name] = spec
+            raise RuntimeError(f"parameter {spec.name!r}{where} declared twice with "
+                               f"different specs: {old} and {spec}")
+        into[spec.name] = spec
     return tuple(s.name for s in specs)
 
 
