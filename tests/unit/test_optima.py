@@ -140,10 +140,43 @@ def test_a_joint_fit_at_a_bound_starts_again_from_the_prior(monkeypatch, inside)
 
     monkeypatch.setattr(joint_module, "fit", stand_in)
     best, others, reason = joint_module.restart_at_bounds(joint, {"k": 400.0, "F0": 12.0})
-    assert [s["k"] for s in seen] == [400.0, 300.0, 500.0]
     assert all(s["F0"] == 10.0 for s in seen)
     if inside:
+        assert [s["k"] for s in seen] == [400.0, 300.0, 500.0]
         assert reason == "" and best.estimates.values[1] == 400.0
         assert sorted(o.estimates.values[1] for o in others) == [400.0, 420.0]
-    else:
-        assert reason == f"k stuck at its bound {high:.4g} after 4 starts" and not others
+    else:  # two starts in a row came back to k's bound: the third is not run
+        assert [s["k"] for s in seen] == [400.0, 300.0]
+        assert reason == f"k stuck at its bound {high:.4g} after 3 starts" and not others
+
+
+@pytest.mark.parametrize("gain, runs", [(2.0, 3), (0.5, 2)])
+def test_restarts_go_on_while_a_start_finds_a_lower_cost(monkeypatch, gain, runs):
+    """The restarts stop only after ``RESTART_RETURNS`` starts in a row ended at a bound
+    with no lower cost: a start at a bound with a cost lower by more than ``RESTART_GAIN``
+    (another optimum) resets the count, so every start runs; by less, the third is not
+    run."""
+    import importlib
+
+    from pneumact.identification.optima import RESTART_GAIN, RESTART_RETURNS
+
+    joint_module = importlib.import_module("pneumact.identification.joint")
+    low, high = 100.0, 1000.0
+    joint = _stand_in_joint(high, low, high)
+    joint.cost = 10.0
+    lower = 10.0 * (1.0 - gain * RESTART_GAIN)
+    ends = iter([(high, 10.0), (low, lower), (high, lower)])
+    seen: list[dict] = []
+
+    def stand_in(models, records, names, *, start, **_):
+        seen.append(start)
+        k, cost = next(ends)
+        fitted = _stand_in_joint(k, low, high)
+        fitted.cost = cost
+        return fitted
+
+    monkeypatch.setattr(joint_module, "fit", stand_in)
+    _, _, reason = joint_module.restart_at_bounds(joint, {"k": 400.0, "F0": 12.0})
+    assert RESTART_RETURNS == 2
+    assert [s["k"] for s in seen] == [400.0, 300.0, 500.0][:runs]
+    assert reason.endswith(f"after {runs + 1} starts")

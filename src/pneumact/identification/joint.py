@@ -36,7 +36,13 @@ from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import SENSOR_LAGS, FitResult, fit
 from .memo import remembered
-from .optima import RESTART_SPREAD, spread_starts, stuck_reason
+from .optima import (
+    RESTART_GAIN,
+    RESTART_RETURNS,
+    RESTART_SPREAD,
+    spread_starts,
+    stuck_reason,
+)
 from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
@@ -218,13 +224,21 @@ def stuck_at_bounds(joint: FitResult) -> np.ndarray:
     return np.isclose(values, low, rtol=1e-6) | np.isclose(values, high, rtol=1e-6)
 
 
+def _nothing_new(fitted: FitResult, best_cost: float) -> bool:
+    """Whether a restart ``fitted`` ended at a bound again, no better than ``best_cost``
+    (by ``RESTART_GAIN`` of it)."""
+    return bool(stuck_at_bounds(fitted).any()) and \
+        fitted.cost >= (1.0 - RESTART_GAIN) * best_cost
+
+
 def restart_at_bounds(joint: FitResult, prior, spread: float = RESTART_SPREAD,
                       max_evaluations: int = MAX_EVALUATIONS
                       ) -> tuple[FitResult, list[FitResult], str]:
     """Where the ``joint`` fit ended with estimates at a bound, fit it again with those
     at the ``prior``'s value and at prior × (1 ± ``spread``/2) (``optima.spread_starts``;
-    the others where the joint fit stopped), and keep the best optimum inside the bounds.
-    Returns (the fit kept, the other optima inside the bounds, why it gave up: the
+    the others where the joint fit stopped), and keep the best optimum inside the bounds;
+    stop once ``RESTART_RETURNS`` starts in a row ended at a bound again without a lower
+    cost. Returns (the fit kept, the other optima inside the bounds, why it gave up: the
     estimates still at a bound, "" if none)."""
     stuck = stuck_at_bounds(joint)
     if not stuck.any():
@@ -233,10 +247,16 @@ def restart_at_bounds(joint: FitResult, prior, spread: float = RESTART_SPREAD,
     base = joint.estimates.values.copy()
     base[stuck] = [prior[names[j]] for j in np.flatnonzero(stuck)]
     every = [True] * len(joint.records)
-    fits = [joint] + [f for f in (refit_without(joint, every, max_evaluations,
-                                                dict(zip(names, map(float, s), strict=True)))
-                                  for s in spread_starts(base, spread, stuck))
-                      if f is not None]
+    fits, returns = [joint], 0
+    for start in spread_starts(base, spread, stuck):
+        fitted = refit_without(joint, every, max_evaluations,
+                               dict(zip(names, map(float, start), strict=True)))
+        if fitted is None:
+            continue
+        returns = returns + 1 if _nothing_new(fitted, min(f.cost for f in fits)) else 0
+        fits.append(fitted)
+        if returns >= RESTART_RETURNS:
+            break
     inside = [f for f in fits if not stuck_at_bounds(f).any()]
     best = min(inside or fits, key=lambda f: f.cost)
     left = stuck_at_bounds(best)
