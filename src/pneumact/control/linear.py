@@ -15,6 +15,11 @@ dy/dt = A·Δy + B·Δu, Δx = C·Δy (+ D·Δu, D = 0) about an operating point
   model describes small deviations from that motion, and the friction enters through its
   local slopes ∂F/∂v, ∂F/∂z there.
 
+The plant's other declared inputs (a cylinder's external ``load``) are held at the
+constant values ``inputs`` gives (zero where it gives none): a cylinder holding a
+position under a load is linearised at the spool command ``ClosedLoop.holding_input``
+finds under the same ``inputs``.
+
 A is the kernel's analytic Jacobian ∂f/∂y at the point; B = ∂f/∂u by central differences
 of the kernel's ``rhs`` with the input channel at u ± δ, δ = 1e-6·max(|u|, input scale)
 (one-sided at an end of the input's range; f is linear in u for every valve and the force
@@ -29,19 +34,19 @@ fundamental of the position. ``plot_bode`` shows both. python-control is optiona
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.signals import Constant, Sine, pack_channels
+from ..core.signals import Constant, Signal, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import Experiment
 from ..io.report import ResultVocabulary
 from ..models.valves import PRESSURE_INPUT
 from ..plotting import tight_layout
-from .plants import input_kind, input_range
+from .plants import held_inputs, input_kind, input_range
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -96,8 +101,14 @@ def _quantity(name: str, value: float, unit: str) -> str:
     return f"{name} = {value:g}" + ("" if unit == "1" else f" {unit}")
 
 
-def _signals(plant, value: float):
-    return pack_channels(plant.channels(Constant(value)))
+def _signals(plant, value: float, held: Mapping[str, Signal] | None = None):
+    """The packed channels: the drive at ``value``, the ``held`` inputs on theirs."""
+    return pack_channels(plant.channels(Constant(value), held))
+
+
+def _unit_of(plant, name: str) -> str:
+    """The unit of the plant's declared input ``name``."""
+    return next(channel.unit for channel in plant.inputs() if channel.name == name)
 
 
 def _rates(kernel, y, vec, sig, ptr) -> np.ndarray:
@@ -331,7 +342,8 @@ class LinearPlant(ResultVocabulary):
 
 def linearise(plant, input_value: float, *, regime: str = "presliding",
               velocity: float | None = None, position: float | None = None,
-              outputs: Sequence[str] = ("position",)) -> LinearPlant:
+              outputs: Sequence[str] = ("position",),
+              inputs: Mapping[str, float] | None = None) -> LinearPlant:
     """The plant (an ``Actuator`` behind any valve, a ``Cylinder`` or a
     ``FrictionRig(drive="force")``) linearised under the constant input ``input_value``
     (command [0, 1], spool command [−1, 1], pressure [Pa] or force [N]).
@@ -344,8 +356,12 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     ``regime``: ``"presliding"`` (the static equilibrium, v = 0) or ``"sliding"`` (steady
     sliding at ``velocity`` [m/s], non-zero, its sign the direction; a motion, not an
     equilibrium); see the module docstring. ``outputs``: state names, default the
-    position. Raises ``ParameterError`` (plant, regime, velocity, outputs) or
-    ``ExperimentError`` (input value) naming the field, the value and what is allowed.
+    position. ``inputs``: the plant's other declared inputs held at constant values (name
+    -> SI value), e.g. a cylinder under a constant external load, ``{"load": 500.0}``
+    [N against extension]; those left out are zero (``{"load": 0.0}`` is the same
+    linearisation, bit for bit). Raises ``ParameterError`` (plant, regime, velocity,
+    outputs) or ``ExperimentError`` (input value, an input the plant does not declare or
+    a value outside its range) naming the field, the value and what is allowed.
     """
     from ..core.assembly import assemble
 
@@ -370,9 +386,10 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
         raise ParameterError(f"linearise: outputs = {list(outputs)!r}; allowed: state names "
                              f"{', '.join(names)}")
     u = _check_input(plant, kind, input_value)
+    held = held_inputs(plant, inputs, "linearise")
     kernel = assembly.kernel
     vec = assembly.pack()
-    sig, ptr = _signals(plant, u)
+    sig, ptr = _signals(plant, u, held)
     n = len(names)
     y = np.empty(n)
     kernel.initial_state(T_POINT, T_POINT, vec, sig, ptr, y)
@@ -382,7 +399,9 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     friction_states = list(assembly.role_states("friction"))
     friction_words = _friction_words(plant)
     unit = plant.drive_unit
-    applied = _quantity(plant.drive_quantity, u, unit)
+    applied = ", ".join([_quantity(plant.drive_quantity, u, unit),
+                         *(_quantity(name, float(inputs[name]), _unit_of(plant, name))
+                           for name in held)])
     if regime == "presliding":
         _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
@@ -403,7 +422,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
                      "local slopes ∂F/∂v, ∂F/∂z there.")
     a = np.zeros((n, n))
     kernel.jac(T_POINT, T_POINT, y, vec, sig, ptr, a)
-    b = _input_derivative(plant, kind, kernel, y, vec, u)
+    b = _input_derivative(plant, kind, kernel, y, vec, u, held)
     c = np.zeros((len(outputs), n))
     for row, name in enumerate(outputs):
         c[row, names.index(name)] = 1.0
@@ -411,6 +430,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     kernel.state_scales(vec, scales)
     point = {name: float(value) for name, value in zip(names, y, strict=True)}
     point[plant.drive_quantity] = u
+    point.update({name: float(inputs[name]) for name in held})
     return LinearPlant(A=a, B=b[:, None], C=c, D=np.zeros((len(outputs), 1)),
                        state_names=names, state_units=assembly.state_units,
                        input_name=plant.drive_quantity, input_unit=unit,
@@ -419,8 +439,10 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
                        state_scales=scales)
 
 
-def _input_derivative(plant, kind: str, kernel, y, vec, u: float) -> np.ndarray:
-    """∂f/∂u by central differences of rhs (one-sided at an end of the input's range)."""
+def _input_derivative(plant, kind: str, kernel, y, vec, u: float,
+                      held: Mapping[str, Signal]) -> np.ndarray:
+    """∂f/∂u by central differences of rhs (one-sided at an end of the input's range),
+    the ``held`` inputs at their values."""
     lo, hi = input_range(plant)
     step = FD_REL_STEP * max(abs(u), _input_scale(plant, kind))
     up, down = u + step, u - step
@@ -428,8 +450,8 @@ def _input_derivative(plant, kind: str, kernel, y, vec, u: float) -> np.ndarray:
         down = u
     if up > hi:
         up = u
-    f_up = _rates(kernel, y, vec, *_signals(plant, up))
-    f_down = _rates(kernel, y, vec, *_signals(plant, down))
+    f_up = _rates(kernel, y, vec, *_signals(plant, up, held))
+    f_down = _rates(kernel, y, vec, *_signals(plant, down, held))
     return (f_up - f_down) / (up - down)
 
 
