@@ -23,7 +23,7 @@ import pneumact as pa
 import reference as ref
 from conftest import load_quietly
 from pneumact.control import PID, ClosedLoop, linearise
-from pneumact.core.signals import Constant
+from pneumact.core.signals import Constant, Step
 from pneumact.errors import ExperimentError, ParameterError
 from pneumact.experiments import Experiment
 
@@ -169,3 +169,12 @@ def test_inputs_the_plant_does_not_declare_or_out_of_range_are_refused(cylinder)
     with pytest.raises(ParameterError, match=r"holding_input: inputs = \[\('load', 1.0\)\]; "
                                              r"give a dict"):
         _loop(cylinder).holding_input(POSITION, inputs=[("load", 1.0)])
+
+
+def test_a_load_stepping_later_is_held_at_its_value_at_the_start(cylinder, holding):
+    """A loop's bias holds the plant at the start (t = 0): a load the cylinder holds that
+    steps later (``--load-step``) is zero there, as in the run, so the holding spool
+    command is the unloaded one (it once read such a step at t = 0.5 s)."""
+    for time in (0.3, 0.5):
+        stepping = pa.Cylinder(cylinder.params, load=Step(time, 0.0, 300.0))
+        assert _loop(stepping).holding_input(POSITION) == holding[0.0][0]

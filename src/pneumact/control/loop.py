@@ -351,9 +351,9 @@ class ClosedLoop(DeclaredInputs):
         y0 = np.empty_like(prep.y0)
         at = prep.assembly.state_index("position")
 
-        def rest(value):
+        def rest(value):  # at the start, t = 0: a load the plant holds at its value there
             sig, ptr = pack_channels(plant.channels(Constant(value), held))
-            prep.kernel.initial_state(0.0, 0.5, prep.vector, sig, ptr, y0)
+            prep.kernel.initial_state(0.0, 0.0, prep.vector, sig, ptr, y0)
             return y0[at] - position
 
         f_lo, f_hi = rest(lo), rest(hi)
