@@ -196,7 +196,8 @@ class LinearPlant(ResultVocabulary):
     ``to_pandas()``: the system matrix; ``plot()``: its Bode plot (``plot_bode``);
     ``write(folder)``: system.csv, bode.png and report.html.
 
-    ``operating_point``: state name -> value, and the input's name -> its value.
+    ``operating_point``: state name -> value, the input's name -> its value, and each
+    other input held (``linearise(..., inputs=...)``) -> its value.
     ``rates``: f at the point (zero at an equilibrium; the sliding point moves).
     ``statement``: one sentence naming the regime and the point, for reports.
     """
