@@ -8,8 +8,9 @@ command and p_a rise with F, p_b falls; a load of 0 is today's linearisation bit
 and a load given as an input is the one the cylinder holds (``Cylinder(load=...)``) bit for
 bit; at the spool command that balances no load, the load is the force left, −F = m·v̇;
 the presliding DC gain Δx/Δu is the slope of the holding force over the spool command,
-divided by the bristle stiffness σ0 (central differences of ``holding_input``); and the
-nonlinear cylinder, started there, stays put.
+divided by the bristle stiffness σ0 (central differences of ``holding_input``); the
+nonlinear cylinder, started there, stays put, and swept there (``frequency_response``
+with the same ``position`` and ``inputs``) has the loaded linearisation's gain and phase.
 """
 
 from __future__ import annotations
@@ -145,6 +146,27 @@ def test_the_nonlinear_cylinder_rests_under_the_load_at_its_holding_spool(cylind
     assert moved["unloaded"].min() < -ref.CYLINDER_LOAD_ACTS_MIN
 
 
+def test_the_nonlinear_sweep_under_the_load_follows_the_loaded_linearisation(cylinder,
+                                                                            holding):
+    """``frequency_response(..., position=, inputs=)``: the nonlinear cylinder, held
+    mid-stroke under the load and swept about its holding spool command, has the gain and
+    phase of the loaded linearisation, far from the unloaded one's."""
+    from pneumact.control import frequency_response
+
+    load = 300.0
+    spool, loaded = holding[load]
+    frequencies = np.array([2.0, 20.0, 150.0])
+    sweep = frequency_response(cylinder, spool, ref.CYLINDER_LOAD_SWEEP_AMPLITUDE,
+                               frequencies, position=POSITION, inputs={"load": load})
+    expected = loaded.frequency_response(frequencies)
+    np.testing.assert_allclose(sweep["gain"], np.abs(expected),
+                               rtol=ref.CYLINDER_LOAD_SWEEP_RTOL)
+    np.testing.assert_allclose(sweep["phase_deg"], np.degrees(np.angle(expected)), rtol=0,
+                               atol=ref.CYLINDER_LOAD_SWEEP_PHASE_DEG)
+    unloaded = np.abs(holding[0.0][1].frequency_response(frequencies))
+    assert np.all(np.abs(unloaded / sweep["gain"] - 1) > 100 * ref.CYLINDER_LOAD_SWEEP_RTOL)
+
+
 def test_inputs_the_plant_does_not_declare_or_out_of_range_are_refused(cylinder):
     spool = 0.0
     with pytest.raises(ExperimentError, match=r"linearise: inputs = \{'load': 2000000.0\} N; "
@@ -169,6 +191,14 @@ def test_inputs_the_plant_does_not_declare_or_out_of_range_are_refused(cylinder)
     with pytest.raises(ParameterError, match=r"holding_input: inputs = \[\('load', 1.0\)\]; "
                                              r"give a dict"):
         _loop(cylinder).holding_input(POSITION, inputs=[("load", 1.0)])
+    from pneumact.control import frequency_response
+
+    with pytest.raises(ExperimentError, match=r"frequency_response: inputs = \{'load': "
+                                              r"2000000.0\} N; allowed"):
+        frequency_response(cylinder, spool, 1e-5, [1.0], inputs={"load": 2e6})
+    with pytest.raises(ExperimentError, match=r"frequency_response: position = 0.5; allowed: "
+                                              r"a position \[m\] in \[0, 0.2\]"):
+        frequency_response(cylinder, spool, 1e-5, [1.0], position=0.5)
 
 
 def test_a_load_stepping_later_is_held_at_its_value_at_the_start(cylinder, holding):

@@ -178,15 +178,20 @@ def _where(plant, y, names, units) -> str:
     return text
 
 
-def _place(plant, y, names, position) -> None:
-    """Move the rest state to ``position`` [m] within the plant's stroke (the other
-    states as at rest: a cylinder's chambers at their balanced pressures)."""
+def _check_position(plant, position, who: str = "linearise") -> float:
+    """``position`` [m] within the plant's stroke, or one ExperimentError naming ``who``."""
     stroke = plant.stroke
     top = math.inf if stroke is None else stroke
     if not (isinstance(position, int | float | np.floating) and 0.0 <= position <= top):
-        raise ExperimentError(f"linearise: position = {position!r}; allowed: a position "
+        raise ExperimentError(f"{who}: position = {position!r}; allowed: a position "
                               f"[m] in [0, {top:g}]")
-    y[names.index("position")] = float(position)
+    return float(position)
+
+
+def _place(plant, y, names, position) -> None:
+    """Move the rest state to ``position`` [m] within the plant's stroke (the other
+    states as at rest: a cylinder's chambers at their balanced pressures)."""
+    y[names.index("position")] = _check_position(plant, position)
 
 
 @dataclass(frozen=True, eq=False)
@@ -457,11 +462,12 @@ def _input_derivative(plant, kind: str, kernel, y, vec, u: float,
 
 
 # ----------------------------------------------------------------- nonlinear frequency sweep
-def _default_settle_time(plant, input_value: float) -> float:
+def _default_settle_time(plant, input_value: float, position: float | None = None,
+                         inputs: Mapping[str, float] | None = None) -> float:
     """SETTLE_TIME_CONSTANTS time constants of the slowest stable pole of the presliding
     linearisation (poles at the origin excluded), 0 when there is no such rest."""
     try:
-        lin = linearise(plant, input_value)
+        lin = linearise(plant, input_value, position=position, inputs=inputs)
     except (ParameterError, ExperimentError):
         return 0.0
     poles = lin.poles()
@@ -473,7 +479,9 @@ def _default_settle_time(plant, input_value: float) -> float:
 def frequency_response(plant, input_value: float, amplitude: float, frequencies, *,
                        periods: int = 10, settle_periods: int = 5,
                        points_per_period: int = 64, settle_time: float | None = None,
-                       output: str = "position", solver=None) -> pd.DataFrame:
+                       output: str = "position", solver=None,
+                       position: float | None = None,
+                       inputs: Mapping[str, float] | None = None) -> pd.DataFrame:
     """Stepped-sine frequency response of the nonlinear model.
 
     For each frequency f the plant starts at rest under ``input_value`` and is driven by
@@ -482,7 +490,10 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
     ``periods`` periods (``points_per_period`` samples each) is fitted by least squares
     with a·sin(2πft) + b·cos(2πft) + offset + drift·t. ``settle_time`` defaults to five
     time constants of the slowest stable pole of the presliding linearisation (the
-    chamber's, behind a valve). ``solver`` defaults to Rodas4(rtol=1e-9).
+    chamber's, behind a valve). ``solver`` defaults to Rodas4(rtol=1e-9). ``position``
+    [m] and ``inputs`` are ``linearise``'s: each run starts at rest placed there (a
+    cylinder, which rests on a stop, held mid-stroke) under the plant's other declared
+    inputs held at constant values (a cylinder's ``{"load": F}``).
 
     Returns a DataFrame with one row per frequency: ``frequency_hz``, ``amplitude`` (of
     the input), ``gain`` (output amplitude per input unit, e.g. m per command unit),
@@ -498,6 +509,9 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
 
     kind = input_kind(plant, "linearise")
     u0 = _check_input(plant, kind, input_value)
+    held = held_inputs(plant, inputs, "frequency_response")
+    start = None if position is None else {
+        "position": _check_position(plant, position, "frequency_response")}
     if not (isinstance(amplitude, int | float) and math.isfinite(amplitude) and amplitude > 0):
         raise ExperimentError(f"frequency_response: amplitude = {amplitude!r}; must be > 0")
     _check_input(plant, kind, u0 - amplitude, "input_value - amplitude")
@@ -512,7 +526,7 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
             raise ExperimentError(f"frequency_response: {name} = {value!r}; must be an "
                                   f"integer >= {least}")
     if settle_time is None:
-        settle_time = _default_settle_time(plant, u0)
+        settle_time = _default_settle_time(plant, u0, position, inputs)
     elif not (math.isfinite(settle_time) and settle_time >= 0):
         raise ExperimentError(f"frequency_response: settle_time = {settle_time!r}; must be "
                               ">= 0 [s]")
@@ -524,8 +538,8 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
         t_end = (n_settle + periods) / f
         t = t0 + np.arange(periods * points_per_period) / (f * points_per_period)
         experiment = Experiment(Sine(amplitude, float(f), offset=u0), plant.drive_quantity,
-                                t_end, n_points=2, name=f"sine sweep {f:g} Hz")
-        result = simulate(plant, experiment, solver, t_eval=t)
+                                t_end, n_points=2, name=f"sine sweep {f:g} Hz", drives=held)
+        result = simulate(plant, experiment, solver, t_eval=t, y0=start)
         if output not in result.signals:
             raise ExperimentError(f"frequency_response: output = {output!r}; allowed: "
                                   f"{', '.join(result.signals)}")
