@@ -167,6 +167,23 @@ def test_the_nonlinear_sweep_under_the_load_follows_the_loaded_linearisation(cyl
     assert np.all(np.abs(unloaded / sweep["gain"] - 1) > 100 * ref.CYLINDER_LOAD_SWEEP_RTOL)
 
 
+def test_a_linear_design_under_the_load_is_made_on_the_loaded_linearisation(cylinder,
+                                                                           holding):
+    """``linear_design(..., at=x, inputs={"load": F})`` designs on the plant held at x
+    under F (its holding spool command, mid-stroke, not on a stop), the same linearisation
+    as ``linearise``'s there."""
+    pytest.importorskip("control")
+    from pneumact.control import linear_design
+
+    load = 300.0
+    design = linear_design(_loop(cylinder), "settling=0.3,overshoot=5%", at=POSITION,
+                           regime="presliding", inputs={"load": load})
+    _, loaded = holding[load]
+    assert design.plant.operating_point == loaded.operating_point
+    np.testing.assert_array_equal(design.plant.A, loaded.A)
+    np.testing.assert_array_equal(design.plant.B, loaded.B)
+
+
 def test_inputs_the_plant_does_not_declare_or_out_of_range_are_refused(cylinder):
     spool = 0.0
     with pytest.raises(ExperimentError, match=r"linearise: inputs = \{'load': 2000000.0\} N; "
