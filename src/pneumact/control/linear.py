@@ -393,6 +393,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
                              f"{', '.join(names)}")
     u = _check_input(plant, kind, input_value)
     held = held_inputs(plant, inputs, "linearise")
+    held_values = {name: float(value) for name, value in (inputs or {}).items()}
     kernel = assembly.kernel
     vec = assembly.pack()
     sig, ptr = _signals(plant, u, held)
@@ -406,8 +407,8 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     friction_words = _friction_words(plant)
     unit = plant.drive_unit
     applied = ", ".join([_quantity(plant.drive_quantity, u, unit),
-                         *(_quantity(name, float(inputs[name]), _unit_of(plant, name))
-                           for name in held)])
+                         *(_quantity(name, value, _unit_of(plant, name))
+                           for name, value in held_values.items())])
     if regime == "presliding":
         _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
@@ -436,7 +437,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     kernel.state_scales(vec, scales)
     point = {name: float(value) for name, value in zip(names, y, strict=True)}
     point[plant.drive_quantity] = u
-    point.update({name: float(inputs[name]) for name in held})
+    point.update(held_values)
     return LinearPlant(A=a, B=b[:, None], C=c, D=np.zeros((len(outputs), 1)),
                        state_names=names, state_units=assembly.state_units,
                        input_name=plant.drive_quantity, input_unit=unit,

@@ -60,7 +60,7 @@ def held_inputs(plant, inputs: Mapping[str, float] | None, who: str) -> dict[str
                              "constant value, e.g. {'load': 500.0} (N)")
     others = {channel.name: channel for channel in plant.inputs()[1:]}
     allowed = ", ".join(channel.describe() for channel in others.values()) or "none"
-    held = {}
+    held: dict[str, Constant] = {}
     for name, value in inputs.items():
         channel = others.get(name)
         if channel is None:
