@@ -85,7 +85,8 @@ BAD_VALUES: dict[str, list[str]] = {
     "--chamber": ["adiabatic", "heat-transfer"],
     "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
     "--spool-lag": ["1", "3"],  # the cylinder's spool: not the actuator's valves
-    "--load-step": ["300,0.2"],  # the cylinder's load, not the actuator's (test_cli_cylinder)
+    # the cylinder's load, not the actuator's nor the regulator loop's (test_cli_cylinder)
+    "--load-step": ["300,0.2"],
     "--decaying-damping": [],
     "--elements": ["0", "4"],  # with the default --friction lugre: not a GMS
     "--chunk-size": ["0"],

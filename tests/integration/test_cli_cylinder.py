@@ -205,3 +205,81 @@ def test_simulate_loads_the_cylinder_with_a_load_step(tmp_path):
     refused = invoke("simulate", "--load-step", "300,0.2", "--out", str(tmp_path / "refused"))
     assert refused.exit_code != 0 and "give --model cylinder" in refused.output
     assert not (tmp_path / "refused").exists()
+
+
+def test_control_step_rejects_a_load_step_on_the_held_cylinder(tmp_path):
+    """--load-step 150,0.3 with --start = --stop: the loop's load-disturbance rejection, the
+    API's run of ``ClosedLoop(Cylinder(load=Step(0.3, 0, 150)), PID(...))`` held at its
+    start (the step rtol apart: the CLI runs in chunks); the piston held exactly until the
+    load, pushed back by it, then brought back by the integral."""
+    from pneumact.control import PID, ClosedLoop
+    from pneumact.control.study import run_loop
+    from pneumact.experiments import SetpointStep
+
+    result = invoke("control", "step", "--plant", "cylinder", "--start", "100", "--stop",
+                    "100", "--kd", "0.5", "--derivative", "velocity", "--load-step",
+                    "150,0.3", "--t-end", "1", "--out", str(tmp_path))
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(tmp_path / "signals.csv")
+    load = Step(0.3, 0.0, 150.0)
+    plant = pa.Cylinder(load_quietly("iso15552-32"), load=load)
+    pid = PID(kp=60.0, ki=300.0, kd=0.5, derivative="velocity", u_min=-1.0, u_max=1.0)
+    loop = ClosedLoop(plant, pid, bias=ClosedLoop(plant, pid).holding_input(0.1))
+    api = run_loop(loop, SetpointStep(0.1, 0.1, 0.1, 1.0), y0={"position": 0.1}).result
+    np.testing.assert_array_equal(frame["load [N]"], api["load"])
+    position = frame["position [m]"].to_numpy()
+    assert np.abs(position - api["position"]).max() <= (ref.CLI_CHUNKED_RUN_RTOL
+                                                        * np.ptp(api["position"]))
+    before = frame["time [s]"].to_numpy() < 0.3
+    assert np.abs(position[before] - 0.1).max() < ref.CYLINDER_LOAD_REST_ATOL
+    assert position.min() < 0.1 - ref.CYLINDER_LOAD_ACTS_MIN
+    assert abs(position[-1] - 0.1) < ref.CYLINDER_LOAD_ACTS_MIN
+
+
+def test_the_load_step_of_control_is_refused_as_simulate_refuses_it(tmp_path):
+    """The same parser and messages as ``simulate --load-step``; on a plant other than
+    the cylinder it names --plant cylinder; nothing written."""
+    profile = tmp_path / "profile.csv"
+    profile.write_text("time [s],reference [mm]\n0,90\n0.5,110\n", encoding="utf-8")
+    cylinder = ["--plant", "cylinder"]
+    for args, said in (
+            (["step", *cylinder, "--load-step", "3e6,0.3"], "its load force spans 0 to 3e+06"),
+            (["step", *cylinder, "--load-step", "150,2"],
+             "--load-step TIME = 2 s: must be in (0, 1)"),
+            (["step", *cylinder, "--load-step", "150"], "give FORCE,TIME"),
+            (["step", "--load-step", "150,0.3"], "give --plant cylinder"),
+            (["step", *cylinder, "--start", "90", "--stop", "90"], "or a --load-step"),
+            (["profile", str(profile), "--load-step", "150,0.3"], "give --plant cylinder"),
+            (["profile", str(profile), *cylinder, "--load-step", "150,0.5"],
+             "--load-step TIME = 0.5 s: must be in (0, 0.5)")):
+        refused = invoke("control", *args, "--out", str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in " ".join(refused.output.split()), (
+            args, refused.output)
+    assert not (tmp_path / "refused").exists()
+
+
+def test_simulate_batch_and_sensitivity_load_the_cylinder_with_a_load_step(tmp_path):
+    """--load-step on the batch: each row the API's batch of the loaded cylinder (slower
+    out than without the load); on the actuator of either command, refused naming
+    --model cylinder."""
+    table = tmp_path / "table.csv"
+    table.write_text("Fc,sigma2\n20,50\n15,80\n", encoding="utf-8")
+    result = invoke("simulate-batch", str(table), "--model", "cylinder", "--t-end", T_END,
+                    "--load-step", "300,0.15", "--workers", "1", "--out",
+                    str(tmp_path / "batch"))
+    assert result.exit_code == 0, result.output
+    cli = pd.read_parquet(tmp_path / "batch" / "results.parquet")
+    sets = pd.DataFrame({"Fc": [20.0, 15.0], "sigma2": [50.0, 80.0]})
+    loaded = pa.Cylinder(load_quietly("iso15552-32"), load=Step(0.15, 0.0, 300.0))
+    api = pa.simulate_batch(loaded, SpoolStep(t_end=float(T_END)), sets, executor=1).table
+    free = pa.simulate_batch(pa.Cylinder(load_quietly("iso15552-32")),
+                             SpoolStep(t_end=float(T_END)), sets, executor=1).table
+    for name in ("travel", "top_speed_out"):
+        np.testing.assert_allclose(cli[name], api[name], rtol=ref.META_BATCH_RTOL,
+                                   err_msg=name)
+    assert (api["top_speed_out"] < free["top_speed_out"]).all()  # the load slows the rod
+    for command in (["simulate-batch", str(table)], ["sensitivity", "src"]):
+        refused = invoke(*command, "--load-step", "300,0.2", "--out",
+                         str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and "give --model cylinder" in refused.output
+    assert not (tmp_path / "refused").exists()

@@ -165,6 +165,7 @@ class ModelOptions:
     decaying_damping: bool = DEFAULT_DECAYING_DAMPING
     elements: int | None = None
     spool_lag: int = 0
+    load_step: str | None = None
 
 
 def executor_of(workers: int | None, scheduler: str | None, chunk_size: int | None = None):
@@ -245,6 +246,8 @@ def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
     from pneumact.models import VALVES, Actuator
 
+    if options.load_step is not None:
+        refuse_load_step(options.load_step, "--model cylinder")
     if options.spool_lag != 0:
         raise ArgumentError(f"--spool-lag {options.spool_lag} is the cylinder's 5/3 valve's "
                             "spool (--model cylinder); the diaphragm actuator's valves have "
@@ -280,7 +283,8 @@ def build_model_of(kind: ModelKind, options: ModelOptions):
     ``build_experiment``) or the cylinder (``build_cylinder``, ``cylinder_experiment``)."""
     if kind is ModelKind.cylinder:
         params, model = build_cylinder(options)
-        return params, model, cylinder_experiment(options, params, model)
+        experiment = cylinder_experiment(options, params, model)
+        return params, with_load_step(model, experiment, options), experiment
     params, model = build_model(options)
     return params, model, build_experiment(options, params)
 
@@ -328,6 +332,56 @@ def cylinder_experiment(options: ModelOptions, params, cylinder):
         return build_experiment(options, params, cylinder)
     t_end = CYLINDER_T_END if options.t_end is None else options.t_end
     return pa.experiments.SpoolStep(t_end=t_end)
+
+
+LoadStepOption = Annotated[str | None, typer.Option(
+    "--load-step", help="--model cylinder: a load force against extension stepping from 0 "
+                        "to FORCE [N] at TIME [s], given as FORCE,TIME (e.g. 300,0.3).")]
+#: --load-step as the control commands word it (the cylinder is their --plant)
+PlantLoadStepOption = Annotated[str | None, typer.Option(
+    "--load-step", help="--plant cylinder: a load force against extension stepping from 0 "
+                        "to FORCE [N] at TIME [s], given as FORCE,TIME (e.g. 300,0.6): the "
+                        "loop's load-disturbance rejection.")]
+
+
+def load_step_of(text: str, experiment, input_csv: Path | None = None):
+    """The load step --load-step FORCE,TIME gives (``Cylinder.load``): a force [N] within
+    the load input's range, from a time [s] within the run of ``experiment``, and no load
+    column of ``input_csv`` (--input-csv) beside it."""
+    from pneumact.core.signals import Step
+    from pneumact.models.cylinder import LOAD_INPUT
+
+    parts = text.split(",")
+    try:
+        force, time = (float(part) for part in parts)
+    except ValueError:
+        raise ArgumentError(f"--load-step {text!r}: give FORCE,TIME, a force [N] and the time "
+                            "[s] it steps on, e.g. 300,0.3") from None
+    check_range("--load-step TIME", time, experiment.t_start, experiment.t_end, unit="s",
+                low_open=True, high_open=True, hint="the load steps within the run")
+    LOAD_INPUT.check(min(force, 0.0), max(force, 0.0), where=f"--load-step {text}")
+    if LOAD_INPUT.name in experiment.drives:
+        raise ArgumentError(f"--load-step {text} and the load column of --input-csv "
+                            f"{input_csv} both drive the load; drop one")
+    return Step(time, 0.0, force)
+
+
+def refuse_load_step(text: str, cylinder: str) -> None:
+    """--load-step given where no cylinder runs: one line naming the option (``cylinder``)
+    that runs one."""
+    raise ArgumentError(f"--load-step {text}: loads the double-acting cylinder's rod; give "
+                        f"{cylinder}")
+
+
+def with_load_step(cylinder, experiment, options: ModelOptions):
+    """``cylinder`` loaded by --load-step (``Cylinder(load=Step(TIME, 0, FORCE))``) where
+    it is given, else as it is."""
+    from dataclasses import replace
+
+    if options.load_step is None:
+        return cylinder
+    return replace(cylinder, load=load_step_of(options.load_step, experiment,
+                                               options.input_csv))
 
 
 def _check_friction_parameters(friction, params, options: ModelOptions) -> None:

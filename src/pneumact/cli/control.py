@@ -23,12 +23,15 @@ from pneumact.cli.common import (
     Friction,
     FrictionOption,
     ParamsOption,
+    PlantLoadStepOption,
     RtolOption,
     SchedulerOption,
     WorkersOption,
     executor_of,
     load_quietly,
+    load_step_of,
     out_console,
+    refuse_load_step,
     run_with_progress,
     the_call,
     use_agg,
@@ -37,6 +40,7 @@ from pneumact.cli.common import (
 from pneumact.errors import ParameterError
 
 if TYPE_CHECKING:
+    from pneumact.core.signals import Signal
     from pneumact.models import Actuator, Cylinder, FrictionRig
     from pneumact.models.controllers import Compensation
 
@@ -198,9 +202,10 @@ def plant_params(plant: Plant, params_name: str):
 
 
 def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
-               start: float, gains: Path | None = None):
+               start: float, gains: Path | None = None, load: Signal | None = None):
     """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0; the
-    controller of a ``gains`` file (``control tune``) if given."""
+    controller of a ``gains`` file (``control tune``) if given; ``load``: the cylinder's
+    external load (``Cylinder.load``, --load-step)."""
     from pneumact.control import ClosedLoop
     from pneumact.models import VALVES, Actuator, Cylinder, FrictionRig, friction_models
 
@@ -210,7 +215,7 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
     if plant is Plant.rig:
         model = FrictionRig(params, law, drive="force")
     elif plant is Plant.cylinder:
-        model = Cylinder(params, law)
+        model = Cylinder(params, law, load=load)
     else:
         model = Actuator(params, law, valve=VALVES[plant.value]())
     if gains is not None:
@@ -223,6 +228,16 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
     loop = ClosedLoop(model, controller)
     bias = loop.holding_input(start)
     return params, ClosedLoop(model, controller, bias=bias)
+
+
+def _load_step(plant: Plant, text: str | None, experiment) -> Signal | None:
+    """The cylinder's load of --load-step FORCE,TIME within the run of ``experiment``
+    (``common.load_step_of``); refused for any plant but the cylinder."""
+    if text is None:
+        return None
+    if plant is not Plant.cylinder:
+        refuse_load_step(text, "--plant cylinder")
+    return load_step_of(text, experiment)
 
 
 def _check_setpoints(plant: Plant, params_name: str, **positions_mm: float) -> None:
@@ -380,22 +395,27 @@ def step_command(
     observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
     rtol: RtolOption = 1e-6,
     gains_file: GainsFileOption = None,
+    load_step: PlantLoadStepOption = None,
     out: OutOption = Path("pneumact-control-step"),
 ) -> None:
     """A position set-point step: rise and settling time, overshoot, steady-state
-    error, stick phases and control effort."""
+    error, stick phases and control effort; with --load-step, the cylinder's rod loaded
+    by a force step (--start = --stop: the load alone, its rejection)."""
     with user_errors():
         from pneumact.experiments import SetpointStep
 
         out = check_out_dir("--out", out)
         options = _options(ctx)
         _refuse_with_gains(ctx, gains_file)
-        if start == stop:
+        if start == stop and load_step is None:
             raise ParameterError(f"--start = --stop = {start:g} mm: there is no step to "
-                                 "follow; give two different positions")
+                                 "follow; give two different positions (or a --load-step "
+                                 "to reject)")
         experiment = SetpointStep(start * 1e-3, stop * 1e-3, t_step, t_end)
+        load = _load_step(plant, load_step, experiment)
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
-        _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file)
+        _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file,
+                             load)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position step {start:g} → {stop:g} mm ({plant.value})",
                        start=start * 1e-3 if plant is Plant.cylinder else None)
@@ -422,10 +442,11 @@ def profile_command(
     coulomb_ff: CoulombOption = None, dither: DitherOption = None,
     observer: ObserverOption = False, observer_gain: ObserverGainOption = 0.0,
     rtol: RtolOption = 1e-6,
+    load_step: PlantLoadStepOption = None,
     out: OutOption = Path("pneumact-control-profile"),
 ) -> None:
     """Follow a measured or designed position profile (piecewise linear between its
-    samples)."""
+    samples); with --load-step, the cylinder's rod loaded by a force step on the way."""
     with user_errors():
         import numpy as np
 
@@ -445,11 +466,13 @@ def profile_command(
         out = check_out_dir("--out", out)
         positions = _within_stroke(plant, params, profile.name, record[name])
         experiment = SetpointProfile(record.time, positions, name=profile.name)
+        load = _load_step(plant, load_step, experiment)
         _check_setpoints(plant, params, **{
             f"{profile.name}: lowest set-point": float(np.min(positions)) * 1e3,
             f"{profile.name}: highest set-point": float(np.max(positions)) * 1e3})
         options = _options(ctx)
-        _, loop = build_loop(plant, params, friction, options, float(positions[0]))
+        _, loop = build_loop(plant, params, friction, options, float(positions[0]),
+                             load=load)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position profile {profile.name} ({plant.value})", tracking=True,
                        start=float(positions[0]) if plant is Plant.cylinder else None)

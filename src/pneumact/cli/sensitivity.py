@@ -28,6 +28,7 @@ from pneumact.cli.common import (
     ElementsOption,
     ExponentOption,
     FrictionOption,
+    LoadStepOption,
     ModelKind,
     ModelOption,
     ModelOptions,
@@ -109,6 +110,7 @@ def sensitivity(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    load_step: LoadStepOption = None,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -162,7 +164,8 @@ def sensitivity(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, exponent=exponent,
                                decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag)
+                               elements=elements, spool_lag=spool_lag,
+                               load_step=load_step)
         parameter_set, actuator, experiment = build_model_of(model, options)
         if conditions and model is ModelKind.cylinder:
             raise ArgumentError("--conditions varies the actuator's pressure cycle (period, "

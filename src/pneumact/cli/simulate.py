@@ -3,7 +3,6 @@ the double-acting cylinder (CSV, step response plot and a summary)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -24,6 +23,7 @@ from pneumact.cli.common import (
     ExponentOption,
     FrictionOption,
     InputOption,
+    LoadStepOption,
     LowOption,
     ModelKind,
     ModelOption,
@@ -33,10 +33,9 @@ from pneumact.cli.common import (
     SpoolLagOption,
     TEndOption,
     ValveOption,
-    build_cylinder,
     build_experiment,
     build_model,
-    cylinder_experiment,
+    build_model_of,
     fmt,
     out_console,
     run_with_progress,
@@ -44,11 +43,6 @@ from pneumact.cli.common import (
     user_errors,
     write_outputs,
 )
-from pneumact.errors import ArgumentError
-
-LoadStepOption = Annotated[str | None, typer.Option(
-    "--load-step", help="--model cylinder: a load force against extension stepping from 0 "
-                        "to FORCE [N] at TIME [s], given as FORCE,TIME (e.g. 300,0.3).")]
 
 
 def simulate(
@@ -79,13 +73,10 @@ def simulate(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag)
+                               elements=elements, spool_lag=spool_lag, load_step=load_step)
         if model is ModelKind.cylinder:
-            _simulate_cylinder(options, out, load_step)
+            _simulate_cylinder(options, out)
             return
-        if load_step is not None:
-            raise ArgumentError(f"--load-step {load_step}: loads the double-acting cylinder's "
-                                "rod; give --model cylinder")
         parameter_set, actuator = build_model(options)
         experiment = build_experiment(options, parameter_set)
         solver = pa.Rodas4(rtol=rtol)
@@ -147,40 +138,13 @@ def _print_summary(summary: dict[str, float], result, p_atm: float, written) -> 
         out_console.print(f"wrote {path}")
 
 
-def load_step_of(text: str, experiment, options: ModelOptions):
-    """The load step --load-step FORCE,TIME gives (``Cylinder.load``): a force [N] within
-    the load input's range, from a time [s] within the run, and no load column of
-    --input-csv beside it."""
-    from pneumact.checks import check_range
-    from pneumact.core.signals import Step
-    from pneumact.models.cylinder import LOAD_INPUT
-
-    parts = text.split(",")
-    try:
-        force, time = (float(part) for part in parts)
-    except ValueError:
-        raise ArgumentError(f"--load-step {text!r}: give FORCE,TIME, a force [N] and the time "
-                            "[s] it steps on, e.g. 300,0.3") from None
-    check_range("--load-step TIME", time, experiment.t_start, experiment.t_end, unit="s",
-                low_open=True, high_open=True, hint="the load steps within the run")
-    LOAD_INPUT.check(min(force, 0.0), max(force, 0.0), where=f"--load-step {text}")
-    if LOAD_INPUT.name in experiment.drives:
-        raise ArgumentError(f"--load-step {text} and the load column of --input-csv "
-                            f"{options.input_csv} both drive the load; drop one")
-    return Step(time, 0.0, force)
-
-
-def _simulate_cylinder(options: ModelOptions, out: Path, load_step: str | None = None
-                       ) -> None:
+def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     """One run of the cylinder: simulation.csv, response.png and its summary; with
-    ``load_step``, its rod loaded by that step (``Cylinder.load``)."""
+    --load-step, its rod loaded by that step (``Cylinder.load``)."""
     import pneumact as pa
     from pneumact.simulation.simulate import check_drive_while_building
 
-    parameter_set, cylinder = build_cylinder(options)
-    experiment = cylinder_experiment(options, parameter_set, cylinder)
-    if load_step is not None:
-        cylinder = replace(cylinder, load=load_step_of(load_step, experiment, options))
+    parameter_set, cylinder, experiment = build_model_of(ModelKind.cylinder, options)
     check_drive_while_building(cylinder, experiment)
     result = run_with_progress(lambda report: pa.simulate(
         cylinder, experiment, pa.Rodas4(rtol=options.rtol), progress=report))

@@ -30,6 +30,7 @@ from pneumact.cli.common import (
     ExponentOption,
     FrictionOption,
     InputOption,
+    LoadStepOption,
     LowOption,
     ModelKind,
     ModelOption,
@@ -99,6 +100,7 @@ def simulate_batch(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    load_step: LoadStepOption = None,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -129,7 +131,8 @@ def simulate_batch(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag)
+                               elements=elements, spool_lag=spool_lag,
+                               load_step=load_step)
         _, built, experiment = build_model_of(model, options)
         with batch_progress() as progress:
             result = pa.simulate_batch(built, experiment, table,

@@ -15,6 +15,11 @@ dy/dt = A·Δy + B·Δu, Δx = C·Δy (+ D·Δu, D = 0) about an operating point
   model describes small deviations from that motion, and the friction enters through its
   local slopes ∂F/∂v, ∂F/∂z there.
 
+The plant's other declared inputs (a cylinder's external ``load``) are held at the
+constant values ``inputs`` gives (zero where it gives none): a cylinder holding a
+position under a load is linearised at the spool command ``ClosedLoop.holding_input``
+finds under the same ``inputs``.
+
 A is the kernel's analytic Jacobian ∂f/∂y at the point; B = ∂f/∂u by central differences
 of the kernel's ``rhs`` with the input channel at u ± δ, δ = 1e-6·max(|u|, input scale)
 (one-sided at an end of the input's range; f is linear in u for every valve and the force
@@ -29,19 +34,19 @@ fundamental of the position. ``plot_bode`` shows both. python-control is optiona
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.signals import Constant, Sine, pack_channels
+from ..core.signals import Constant, Signal, Sine, pack_channels
 from ..errors import ExperimentError, ParameterError
 from ..experiments.actuator import Experiment
 from ..io.report import ResultVocabulary
 from ..models.valves import PRESSURE_INPUT
 from ..plotting import tight_layout
-from .plants import input_kind, input_range
+from .plants import held_inputs, input_kind, input_range
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -96,8 +101,14 @@ def _quantity(name: str, value: float, unit: str) -> str:
     return f"{name} = {value:g}" + ("" if unit == "1" else f" {unit}")
 
 
-def _signals(plant, value: float):
-    return pack_channels(plant.channels(Constant(value)))
+def _signals(plant, value: float, held: Mapping[str, Signal] | None = None):
+    """The packed channels: the drive at ``value``, the ``held`` inputs on theirs."""
+    return pack_channels(plant.channels(Constant(value), held))
+
+
+def _unit_of(plant, name: str) -> str:
+    """The unit of the plant's declared input ``name``."""
+    return next(channel.unit for channel in plant.inputs() if channel.name == name)
 
 
 def _rates(kernel, y, vec, sig, ptr) -> np.ndarray:
@@ -167,15 +178,20 @@ def _where(plant, y, names, units) -> str:
     return text
 
 
-def _place(plant, y, names, position) -> None:
-    """Move the rest state to ``position`` [m] within the plant's stroke (the other
-    states as at rest: a cylinder's chambers at their balanced pressures)."""
+def _check_position(plant, position, who: str = "linearise") -> float:
+    """``position`` [m] within the plant's stroke, or one ExperimentError naming ``who``."""
     stroke = plant.stroke
     top = math.inf if stroke is None else stroke
     if not (isinstance(position, int | float | np.floating) and 0.0 <= position <= top):
-        raise ExperimentError(f"linearise: position = {position!r}; allowed: a position "
+        raise ExperimentError(f"{who}: position = {position!r}; allowed: a position "
                               f"[m] in [0, {top:g}]")
-    y[names.index("position")] = float(position)
+    return float(position)
+
+
+def _place(plant, y, names, position) -> None:
+    """Move the rest state to ``position`` [m] within the plant's stroke (the other
+    states as at rest: a cylinder's chambers at their balanced pressures)."""
+    y[names.index("position")] = _check_position(plant, position)
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,7 +201,8 @@ class LinearPlant(ResultVocabulary):
     ``to_pandas()``: the system matrix; ``plot()``: its Bode plot (``plot_bode``);
     ``write(folder)``: system.csv, bode.png and report.html.
 
-    ``operating_point``: state name -> value, and the input's name -> its value.
+    ``operating_point``: state name -> value, the input's name -> its value, and each
+    other input held (``linearise(..., inputs=...)``) -> its value.
     ``rates``: f at the point (zero at an equilibrium; the sliding point moves).
     ``statement``: one sentence naming the regime and the point, for reports.
     """
@@ -331,7 +348,8 @@ class LinearPlant(ResultVocabulary):
 
 def linearise(plant, input_value: float, *, regime: str = "presliding",
               velocity: float | None = None, position: float | None = None,
-              outputs: Sequence[str] = ("position",)) -> LinearPlant:
+              outputs: Sequence[str] = ("position",),
+              inputs: Mapping[str, float] | None = None) -> LinearPlant:
     """The plant (an ``Actuator`` behind any valve, a ``Cylinder`` or a
     ``FrictionRig(drive="force")``) linearised under the constant input ``input_value``
     (command [0, 1], spool command [−1, 1], pressure [Pa] or force [N]).
@@ -344,8 +362,12 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     ``regime``: ``"presliding"`` (the static equilibrium, v = 0) or ``"sliding"`` (steady
     sliding at ``velocity`` [m/s], non-zero, its sign the direction; a motion, not an
     equilibrium); see the module docstring. ``outputs``: state names, default the
-    position. Raises ``ParameterError`` (plant, regime, velocity, outputs) or
-    ``ExperimentError`` (input value) naming the field, the value and what is allowed.
+    position. ``inputs``: the plant's other declared inputs held at constant values (name
+    -> SI value), e.g. a cylinder under a constant external load, ``{"load": 500.0}``
+    [N against extension]; those left out are zero (``{"load": 0.0}`` is the same
+    linearisation, bit for bit). Raises ``ParameterError`` (plant, regime, velocity,
+    outputs) or ``ExperimentError`` (input value, an input the plant does not declare or
+    a value outside its range) naming the field, the value and what is allowed.
     """
     from ..core.assembly import assemble
 
@@ -370,9 +392,11 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
         raise ParameterError(f"linearise: outputs = {list(outputs)!r}; allowed: state names "
                              f"{', '.join(names)}")
     u = _check_input(plant, kind, input_value)
+    held = held_inputs(plant, inputs, "linearise")
+    held_values = {name: float(value) for name, value in (inputs or {}).items()}
     kernel = assembly.kernel
     vec = assembly.pack()
-    sig, ptr = _signals(plant, u)
+    sig, ptr = _signals(plant, u, held)
     n = len(names)
     y = np.empty(n)
     kernel.initial_state(T_POINT, T_POINT, vec, sig, ptr, y)
@@ -382,7 +406,9 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     friction_states = list(assembly.role_states("friction"))
     friction_words = _friction_words(plant)
     unit = plant.drive_unit
-    applied = _quantity(plant.drive_quantity, u, unit)
+    applied = ", ".join([_quantity(plant.drive_quantity, u, unit),
+                         *(_quantity(name, value, _unit_of(plant, name))
+                           for name, value in held_values.items())])
     if regime == "presliding":
         _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u)
         statement = (f"Linearised about the static equilibrium under {applied}, presliding "
@@ -403,7 +429,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
                      "local slopes ∂F/∂v, ∂F/∂z there.")
     a = np.zeros((n, n))
     kernel.jac(T_POINT, T_POINT, y, vec, sig, ptr, a)
-    b = _input_derivative(plant, kind, kernel, y, vec, u)
+    b = _input_derivative(plant, kind, kernel, y, vec, u, held)
     c = np.zeros((len(outputs), n))
     for row, name in enumerate(outputs):
         c[row, names.index(name)] = 1.0
@@ -411,6 +437,7 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     kernel.state_scales(vec, scales)
     point = {name: float(value) for name, value in zip(names, y, strict=True)}
     point[plant.drive_quantity] = u
+    point.update(held_values)
     return LinearPlant(A=a, B=b[:, None], C=c, D=np.zeros((len(outputs), 1)),
                        state_names=names, state_units=assembly.state_units,
                        input_name=plant.drive_quantity, input_unit=unit,
@@ -419,8 +446,10 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
                        state_scales=scales)
 
 
-def _input_derivative(plant, kind: str, kernel, y, vec, u: float) -> np.ndarray:
-    """∂f/∂u by central differences of rhs (one-sided at an end of the input's range)."""
+def _input_derivative(plant, kind: str, kernel, y, vec, u: float,
+                      held: Mapping[str, Signal]) -> np.ndarray:
+    """∂f/∂u by central differences of rhs (one-sided at an end of the input's range),
+    the ``held`` inputs at their values."""
     lo, hi = input_range(plant)
     step = FD_REL_STEP * max(abs(u), _input_scale(plant, kind))
     up, down = u + step, u - step
@@ -428,17 +457,18 @@ def _input_derivative(plant, kind: str, kernel, y, vec, u: float) -> np.ndarray:
         down = u
     if up > hi:
         up = u
-    f_up = _rates(kernel, y, vec, *_signals(plant, up))
-    f_down = _rates(kernel, y, vec, *_signals(plant, down))
+    f_up = _rates(kernel, y, vec, *_signals(plant, up, held))
+    f_down = _rates(kernel, y, vec, *_signals(plant, down, held))
     return (f_up - f_down) / (up - down)
 
 
 # ----------------------------------------------------------------- nonlinear frequency sweep
-def _default_settle_time(plant, input_value: float) -> float:
+def _default_settle_time(plant, input_value: float, position: float | None = None,
+                         inputs: Mapping[str, float] | None = None) -> float:
     """SETTLE_TIME_CONSTANTS time constants of the slowest stable pole of the presliding
     linearisation (poles at the origin excluded), 0 when there is no such rest."""
     try:
-        lin = linearise(plant, input_value)
+        lin = linearise(plant, input_value, position=position, inputs=inputs)
     except (ParameterError, ExperimentError):
         return 0.0
     poles = lin.poles()
@@ -450,7 +480,9 @@ def _default_settle_time(plant, input_value: float) -> float:
 def frequency_response(plant, input_value: float, amplitude: float, frequencies, *,
                        periods: int = 10, settle_periods: int = 5,
                        points_per_period: int = 64, settle_time: float | None = None,
-                       output: str = "position", solver=None) -> pd.DataFrame:
+                       output: str = "position", solver=None,
+                       position: float | None = None,
+                       inputs: Mapping[str, float] | None = None) -> pd.DataFrame:
     """Stepped-sine frequency response of the nonlinear model.
 
     For each frequency f the plant starts at rest under ``input_value`` and is driven by
@@ -459,7 +491,10 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
     ``periods`` periods (``points_per_period`` samples each) is fitted by least squares
     with a·sin(2πft) + b·cos(2πft) + offset + drift·t. ``settle_time`` defaults to five
     time constants of the slowest stable pole of the presliding linearisation (the
-    chamber's, behind a valve). ``solver`` defaults to Rodas4(rtol=1e-9).
+    chamber's, behind a valve). ``solver`` defaults to Rodas4(rtol=1e-9). ``position``
+    [m] and ``inputs`` are ``linearise``'s: each run starts at rest placed there (a
+    cylinder, which rests on a stop, held mid-stroke) under the plant's other declared
+    inputs held at constant values (a cylinder's ``{"load": F}``).
 
     Returns a DataFrame with one row per frequency: ``frequency_hz``, ``amplitude`` (of
     the input), ``gain`` (output amplitude per input unit, e.g. m per command unit),
@@ -475,6 +510,9 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
 
     kind = input_kind(plant, "linearise")
     u0 = _check_input(plant, kind, input_value)
+    held = held_inputs(plant, inputs, "frequency_response")
+    start = None if position is None else {
+        "position": _check_position(plant, position, "frequency_response")}
     if not (isinstance(amplitude, int | float) and math.isfinite(amplitude) and amplitude > 0):
         raise ExperimentError(f"frequency_response: amplitude = {amplitude!r}; must be > 0")
     _check_input(plant, kind, u0 - amplitude, "input_value - amplitude")
@@ -489,7 +527,7 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
             raise ExperimentError(f"frequency_response: {name} = {value!r}; must be an "
                                   f"integer >= {least}")
     if settle_time is None:
-        settle_time = _default_settle_time(plant, u0)
+        settle_time = _default_settle_time(plant, u0, position, inputs)
     elif not (math.isfinite(settle_time) and settle_time >= 0):
         raise ExperimentError(f"frequency_response: settle_time = {settle_time!r}; must be "
                               ">= 0 [s]")
@@ -501,8 +539,8 @@ def frequency_response(plant, input_value: float, amplitude: float, frequencies,
         t_end = (n_settle + periods) / f
         t = t0 + np.arange(periods * points_per_period) / (f * points_per_period)
         experiment = Experiment(Sine(amplitude, float(f), offset=u0), plant.drive_quantity,
-                                t_end, n_points=2, name=f"sine sweep {f:g} Hz")
-        result = simulate(plant, experiment, solver, t_eval=t)
+                                t_end, n_points=2, name=f"sine sweep {f:g} Hz", drives=held)
+        result = simulate(plant, experiment, solver, t_eval=t, y0=start)
         if output not in result.signals:
             raise ExperimentError(f"frequency_response: output = {output!r}; allowed: "
                                   f"{', '.join(result.signals)}")

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -191,12 +192,15 @@ class LinearDesign(ResultVocabulary):
 
 
 def linear_design(loop: ClosedLoop, specs: Specs | str, *, at: float | None = None,
-                  regime: str = "sliding", velocity: float | None = None) -> LinearDesign:
+                  regime: str = "sliding", velocity: float | None = None,
+                  inputs: Mapping[str, float] | None = None) -> LinearDesign:
     """A PID for ``loop``'s plant designed on its linearisation (module docstring).
 
     ``at``: the operating position [m] (default mid-stroke); ``regime``: ``"sliding"``
     (default; at ``velocity`` [m/s], default 20 % of the stroke over the settling spec)
-    or ``"presliding"``. The loop's controller must be a ``PID``; its limits and
+    or ``"presliding"``; ``inputs``: the plant's other declared inputs held at constant
+    values there (a cylinder's ``{"load": F}``, as ``linearise`` and ``holding_input``
+    take them). The loop's controller must be a ``PID``; its limits and
     anti-windup are kept, its gains replaced. Raises ``ParameterError`` naming the field
     where the loop, the specs or the point do not allow a design."""
     _require_control()
@@ -213,8 +217,9 @@ def linear_design(loop: ClosedLoop, specs: Specs | str, *, at: float | None = No
     at = (0.5 * stroke if stroke else 0.0) if at is None else float(at)
     if regime == "sliding" and velocity is None:
         velocity = 0.2 * (stroke or 1e-2) / limits["settling"]
-    hold = loop.holding_input(at) * loop.drive_gain
-    plant = linearise(loop.plant, hold, regime=regime, velocity=velocity)
+    hold = loop.holding_input(at, inputs=inputs) * loop.drive_gain
+    plant = linearise(loop.plant, hold, regime=regime, velocity=velocity, position=at,
+                      inputs=inputs)
     sign = loop.action * loop.drive_gain
     zeta = _damping(limits["overshoot"])
     shape = math.sqrt(math.sqrt(1.0 + 4.0 * zeta**4) - 2.0 * zeta**2)

@@ -26,7 +26,7 @@ from ..models.controllers import Controller, LuGreObserver, StaticCompensation
 from ..models.cylinder import Cylinder
 from ..models.rig import FrictionRig
 from ..models.valves import PRESSURE_INPUT
-from .plants import input_kind, input_range
+from .plants import held_inputs, input_kind, input_range
 
 __all__ = ["ClosedLoop"]
 
@@ -322,13 +322,16 @@ class ClosedLoop(DeclaredInputs):
 
     # -- operating points ------------------------------------------------------------------
     def holding_input(self, position: float, lo: float | None = None,
-                      hi: float | None = None, *, values: Mapping[str, float] | None = None
-                      ) -> float:
+                      hi: float | None = None, *, values: Mapping[str, float] | None = None,
+                      inputs: Mapping[str, float] | None = None) -> float:
         """The constant controller output that holds the plant at rest at ``position``
         (friction unloaded), by bisection on the plant's static equilibrium (a cylinder's:
-        the spool command at which its chambers balance, which holds any position); default
-        bracket: the controller's limits within the plant's input range. ``values``:
-        plant parameters changed for this answer (an uncertainty sample)."""
+        the spool command at which its chambers balance, (p_a − p_atm)·A_a − (p_b −
+        p_atm)·A_b = F_load, which holds any position); default bracket: the controller's
+        limits within the plant's input range. ``values``: plant parameters changed for
+        this answer (an uncertainty sample). ``inputs``: the plant's other declared inputs
+        held at constant values (``linearise``'s), e.g. ``{"load": 500.0}`` [N] for a
+        cylinder under a constant load against extension (zero where not given)."""
         from scipy.optimize import brentq
 
         from ..core.signals import pack_channels
@@ -337,6 +340,7 @@ class ClosedLoop(DeclaredInputs):
         from ..simulation.solvers import Rodas4
 
         plant = self.plant
+        held = held_inputs(plant, inputs, "holding_input")
         if self.plant_kind == "force":
             return 0.0  # the rig has no spring: any position rests under zero force
         natural = input_range(plant)
@@ -347,9 +351,9 @@ class ClosedLoop(DeclaredInputs):
         y0 = np.empty_like(prep.y0)
         at = prep.assembly.state_index("position")
 
-        def rest(value):
-            sig, ptr = pack_channels(plant.channels(Constant(value)))
-            prep.kernel.initial_state(0.0, 0.5, prep.vector, sig, ptr, y0)
+        def rest(value):  # at the start, t = 0: a load the plant holds at its value there
+            sig, ptr = pack_channels(plant.channels(Constant(value), held))
+            prep.kernel.initial_state(0.0, 0.0, prep.vector, sig, ptr, y0)
             return y0[at] - position
 
         f_lo, f_hi = rest(lo), rest(hi)

@@ -4,12 +4,17 @@ loop and the linearisation). Both are asked of the plant itself (the model proto
 
 from __future__ import annotations
 
-from ..errors import ParameterError
+import math
+import numbers
+from collections.abc import Mapping
+
+from ..core.signals import Constant
+from ..errors import ExperimentError, ParameterError
 from ..models.cylinder import SPOOL_INPUT
 from ..models.rig import DRIVE_INPUTS
 from ..models.valves import COMMAND_INPUT, PRESSURE_INPUT
 
-__all__ = ["CONTROLLABLE", "input_kind", "input_range"]
+__all__ = ["CONTROLLABLE", "held_inputs", "input_kind", "input_range"]
 
 #: the plant inputs a position controller can act on, with their units (as the
 #: components that own them declare them: a rig's force, a valve's, the 5/3 valve's)
@@ -39,3 +44,36 @@ def input_range(plant) -> tuple[float, float]:
     or force unbounded."""
     input_kind(plant, "input_range")
     return plant.input_range
+
+
+def held_inputs(plant, inputs: Mapping[str, float] | None, who: str) -> dict[str, Constant]:
+    """The plant's other declared inputs held at the constant values ``inputs`` gives
+    (input name -> value in its SI unit: a cylinder's ``{"load": 500.0}`` [N]), as the
+    ``drives`` of ``plant.channels``: the operating point of a linearisation or a holding
+    input. One ExperimentError, naming ``who``, the input, the value and what is allowed,
+    for a name the plant does not declare beside its drive (its drive is the input value)
+    or a value outside the declared range."""
+    if inputs is None:
+        return {}
+    if not isinstance(inputs, Mapping):
+        raise ParameterError(f"{who}: inputs = {inputs!r}; give a dict of input name -> "
+                             "constant value, e.g. {'load': 500.0} (N)")
+    others = {channel.name: channel for channel in plant.inputs()[1:]}
+    allowed = ", ".join(channel.describe() for channel in others.values()) or "none"
+    held: dict[str, Constant] = {}
+    for name, value in inputs.items():
+        channel = others.get(name)
+        if channel is None:
+            drive = (f" ({name!r} is its drive, the input value)"
+                     if name == plant.drive_quantity else "")
+            raise ExperimentError(f"{who}: inputs = {{{name!r}: {value!r}}}; "
+                                  f"{plant.describe()} declares no input {name!r} beside "
+                                  f"its drive{drive}; allowed: {allowed}")
+        if not (isinstance(value, numbers.Real) and not isinstance(value, bool)
+                and math.isfinite(value) and channel.accepts(value, value)):
+            raise ExperimentError(f"{who}: inputs = {{{name!r}: {value!r}}} {channel.unit}; "
+                                  f"allowed for the {channel.label or name} of this plant: a "
+                                  f"finite number in [{channel.low:g}, {channel.high:g}] "
+                                  f"{channel.unit}")
+        held[name] = Constant(float(value))
+    return held
