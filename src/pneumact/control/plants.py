@@ -58,17 +58,18 @@ def held_inputs(plant, inputs: Mapping[str, float] | None, who: str) -> dict[str
     if not isinstance(inputs, Mapping):
         raise ParameterError(f"{who}: inputs = {inputs!r}; give a dict of input name -> "
                              "constant value, e.g. {'load': 500.0} (N)")
-    others = {channel.name: channel for channel in plant.inputs()[1:]}
+    drive = plant.drive_input.name
+    others = {channel.name: channel for channel in plant.inputs() if channel.name != drive}
     allowed = ", ".join(channel.describe() for channel in others.values()) or "none"
     held: dict[str, Constant] = {}
     for name, value in inputs.items():
         channel = others.get(name)
         if channel is None:
-            drive = (f" ({name!r} is its drive, the input value)"
-                     if name == plant.drive_quantity else "")
+            its_drive = (f" ({name!r} is its drive, the input value)"
+                         if name == plant.drive_quantity else "")
             raise ExperimentError(f"{who}: inputs = {{{name!r}: {value!r}}}; "
                                   f"{plant.describe()} declares no input {name!r} beside "
-                                  f"its drive{drive}; allowed: {allowed}")
+                                  f"its drive{its_drive}; allowed: {allowed}")
         if not (isinstance(value, numbers.Real) and not isinstance(value, bool)
                 and math.isfinite(value) and channel.accepts(value, value)):
             raise ExperimentError(f"{who}: inputs = {{{name!r}: {value!r}}} {channel.unit}; "
