@@ -314,6 +314,29 @@ def test_the_lag_search_stops_at_the_lag_stage_c_allows(vgt, monkeypatch):
     assert tried == [] and tau == 0.0 and with_lag == np.inf
 
 
+def test_the_lag_grid_steps_by_the_finest_sample_period(vgt, monkeypatch):
+    """A campaign's sweep is often sampled slower than its ramps (the reproduction's:
+    100 Hz and 1 kHz). The lag grid counts in the finest period of the moving records:
+    counted in the sweep's 10 ms, a 5 ms lag had only 10 ms to try below the bound stage
+    (c) allowed, was not found, and the campaign was refused whole (found on the 1 ms
+    grid: fitted 4.98 ms, six of eight parameters identified)."""
+    from pneumact.identification import faults, joint
+
+    monkeypatch.setattr(joint, "prediction_ratio", lambda *a, **k: 1.0)
+    records = [Record.from_arrays(np.arange(0.0, 1.0, period),
+                                  {"position": 1e-3 * np.arange(0.0, 1.0, period)},
+                                  {"position": "m"}, name)
+               for name, period in (("sweep", 1e-2), ("ramp", 1e-3))]
+    tried: list[float] = []
+
+    def restage(undone):
+        tried.append(float(undone[1]["position"][-1] - records[1]["position"][-1]))
+        raise RuntimeError("not needed here")
+
+    faults.lag_search(records, ["sweep", "ramp"], vgt, restage, longest=10.6e-3)
+    assert np.allclose(np.array(tried) / 1e-3, [1e-3, 2e-3, 4e-3, 8e-3])
+
+
 def test_fs_and_vs_resting_on_faster_ramps_only_are_not_trusted():
     """Issue 38: a second round's ramps start above the speeds that stick-slip; with no
     ramp slower than vs, Fs and vs rest on faster records (measured: vs 8.7 % off with a

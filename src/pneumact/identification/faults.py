@@ -95,7 +95,8 @@ REGULATOR_RATIO = 10.0
 #: A position lag is fitted when the model with it (and the σ2 it implies) predicts the
 #: records with at most this share of the error (sum of squared noise ratios) without it.
 LAG_GAIN = 0.5
-#: Lags searched, in sample periods of the position record.
+#: Lags searched, in the finest sample period of the sweeps' and ramps' records (a
+#: sweep is often sampled slower than the ramps that resolve a lag).
 LAG_GRID_SAMPLES = (1, 2, 4, 8, 16, 32, 64)
 #: Stage (c) takes a lag τ for viscous friction k·τ, so the σ2 it found bounds the lag:
 #: τ ≤ σ2/k. The grid stops at this multiple of that bound (σ2's scatter between
@@ -322,7 +323,7 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
     moving = [(r, k) for r, k in zip(records, kinds, strict=True) if k != "presliding"]
     if not moving:
         return 0.0, staged, np.inf, np.inf
-    period = float(np.median(np.diff(moving[0][0].time)))
+    period = min(float(np.median(np.diff(r.time))) for r, _ in moving)
     grid = [n * period for n in LAG_GRID_SAMPLES if n * period <= longest]
     if not grid:
         return 0.0, staged, np.inf, np.inf
