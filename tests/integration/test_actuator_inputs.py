@@ -167,9 +167,10 @@ def test_a_load_out_of_range_and_a_foreign_input_are_refused(vgt):
                                                  r"1e\+06\] N"):
         check_drive(pa.Actuator(vgt, load=LOAD_INPUT),
                     _at_rest({"load": Step(0.5, 0.0, 2e6)}))
-    with pytest.raises(pa.ArgumentError, match=r"Actuator: load = InputChannel\(name='load'"
-                                               r".*give that, a Signal the actuator holds, "
-                                               r"or None"):
+    with pytest.raises(pa.ArgumentError, match=r"Actuator: load = the input 'load' \[N\] .*"
+                                               r"\(external force on the rod, against "
+                                               r"extension\): .*give that, a Signal the "
+                                               r"actuator holds, or None"):
         pa.Actuator(vgt, load=CYLINDER_LOAD_INPUT)
     with pytest.raises(pa.ArgumentTypeError, match=r"load = 3.*LOAD_INPUT"):
         pa.Actuator(vgt, load=3.0)

@@ -91,9 +91,10 @@ class Actuator(DeclaredInputs):
             examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
         if isinstance(self.load, InputChannel) and self.load != LOAD_INPUT:
             raise ArgumentError(
-                f"Actuator: load = {self.load!r}: the input an actuator declares for its "
-                "load is pneumact.models.actuator.LOAD_INPUT; give that, a Signal the "
-                "actuator holds, or None")
+                f"Actuator: load = the input {self.load.describe()} "
+                f"({self.load.description}): the input an actuator declares for its load "
+                "is pneumact.models.actuator.LOAD_INPUT; give that, a Signal the actuator "
+                "holds, or None")
         if not isinstance(self.load, InputChannel | None):
             check_type("load", self.load, Signal, where="Actuator",
                        what="a Signal (e.g. pa.experiments.Ramp(...)), "
