@@ -189,3 +189,20 @@ def test_a_closed_loop_and_the_fmu_take_the_declared_load(vgt):
     assert form.held_load is not None and form.held_load(np.array([0.0]))[0] == 0.0
     with pytest.raises(pa.ArgumentError, match="drive the input 'external_force'"):
         pa.Actuator(vgt, load=Constant(1.0)).fmu_form()
+
+
+def test_a_linearisation_holds_the_declared_load_as_the_held_one(vgt):
+    """``linearise(actuator, p, inputs={"load": F})`` on an actuator declaring its load is
+    the linearisation of the actuator holding F, bit for bit; refused on one without."""
+    from pneumact.control import linearise
+
+    driven = linearise(pa.Actuator(vgt, load=LOAD_INPUT), MID_STROKE_PRESSURE,
+                       inputs={LOAD_INPUT.name: LOAD})
+    held = linearise(pa.Actuator(vgt, load=Constant(LOAD)), MID_STROKE_PRESSURE)
+    assert np.array_equal(driven.A, held.A) and np.array_equal(driven.B, held.B)
+    free = linearise(pa.Actuator(vgt), MID_STROKE_PRESSURE)
+    shift = driven.operating_point["position"] - free.operating_point["position"]
+    assert shift == pytest.approx(-LOAD / vgt["k"], rel=LOAD_SHIFT_RTOL)
+    with pytest.raises(pa.ExperimentError, match=r"declares no input 'load' beside its "
+                                                 r"drive; allowed: none"):
+        linearise(pa.Actuator(vgt), MID_STROKE_PRESSURE, inputs={LOAD_INPUT.name: LOAD})
