@@ -753,6 +753,9 @@ CYLINDER_INPUT_ECHO_ATOL = 1e-12
 #: between the record's samples; the integrator stops at every sample or, rebuilt, at the
 #: knots): the integration error [m] (measured 2.0e-11 from the samples, 0.0 rebuilt)
 CYLINDER_RECORD_DRIVE_ATOL = 1e-9
+#: the diaphragm actuator's run against the same run driven from its record (pressure and
+#: load linear between the record's samples): the integration error [m] (measured 2.1e-11)
+ACTUATOR_RECORD_DRIVE_ATOL = 1e-9
 #: a load driven by name moves the rod at least this far from the run without it [m]
 #: (measured 0.107 m open loop, 250 N during a half-open extension; 7.8e-3 m in the PID
 #: loop, 150 N) and the loop's integral takes it back to the set-point within this, 1 s

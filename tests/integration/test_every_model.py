@@ -277,9 +277,10 @@ def test_each_model_refuses_the_drives_its_components_cannot_take(kind):
 # ------------------------------------------------- inputs declared by the model (item 2)
 def _declaring_models() -> dict[str, Model]:
     """Every model kind with each of its components that owns an input: the actuator
-    behind each valve, the rig with each drive, the cylinder, a loop around the cylinder
-    (a stroke) and around the force rig (none)."""
+    behind each valve (and declaring its load), the rig with each drive, the cylinder, a
+    loop around the cylinder (a stroke) and around the force rig (none)."""
     from pneumact.models import VALVES
+    from pneumact.models.actuator import LOAD_INPUT
     from pneumact.models.rig import DRIVES
 
     vgt, canudas = load_quietly("vgt-paper"), load_quietly("canudas1995")
@@ -287,6 +288,7 @@ def _declaring_models() -> dict[str, Model]:
     force_rig = pa.FrictionRig(canudas, drive="force")
     return {**{f"actuator-{name}": pa.Actuator(vgt, valve=cls())
                for name, cls in VALVES.items()},
+            "actuator-load": pa.Actuator(vgt, load=LOAD_INPUT),
             **{f"rig-{drive}": pa.FrictionRig(canudas, drive=drive) for drive in DRIVES},
             "cylinder": cylinder, "loop-cylinder": _cylinder_loop(cylinder),
             "loop-rig": ClosedLoop(force_rig, PID(kp=1.0))}
@@ -296,6 +298,7 @@ def _declaring_models() -> dict[str, Model]:
 DECLARED_RANGES = {
     "actuator-source": (1e3, 10e6), "actuator-regulator": (1e3, 10e6),
     "actuator-command": (0.0, 1.0), "actuator-iso6358": (0.0, 1.0),
+    "actuator-load": (1e3, 10e6),
     "rig-force": (-np.inf, np.inf), "rig-spring": (-np.inf, np.inf),
     "rig-velocity": (-np.inf, np.inf), "rig-position": (-np.inf, np.inf),
     "cylinder": (-1.0, 1.0), "loop-cylinder": None, "loop-rig": (-np.inf, np.inf),

@@ -195,7 +195,7 @@ def campaign(
             with _status("simulating the bench campaign"):
                 records = synthetic_campaign(parameter_set, designed.tests, noise=noise,
                                              seed=seed)
-            units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
+            units = _record_units()
             writers = {f"{r.source}.csv": functools.partial(r.save, units=units)
                        for r in records}
         written = write_outputs(out, writers)
@@ -208,13 +208,20 @@ def campaign(
         out_console.print(f"wrote {what} ({len(written)} files) to {out}")
 
 
+def _record_units() -> dict[str, str]:
+    """The units a simulated record's columns are written in (kPa, mm: a bench's)."""
+    from pneumact.io.records import PRESSURE_SIGNAL
+
+    return {PRESSURE_SIGNAL: "kPa", "position": "mm", "setpoint": "kPa"}
+
+
 def _simulate_plan(tests, parameter_set, out: Path, seed: int, noise, source: Path) -> None:
     """Simulate a written plan's ``tests`` on ``parameter_set`` and write the records."""
     from pneumact.identification import synthetic_campaign
 
     with _status(f"simulating the plan of {source} on {parameter_set.name}"):
         records = synthetic_campaign(parameter_set, tests, noise=noise, seed=seed)
-    units = {"pressure": "kPa", "position": "mm", "setpoint": "kPa"}
+    units = _record_units()
     written = write_outputs(out, {f"{r.source}.csv": functools.partial(r.save, units=units)
                                   for r in records})
     out_console.print(f"ran the plan of {source} ({len(tests)} tests) on "
@@ -280,6 +287,7 @@ def identify_paper_command(
     with user_errors():
         from pneumact.identification import identify_paper
         from pneumact.io import read_records
+        from pneumact.io.records import PRESSURE_SIGNAL
 
         if sliding_speed is not None:
             check_positive("--sliding-speed", sliding_speed)
@@ -290,7 +298,7 @@ def identify_paper_command(
         earlier = None if previous is None else _previous_round(previous, out)
         parameter_set = load_quietly(params)
         refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
-        recs = read_records(records, required=("pressure", "position"),
+        recs = read_records(records, required=(PRESSURE_SIGNAL, "position"),
                             p_atm=parameter_set["p_atm"])
         with progress_display("identifying", bar_per_stage=False) as progress:
             result = identify_paper(
@@ -373,12 +381,13 @@ def identify_signature_command(
     with user_errors():
         from pneumact.identification import identify_signature
         from pneumact.io import read_records
+        from pneumact.io.records import PRESSURE_SIGNAL
 
         check_range("--spread", spread, 0.0, 100.0, unit="%", high_open=True)
         out = check_out_dir("--out", out)
         parameter_set = load_quietly(params)
         refuse_cylinder_set(parameter_set, "the paper's identification is the diaphragm's")
-        recs = read_records(records, required=("pressure", "position"),
+        recs = read_records(records, required=(PRESSURE_SIGNAL, "position"),
                             p_atm=parameter_set["p_atm"])
         result = identify_signature(recs, parameter_set, prior_spread=spread / 100)
         _finish_identification(result, out, the_call(ctx))

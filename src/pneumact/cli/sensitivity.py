@@ -57,6 +57,7 @@ from pneumact.cli.common import (
     write_outputs,
 )
 from pneumact.errors import ArgumentError, ParameterError
+from pneumact.models.actuator import CHAMBER_PRESSURE
 from pneumact.options import Checkpoint, Executor
 
 if TYPE_CHECKING:
@@ -322,7 +323,7 @@ class Study:
             _print_oat(study, feature_names)
             writers = {"runs.csv": lambda p: study.runs.to_csv(p, index=False),
                        "loops.png": figure_writer(  # zoomed into an actuator's loops
-                           lambda: study.plot_loops(zoom="pressure" in study.signals))}
+                           lambda: study.plot_loops(zoom=CHAMBER_PRESSURE in study.signals))}
             # Fig. 3 of the varied parameters of the friction law (not the valve's, ...)
             law = set(self.model.friction.required)
             on_law = {name: amount for name, amount in
@@ -384,7 +385,8 @@ class Study:
             local = sa.local_along_time(self.model, self.experiment, problem.names, signal,
                                         grid)
             nominal = pa.simulate(self.model, self.experiment, t_eval=grid)
-        pressure_kpa = nominal["pressure"] * 1e-3 if "pressure" in nominal else None
+        pressure_kpa = (nominal[CHAMBER_PRESSURE] * 1e-3 if CHAMBER_PRESSURE in nominal
+                        else None)
         writers = {f"local_{signal}.csv": lambda p: local.to_csv(p),
                    f"local_{signal}.png": figure_writer(lambda: sa.plot_along_time(local))}
         if self.method is Method.oat:

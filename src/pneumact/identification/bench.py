@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import DataError
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from .inputs import sensor_noise
 from .smoothing import savgol_filter, savgol_weights
 
@@ -117,7 +117,7 @@ def kinematics(record: Record, window: float | None = None) -> Kinematics:
     """Smoothed velocity and acceleration of ``record`` (Savitzky-Golay, cubic, over
     ``window`` seconds; default ``smoothing_window(record)``; the record is resampled
     to its median step if not uniform)."""
-    record.require(["pressure", "position"], "the force balance")
+    record.require([PRESSURE_SIGNAL, "position"], "the force balance")
     rec = _uniform(record)
     dt = float(rec.time[1] - rec.time[0])
     window = smoothing_window(rec) if window is None else window
@@ -128,7 +128,8 @@ def kinematics(record: Record, window: float | None = None) -> Kinematics:
     x = rec["position"]
     v = savgol_filter(x, n, 3, deriv=1, delta=dt)
     a = savgol_filter(x, n, 3, deriv=2, delta=dt)
-    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec["pressure"], x, n * dt)
+    return Kinematics(rec.time, savgol_filter(x, n, 3), v, a, rec[PRESSURE_SIGNAL], x,
+                      n * dt)
 
 
 def drive_force(pressure: np.ndarray, params) -> np.ndarray:

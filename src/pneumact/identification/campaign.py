@@ -38,8 +38,9 @@ import pandas as pd
 
 from ..errors import ExperimentError
 from ..experiments import Experiment, PiecewiseLinear
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from ..io.report import ResultVocabulary
+from ..models.actuator import CHAMBER_PRESSURE
 from ..models.sensors import first_order_lag
 from ..models.valves import PRESSURE_INPUT  # the regulator's and the source's input
 from ..plotting import tight_layout
@@ -481,7 +482,7 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
         else:  # the pressure is prescribed: no chamber law applies
             model = Actuator(params, friction=friction, valve=PressureSource())
         result = simulate(model, test.experiment, solver)
-        signals = {"pressure": result["pressure"], "position": result["position"]}
+        signals = {PRESSURE_SIGNAL: result[CHAMBER_PRESSURE], "position": result["position"]}
         if test.valve == "regulator":  # the bench logs what it commanded, too
             signals["setpoint"] = test.experiment.drive(result.time)
         records.append(Record.from_arrays(
@@ -496,8 +497,8 @@ def add_noise(records: Sequence[Record], noise: Noise, seed: int = 0) -> list[Re
     rng = np.random.default_rng(seed)
     noisy = []
     for rec in records:
-        pressure, position = noise.apply(rng, rec["pressure"], rec["position"], rec.time)
-        signals = {**rec.signals, "pressure": pressure, "position": position}
+        pressure, position = noise.apply(rng, rec[PRESSURE_SIGNAL], rec["position"], rec.time)
+        signals = {**rec.signals, PRESSURE_SIGNAL: pressure, "position": position}
         noisy.append(Record.from_arrays(rec.time, signals, rec.units, rec.source,
                                         {**rec.meta, "seed": str(seed)}))
     return noisy

@@ -44,7 +44,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
+from ..models.actuator import CHAMBER_PRESSURE
 from .diagnostics import Diagnostic, named_list
 from .inputs import noise_level, resolution, sensor_noise
 from .smoothing import savgol_filter
@@ -139,7 +140,7 @@ def _rest_offset(record: Record, prior, prior_spread: float) -> dict | None:
     or None where it does not start there."""
     from .bench import drive_force
 
-    drive = drive_force(record["pressure"], prior)
+    drive = drive_force(record[PRESSURE_SIGNAL], prior)
     limit = REST_DRIVE_SHARE * (1.0 - prior_spread) * prior["F0"]
     above = np.flatnonzero(drive > limit)
     rest = slice(0, int(above[0]) if above.size else drive.size)
@@ -160,7 +161,7 @@ def position_zero(records: Sequence[Record], prior, prior_spread: float = 0.5
     the samples read, and a quantised sensor's rounding), taken off every position
     record where it is ``OFFSET_SIGMAS`` standard errors from zero and above half the
     position noise."""
-    rows = [row for r in records if "position" in r and "pressure" in r
+    rows = [row for r in records if "position" in r and PRESSURE_SIGNAL in r
             if (row := _rest_offset(r, prior, prior_spread)) is not None]
     table = pd.DataFrame(rows, columns=["record", "offset", "samples", "noise", "resolution"])
     if not len(table):
@@ -198,7 +199,7 @@ def _regression(time, measured, simulated) -> tuple[float, float, float]:
     return float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(left**2)))
 
 
-def _shifted(record: Record, offset: float, signal: str = "pressure") -> Record:
+def _shifted(record: Record, offset: float, signal: str = PRESSURE_SIGNAL) -> Record:
     if offset == 0.0:
         return record
     signals = {**record.signals, signal: record[signal] - offset}
@@ -218,14 +219,14 @@ def _pressure_table(records: Sequence[Record], params, friction, chamber,
         model = bench_model(record, params, friction, chamber)
         result = simulate(model, experiment_for(model, record, smooth=True),
                           Rodas4(rtol=1e-6), t_eval=record.time)
-        offset, delay, left = _regression(record.time, record["pressure"],
-                                          result["pressure"])
-        noise = max(sensor_noise(record["pressure"]), 1e-9)
+        offset, delay, left = _regression(record.time, record[PRESSURE_SIGNAL],
+                                          result[CHAMBER_PRESSURE])
+        noise = max(sensor_noise(record[PRESSURE_SIGNAL]), 1e-9)
         return {"record": record.source, "offset": offset, "delay": delay,
                 "ratio": left / noise, "regulator_follows": bool(left <= REGULATOR_RATIO
                                                                  * noise)}
 
-    paired = [r for r in records if "setpoint" in r and "pressure" in r]
+    paired = [r for r in records if "setpoint" in r and PRESSURE_SIGNAL in r]
     return pd.DataFrame(map_on_threads(workers or 1, check, paired),
                         columns=["record", "offset", "delay", "ratio", "regulator_follows"])
 
@@ -241,8 +242,8 @@ def pressure_side(records: Sequence[Record], prior, friction=None, chamber=None,
         return PressureSide(0.0, np.inf, False, table, list(records))
     offsets = table["offset"].to_numpy()
     offset = float(np.median(offsets))
-    noise = float(np.median([noise_level(r["pressure"]) for r in records
-                             if "setpoint" in r and "pressure" in r]))
+    noise = float(np.median([noise_level(r[PRESSURE_SIGNAL]) for r in records
+                             if "setpoint" in r and PRESSURE_SIGNAL in r]))
     spread = 1.4826 * float(np.median(np.abs(offsets - offset))) if offsets.size > 2 else \
         noise
     stderr = max(spread, 1e-3 * noise) / np.sqrt(offsets.size)
@@ -255,7 +256,7 @@ def pressure_side(records: Sequence[Record], prior, friction=None, chamber=None,
             f"its set-point ({len(table)} records): taken off every pressure record "
             "(pressure_offset)", "zero the pressure sensor, or check the regulator's own "
             "offset against a reference gauge"))
-    corrected = [_shifted(r, offset if applied else 0.0) if "pressure" in r else r
+    corrected = [_shifted(r, offset if applied else 0.0) if PRESSURE_SIGNAL in r else r
                  for r in records]
     return PressureSide(offset, float(stderr), bool(applied), table, corrected, diagnostics)
 

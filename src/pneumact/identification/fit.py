@@ -36,6 +36,7 @@ from scipy.optimize import least_squares
 from ..errors import DataError, ParameterError, PneumactError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
+from ..models.actuator import CHAMBER_PRESSURE
 from ..models.sensors import Sensors, first_order_lag, lag_derivative
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
 from ..plotting import tight_layout
@@ -52,7 +53,7 @@ if TYPE_CHECKING:
 __all__ = ["FitResult", "ProfileLikelihood", "fit"]
 
 #: the sensor lags a fit can free, and the signal each delays
-SENSOR_LAGS = {"position_lag": "position", "pressure_lag": "pressure"}
+SENSOR_LAGS = {"position_lag": "position", "pressure_lag": CHAMBER_PRESSURE}
 
 CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood threshold
 

@@ -34,8 +34,9 @@ import numpy as np
 import pandas as pd
 
 from ..errors import DataError, ParameterError, SolverError
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from ..io.report import ResultVocabulary
+from ..models.actuator import CHAMBER_PRESSURE
 from ..models.sensors import SENSOR_PARAMETERS
 from ..options import Executor
 from ..plotting import tight_layout
@@ -408,13 +409,13 @@ class PaperIdentification(ResultVocabulary):
                       sweeps[0] if sweeps else self.records[0])
         band = self.band(chosen)
         fig, (ax_loop, ax_time, ax_zoom) = plt.subplots(1, 3, figsize=(15.5, 4.2))
-        for run_p, run_x in zip(band.samples["pressure"], band.samples["position"],
+        for run_p, run_x in zip(band.samples[CHAMBER_PRESSURE], band.samples["position"],
                                 strict=True):
             ax_loop.plot(run_p * 1e-3, run_x * 1e3, color="C0", alpha=0.05, lw=0.8)
-        ax_loop.plot(chosen["pressure"] * 1e-3, chosen["position"] * 1e3, "k.", ms=1,
+        ax_loop.plot(chosen[PRESSURE_SIGNAL] * 1e-3, chosen["position"] * 1e3, "k.", ms=1,
                      label="measured")
-        ax_loop.plot(band.nominal["pressure"] * 1e-3, band.nominal["position"] * 1e3, "C3-",
-                     lw=1, label="identified model")
+        ax_loop.plot(band.nominal[CHAMBER_PRESSURE] * 1e-3, band.nominal["position"] * 1e3,
+                     "C3-", lw=1, label="identified model")
         ax_loop.set_xlabel("chamber pressure [kPa abs]")
         ax_loop.set_ylabel("position [mm]")
         ax_loop.set_title(f"{Path(chosen.source).name}: loop, {len(band.samples['position'])}"
@@ -1351,7 +1352,7 @@ class SignatureIdentification(PaperIdentification):
         x = np.linspace(0.0, self.initial["x_max"], 50)
         for record in (r for r in self.records if record_kind(r) == "sweep"):
             position = record["position"]
-            vacuum = p_atm - record["pressure"]
+            vacuum = p_atm - record[PRESSURE_SIGNAL]
             ax.plot(position * 1e3, vacuum * 1e-3, "k.", ms=1, alpha=0.4,
                     label=f"measured: {Path(record.source).name}")
             axb.plot(position * 1e3, (vacuum - (f0 + k * position) / area) * 1e-3, "k.",

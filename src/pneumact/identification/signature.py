@@ -33,7 +33,7 @@ import pandas as pd
 from scipy import stats
 
 from ..errors import DataError
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from .diagnostics import (
     IDENTIFIED_HALF_WIDTH,
     MISFIT_STRUCTURE,
@@ -230,7 +230,7 @@ def signature_verdicts(fit: SignatureFit, names: Sequence[str]) -> list[Verdict]
 def _turns(record: Record) -> list[int]:
     """Indices where the drive (the logged set-point, else the pressure, smoothed over
     half a per cent of the record) turns."""
-    drive = record["setpoint"] if "setpoint" in record.signals else record["pressure"]
+    drive = record["setpoint"] if "setpoint" in record.signals else record[PRESSURE_SIGNAL]
     n = max(5, len(record) // 200) | 1
     smooth = np.convolve(drive, np.ones(n) / n, mode="valid")
     step = np.diff(smooth)
@@ -249,7 +249,7 @@ def dead_band(records: Sequence[Record], params) -> tuple[float, float, int]:
     read (0: none, then NaNs)."""
     bands, resolutions = [], []
     for record in records:
-        x, p = record["position"], record["pressure"]
+        x, p = record["position"], record[PRESSURE_SIGNAL]
         floor = x.min() + 0.05 * np.ptp(x)
         threshold = max(DEAD_BAND_SIGMAS * sensor_noise(x), 1e-9)
         smooth_p = np.convolve(p, np.ones(9) / 9, mode="same")

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError, SolverError
+from ..models.actuator import CHAMBER_PRESSURE
 from ..options import Executor
 from ..progress import stop_threads
 from .estimates import Estimates
@@ -302,7 +303,8 @@ def parameter_draws(estimates: Estimates, draws: int, seed: int = 0, *,
 
 
 def prediction_band(model, experiment, estimates: Estimates, *, draws: int = 100,
-                    level: float = 0.95, signals: Sequence[str] = ("position", "pressure"),
+                    level: float = 0.95,
+                    signals: Sequence[str] = ("position", CHAMBER_PRESSURE),
                     t_eval=None, seed: int = 0, solver=None,
                     executor: Executor | int | str | None = None) -> PredictionBand:
     """The band of ``signals`` under ``experiment`` that the uncertainty of

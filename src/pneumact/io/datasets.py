@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from pneumact.errors import DataError
-from pneumact.io.records import Record, read_record
+from pneumact.io.records import PRESSURE_SIGNAL, Record, read_record
 from pneumact.io.tables import PathLike, require_file
 
 __all__ = ["TUDELFT_COLUMNS", "read_emps", "read_tudelft_cylinder"]
@@ -68,9 +68,9 @@ def read_tudelft_cylinder(path: PathLike, bore: float | None = None,
                                 "force_raw": "V"})
     area = math.pi * bore**2 / 4
     keep = slice(skip, None)
-    signals = {n: record[n][keep] for n in ("position", "pressure", "force")}
-    signals["friction"] = signals["force"] - (signals["pressure"] - p_atm) * area
+    signals = {n: record[n][keep] for n in ("position", PRESSURE_SIGNAL, "force")}
+    signals["friction"] = signals["force"] - (signals[PRESSURE_SIGNAL] - p_atm) * area
     return Record.from_arrays(record.time[keep], signals,
-                              {"position": "m", "pressure": "Pa", "force": "N",
+                              {"position": "m", PRESSURE_SIGNAL: "Pa", "force": "N",
                                "friction": "N"}, str(source),
                               {"bore": repr(bore), "p_atm": repr(p_atm)})

@@ -39,8 +39,12 @@ if TYPE_CHECKING:
 __all__ = ["Record", "as_records", "read_record", "read_records", "read_signal_csv",
            "refuse_duplicates"]
 
+#: A record's measured chamber pressure, absolute [Pa] (a ``pressure_gauge`` column is
+#: read into it): what an imposed pressure drives a run with, and what a run's chamber
+#: pressure is compared against.
+PRESSURE_SIGNAL = "pressure"
 #: Signals ``read_signal_csv`` accepts as the one input signal of a simulation.
-INPUT_SIGNALS = ("pressure", "command", "setpoint", "force", "velocity", "position")
+INPUT_SIGNALS = (PRESSURE_SIGNAL, "command", "setpoint", "force", "velocity", "position")
 #: the files a record is read from (their suffix is not part of its name)
 RECORD_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".xlsx")
 #: Excel workbooks (.xlsx read with the optional openpyxl; .xls refused with a hint)
@@ -177,8 +181,8 @@ class Record(ResultVocabulary):
         back (by a tenth of its range each way): the actuator moved on, the sensor did
         not. A stick at the input's turning point holds from the turn on, not across it;
         a hold at the end of the stroke ``x_max`` (its stop) is the actuator's own."""
-        drive = next((s for s in ("pressure", "setpoint", "command") if s in self.signals),
-                     None)
+        drive = next((s for s in (PRESSURE_SIGNAL, "setpoint", "command")
+                      if s in self.signals), None)
         if "position" not in self.signals or drive is None:
             return None
         x, u = self.signals["position"], self.signals[drive]
@@ -388,7 +392,7 @@ def check_physics(source, name: str, values: np.ndarray, label: str | None = Non
             f"a clock or epoch timestamp?); at that offset time has a resolution of only "
             f"{spacing:.2g} s, too coarse for the solver's steps: subtract the first time so "
             "that the record starts at 0")
-    if name in ("pressure", "setpoint"):
+    if name in (PRESSURE_SIGNAL, "setpoint"):
         bad = (values <= 0) | (values > MAX_ABSOLUTE_PRESSURE)
         if bad.any():
             i = _first(bad)
@@ -534,7 +538,7 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
                        "; the file seems to have no header" if headless else "")
     gauge = "pressure_gauge" in final
     for name in ("time", *required):
-        if not (name in final or (name == "pressure" and gauge)):
+        if not (name in final or (name == PRESSURE_SIGNAL and gauge)):
             if headless:
                 raise DataError(
                     f"{source}: required column {name!r} is missing; the file seems to have "
@@ -570,11 +574,11 @@ def read_record(path: PathLike, columns: Mapping[str, str] | None = None,
             time = values
         elif name == "pressure_gauge":
             assert p_atm is not None  # a gauge column without p_atm was refused above
-            if "pressure" in final:
+            if PRESSURE_SIGNAL in final:
                 raise DataError(f"{source}: has both 'pressure' and 'pressure_gauge'; keep one")
-            signals["pressure"] = values + float(p_atm)
-            signal_units["pressure"] = "Pa"
-            check_physics(source, "pressure", signals["pressure"],
+            signals[PRESSURE_SIGNAL] = values + float(p_atm)
+            signal_units[PRESSURE_SIGNAL] = "Pa"
+            check_physics(source, PRESSURE_SIGNAL, signals[PRESSURE_SIGNAL],
                           f"{label} + p_atm = {p_atm:g} Pa")
         else:
             check_physics(source, name, values, label)

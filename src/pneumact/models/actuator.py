@@ -9,13 +9,13 @@ from ..checks import as_instance, check_type
 from ..core.channels import DeclaredInputs, InputChannel, in_order
 from ..core.component import Part, StateSpec, required_parameters
 from ..core.signals import Constant, Signal
-from ..errors import ArgumentError
+from ..errors import ArgumentError, ExperimentError
 from ..parameters.files import as_parameter_set
 from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
 from .friction import FrictionModel, LuGre
 from .mechanics import MECHANICS_BLOCK, explicit_step
 from .pneumatics import ChamberLaw, Isothermal
-from .valves import PressureSource, Valve
+from .valves import COMMAND_INPUT, PRESSURE_INPUT, SETPOINT_INPUT, PressureSource, Valve
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -25,10 +25,27 @@ if TYPE_CHECKING:
 
 #: the FMU input that takes what drives each valve (the record signal it replaces); its
 #: unit and description are the valve's declared input's
-FMU_DRIVES = {"pressure": "pressure_input", "setpoint": "pressure_setpoint",
-              "command": "valve_command"}
+FMU_DRIVES = {PRESSURE_INPUT.record_signal: "pressure_input",
+              SETPOINT_INPUT.record_signal: "pressure_setpoint",
+              COMMAND_INPUT.record_signal: "valve_command"}
+#: the signal of its chamber pressure [Pa, absolute] in a run: its valve's state behind a
+#: valve, the template's output ``pressure`` always (the template and the valves spell it
+#: in their kernel sources, which keep their kernels' keys; tests hold them to this name)
+CHAMBER_PRESSURE = "pressure"
 #: the mechanics' parameters the FMU's end-stop check reads, in the template's order
 STOP_CHECK_PARAMETERS = ("m", "F0", "k", "x_max", "k_stop", "c_stop", "A_d", "p_atm")
+
+#: the external force on the diaphragm, against larger x (with the spring, against the
+#: vacuum's pull): an input beside the valve's drive of an actuator built with
+#: ``load=LOAD_INPUT`` (a load-free actuator's kernel has no load code, so it declares
+#: none), on the load-against-time channel the template reads; a record's ``load`` drives
+#: it (a run writes its load under that name). 1 MN bounds any force in newtons on a
+#: diaphragm actuator (one atmosphere on a 1 m² diaphragm is 0.1 MN).
+LOAD_INPUT = InputChannel(
+    "load", "N", -1e6, 1e6, record_signals=("load",), channel="load_t",
+    description="external force on the diaphragm, against larger x",
+    label="load force", rule="a load force on a diaphragm actuator must stay within "
+                             "[{low:g}, {high:g}] N (is it in N?)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,23 +53,27 @@ class Actuator(DeclaredInputs):
     """A spring-return vacuum diaphragm actuator.
 
     ``friction``, ``valve`` and ``chamber`` are strategy objects; ``load`` is an external
-    force F_ext(t) [N] and ``load_map`` a force against position F_ext(x) [N] (both
-    oppose motion towards larger x; zero by default). The chamber law matters only
-    behind a valve (with a pressure source the chamber pressure is given).
+    force F_ext(t) [N] the actuator holds, or ``LOAD_INPUT`` to declare it as the input
+    ``load`` (an experiment or a record drives it by name; zero where none does), and
+    ``load_map`` a force against position F_ext(x) [N] (both oppose motion towards larger
+    x; none by default: the paper's actuator, whose kernel has no load code). The chamber
+    law matters only behind a valve (with a pressure source the chamber pressure is
+    given).
     """
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     valve: Valve = field(default_factory=PressureSource)
     chamber: ChamberLaw = field(default_factory=Isothermal)
-    load: Signal | None = None
+    load: Signal | InputChannel | None = None
     load_map: Signal | None = None
     template: ClassVar[str] = "pneumact.models.actuator_template"
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
                      valve: Valve = ..., chamber: ChamberLaw = ...,
-                     load: Signal | None = ..., load_map: Signal | None = ...) -> None: ...
+                     load: Signal | InputChannel | None = ...,
+                     load_map: Signal | None = ...) -> None: ...
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -68,11 +89,20 @@ class Actuator(DeclaredInputs):
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Actuator",
             examples="pa.Isothermal(), pa.Adiabatic() or pa.Polytropic(exponent)"))
-        for name in ("load", "load_map"):
-            value = getattr(self, name)
-            if value is not None:
-                check_type(name, value, Signal, where="Actuator",
-                           what="a Signal (e.g. pa.experiments.Ramp(...)) or None")
+        if isinstance(self.load, InputChannel) and self.load != LOAD_INPUT:
+            raise ArgumentError(
+                f"Actuator: load = the input {self.load.describe()} "
+                f"({self.load.description}): the input an actuator declares for its load "
+                "is pneumact.models.actuator.LOAD_INPUT; give that, a Signal the actuator "
+                "holds, or None")
+        if not isinstance(self.load, InputChannel | None):
+            check_type("load", self.load, Signal, where="Actuator",
+                       what="a Signal (e.g. pa.experiments.Ramp(...)), "
+                            "pneumact.models.actuator.LOAD_INPUT (the input 'load', driven "
+                            "by name) or None")
+        if self.load_map is not None:
+            check_type("load_map", self.load_map, Signal, where="Actuator",
+                       what="a Signal (e.g. pa.experiments.Ramp(...)) or None")
         if self.chamber.temperature_state:
             raise ArgumentError(
                 f"Actuator: chamber = {type(self.chamber).__name__}(): only the cylinder's "
@@ -95,8 +125,35 @@ class Actuator(DeclaredInputs):
     def inputs(self) -> tuple[InputChannel, ...]:
         """Its valve's input (a source's pressure, a regulator's set-point, a command in
         [0, 1]), with the range the parameters give it: ``drive_quantity``,
-        ``input_signal``, ``input_range`` and ``check_drive_values`` read it."""
-        return (self.valve.declared_input(self.params),)
+        ``input_signal``, ``input_range`` and ``check_drive_values`` read it; then its
+        load force (``LOAD_INPUT``) where it is built with ``load=LOAD_INPUT``."""
+        drive = self.valve.declared_input(self.params)
+        return (drive, LOAD_INPUT) if self.load_is_input else (drive,)
+
+    @property
+    def load_is_input(self) -> bool:
+        """Whether its load is the declared input ``load`` (``load=LOAD_INPUT``)."""
+        return isinstance(self.load, InputChannel)
+
+    @property
+    def held_load(self) -> Signal | None:
+        """The load against time it holds (``load=`` a Signal), None where it holds none."""
+        return self.load if isinstance(self.load, Signal) else None
+
+    def declared_input(self, name: str, who: str) -> InputChannel:
+        """Its input named ``name``; its load, where it declares none, is refused saying
+        how to declare it."""
+        if name == LOAD_INPUT.name and not self.load_is_input:
+            listed = ", ".join(c.describe() for c in self.inputs())
+            if self.load is not None:
+                how = f"it holds its load (load = {self.load!r}): give load=LOAD_INPUT instead"
+            else:
+                how = "it is built without one: give load=LOAD_INPUT"
+            raise ExperimentError(
+                f"{who} drives {name!r}, but this Actuator declares no load input (its "
+                f"declared inputs: {listed}); {how} (pneumact.models.actuator) to drive "
+                f"the input {LOAD_INPUT.describe()}")
+        return super().declared_input(name, who)
 
     @property
     def input_signals(self) -> tuple[str, ...]:
@@ -161,11 +218,13 @@ class Actuator(DeclaredInputs):
 
     def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
                  ) -> list[Signal | None]:
-        """Its valve's drive (and any other input ``drives`` names: it declares none), its
-        loads and its valve's area maps."""
+        """Its valve's drive and the inputs ``drives`` names (its load, where declared) on
+        their channels, the loads it holds (zero where it has load code and none is held
+        or driven) and its valve's area maps."""
         res_map, atm_map = self.valve.maps()
         zero = Constant(0.0) if self.has_load else None
-        return in_order({"load_t": self.load if self.load is not None else zero,
+        held = self.held_load
+        return in_order({"load_t": held if held is not None else zero,
                          "load_x": self.load_map if self.load_map is not None else zero,
                          "map_res": res_map, "map_atm": atm_map,
                          **self.routed(drive, drives)})
@@ -173,8 +232,8 @@ class Actuator(DeclaredInputs):
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Actuator:
         """This actuator as its FMU runs it: the external force an input channel (a load
-        against time is refused: in the FMU it is the input)."""
-        refuse_load_against_time("actuator", self.load)
+        against time it holds is refused: in the FMU it is the input)."""
+        refuse_load_against_time("actuator", self.held_load)
         return replace(self, load=Constant(0.0))
 
     def fmu_interface(self) -> FmuInterface:

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..parameters.catalogue import ParameterSpec, declare
+from .actuator import CHAMBER_PRESSURE
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -51,7 +52,7 @@ SENSOR_PARAMETERS = declare(
 
 #: the signal each offset, lag and resolution belongs to
 _OF_SIGNAL = {"position": ("position_offset", "position_lag", "position_resolution"),
-              "pressure": ("pressure_offset", "pressure_lag", None)}
+              CHAMBER_PRESSURE: ("pressure_offset", "pressure_lag", None)}
 
 
 def _uniform_step(time: np.ndarray) -> float | None:

@@ -12,6 +12,7 @@ import pandas as pd
 
 from ..errors import ParameterError
 from ..io.report import ResultVocabulary
+from ..models.actuator import CHAMBER_PRESSURE
 from ..options import Executor
 from ..plotting import tight_layout
 
@@ -27,7 +28,7 @@ PAPER_VARIATIONS = {"sigma0": 0.50, "sigma1": 0.68, "sigma2": 0.90, "Fs": 0.16,
                     "Fc": 0.1536, "vs": 0.50}
 #: the signals kept of each run, by the model's ``summary_kind``: an actuator's loops, a
 #: cylinder's or a rig's positions (their motion has no pressure to draw against)
-LOOP_SIGNALS = {"hysteresis": ("pressure", "position"), "motion": ("position",)}
+LOOP_SIGNALS = {"hysteresis": (CHAMBER_PRESSURE, "position"), "motion": ("position",)}
 DEFAULT_FEATURES = ("loop_width_pressure", "loop_width_position", "loop_area",
                     "breakaway_pressure")
 
@@ -69,7 +70,7 @@ class OneAtATime(ResultVocabulary):
         diaphragm leaves rest), the middle of the stroke (the loop's width in position on
         its own scale) and the low-pressure reversal, where σ0, σ1 and vs act."""
         params = [p for p in dict.fromkeys(self.runs["parameter"]) if p != "nominal"]
-        loops = "pressure" in self.signals
+        loops = CHAMBER_PRESSURE in self.signals
         if zoom and not loops:
             raise ParameterError("plot_loops: zoom = True zooms into pressure-position loops; "
                                  "this study's model has none (its runs are positions over "
@@ -88,7 +89,7 @@ class OneAtATime(ResultVocabulary):
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
         x = self.signals["position"] * 1e3
         # a model without a pressure-position loop (a cylinder): its positions over time
-        p = (self.signals["pressure"] * 1e-3 if "pressure" in self.signals
+        p = (self.signals[CHAMBER_PRESSURE] * 1e-3 if CHAMBER_PRESSURE in self.signals
              else np.broadcast_to(self.time, x.shape))
         rows = [nominal, *np.flatnonzero(self.runs["parameter"] == name)]
         for i in rows:
@@ -108,7 +109,7 @@ class OneAtATime(ResultVocabulary):
         from ..core.features import hysteresis_summary
 
         nominal = int(np.flatnonzero(self.runs["parameter"] == "nominal")[0])
-        p, x = self.signals["pressure"][nominal], self.signals["position"][nominal]
+        p, x = self.signals[CHAMBER_PRESSURE][nominal], self.signals["position"][nominal]
         summary = hysteresis_summary(self.time, p, x)
         width = summary["loop_width_pressure"] * 1e-3
         breakaway = summary["breakaway_pressure"] * 1e-3

@@ -203,8 +203,9 @@ class Result(ResultVocabulary):
 def hysteresis_features(result: Result) -> dict[str, float]:
     """Stroke, loop widths and break-away pressure of a pressure-position record."""
     from ..core.features import hysteresis_summary
+    from ..models.actuator import CHAMBER_PRESSURE
 
-    return hysteresis_summary(result.time, result["pressure"], result["position"])
+    return hysteresis_summary(result.time, result[CHAMBER_PRESSURE], result["position"])
 
 
 def motion_summary(result: Result) -> dict[str, float]:

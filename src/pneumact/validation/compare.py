@@ -39,8 +39,9 @@ from ..identification import FitResult, experiment_for, fit
 from ..identification.arguments import fit_records
 from ..identification.diagnostics import verdicts
 from ..identification.estimates import long_run_variance
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from ..io.report import ResultVocabulary
+from ..models.actuator import CHAMBER_PRESSURE
 from ..models.inputs import INPUT_SIGNALS
 from ..options import Executor, Multistart, Optimizer
 from ..plotting import tight_layout
@@ -130,10 +131,11 @@ def _loop_error(model, records, predictions, signal: str) -> float:
         return np.nan
     errors = []
     for rec, pred in zip(records, predictions, strict=True):
-        pressure = rec["pressure"] if "pressure" in rec else pred["pressure"]
+        pressure = (rec[PRESSURE_SIGNAL] if PRESSURE_SIGNAL in rec
+                    else pred[CHAMBER_PRESSURE])
         try:
             measured = loop_measures(rec.time, pressure, rec["position"])
-            modelled = loop_measures(rec.time, pred["pressure"], pred["position"])
+            modelled = loop_measures(rec.time, pred[CHAMBER_PRESSURE], pred["position"])
         except PneumactError:
             continue
         width = measured["loop_width_pressure"]

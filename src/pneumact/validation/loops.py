@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.features import FEATURE_UNITS, hysteresis_summary, turning_points
+from ..io.records import PRESSURE_SIGNAL
 
 __all__ = ["LOOP_MEASURES", "compare_loops", "loop_measures", "reversals"]
 
@@ -34,7 +35,7 @@ def reversals(time, pressure, position) -> pd.DataFrame:
     turns = cuts[1:-1]
     kind = ["minimum" if p[cuts[j]] < p[cuts[j - 1]] else "maximum"
             for j in range(1, cuts.size - 1)]
-    return pd.DataFrame({"time": t[turns], "pressure": p[turns], "position": x[turns],
+    return pd.DataFrame({"time": t[turns], PRESSURE_SIGNAL: p[turns], "position": x[turns],
                          "turn": kind})
 
 

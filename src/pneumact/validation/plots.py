@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.display import display_frame, display_unit
+from ..io.records import PRESSURE_SIGNAL
+from ..models.actuator import CHAMBER_PRESSURE
 from ..plotting import DISPLAY_UNITS, page_names, panel_grid, tight_layout
 from .metrics import metrics_for_reading
 
@@ -24,9 +26,9 @@ def plot_loops(validation, records=None):
                if rv.has_loop]
     fig, panels = panel_grid(len(records))
     for (ax,), rv in zip(panels, records, strict=True):
-        ax.plot(rv.record["pressure"] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
+        ax.plot(rv.record[PRESSURE_SIGNAL] * 1e-3, rv.record["position"] * 1e3, "k--", lw=1,
                 label="measured")
-        ax.plot(rv.predicted("pressure") * 1e-3, rv.predicted("position") * 1e3, "C0-",
+        ax.plot(rv.predicted(CHAMBER_PRESSURE) * 1e-3, rv.predicted("position") * 1e3, "C0-",
                 lw=1.2, label="model")
         ax.set_xlabel("pressure [kPa abs]")
         ax.set_ylabel("position [mm]")
@@ -60,8 +62,8 @@ def plot_residuals(validation, records=None):
     for (ax_res, ax_acf), rv in zip(panels, records, strict=True):
         residual = rv.residual(signal)
         unit, factor = _display(rv, signal, residual)
-        if "pressure" in rv.record:
-            ax_res.plot(rv.record["pressure"] * 1e-3, residual * factor, ".", ms=1.5)
+        if PRESSURE_SIGNAL in rv.record:
+            ax_res.plot(rv.record[PRESSURE_SIGNAL] * 1e-3, residual * factor, ".", ms=1.5)
             ax_res.set_xlabel("pressure [kPa abs]")
         else:
             ax_res.plot(rv.record.time, residual * factor, ".", ms=1.5)
@@ -86,7 +88,7 @@ def _reversal_units(table) -> dict[str, str]:
     units = {}
     for column in table.columns:
         name = str(column)
-        units[column] = ("Pa" if "pressure" in name else "m" if "position" in name
+        units[column] = ("Pa" if PRESSURE_SIGNAL in name else "m" if "position" in name
                          else "s" if "time" in name else "")
     return {c: u for c, u in units.items() if u}
 

@@ -23,9 +23,10 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ArgumentError, DataError
-from ..io.records import Record
+from ..io.records import PRESSURE_SIGNAL, Record
 from ..io.report import NotebookDisplay
 from ..models import VALVES
+from ..models.actuator import CHAMBER_PRESSURE
 from ..models.inputs import DEFAULT_INPUT, INPUT_SIGNALS, INPUTS
 from ..progress import ProgressCallback, check_progress, notify
 from .loops import compare_loops, loop_measures, reversals
@@ -142,15 +143,15 @@ class RecordValidation(NotebookDisplay):
 
     @property
     def has_loop(self) -> bool:
-        return "pressure" in self.record and "position" in self.record
+        return PRESSURE_SIGNAL in self.record and "position" in self.record
 
     def loops(self) -> pd.DataFrame | None:
         """Loop measures of measurement and model (None without pressure and position)."""
         if not self.has_loop:
             return None
         t = self.record.time
-        measured = loop_measures(t, self.record["pressure"], self.record["position"])
-        model = loop_measures(t, self.predicted("pressure"), self.predicted("position"))
+        measured = loop_measures(t, self.record[PRESSURE_SIGNAL], self.record["position"])
+        model = loop_measures(t, self.predicted(CHAMBER_PRESSURE), self.predicted("position"))
         return compare_loops(measured, model)
 
     def reversals(self) -> pd.DataFrame | None:
@@ -158,11 +159,11 @@ class RecordValidation(NotebookDisplay):
         if not self.has_loop:
             return None
         t = self.record.time
-        measured = reversals(t, self.record["pressure"], self.record["position"])
-        model = reversals(t, self.predicted("pressure"), self.predicted("position"))
+        measured = reversals(t, self.record[PRESSURE_SIGNAL], self.record["position"])
+        model = reversals(t, self.predicted(CHAMBER_PRESSURE), self.predicted("position"))
         n = min(len(measured), len(model))
         out = measured.iloc[:n].add_prefix("measured_").reset_index(drop=True)
-        for column in ("pressure", "position"):
+        for column in (PRESSURE_SIGNAL, "position"):
             out[f"model_{column}"] = model[column].to_numpy()[:n]
             out[f"{column}_difference"] = out[f"model_{column}"] - out[f"measured_{column}"]
         return out

@@ -37,6 +37,7 @@ from ...experiments.actuator import Experiment
 from ...io.chunks import ChunkOutput, ChunkStore
 from ...io.report import ResultVocabulary
 from ...io.tables import partial_folder, staged_folder
+from ...models.actuator import CHAMBER_PRESSURE
 from ...progress import ProgressCallback, check_progress, notify, stop_threads
 
 if TYPE_CHECKING:
@@ -160,7 +161,7 @@ def check_outputs(model, experiment, features=(), signals=(), *, reference: bool
     """Refuse unknown feature or signal names (and pressure features of a model without a
     pressure) before anything runs; ``cli`` names them as the command line's options."""
     assembly = assemble(model)
-    has_pressure = assembly.signal_source("pressure") is not None
+    has_pressure = assembly.signal_source(CHAMBER_PRESSURE) is not None
     try:
         check_features(features, has_pressure, reference, type(model).__name__)
         check_names("signal", signals, signal_names(model, experiment))
@@ -177,7 +178,7 @@ def _plan(model, experiment, table, features, signals, t_eval, solver, reference
     assembly = assemble(model)
     columns, values = check_table(table, assembly)
     reference = check_reference(reference)
-    has_pressure = assembly.signal_source("pressure") is not None
+    has_pressure = assembly.signal_source(CHAMBER_PRESSURE) is not None
     if features is None:
         features = default_features(model.summary_kind, has_pressure, reference is not None,
                                     signals)

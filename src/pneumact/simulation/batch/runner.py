@@ -26,6 +26,7 @@ from ...core.c_engine import engine_scope
 from ...core.features import FEATURES, N_FEATURES, all_features
 from ...errors import ArgumentError
 from ...io.chunks import ChunkOutput
+from ...models.actuator import CHAMBER_PRESSURE
 from ...parameters.validation import row_problems
 from ...progress import raise_if_stopped
 from ..result import SolverStats
@@ -41,7 +42,7 @@ STATUS_SOLVER = "solver"  # the integrator failed (step underflow, NaN, max_step
 STATUS_ERROR = "error"  # the row's run raised
 
 #: the signals the features are computed from, in this order (``sources`` rows)
-FEATURE_SIGNALS = ("position", "velocity", "pressure")
+FEATURE_SIGNALS = ("position", "velocity", CHAMBER_PRESSURE)
 #: where a signal is read: a state column or a derived-output column
 FROM_STATE = 0
 FROM_OUTPUT = 1
@@ -51,7 +52,7 @@ def _feature_source(assembly, name: str) -> tuple[int, int]:
     """Where the features read ``name``; a model without pressure (a friction rig) gives
     (−1, −1) there, and the pressure features are NaN."""
     source = assembly.signal_source(name)
-    if source is None and name != "pressure":
+    if source is None and name != CHAMBER_PRESSURE:
         raise ArgumentError(f"batch: the model has no {name!r} signal, which every feature "
                             f"needs; its signals: {', '.join(assembly.state_names)}")
     return source if source is not None else (-1, -1)
