@@ -727,13 +727,14 @@ def _richer_record(params, case: str, sweep, seed: int):
 
 def _validation(parts: _Parts, params, identified, sizes: Sizes, seed: int) -> None:
     from .identification import paper_campaign
+    from .io.records import PRESSURE_SIGNAL
     from .models import Actuator, PressureRegulator
     from .validation import validate
 
     sweep = paper_campaign(params, speeds=(), sweep_period=2 * sizes.sweep_period)[:1]
     model = Actuator(identified.parameters, valve=PressureRegulator())
     results = {case: validate(model, _richer_record(params, case, sweep, seed + 1),
-                              signals=("position", "pressure"))
+                              signals=("position", PRESSURE_SIGNAL))
                for case, _ in RICHER_CASES if case in sizes.richer_cases}
     validation = results["self-consistent"]
     criteria = validation.criteria
@@ -767,7 +768,7 @@ def _validation(parts: _Parts, params, identified, sizes: Sizes, seed: int) -> N
         fit = results[case].metrics().set_index(["record", "signal"])["fit_percent"]
         rows.append({"record made by": case, "what differs": what,
                      "fit % position": float(fit[(verdict["record"], "position")]),
-                     "fit % pressure": float(fit[(verdict["record"], "pressure")]),
+                     "fit % pressure": float(fit[(verdict["record"], PRESSURE_SIGNAL)]),
                      "loop width error": float(verdict["loop_width_pressure_error"]),
                      "break-away error": float(verdict["breakaway_error"]),
                      "verdict": verdict["verdict"], "reasons": verdict["reasons"]})
@@ -920,8 +921,10 @@ def _by_branch(ax, velocity: np.ndarray, curve: np.ndarray, scale: float = 1.0,
 def _fig6(validation):
     import matplotlib.pyplot as plt
 
+    from .io.records import PRESSURE_SIGNAL
+
     record = validation.records[0]
-    p_meas, p_model = record.measured("pressure"), record.predicted("pressure")
+    p_meas, p_model = record.measured(PRESSURE_SIGNAL), record.predicted(PRESSURE_SIGNAL)
     x_meas, x_model = record.measured("position"), record.predicted("position")
     fig, axes = plt.subplots(1, 3, figsize=(12.0, 3.8))
     for ax in axes[:2]:
@@ -938,7 +941,7 @@ def _fig6(validation):
     axes[2].set_xlabel("time [s]")
     axes[2].set_ylabel("position residual [µm]", color="C1")
     twin = axes[2].twinx()
-    twin.plot(time, record.residual("pressure"), "C2-", lw=0.4, alpha=0.6)
+    twin.plot(time, record.residual(PRESSURE_SIGNAL), "C2-", lw=0.4, alpha=0.6)
     twin.set_ylabel("pressure residual [Pa]", color="C2")
     axes[2].grid(True, alpha=0.3)
     tight_layout(fig)
@@ -960,13 +963,15 @@ def _zoom_on_reversal(ax, pressure, position, span: float = 0.08) -> None:
 def _richer_figure(results: dict):
     import matplotlib.pyplot as plt
 
+    from .io.records import PRESSURE_SIGNAL
+
     fig, axes = plt.subplots(2, len(results), figsize=(12.0, 5.6), squeeze=False)
     for column, (case, validation) in enumerate(results.items()):
         record = validation.records[0]
-        pressure = record.measured("pressure")
+        pressure = record.measured(PRESSURE_SIGNAL)
         top, bottom = axes[0, column], axes[1, column]
         top.plot(1e-3 * pressure, 1e3 * record.measured("position"), color="0.55", lw=3.0)
-        top.plot(1e-3 * record.predicted("pressure"), 1e3 * record.predicted("position"),
+        top.plot(1e-3 * record.predicted(PRESSURE_SIGNAL), 1e3 * record.predicted("position"),
                  "C0-", lw=0.9)
         _zoom_on_reversal(top, pressure, record.measured("position"))
         top.set_title(case, fontsize=9)
@@ -1378,12 +1383,13 @@ def _step_figure(params, step: dict):
     import matplotlib.pyplot as plt
 
     from .analysis import chamber_time_constant, choked_limit
+    from .models.actuator import CHAMBER_PRESSURE
 
     time, free, held = step["time"], step["free"], step["held"]
     tau = float(chamber_time_constant(params, 0.0))
     fig, axes = plt.subplots(1, 2, figsize=(11.0, 3.6))
-    axes[0].plot(time, 1e-3 * free["pressure"], "C0-", lw=1.4, label="free diaphragm")
-    axes[0].plot(time, 1e-3 * held["pressure"], "C3--", lw=1.0, label="held at rest")
+    axes[0].plot(time, 1e-3 * free[CHAMBER_PRESSURE], "C0-", lw=1.4, label="free diaphragm")
+    axes[0].plot(time, 1e-3 * held[CHAMBER_PRESSURE], "C3--", lw=1.0, label="held at rest")
     decay = time[(time >= STEP_TIMES[0]) & (time <= STEP_TIMES[1])]
     exponential = params["p_atm"] * np.exp(-(decay - STEP_TIMES[0]) / tau)
     choked = exponential >= params["p_res"] / choked_limit(params["gamma"])[0]

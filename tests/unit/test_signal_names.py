@@ -28,12 +28,10 @@ SOURCE = Path(pneumact.__file__).parent
 #: function ``valve_pressure``; the template's output; the two constants), the unit
 #: vocabularies keyed by signal name (``core.units``, ``io.units``: a table of names is
 #: where names are said), the figures (``plotting`` sits below ``io`` and ``models``, whose
-#: constants it cannot import) and ``reproduction.py`` (the paper's figures, left to its
-#: own change)
+#: constants it cannot import)
 ALLOWED = {
     "models/valves.py": 6, "models/actuator_template.py": 1, "models/actuator.py": 1,
     "io/records.py": 1, "core/units.py": 2, "io/units.py": 1, "plotting.py": 3,
-    "reproduction.py": 9,
 }
 
 
