@@ -87,7 +87,15 @@ class Experiment:
         return {self.quantity: self.drive, **self.drives}
 
     def breakpoints(self) -> np.ndarray:
-        """Times the integrator must stop at, within [t_start, t_end]."""
+        """Times the integrator must stop at, within [t_start, t_end] (found once: an
+        experiment does not change; a copy each time)."""
+        found = self.__dict__.get("_breakpoints")
+        if found is None:
+            found = self._find_breakpoints()
+            object.__setattr__(self, "_breakpoints", found)
+        return found.copy()
+
+    def _find_breakpoints(self) -> np.ndarray:
         bp = np.concatenate([*(signal.breakpoints() for signal in self.inputs.values()),
                              self.extra_breakpoints, [self.t_start, self.t_end]])
         bp = np.unique(bp)
