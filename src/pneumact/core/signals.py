@@ -111,10 +111,6 @@ class Signal:
 
     def __init__(self, terms: Sequence[np.ndarray]):
         self._terms = [np.asarray(t, dtype=np.float64) for t in terms]
-        #: what a run asks of the signal again and again (its breakpoints, its
-        #: extremes over the run for the drive's range check), computed once: a
-        #: signal's terms do not change after it is made
-        self._remembered: dict[tuple, object] = {}
 
     # -- packing -------------------------------------------------------------------
     def encode(self) -> np.ndarray:
@@ -123,13 +119,6 @@ class Signal:
 
     def breakpoints(self) -> np.ndarray:
         """Sorted unique times where the signal has a corner or a jump."""
-        remembered = self.__dict__.setdefault("_remembered", {})  # (one unpickled)
-        found = remembered.get(("breakpoints",))
-        if found is None:
-            found = remembered[("breakpoints",)] = self._find_breakpoints()
-        return found.copy()  # type: ignore[union-attr]
-
-    def _find_breakpoints(self) -> np.ndarray:
         points: list[np.ndarray] = []
         for term in self._terms:
             n = int(term[1])
@@ -162,14 +151,6 @@ class Signal:
         """(lowest, highest) value over [t0, t1]: exact at the corners of a piecewise
         linear signal (where its extremes lie, both sides of a jump), a fine grid in
         between for sines and sums."""
-        key = ("extremes", float(t0), float(t1))
-        remembered = self.__dict__.setdefault("_remembered", {})
-        found = remembered.get(key)
-        if found is None:
-            found = remembered[key] = self._find_extremes(t0, t1)
-        return found  # type: ignore[return-value]
-
-    def _find_extremes(self, t0: float, t1: float) -> tuple[float, float]:
         points = [np.array([t0, t1], dtype=float)]
         bp = self.breakpoints()
         bp = bp[(bp >= t0) & (bp <= t1)]

@@ -170,14 +170,13 @@ def _check_drive_of(model: Model, experiment: Experiment, where: str) -> None:
     """``check_drive`` of a model already checked."""
     check_experiment(experiment, where)
     who = f"experiment '{experiment.name}'"
-    for name, signal in experiment.inputs.items():
+    for name, (low, high) in experiment.input_extremes().items():
         declared = model.declared_input(name, who)
         if name == experiment.quantity and declared.name != model.drive_quantity:
             raise ExperimentError(
                 f"{who} drives {name!r} as its quantity, but the drive of this "
                 f"{type(model).__name__} is {model.drive_quantity!r}: drive "
                 f"{model.drive_quantity!r} and give {name!r} in drives={{{name!r}: ...}}")
-        low, high = signal.extremes(experiment.t_start, experiment.t_end)
         declared.check(low, high, who)
 
 
