@@ -868,3 +868,17 @@ NUMPY_FILTER_RTOL = 1e-12
 #: the cylinder resting on its rod-end stop: x_max within the stop spring's give under
 #: the full supply force (measured 4.8 µm on iso15552-32, k_stop's default)
 END_STOP_REST_ATOL = 1e-4
+
+# ------------------------------------- a fit on a record whose drive steps (issue 41, 5)
+#: the truth's tolerance: a synthetic record carries no integration error
+STEP_FIT_TRUTH_RTOL = 1e-9
+#: noise seeds of the cylinder's spool-step fit of Fc (the position sensor's Noise())
+STEP_FIT_SEEDS = 5
+#: Fc against the truth: the step moved by half a sample gave +4.2 % (20.83 N for 20 N);
+#: kept at the step's sample, 12 seeds were within 3e-5 (the noise's standard error)
+STEP_FIT_RTOL = 1e-3
+#: the truth within this many half-widths of the 95 % interval (1.5: 2.9 standard errors,
+#: 99.6 % of seeds of an honest interval; the moved step was 8 half-widths off)
+STEP_FIT_CI_SLACK = 1.5
+#: noise on a logged spool [-] for the input-noise bootstrap's check (a jump 150 × it)
+STEP_FIT_SPOOL_NOISE = 0.01

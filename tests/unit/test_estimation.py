@@ -9,13 +9,19 @@ from scipy import stats
 
 import reference as ref
 from pneumact.errors import DataError, ParameterError
+from pneumact.experiments import PiecewiseLinear, SpoolStep
 from pneumact.identification import Estimates, inverse_friction, linear_least_squares
 from pneumact.identification.estimates import (
     _bandwidth,
     _long_run_covariance,
     covariance_from_jacobian,
 )
-from pneumact.identification.inputs import noise_level, piecewise_linear_input
+from pneumact.identification.inputs import (
+    input_jumps,
+    noise_level,
+    piecewise_linear_input,
+    sampled_input,
+)
 from pneumact.identification.paper import record_kind
 from pneumact.io import Record, read_record, read_records
 
@@ -119,6 +125,31 @@ def test_piecewise_linear_input_keeps_steps_and_removes_noise():
     same_t, same_v = piecewise_linear_input(t, clean)
     assert same_t.size < 20
     assert np.allclose(np.interp(t, same_t, same_v), clean, rtol=1e-12)
+
+
+def test_a_sampled_step_is_rebuilt_as_a_step_at_the_sample_that_shows_it():
+    """A spool logged as commanded (1 kHz, the step at a sample): rebuilt, smoothed or
+    not, it equals the commanded step between the samples too (a line across the
+    interval moved it by half a sample); with noise, the jump keeps that time. A ramp
+    over two samples and a quantised signal's one-step flicker are not jumps."""
+    t = np.arange(301) * 1e-3
+    commanded = SpoolStep(-1.0, 0.5, t_step=0.1, t_end=0.3).drive
+    spool = commanded(t)
+    between = t[:-1] + 0.37e-3
+    assert input_jumps(spool).tolist() == [99]
+    for knots in (piecewise_linear_input(t, spool), sampled_input(t, spool)):
+        rebuilt = PiecewiseLinear(*knots)
+        np.testing.assert_array_equal(rebuilt(between), commanded(between))
+    noisy = spool + np.random.default_rng(5).normal(0.0, ref.STEP_FIT_SPOOL_NOISE, t.size)
+    knots_t, knots_v = piecewise_linear_input(t, noisy)
+    assert knots_t[np.flatnonzero(np.diff(knots_t) == 0)].tolist() == [t[100]]
+    rebuilt = PiecewiseLinear(knots_t, knots_v)(between)
+    assert np.max(np.abs(rebuilt - commanded(between))) < ref.PWL_MAX_ERROR * \
+        ref.STEP_FIT_SPOOL_NOISE
+    ramp = np.interp(t, [0.0, 0.1, 0.102, 0.3], [-1.0, -1.0, 0.5, 0.5])
+    assert input_jumps(ramp).size == 0
+    creeping = np.round(np.linspace(0.0, 1.0, t.size) / 0.01) * 0.01
+    assert input_jumps(creeping).size == 0
 
 
 # --------------------------------------------------------------------------- records

@@ -96,3 +96,28 @@ def test_piecewise_linear_rejects_length_mismatch_and_bad_ramp():
         Ramp(0.0, 1.0, duration=0.0)
     with pytest.raises(ExperimentError, match="frequency"):
         Sine(1.0, frequency=0.0)
+
+
+def test_what_an_experiment_remembers_is_handed_out_as_copies():
+    """A run asks an experiment for its breakpoints and its inputs' extremes (the drive's
+    range check) once and then from memory: a caller that changes what it got changes
+    nothing the next caller sees, and the answers are a fresh experiment's."""
+    from pneumact.experiments import Experiment
+
+    def make() -> Experiment:
+        drive = PiecewiseLinear([0.0, 0.2, 0.2, 0.5], [1.0, 1.0, 3.0, 2.0]) + \
+            Step(0.4, 0.0, 1.0)
+        return Experiment(drive, "pressure", 0.5, drives={"force": Constant(2.0)})
+
+    experiment, fresh = make(), make()
+    for ask in (Experiment.breakpoints, Experiment.input_extremes):
+        got = ask(experiment)
+        if isinstance(got, dict):
+            got.clear()
+        else:
+            got[:] = -1.0
+    np.testing.assert_array_equal(experiment.breakpoints(), fresh.breakpoints())
+    assert experiment.input_extremes() == fresh.input_extremes()
+    extremes = experiment.input_extremes()
+    assert extremes["pressure"] == pytest.approx((1.0, 10.0 / 3.0), rel=SIGNAL_RTOL)  # 0.4 s
+    assert extremes["force"] == (2.0, 2.0)

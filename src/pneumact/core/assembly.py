@@ -62,6 +62,8 @@ class Assembly:
     def __init__(self, model):
         self.model = model
         self._kernels: dict[str, Kernel] = {}
+        #: engine -> the vector of the model's own parameter set (``pack``)
+        self._packed: dict[str, np.ndarray] = {}
         self.parts: tuple[Part, ...] = tuple(model.parts())
         refuse_duplicates(self.parts, self.describe())
         self.template: str = model.template
@@ -156,8 +158,17 @@ class Assembly:
         """The kernel vector: parameters from ``params`` (default: the model's set;
         given values, else catalogue defaults; those a component fixes, such as a
         controller's gains, from the component), settings from the components, derived
-        quantities computed."""
-        params = self.model.params if params is None else params
+        quantities computed. The model's own vector is packed once per engine (its
+        parameter set and components do not change) and handed out as a copy."""
+        if params is None:
+            engine = current_engine()
+            packed = self._packed.get(engine)
+            if packed is None:
+                packed = self._packed[engine] = self._pack(self.model.params)
+            return packed.copy()
+        return self._pack(params)
+
+    def _pack(self, params: Mapping[str, float]) -> np.ndarray:
         settings = {part.qualified(name): value for part in self.parts
                     for name, value in part.settings.items()}
         own = self.own_values

@@ -87,7 +87,26 @@ class Experiment:
         return {self.quantity: self.drive, **self.drives}
 
     def breakpoints(self) -> np.ndarray:
-        """Times the integrator must stop at, within [t_start, t_end]."""
+        """Times the integrator must stop at, within [t_start, t_end] (found once: an
+        experiment does not change; a copy each time)."""
+        found = self.__dict__.get("_breakpoints")
+        if found is None:
+            found = self._find_breakpoints()
+            object.__setattr__(self, "_breakpoints", found)
+        return found.copy()
+
+    def input_extremes(self) -> dict[str, tuple[float, float]]:
+        """Input name -> (lowest, highest) value of its signal over the run
+        (``Signal.extremes``), found once: every run checks its drive against the
+        model's declared ranges, and a fit runs the same experiment hundreds of times."""
+        found = self.__dict__.get("_input_extremes")
+        if found is None:
+            found = {name: signal.extremes(self.t_start, self.t_end)
+                     for name, signal in self.inputs.items()}
+            object.__setattr__(self, "_input_extremes", found)
+        return dict(found)
+
+    def _find_breakpoints(self) -> np.ndarray:
         bp = np.concatenate([*(signal.breakpoints() for signal in self.inputs.values()),
                              self.extra_breakpoints, [self.t_start, self.t_end]])
         bp = np.unique(bp)

@@ -289,14 +289,24 @@ def experiment_for(model, record: Record, smooth: bool = False):
     model declares whose record signal the record carries (a cylinder's ``load``) as
     measured; with ``smooth`` the drive rebuilt piecewise linear
     (``identification.inputs``), which also leaves the integrator far fewer breakpoints
-    than one per sample."""
+    than one per sample. Either way a jump between two samples (a spool step) stays a
+    jump, at the first sample that shows it: a line across the interval would move it."""
     from ..core.signals import PiecewiseLinear
     from ..experiments import from_record, from_samples
+    from .inputs import input_jumps, sampled_input
 
     drive = model.drive_input  # the declared input the record's signal drives
     others = recorded_inputs(model, record)
-    if not smooth:
+    signals = (drive.record_signal, *others.values())
+    if not smooth and (drive.record_signal not in record or not any(
+            input_jumps(record[s]).size for s in signals)):
         return from_record(record, drive.name, signal=drive.record_signal, drives=others)
+    if not smooth:  # the samples as they are, a step kept as a step (``sampled_input``)
+        drives = {name: PiecewiseLinear(*sampled_input(record.time, record[signal]))
+                  for name, signal in others.items()}
+        return from_samples(*sampled_input(record.time, record[drive.record_signal]),
+                            drive.name, name=os.path.basename(record.source) or "record",
+                            n_points=record.time.size, drives=drives)
     knots_t, knots_v = rebuilt_input(model, record)
     drives = {name: PiecewiseLinear(*rebuilt_signal(record, signal))
               for name, signal in others.items()}

@@ -9,18 +9,36 @@ the input as a piecewise-linear signal: knots from the Ramer-Douglas-Peucker
 simplification at a few noise standard deviations, then the knot values by linear
 least squares over all samples (no noise left within a segment, corners and steps
 kept).
+
+A change within one sample interval, far larger than its neighbours' (a spool or
+command step, logged as commanded), is a jump, not a ramp: the samples cannot say where
+in the interval it happened, and a straight line across it moves the step by half an
+interval on average (on a cylinder's spool step sampled at 1 kHz that biased Fc by
+−20 %, the interval excluding the truth). ``input_jumps`` finds them and the rebuilt
+input jumps at the first sample that shows the new value: a sampled record is
+right-continuous (a controller's command holds from its sample on, as pneumact's
+signals do at their own jumps); each side is rebuilt on its own and the value before
+the jump is held up to it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["knot_jacobian", "noise_level", "piecewise_linear_input", "resolution",
-           "sensor_noise"]
+__all__ = ["input_jumps", "knot_jacobian", "noise_level", "piecewise_linear_input",
+           "resolution", "sampled_input", "sensor_noise"]
 
 #: Beyond this many knots the input is not a bench test of holds, ramps and steps; the
 #: knot times are then kept where the simplification put them.
 MAX_REFINED_KNOTS = 400
+#: A change between two samples is a jump when it is this many times each neighbouring
+#: sample's change (a ramp's changes are equal, a first-order rise's shrink by e^(h/τ))
+JUMP_NEIGHBOUR_RATIO = 10.0
+#: ... and this many times the white noise on the signal (``noise_level``)
+JUMP_NOISE_RATIO = 20.0
+#: ... and this share of the signal's peak-to-peak (a quantised signal's one-step
+#: flicker on a moving signal is not a jump)
+JUMP_RANGE_SHARE = 0.05
 
 
 def noise_level(values: np.ndarray) -> float:
@@ -74,23 +92,82 @@ def _rdp_knots(t: np.ndarray, y: np.ndarray, tolerance: float) -> np.ndarray:
     return np.flatnonzero(keep)
 
 
+def input_jumps(values: np.ndarray) -> np.ndarray:
+    """Indices k of the samples after which a sampled input jumps (a step between samples
+    k and k + 1): the change is more than ``JUMP_NEIGHBOUR_RATIO`` times each
+    neighbouring sample's change, ``JUMP_NOISE_RATIO`` times the noise and
+    ``JUMP_RANGE_SHARE`` of the peak-to-peak. The first and last changes are never
+    jumps (no neighbour on one side)."""
+    values = np.asarray(values, dtype=float)
+    if values.size < 4:
+        return np.zeros(0, dtype=int)
+    change = np.abs(np.diff(values))
+    scale = max(float(np.ptp(values)), float(np.abs(values).max()), 1e-300)
+    floor = max(JUMP_NOISE_RATIO * noise_level(values), JUMP_RANGE_SHARE * np.ptp(values),
+                1e-9 * scale)
+    inner = change[1:-1]
+    neighbours = np.maximum(change[:-2], change[2:])
+    return np.flatnonzero((inner > JUMP_NEIGHBOUR_RATIO * neighbours) & (inner > floor)) + 1
+
+
+def sampled_input(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(times, values) of a sampled input as it is, linear between samples, but each jump
+    (``input_jumps``) held from the sample before it up to the sample that shows it: the
+    record's samples unsmoothed, its steps kept as steps."""
+    time = np.asarray(time, dtype=float)
+    values = np.asarray(values, dtype=float)
+    jumps = input_jumps(values)
+    if jumps.size == 0:
+        return time, values
+    return (np.insert(time, jumps + 1, time[jumps + 1]),
+            np.insert(values, jumps + 1, values[jumps]))
+
+
 def piecewise_linear_input(time: np.ndarray, values: np.ndarray,
                            tolerance: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(knot times, knot values) of a piecewise-linear signal fitted to a noisy input.
 
     ``tolerance`` (default 6 × the estimated noise level) is the largest deviation left
-    unexplained by a segment; a noiseless input keeps its corners exactly."""
+    unexplained by a segment; a noiseless input keeps its corners exactly. A jump
+    (``input_jumps``) between samples k and k + 1 is a repeated knot time at sample
+    k + 1, the value before it held from sample k: a step stays a step."""
     time = np.asarray(time, dtype=float)
     values = np.asarray(values, dtype=float)
     sigma = noise_level(values)
     scale = max(np.ptp(values), np.abs(values).max())
-    if tolerance is None and sigma <= 1e-9 * scale:
-        # noiseless (simulated, or already clean): drop only the samples that lie on a
-        # straight line between their neighbours (exactly the same signal, fewer knots)
-        knots = _rdp_knots(time, values, 1e-9 * scale)
+    noiseless = tolerance is None and sigma <= 1e-9 * scale
+    tol = 1e-9 * scale if noiseless else (6.0 * sigma if tolerance is None
+                                          else float(tolerance))
+    jumps = input_jumps(values)
+    if jumps.size == 0:
+        return _rebuilt_piece(time, values, tol, noiseless)
+    starts = np.concatenate([[0], jumps + 1])
+    ends = np.concatenate([jumps + 1, [time.size]])
+    knots_t: list[np.ndarray] = []
+    knots_v: list[np.ndarray] = []
+    for start, end in zip(starts, ends, strict=True):
+        if knots_t:  # hold the value before the jump up to the jump's sample
+            knots_t.append(time[start:start + 1])
+            knots_v.append(knots_v[-1][-1:])
+        piece_t, piece_v = _rebuilt_piece(time[start:end], values[start:end], tol,
+                                          noiseless)
+        knots_t.append(piece_t)
+        knots_v.append(piece_v)
+    return np.concatenate(knots_t), np.concatenate(knots_v)
+
+
+def _rebuilt_piece(time: np.ndarray, values: np.ndarray, tolerance: float,
+                   noiseless: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(knot times, knot values) of samples without a jump: the noiseless ones that lie
+    on a straight line between their neighbours dropped (the same signal, fewer knots),
+    or else the simplification at ``tolerance``, the knot values fitted by linear least
+    squares and the knot times refined."""
+    if noiseless:
+        knots = _rdp_knots(time, values, tolerance)
         return time[knots], values[knots]
-    tol = 6.0 * sigma if tolerance is None else float(tolerance)
-    knots = _rdp_knots(time, values, tol)
+    knots = _rdp_knots(time, values, tolerance)
+    if knots.size < 2 or time.size < 3:
+        return time[knots], values[knots]
     # hat-function basis on the knots: linear least squares for the knot values
     seg = np.clip(np.searchsorted(time[knots], time, side="right") - 1, 0, knots.size - 2)
     t0, t1 = time[knots][seg], time[knots][seg + 1]

@@ -108,7 +108,7 @@ def input_replicates(models, records, values: dict[str, float], masks, *,
             n_in = knot_t.size - 2
             times[1:-1] += move[:n_in]
             knots += move[n_in:]
-            if np.any(np.diff(times) <= 0):
+            if np.any(np.diff(times)[np.diff(knot_t) > 0] <= 0):
                 return None  # a knot moved past a neighbour: not a rebuilt input
         experiment = from_samples(times, knots, model.drive_quantity,
                                   n_points=record.time.size, drives=others)
@@ -214,17 +214,35 @@ def nuisance_covariance(fit: FitResult, held: dict[str, float], solver=None,
 
 
 def _knot_projector(time, knot_t, knot_v, sigma: float) -> np.ndarray:
-    """Linear map from noise on the input's samples to the moves of its knots: one
-    Gauss-Newton step of the knot fit, with each interior knot time held (as a prior of
-    standard deviation half the gap to its nearer neighbour) so that a knot between two
-    nearly level segments, whose time the samples hardly fix, stays between its
-    neighbours instead of swinging far off."""
+    """Linear map from noise on the input's samples to the moves of its knots (interior
+    knot times, then all values): one Gauss-Newton step of the knot fit, with each
+    interior knot time held (as a prior of standard deviation half the gap to its nearer
+    neighbour) so that a knot between two nearly level segments, whose time the samples
+    hardly fix, stays between its neighbours instead of swinging far off. A jump's knots
+    (a repeated time, ``inputs.piecewise_linear_input``) keep their time, and the value
+    held up to a jump, which no sample sees, moves with the knot before it."""
+    from scipy.sparse import identity
+
+    n_knots = knot_t.size
+    n_in = n_knots - 2
     basis = knot_jacobian(time, knot_t, knot_v)
-    normal = (basis.T @ basis).toarray()
-    gaps = np.minimum(np.diff(knot_t)[:-1], np.diff(knot_t)[1:])
+    repeated = np.zeros(n_knots, dtype=bool)
+    repeated[1:] |= np.diff(knot_t) == 0
+    repeated[:-1] |= np.diff(knot_t) == 0
+    unseen = np.zeros(n_knots, dtype=bool)
+    unseen[1:] = np.asarray(abs(basis[:, n_in + 1:]).sum(axis=0)).ravel() == 0
+    # the moves of all knots from the free ones: a free column maps to itself, a held
+    # time to nothing, an unseen value to its left neighbour's value
+    expand = identity(n_in + n_knots, format="lil")
+    for k in np.flatnonzero(unseen):
+        expand[n_in + k, n_in + k - 1] = 1.0
+    expand = expand.tocsc()[:, np.concatenate([~repeated[1:-1], ~unseen])]
+    reduced = basis @ expand
+    normal = (reduced.T @ reduced).toarray()
+    gaps = np.minimum(np.diff(knot_t)[:-1], np.diff(knot_t)[1:])[~repeated[1:-1]]
     prior = np.zeros(normal.shape[0])
-    prior[: knot_t.size - 2] = (sigma / (0.5 * gaps)) ** 2
-    return np.linalg.solve(normal + np.diag(prior), basis.T.toarray())
+    prior[: gaps.size] = (sigma / (0.5 * gaps)) ** 2
+    return expand @ np.linalg.solve(normal + np.diag(prior), reduced.T.toarray())
 
 
 def _parameters_of(model) -> frozenset[str]:

@@ -258,14 +258,6 @@ def _rates_of(law, y, prm, dydt):
 
 
 @kernel()
-def _controller_rates(t, ts, y, prm, sig, ptr, dydt):
-    for i in range(PLANT_NSTATE, NSTATE):
-        dydt[i] = 0.0
-    if not SAMPLED:
-        _rates_of(_states_law(t, ts, y, prm, sig, ptr), y, prm, dydt)
-
-
-@kernel()
 def rhs(t, ts, y, prm, sig, ptr, dydt):
     """The plant under the controller's input, then the controller's rates; the law is
     evaluated once."""
@@ -300,9 +292,17 @@ def _input_gain(t, ts, y, value, prm, sig, ptr, b):
 
 @kernel()
 def _input_and_rates(t, ts, y, prm, sig, ptr, rates):
-    """The plant input and the controller's rates at (y, prm): one side of a difference."""
-    _controller_rates(t, ts, y, prm, sig, ptr, rates)
-    return _plant_input(t, ts, _command(t, ts, y, prm, sig, ptr), prm, sig, ptr)
+    """The plant input and the controller's rates at (y, prm): one side of a difference.
+    The continuous law is evaluated once for both (the Jacobian calls this twice per
+    state: evaluating it apart for the rates and the command was a tenth of a loop's
+    run)."""
+    for i in range(PLANT_NSTATE, NSTATE):
+        rates[i] = 0.0
+    if SAMPLED:
+        return _plant_input(t, ts, y[S_HELD_COMMAND], prm, sig, ptr)
+    law = _states_law(t, ts, y, prm, sig, ptr)
+    _rates_of(law, y, prm, rates)
+    return _plant_input(t, ts, law.output, prm, sig, ptr)
 
 
 @kernel()
