@@ -319,7 +319,7 @@ def test_the_lag_grid_steps_by_the_finest_sample_period(vgt, monkeypatch):
     100 Hz and 1 kHz). The lag grid counts in the finest period of the moving records:
     counted in the sweep's 10 ms, a 5 ms lag had only 10 ms to try below the bound stage
     (c) allowed, was not found, and the campaign was refused whole (found on the 1 ms
-    grid: fitted 4.98 ms, six of eight parameters identified)."""
+    grid: fitted 4.98 ms, F0, k, Fc, Fs and σ0 identified, σ2, vs and σ1 poorly)."""
     from pneumact.identification import faults, joint
 
     monkeypatch.setattr(joint, "prediction_ratio", lambda *a, **k: 1.0)
