@@ -120,15 +120,21 @@ def test_unknown_instances_and_old_names_are_refused_saying_what_is_allowed(
 
 def test_old_names_are_refused_by_studies_and_by_the_model(cylinder_set):
     """A study's variations name the new name; a fit's, a run's or a sensitivity's names
-    (checked by the assembly) list the model's parameters, the instances' among them."""
+    (checked by the assembly) say it too, the catalogue's explanation beside the closest
+    match, and list the model's parameters, the instances' among them."""
     with pytest.raises(pa.ParameterError, match=r"unknown parameter 'V_dead_a' in the "
                                                 r"variations: renamed: use "
                                                 r"'chamber_a.V_dead'"):
         sa.Problem.around(cylinder_set, {"V_dead_a": 0.05})
     with pytest.raises(pa.ParameterError, match=r"free: 'V_dead_a' is not a parameter of "
-                                                r"Cylinder.*chamber_a.V_dead, "
+                                                r"Cylinder.*\(renamed: use "
+                                                r"'chamber_a.V_dead'\).*chamber_a.V_dead, "
                                                 r"chamber_b.V_dead"):
         Assembly(pa.Cylinder(cylinder_set)).check_parameters(["V_dead_a"], "free")
+    with pytest.raises(pa.ParameterError, match=r"\(no component instance 'chamber_c'; "
+                                                r"instances: chamber_a, chamber_b; did you "
+                                                r"mean 'chamber_b.V_dead'\?\)"):
+        Assembly(pa.Cylinder(cylinder_set)).check_parameters(["chamber_c.V_dead"], "free")
 
 
 def test_set_files_give_an_instance_s_parameters_as_dotted_keys_or_a_table(

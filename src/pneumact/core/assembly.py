@@ -27,7 +27,7 @@ import contextlib
 import importlib
 import threading
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from functools import cached_property
@@ -40,7 +40,7 @@ from . import codegen
 from .c_engine import Kernel, build_ahead, current_engine, engine_kernel
 from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
-__all__ = ["Assembly", "assemble"]
+__all__ = ["Assembly", "assemble", "explain_unknown_names"]
 
 INTEGRATORS = "pneumact.core.integrators"
 
@@ -142,8 +142,12 @@ class Assembly:
         for name in names:
             if name in self.slots:
                 continue
+            said = next((text for text in (explain(name) for explain in _NAME_EXPLAINERS)
+                         if text), "")
             close = difflib.get_close_matches(name, list(self.slots), n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            guess = f"did you mean '{close[0]}'?" if close else ""
+            hint = f" ({'; '.join(text for text in (said, guess) if text)})" \
+                if said or guess else ""
             raise ParameterError(
                 f"{what}: '{name}' is not a parameter of {self.describe()}{hint}; its "
                 f"parameters are {', '.join(self.parameter_names)}")
@@ -326,6 +330,19 @@ def refuse_duplicates(parts: Sequence[Part], model: str) -> None:
 def output_constant(name: str) -> str:
     """The kernel constant holding the index of output ``name`` ("OUT_<NAME>")."""
     return f"OUT_{name.upper()}"
+
+
+#: functions that say why a name is no parameter, where more can be said than a close
+#: match (``explain_unknown_names``); '' when they know nothing of it
+_NAME_EXPLAINERS: list[Callable[[str], str]] = []
+
+
+def explain_unknown_names(explain: Callable[[str], str]) -> None:
+    """Register ``explain`` (name -> why it is no parameter, or ''): an assembly's refusal
+    of an unknown name says it (the parameter catalogue registers its renamed names and
+    component instances, a layer above this one)."""
+    if explain not in _NAME_EXPLAINERS:
+        _NAME_EXPLAINERS.append(explain)
 
 
 def assemble(model) -> Assembly:
