@@ -30,7 +30,6 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..core.assembly import explain_unknown_names
 from ..core.component import instance_entry
 
 __all__ = [
@@ -239,9 +238,6 @@ def explain_unknown(name: str) -> str:
                 f"{', '.join(_INSTANCES) or 'none'}")
     return (f"'{local}' is no parameter of {instance}, a {kind}; a {kind}'s parameters: "
             f"{', '.join(_KINDS[kind])}")
-
-
-explain_unknown_names(explain_unknown)
 
 
 def declare_relation(names: tuple[str, ...], holds: Callable[..., object],

@@ -5,7 +5,8 @@ forward parameter sensitivities along; ``simulate_batch`` (``simulation.batch``)
 many parameter sets on all cores or a Dask cluster.
 """
 
-from ..core.assembly import Assembly, assemble
+from ..core.assembly import Assembly, assemble, explain_unknown_names
+from ..parameters.catalogue import explain_unknown
 from .forward_sensitivity import SensitivityResult, simulate_sensitivities
 from .result import Result, SolverStats
 from .simulate import simulate
@@ -13,3 +14,7 @@ from .solvers import DormandPrince, Rodas4, Solver
 
 __all__ = ["Assembly", "DormandPrince", "Result", "Rodas4", "SensitivityResult", "Solver",
            "SolverStats", "assemble", "simulate", "simulate_sensitivities"]
+
+# an assembly's refusal of an unknown name says what the catalogue knows of it (a renamed
+# name's new one, the instances): core sits below the catalogue, so it is told here
+explain_unknown_names(explain_unknown)
