@@ -350,8 +350,9 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
                          for r, kind in which])
 
     first = map_on_threads(workers or 1, lambda rk: ratios(staged, [rk])[0], moving)
-    near = [rk for rk, ratio in zip(moving, first, strict=True) if ratio <= ADMIT_RATIO]
-    judged = near if len(near) >= LAG_JUDGED_MIN else moving
+    near = [i for i, ratio in enumerate(first) if ratio <= ADMIT_RATIO]
+    chosen = near if len(near) >= LAG_JUDGED_MIN else range(len(moving))
+    judged = [moving[i] for i in chosen]
     trials = []
     for tau in grid:
         try:
@@ -363,7 +364,7 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
         tau = share * staged["sigma2"] / staged["k"]
         trials.append((tau, staged.with_values({"position_lag": tau,
                                                 "sigma2": (1.0 - share) * staged["sigma2"]})))
-    without = float(np.sum(np.square(ratios(staged, judged))))
+    without = float(np.sum(np.square([first[i] for i in chosen])))
     errors = map_on_threads(workers or 1,
                             lambda trial: float(np.sum(np.square(ratios(trial[1], judged)))),
                             trials)
