@@ -2,15 +2,16 @@
 with the package (``src/pneumact/core/shipped_c/``, see ``core.c_shipped``).
 
 Shipped: the common library of signals and features, and the run library of every model
-``pneumact simulate`` builds from its options with the default chamber and parameter set:
+``pneumact simulate`` builds from its options with the default parameter set:
 each ``--valve`` (``pneumact.models.VALVES``) with each ``--friction``
-(``friction_models()``), built as the command builds it (``cli.common.build_model``),
-and ``--model cylinder``'s default. A combination the command refuses with the default
+(``friction_models()``), built as the command builds it (``cli.common.build_model``;
+``--chamber`` needs none of its own: the chamber laws are parameters of one kernel), and
+``--model cylinder``'s default. A combination the command refuses with the default
 options (``--friction gms``: ``vgt-paper`` lacks its parameters) is skipped, saying why.
-Their C comes from numba's typing of the kernel functions (3-7 s of CPU each); shipped, a
+Their C comes from numba's typing of the kernel functions (2-4 s of CPU each); shipped, a
 first run of any of them only compiles it. Run this after a change to a kernel's code,
 the C back end or numba (``tests/integration/test_shipped_c.py`` fails until then); it
-translates every library (a few minutes) and removes the files of libraries no longer
+translates every library (about a minute) and removes the files of libraries no longer
 shipped:
 
     PYTHONPATH=src python tools/ship_c.py            # write the shipped C
