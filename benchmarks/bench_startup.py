@@ -15,9 +15,9 @@ simulate``, the quick start's main job), on one installation whose caches start 
   compile; on C one combination outside the shipped set (``--valve command
   --decaying-damping``: LuGre's option, a kernel of its own) is measured too, labelled
   so: its C is translated first (numba's typing of the kernel), the honest cost of any
-  other model. Measured (C, 2-core machine at load ~7, the tree before → after shipping
-  them all): whole command 4.6-9.8 s → 1.9-3.6 s (4.2-6.2 → 1.5-2.0 s of CPU); not
-  shipped 5.4-11.1 s (``benchmarks/README.md``);
+  other model. Measured (C, the 2-core machine shared at load 3-8, the tree before →
+  after shipping them all): whole command 4.6-9.8 s → 1.7-3.6 s (4.2-6.2 → 1.4-2.0 s of
+  CPU); not shipped 5.4-11.1 s (``benchmarks/README.md``);
 - warm: the same command again, caches filled: the overhead from the launch of the
   process (interpreter start included) to the moment the integrator is entered, and the
   whole command (with the interpreter's exit); and ``import pneumact`` alone.
