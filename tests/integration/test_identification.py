@@ -521,3 +521,41 @@ def test_runs_repeated_within_an_identification_are_done_once(vgt, clean_preslid
         assert run(every) is not first
     np.testing.assert_array_equal(first["position"], fresh["position"])
     np.testing.assert_array_equal(first.result["position"], fresh.result["position"])
+
+
+def test_a_campaign_the_fit_follows_in_part_gets_a_partial_answer(campaign, start, vgt,
+                                                                   monkeypatch):
+    """Issue 38 item 2: where the joint fit follows too few records to speak for the
+    campaign (here every ramp below the fastest three and the presliding test are
+    made unfollowable), the parameters the followed records carry (the spring and the
+    sliding friction) are still judged on them, and those resting on the others are
+    refused with the reason: Fs and vs (no slow ramp fitted), σ0 and σ1 (no presliding
+    test fitted). Before, all eight were refused."""
+    import importlib
+
+    from pneumact.identification.bench import typical_speed
+    from pneumact.identification.paper import record_kind
+
+    joint = importlib.import_module("pneumact.identification.joint")
+    original = joint.prediction_ratio
+    ramps = sorted((typical_speed(r) for r in campaign if record_kind(r) == "ramp"),
+                   reverse=True)
+    fast = ramps[2]
+
+    def unfollowable(record, kind, *args, **kwargs):
+        if kind == "presliding" or (kind == "ramp" and typical_speed(record) < fast):
+            return 1e3
+        return original(record, kind, *args, **kwargs)
+
+    monkeypatch.setattr(joint, "prediction_ratio", unfollowable)
+    result = identify_paper(campaign, start)
+    table = result.to_pandas(truth=vgt)
+    assert any("does not follow" in d.message for d in result.diagnostics)
+    for name in ("F0", "k"):
+        assert table.loc[name, "verdict"] == "identified", table.loc[name, "reason"]
+        assert table.loc[name, "truth_in_ci95"]
+    for name in ("Fs", "vs", "sigma0", "sigma1"):
+        assert table.loc[name, "verdict"] != "identified"
+        assert np.isnan(table.loc[name, "ci95_low"])
+    assert "presliding" in table.loc["sigma0", "reason"]
+    assert not result.ok

@@ -389,7 +389,7 @@ def test_fs_and_vs_resting_on_faster_ramps_only_are_not_trusted():
 
     judged = [Verdict(n, IDENTIFIED, "95 % interval ±1 %") for n in ("Fc", "Fs", "vs")]
     fast = [ramp("ramp_5mm_s", 5e-3)]
-    used = pd.DataFrame({"record": ["ramp_5mm_s", "ramp_0.1mm_s"]})
+    used = pd.DataFrame({"record": ["ramp_5mm_s", "ramp_0.1mm_s"], "fits": [True, True]})
     found: list = []
     after, refused = _stribeck_dip_check(fast, used, {"vs": 1e-3}, judged, found)
     assert refused == ["Fs", "vs"] and "no ramp is slower than vs" in found[0].message
@@ -397,6 +397,35 @@ def test_fs_and_vs_resting_on_faster_ramps_only_are_not_trusted():
     slow = [*fast, ramp("ramp_0.1mm_s", 1e-4)]
     after, refused = _stribeck_dip_check(slow, used, {"vs": 1e-3}, judged, [])
     assert not refused and all(v.identified for v in after)
+    # in the fit but not fitted (its stick-slip missed): Fs and vs rest on faster records
+    missed = used.assign(fits=[True, False])
+    found = []
+    after, refused = _stribeck_dip_check(slow, missed, {"vs": 1e-3}, judged, found)
+    assert refused == ["Fs", "vs"] and "not fitted by it" in found[0].message
+
+
+def test_sigma0_and_sigma1_are_refused_when_no_presliding_test_is_fitted():
+    """Issue 38 item 2: the refit without the records the model misses keeps sliding
+    records only, which still give σ0 a finite standard error (measured −2.8 % at
+    ±1.3 %): with every presliding test missed, σ0 and σ1 are refused, the others not;
+    one presliding test fitted keeps them to the refit's judgement."""
+    import pandas as pd
+
+    from pneumact.identification.paper import _resting_on_misfits
+
+    test = Record.from_arrays(np.linspace(0.0, 1.0, 11), {"position": np.zeros(11),
+                                                          "pressure": np.full(11, 9e4)},
+                              source="presliding", meta={"kind": "presliding"})
+    kinds = {"presliding": [test]}
+    residuals = pd.DataFrame({"record": ["sweep", "presliding"], "fits": [True, False]})
+    refused = _resting_on_misfits(kinds, residuals, {"sigma1": "already"})
+    assert list(refused) == ["sigma0"] and "presliding" in refused["sigma0"]
+    assert not _resting_on_misfits(kinds, residuals.assign(fits=True), {})
+    windowed = residuals.assign(record=["sweep", "presliding (0..2.83 s)"], fits=True)
+    assert not _resting_on_misfits(kinds, windowed, {})  # fitted after its approach
+    assert list(_resting_on_misfits(kinds, windowed.assign(fits=False), {})) == \
+        ["sigma0", "sigma1"]
+    assert not _resting_on_misfits({"presliding": []}, residuals, {})
 
 
 def _segments(friction, params, seed: int = 0):
@@ -523,3 +552,26 @@ def test_the_position_zero_is_read_at_rest_on_the_stop(vgt):
     clean = position_zero(zeroed, vgt)
     assert not clean.applied and not clean.diagnostics
     assert all(a is b for a, b in zip(clean.records, zeroed, strict=True))  # left as read
+
+
+def test_the_refit_judges_a_campaign_whose_slow_end_alone_is_missed():
+    """Issue 38 item 2: many records missed, all of them the slowest ramps (and a
+    presliding test), is the stick-slip regime output error cannot follow: a refit
+    without them judges the rest. A steady ramp missed among fitted ones, or a missed
+    sweep, says the model lacks something everywhere: not that."""
+    from pneumact.identification.paper import _slow_end_only
+
+    time = np.linspace(0.0, 2.0, 201)
+
+    def record(kind: str, speed: float = 0.0) -> Record:
+        return Record.from_arrays(time, {"position": speed * time,
+                                         "pressure": np.full_like(time, 9e4)},
+                                  source=f"{kind}_{speed:g}", meta={"kind": kind})
+
+    records = [record("sweep", 1e-3), *(record("ramp", v) for v in (1e-4, 1e-3, 1e-2)),
+               record("presliding")]
+    assert _slow_end_only(records, [True, False, True, True, False])
+    assert _slow_end_only(records, [True, False, False, True, True])
+    assert not _slow_end_only(records, [True, False, True, False, True])  # a steady one
+    assert not _slow_end_only(records, [False, False, True, True, True])  # the sweep
+    assert not _slow_end_only(records, [True, False, False, False, True])  # none fitted

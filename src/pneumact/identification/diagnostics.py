@@ -114,7 +114,8 @@ MISFIT_INFORMATION = 0.5
 #: added to its variance.
 MISFIT_SHIFT = 1.0
 #: Where at most this share of the records misfit, the move is measured by fitting again
-#: without them (``joint.refit_without``), not by one linear step.
+#: without them (``joint.refit_without``), not by one linear step; beyond it only where
+#: the model misses the slow end of the campaign alone (``paper._slow_end_only``).
 MISFIT_REFIT_SHARE = 0.25
 
 

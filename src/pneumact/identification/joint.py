@@ -125,6 +125,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
                      executor: Executor | int | None = None,
                      max_evaluations: int = MAX_EVALUATIONS,
                      prior=None, drop_chaotic: bool = True, excluded: list | None = None,
+                     partial: bool = False,
                      progress: ProgressCallback | None = None) -> FitResult:
     """Fit ``free`` to all ``records`` at once from the values of ``params`` (the staged
     estimates), within ``stages.prior_bounds`` of ``prior`` (default ``params``);
@@ -138,7 +139,10 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
       sliding, or the reverse) make the cost rugged and the fit stops in a local
       optimum (measured on drawn actuators: costs 7× the truth's, or 100× the noise on
       records the truth fits to 0.86×). A record never admitted is left out, and its
-      name appended to ``excluded``.
+      name appended to ``excluded``. More than ``MAX_EXCLUDED_SHARE`` of the records
+      left out refuses the fit (a DataError), unless ``partial``: then the fit of the
+      records it follows is returned, for verdicts that refuse what rests on the others
+      (a slow ramp's Fs and vs, a presliding test's σ0 and σ1).
     - Each record's weight counts the noise of its measured input as well as its
       sensor's (``uncertainty.input_noise_weights``, ``replicates`` runs).
     - With ``drop_chaotic`` a record whose motion is chaotic in the parameters at the
@@ -171,7 +175,7 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
         if not admitted or round_ == MAX_ROUNDS - 1:
             excluded.extend(chaotic)
             excluded.extend(records[i].source for i in waiting)
-            if len(excluded) > MAX_EXCLUDED_SHARE * len(records):
+            if len(excluded) > MAX_EXCLUDED_SHARE * len(records) and not partial:
                 raise DataError(
                     f"joint refinement: the model fitted to the steadier records does not "
                     f"follow {len(excluded)} of the {len(records)} records "
