@@ -60,7 +60,7 @@ S_PRESSURE_B = 3
 S_FRICTION = 4
 S_VALVE = 5
 S_THERMAL = 6
-CH_SUPPLY = -1
+CH_SUPPLY = None  # generated: the supply channel's index (``core.channels``)
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool", "mass_flow_a",
