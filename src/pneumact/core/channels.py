@@ -212,8 +212,13 @@ class DeclaredInputs:
     @property
     def channel_names(self) -> tuple[str, ...]:
         """The model's channels in kernel order (``parts_layout``): ``CHANNELS``, its
-        components' extras, its own."""
-        return parts_layout(self.parts(), self.own_channels)
+        components' extras, its own; found once per model (a model does not change, and
+        every run packs its channels by it)."""
+        found = self.__dict__.get("_channel_names")
+        if found is None:
+            found = parts_layout(self.parts(), self.own_channels)
+            object.__setattr__(self, "_channel_names", found)
+        return found
 
     @property
     def drive_input(self) -> InputChannel:

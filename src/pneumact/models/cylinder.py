@@ -290,12 +290,19 @@ def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
     return channel_eval(sig, ptr, CH_DRIVE, t, ts)[0]
 
 
+@njit(cache=True)
+def driven_supply(t, ts, sig, ptr, ch):  # pragma: no cover - compiled
+    """The input ``supply`` on channel ``ch`` (a call of its own: the evaluation of a
+    signal stays out of the equations that read the parameter where it is not driven)."""
+    return channel_eval(sig, ptr, ch, t, ts)[0]
+
+
 @njit(cache=True, inline="always")
 def supply_pressure(t, ts, p, o, sig, ptr, ch):  # pragma: no cover - compiled
     """The supply pressure p_sup [Pa absolute]: the input ``supply`` on channel ``ch``
     where an experiment drives it, else the parameter p_supply."""
     if channel_driven(sig, ptr, ch):
-        return channel_eval(sig, ptr, ch, t, ts)[0]
+        return driven_supply(t, ts, sig, ptr, ch)
     return p[o + CY_PSUP]
 
 
@@ -1028,10 +1035,14 @@ class Cylinder(DeclaredInputs):
     def inputs(self) -> tuple[InputChannel, ...]:
         """Its 5/3 valve's spool command u in [-1, 1] (``SPOOL_INPUT``), then its load
         force (``LOAD_INPUT``) unless the cylinder holds one (``load=``), then its supply
-        pressure (``SUPPLY_INPUT``, from its p_atm up)."""
-        supply = replace(SUPPLY_INPUT, low=float(self.params["p_atm"]))
-        load = () if self.load is not None else (LOAD_INPUT,)
-        return (SPOOL_INPUT, *load, supply)
+        pressure (``SUPPLY_INPUT``, from its p_atm up); found once (every run asks)."""
+        found = self.__dict__.get("_inputs")
+        if found is None:
+            supply = replace(SUPPLY_INPUT, low=float(self.params["p_atm"]))
+            load = () if self.load is not None else (LOAD_INPUT,)
+            found = (SPOOL_INPUT, *load, supply)
+            object.__setattr__(self, "_inputs", found)
+        return found
 
     def declared_input(self, name: str, who: str) -> InputChannel:
         """Its input named ``name``; the load of a cylinder that holds one is refused
@@ -1128,8 +1139,9 @@ class Cylinder(DeclaredInputs):
         spool = drive_input("spool_command", SPOOL_INPUT.unit, SPOOL_INPUT.description, 0.0,
                             1.0, SPOOL_INPUT.low, SPOOL_INPUT.high)
         step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
-        supply = declared_fmu_input(SUPPLY_INPUT.name, self.inputs()[-1],
-                                    float(p["p_supply"]), pressure=True)
+        declared = next(i for i in self.inputs() if i.name == SUPPLY_INPUT.name)
+        supply = declared_fmu_input(SUPPLY_INPUT.name, declared, float(p["p_supply"]),
+                                    pressure=True)
         return FmuInterface((spool, force_input(push), supply), None, step)
 
     def describe(self) -> str:

@@ -77,7 +77,7 @@ def _spool(t, ts, y, prm, sig, ptr):
     return spool_position(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
 
 
-@kernel()
+@kernel(inline="always")
 def _supply(t, ts, prm, sig, ptr):
     """The supply pressure: its input where driven, else p_supply."""
     return supply_pressure(t, ts, prm, CYLINDER_LO, sig, ptr, CH_SUPPLY)
