@@ -20,7 +20,7 @@ import pytest
 import pneumact as pa
 from pneumact.core import codegen
 from pneumact.core.assembly import assemble
-from pneumact.core.channels import LOOP_CHANNELS
+from pneumact.core.channels import CHANNELS
 from pneumact.core.signals import Constant, PiecewiseLinear, Step
 from pneumact.experiments import Experiment
 from pneumact.identification import experiment_for
@@ -87,10 +87,10 @@ def test_the_load_is_declared_only_when_asked_for(vgt):
     assert key(declared) == key(pa.Actuator(vgt, load=Constant(LOAD))) != key(default)
     drive, load = Constant(MID_STROKE_PRESSURE), Constant(LOAD)
     channels = declared.channels(drive, {LOAD_INPUT.name: load})
-    assert channels[LOOP_CHANNELS.index(LOAD_INPUT.channel)] is load
-    undriven = declared.channels(drive)[LOOP_CHANNELS.index(LOAD_INPUT.channel)]
+    assert channels[CHANNELS.index(LOAD_INPUT.channel)] is load
+    undriven = declared.channels(drive)[CHANNELS.index(LOAD_INPUT.channel)]
     assert np.all(undriven(np.array([0.0, 1.0, 1e3])) == 0.0)
-    assert default.channels(drive)[LOOP_CHANNELS.index(LOAD_INPUT.channel)] is None
+    assert default.channels(drive)[CHANNELS.index(LOAD_INPUT.channel)] is None
 
 
 def test_a_batch_drives_the_load_as_a_run_does(vgt):

@@ -12,17 +12,18 @@ again. Names or values the declarations do not allow are refused naming them.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 import pneumact as pa
 from conftest import load_quietly
-from pneumact.core.channels import LOOP_CHANNELS
 from pneumact.core.signals import Constant, PiecewiseLinear, Step
 from pneumact.experiments import Experiment, SpoolStep
 from pneumact.identification import experiment_for
 from pneumact.io.records import Record
-from pneumact.models.cylinder import LOAD_INPUT, SPOOL_INPUT
+from pneumact.models.cylinder import LOAD_INPUT, SPOOL_INPUT, SUPPLY_INPUT
 from pneumact.simulation import Rodas4
 from pneumact.simulation.simulate import check_drive
 from reference import (
@@ -83,13 +84,16 @@ def test_each_declared_input_is_routed_to_its_channel(cylinder_set):
     """``channels`` puts the drive on the spool's channel and ``drives`` on the load's, a
     held load where no experiment drives one, zero on a free cylinder."""
     spool, load = Constant(0.3), Constant(80.0)
-    channels = pa.Cylinder(cylinder_set).channels(spool, {"load": load})
-    assert channels[LOOP_CHANNELS.index(SPOOL_INPUT.channel)] is spool
-    assert channels[LOOP_CHANNELS.index(LOAD_INPUT.channel)] is load
+    free = pa.Cylinder(cylinder_set)
+    layout = free.channel_names
+    channels = free.channels(spool, {"load": load})
+    assert channels[layout.index(SPOOL_INPUT.channel)] is spool
+    assert channels[layout.index(LOAD_INPUT.channel)] is load
     held = pa.Cylinder(cylinder_set, load=load).channels(spool)
-    assert held[LOOP_CHANNELS.index(LOAD_INPUT.channel)] is load
-    assert pa.Cylinder(cylinder_set).inputs() == (SPOOL_INPUT, LOAD_INPUT)
-    assert pa.Cylinder(cylinder_set, load=load).inputs() == (SPOOL_INPUT,)
+    assert held[layout.index(LOAD_INPUT.channel)] is load
+    supply = replace(SUPPLY_INPUT, low=cylinder_set["p_atm"])
+    assert free.inputs() == (SPOOL_INPUT, LOAD_INPUT, supply)
+    assert pa.Cylinder(cylinder_set, load=load).inputs() == (SPOOL_INPUT, supply)
 
 
 def test_a_record_with_a_load_column_drives_the_load(cylinder_set):
@@ -120,7 +124,8 @@ def test_a_record_with_a_load_column_drives_the_load(cylinder_set):
 @pytest.mark.parametrize(("drives", "message"), [
     ({"pressure": Constant(2e5)},
      r"drives 'pressure', but the 5/3 valve of this Cylinder needs a 'spool' signal \(its "
-     r"declared inputs: 'spool' \[1\] in \[-1, 1\], 'load' \[N\] in \[-1e\+06, 1e\+06\]\)"),
+     r"declared inputs: 'spool' \[1\] in \[-1, 1\], 'load' \[N\] in \[-1e\+06, 1e\+06\], "
+     r"'supply' \[Pa\] in \[100000, 1e\+07\]\)"),
     ({"load": Step(0.5, 0.0, 2e6)},
      r"experiment 'probe': its load force spans 0 to 2e\+06; a load force on a pneumatic "
      r"cylinder must stay within \[-1e\+06, 1e\+06\] N"),
@@ -164,7 +169,7 @@ def test_the_fmu_takes_the_load_as_its_external_force_input(cylinder_set):
     declared load input (a held load is refused there: it would be dropped)."""
     interface = pa.Cylinder(cylinder_set).fmu_interface()
     force = next(i for i in interface.inputs if i.name == "external_force")
-    assert force.channel == LOOP_CHANNELS.index(LOAD_INPUT.channel)
+    assert force.channel == LOAD_INPUT.channel
     assert force.unit == LOAD_INPUT.unit
     with pytest.raises(pa.ArgumentError, match="drive the input 'external_force'"):
         pa.Cylinder(cylinder_set, load=Constant(1.0)).fmu_form()
@@ -256,7 +261,7 @@ def test_a_csv_drives_the_spool_and_its_load_in_kn_as_the_api_does(cylinder_set,
     ({"command [1]": np.abs(CSV_SPOOL)}, pa.DataError,
      r"drive\.csv: has no spool column \(columns: time, command\); a Cylinder's input file "
      r"needs time and its drive spool, optionally the other inputs it declares \(columns "
-     r"spool \[1\], load \[N\]\)"),
+     r"spool \[1\], load \[N\], supply \[Pa\]\)"),
     ({"spool [1]": CSV_SPOOL, "load [mm]": CSV_LOAD_KN}, pa.DataError,
      r"column 'load' has unit 'mm' of dimension \[length\]; load needs a force unit such "
      r"as N, kN or lbf"),

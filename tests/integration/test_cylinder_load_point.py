@@ -82,6 +82,23 @@ def test_the_chambers_balance_the_load_at_the_holding_spool(cylinder, holding):
     assert np.all(np.diff(p_b) < 0)
 
 
+@pytest.mark.parametrize("supply", [ref.CYLINDER_SUPPLY_LOW, ref.CYLINDER_SUPPLY_HIGH])
+def test_the_chambers_balance_the_load_at_each_supply_level(cylinder, supply):
+    """The supply pressure held as an input beside the load (``inputs={"supply": p_s}``):
+    at each level the holding spool's chambers balance the load, with chamber A's rest
+    pressure below that level, and a lower supply holds the load at other pressures."""
+    load = 150.0
+    inputs = {"load": load, "supply": supply}
+    spool = _loop(cylinder).holding_input(POSITION, inputs=inputs)
+    point = linearise(cylinder, spool, position=POSITION, inputs=inputs).operating_point
+    assert abs(_pressure_force(cylinder.params, point) - load) < ref.CYLINDER_LOAD_BALANCE_ATOL
+    assert cylinder.params["p_atm"] < point["pressure_a"] < supply
+    usual = _loop(cylinder).holding_input(POSITION, inputs={"load": load})
+    usual_point = linearise(cylinder, usual, position=POSITION,
+                            inputs={"load": load}).operating_point
+    assert abs(point["pressure_a"] - usual_point["pressure_a"]) > 1e3  # Pa: it acts
+
+
 def test_no_load_is_todays_linearisation_and_a_held_load_the_same_point(cylinder, holding):
     """inputs={"load": 0} changes nothing, bit for bit; a load given as an input is the
     same point as the load the cylinder holds (Cylinder(load=Constant(F)))."""
@@ -199,7 +216,8 @@ def test_inputs_the_plant_does_not_declare_or_out_of_range_are_refused(cylinder)
     held = pa.Cylinder(cylinder.params, load=Constant(100.0))
     with pytest.raises(ExperimentError, match=r"holding_input: inputs = \{'load': 100.0\}; "
                                               r"Cylinder.* declares no input 'load' beside "
-                                              r"its drive; allowed: none"):
+                                              r"its drive; allowed: 'supply' \[Pa\] in "
+                                              r"\[100000, 1e\+07\]"):
         _loop(held).holding_input(POSITION, inputs={"load": 100.0})
     actuator = pa.Actuator(load_quietly("vgt-paper"), valve=pa.CommandValve())
     with pytest.raises(ExperimentError, match=r"linearise: inputs = \{'load': 1.0\}; "

@@ -328,7 +328,8 @@ def test_every_model_declares_its_inputs_and_enforces_their_ranges(name):
     signal); a drive just inside its declared range passes ``check_drive``, just outside
     it is refused, at each finite end; an unbounded one takes any value; an experiment of
     a quantity the model does not declare is refused naming it, the model and its
-    inputs; each input beside the drive (the cylinder's load), driven by name, likewise,
+    inputs; each input beside the drive (the cylinder's load and supply pressure), driven
+    by name, likewise (from zero or its range's nearest end),
     and reaches its channel."""
     from pneumact.core.channels import InputChannel
     from pneumact.experiments import QUANTITIES
@@ -373,11 +374,12 @@ def _check_input_beside_the_drive(model, declared, held: Experiment) -> None:
     inside its declared range it passes ``check_drive`` and reaches the channel it
     declares, just outside it is refused naming it; as the experiment's quantity it is
     refused naming the model's drive."""
-    from pneumact.core.channels import LOOP_CHANNELS
     from pneumact.simulation.simulate import check_drive
 
+    rest = min(max(0.0, declared.low), declared.high)  # zero, or its range's nearest end
+
     def driving(value: float) -> Experiment:
-        signal = PiecewiseLinear([0.0, 0.1], [0.0, value])
+        signal = PiecewiseLinear([0.0, 0.1], [rest, value])
         return Experiment(held.drive, held.quantity, 0.1, drives={declared.name: signal})
 
     for end, upper in ((declared.low, False), (declared.high, True)):
@@ -388,7 +390,7 @@ def _check_input_beside_the_drive(model, declared, held: Experiment) -> None:
             check_drive(model, driving(outside))
     signal = driving(declared.high).drives[declared.name]
     channels = model.channels(held.drive, {declared.name: signal})
-    assert channels[LOOP_CHANNELS.index(declared.channel)] is signal
+    assert channels[model.channel_names.index(declared.channel)] is signal
     with pytest.raises(pa.ExperimentError, match=f"but the drive of this {type(model).__name__}"
                                                  f" is '{held.quantity}'"):
         check_drive(model, Experiment(signal, declared.name, 0.1,

@@ -222,6 +222,42 @@ def test_the_cylinder_fmu_s_external_force_is_its_load_input(cylinder_fmu):
     assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed
 
 
+def test_the_cylinder_fmu_s_supply_input_is_its_supply_pressure(cylinder_fmu):
+    """The cylinder declares its supply pressure as an input on a channel of its own
+    (issue 41, item 2): its FMU has the input ``supply`` [Pa] starting at p_supply, from
+    p_atm up, and a supply step in the FMU's input table runs as pa.simulate runs the same
+    step driven by name, within what the ME FMU is held to, and far from the run without
+    it."""
+    from pneumact.core.signals import Step
+
+    model, fmu = cylinder_fmu
+    supply = next(v for v in fmu.variables if v.name == "supply")
+    assert (supply.causality, supply.unit, supply.start, supply.minimum) == (
+        "input", "Pa", model.params["p_supply"], model.params["p_atm"])
+    spool = pa.experiments.SpoolStep(before=-1.0, after=0.5, t_step=0.1, t_end=1.0)
+    high, low = model.params["p_supply"], 3e5
+    lowered = pa.Experiment(spool.drive, spool.quantity, spool.t_end, n_points=spool.n_points,
+                            drives={"supply": Step(0.15, high, low)})
+    table = np.array([(0.0, -1.0, high), (0.1, -1.0, high), (0.1, 0.5, high),
+                      (0.15, 0.5, high), (0.15, 0.5, low), (1.0, 0.5, low)],
+                     dtype=[("time", float), ("spool_command", float), ("supply", float)])
+    out = fmpy.simulate_fmu(str(fmu.path), fmi_type="ModelExchange", stop_time=1.0,
+                            input=table, start_values={"spool_command": -1.0},
+                            relative_tolerance=ref.FMU_RTOL, output_interval=1e-3,
+                            output=["position"])
+    run = pa.simulate(model, lowered)
+    position = np.interp(run.time, out["time"], out["position"])
+    allowed = ref.FMU_POSITION_RMS_OF_STROKE * float(np.ptp(run["position"]))
+    assert np.sqrt(np.mean((position - run["position"]) ** 2)) <= allowed
+    free = pa.simulate(model, spool)["position"]
+    changed = np.sqrt(np.mean((free - run["position"]) ** 2))
+    assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed
+    with pytest.raises(pa.ArgumentError,
+                       match=r"supply = 50000: must be in \[100000, 1e\+07\]"):
+        pa.export_fmu(model, fmu.path.with_name("low.fmu"), inputs={"supply": 5e4},
+                      binary=False)
+
+
 def _steps_like_pa_simulate(cosimulation, case: str, step: float,
                             experiment: pa.Experiment, also: tuple[str, ...] = ()) -> None:
     """The CS FMU's position (and the outputs ``also``) on a held input against

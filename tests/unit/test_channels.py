@@ -57,3 +57,50 @@ def test_an_input_refusal_shows_the_values_in_its_display_unit():
         setpoint.check(0.001, 0.005, "exp")
     assert setpoint.describe() == "'position' [m] in [0, 0.004]"
     assert setpoint.span == (0.0, 0.004) and setpoint.record_signal == "position_setpoint"
+
+
+def test_a_layout_is_the_fixed_channels_then_the_extras_then_the_model_s_own():
+    """``channel_layout``: CHANNELS first, the components' extras in order, the model's
+    own last; CH_<NAME> constants only where an index moves (none for the fixed
+    channels, nor for a loop's own after them)."""
+    from pneumact.core.channels import (
+        LOOP_CHANNELS,
+        LOOP_OWN,
+        channel_layout,
+        layout_constants,
+    )
+
+    assert channel_layout() == CHANNELS
+    assert channel_layout(own=LOOP_OWN) == LOOP_CHANNELS
+    assert layout_constants(CHANNELS) == [] and layout_constants(LOOP_CHANNELS) == []
+    layout = channel_layout(("supply", "command_b"), LOOP_OWN)
+    assert layout == (*CHANNELS, "supply", "command_b", *LOOP_OWN)
+    assert layout_constants(layout) == [("CH_SUPPLY", 5), ("CH_COMMAND_B", 6),
+                                        ("CH_SETPOINT", 7), ("CH_FEEDFORWARD", 8),
+                                        ("CH_DISTURBANCE", 9)]
+    assert in_order({"supply": Constant(1.0)}, layout)[5] is not None
+
+
+@pytest.mark.parametrize(("extras", "message"), [
+    (("supply", "supply"), r"channels \['supply'\] are declared twice"),
+    (("drive",), r"channels \['drive'\] are declared twice"),
+    (("supply pressure",), r"channel 'supply pressure': a channel's name must be a name"),
+], ids=["twice", "a-fixed-one", "not-a-name"])
+def test_a_layout_refuses_a_channel_twice_or_a_name_that_is_none(extras, message):
+    from pneumact.core.channels import channel_layout
+    from pneumact.errors import ArgumentError
+
+    with pytest.raises(ArgumentError, match=message):
+        channel_layout(extras)
+
+
+def test_an_input_may_ride_on_an_extra_channel_but_not_on_a_non_name():
+    """An input names any channel (a model's extra: checked against its layout when it
+    is routed); a channel that cannot be a name is refused naming it."""
+    from pneumact.core.channels import InputChannel
+    from pneumact.errors import ArgumentError
+
+    assert InputChannel("supply", "Pa", 1e5, 1e7, record_signals=("supply",),
+                        channel="supply").channel == "supply"
+    with pytest.raises(ArgumentError, match=r"channel = 'supply-a': must be a channel's name"):
+        InputChannel("supply", "Pa", 1e5, 1e7, record_signals=("supply",), channel="supply-a")

@@ -16,7 +16,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..core.channels import CHANNELS, LOOP_CHANNELS, DeclaredInputs, InputChannel, in_order
+from ..core.channels import LOOP_OWN, DeclaredInputs, InputChannel, in_order
 from ..core.codegen import Child
 from ..core.component import Part
 from ..core.signals import Constant, Signal
@@ -93,6 +93,8 @@ class ClosedLoop(DeclaredInputs):
     disturbance: Signal | None = None
     compensation_gain: float | None = None
     template: ClassVar[str] = LOOP_TEMPLATE
+    #: its own channels, after its plant's (``core.channels``)
+    own_channels: ClassVar[tuple[str, ...]] = LOOP_OWN
 
     def __post_init__(self):
         kind = input_kind(self.plant, "ClosedLoop")
@@ -285,14 +287,15 @@ class ClosedLoop(DeclaredInputs):
         plant's other inputs ``drives`` names on theirs), the set-point, the feed-forward
         and the disturbance."""
         held = Constant(self.drive_gain * self.bias)
-        plant = dict(zip(CHANNELS, self.plant.channels(held, drives), strict=True))
+        plant = dict(zip(self.plant.channel_names, self.plant.channels(held, drives),
+                         strict=True))
         # with one of feed-forward and disturbance the other is zero: one kernel for both
         zero = Constant(0.0) if self.has_loop_inputs else None
         return in_order({**plant, "setpoint": setpoint,
                          "feedforward": self.feedforward if self.feedforward is not None
                          else zero,
                          "disturbance": self.disturbance if self.disturbance is not None
-                         else zero}, LOOP_CHANNELS)
+                         else zero}, self.channel_names)
 
     def breakpoints(self, bp: np.ndarray, channels, t_start: float, t_end: float
                     ) -> np.ndarray:

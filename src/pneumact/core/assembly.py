@@ -12,6 +12,8 @@ layout, so no other module indexes states, parameters or outputs by position:
 - ``pack`` (values by name -> vector, settings filled, derived quantities computed) and
   ``update`` (change values by name, re-derive), ``values`` (vector -> names);
 - the state and output names with units, and their columns;
+- the signal channels: the fixed ones, the extras its components declare, the model's
+  own (``core.channels``), and where each sits (``channel_index``);
 - the kernel: generated from the model template, the integrators and the batch loop
   with the components' compiled functions (``core.codegen``).
 
@@ -38,6 +40,7 @@ import numpy as np
 from ..errors import ComponentError, ParameterError
 from . import codegen
 from .c_engine import Kernel, build_ahead, current_engine, engine_kernel
+from .channels import layout_constants, parts_layout
 from .component import DERIVED, PARAMETER, SETTING, Part, StateSpec
 
 __all__ = ["Assembly", "assemble", "explain_unknown_names"]
@@ -88,6 +91,9 @@ class Assembly:
         self.parameter_units: dict[str, str] = {part.qualified(n): u for part in self.parts
                                                 for n, u in part.units.items()}
         self.states: tuple[StateSpec, ...] = tuple(s for part in self.parts for s in part.states)
+        #: the kernel's channels in order (``core.channels.channel_layout``)
+        self.channels: tuple[str, ...] = parts_layout(self.parts,
+                                                      getattr(model, "own_channels", ()))
         module = importlib.import_module(self.template)
         # a model may name its outputs itself (a closed loop: its plant's, then its own)
         self.output_names: tuple[str, ...] = tuple(
@@ -125,6 +131,14 @@ class Assembly:
                 return tuple(range(first, first + len(part.states)))
             first += len(part.states)
         raise KeyError(f"{self.describe()} has no component {role!r}")
+
+    def channel_index(self, name: str) -> int:
+        """Where channel ``name`` sits in the packed channels; one ComponentError naming
+        the model's channels when it has none of that name."""
+        if name not in self.channels:
+            raise ComponentError(f"{self.describe()} has no channel {name!r}; its channels "
+                                 f"are {', '.join(self.channels)}")
+        return self.channels.index(name)
 
     def signal_source(self, name: str) -> tuple[int, int] | None:
         """(0, state column) or (1, output column) of a signal name; states win."""
@@ -249,6 +263,7 @@ class Assembly:
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
         constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))
+        constants += layout_constants(self.channels)  # none without extra channels
         # PRIVATE_INPUTS: the model writes its own input into the channels (a closed
         # loop's controller output), so a batch gives each row its own copy of them
         switches: dict[str, object] = {"PRIVATE_INPUTS": False,

@@ -1,40 +1,63 @@
-"""Signal channels handed to every kernel, in this order (``experiments.pack_channels``).
+"""Signal channels handed to every kernel, in the order the model's layout gives them.
 
-A model fills the channels it uses and leaves the others empty: the experiment's drive
-(pressure, command, set-point, force, velocity or position), the external loads of the
-actuator against time and against position, and the valve's normalised area maps
-against the command u. A closed loop adds its position set-point, a feed-forward
-signal added to the controller output and a force disturbance on a rig's mass; its
-plant's drive channel then holds one value, the controller's output, which the loop
-writes at ``INPUT_OFFSET`` past the channel's start.
+Every model has the fixed channels ``CHANNELS``, first and in this order, and fills the
+ones it uses (the others stay empty): the experiment's drive (pressure, command,
+set-point, force, velocity or position), the external loads of the actuator against time
+and against position, and the valve's normalised area maps against the command u.
 
-Models name their channels (``in_order``); only the packing puts them in this order.
+A model may declare more: a component lists the extra channels it reads
+(``Part.channels``: the cylinder's supply pressure, ``supply``), and the model's layout is
+``CHANNELS``, then its components' extras in the order of its parts, then the channels of
+its own that a model adds after its components' (``own_channels``: a closed loop's
+position set-point, a feed-forward signal added to the controller output and a force
+disturbance on a rig's mass, ``LOOP_OWN``), each name once (``channel_layout``). A model
+without extras has exactly ``CHANNELS`` (a loop around it ``LOOP_CHANNELS``), so its
+kernel reads the static indices below (``CH_DRIVE`` ...) and its generated text is what
+it was before models declared channels. Where a channel's index differs from the static
+one, or it has none (an extra), the assembly generates ``CH_<NAME>`` into the kernel
+(``layout_constants``): a template reads an extra by that constant (a template global
+the generator overrides) and hands it to its component's functions, as it hands them
+their block's offset; a loop's plant is a prefix of the loop's layout, so the plant's
+own kernel reads the loop's channels where it reads its own. A closed loop's plant drive
+channel holds one value, the controller's output, which the loop writes at
+``INPUT_OFFSET`` past the channel's start.
+
+Models name their channels (``in_order`` with the model's ``channel_names``); only the
+packing (``core.signals.pack_channels``) puts them in order, and only the assembly
+(``Assembly.channel_index``) says where one sits: nothing else reads a channel by its
+position.
 
 What drives a model is declared too: ``InputChannel`` says an input's name (the quantity
 an experiment drives it with), unit, range, the record signals that drive it, the channel
 that carries it and how a refusal reads; the component that owns the input declares it (a
-valve, the 5/3 valve, the rig's drive, a loop's set-point, the cylinder's load force) and
-the model lists them (``inputs()``, its drive first). An experiment drives the first by
-its quantity and any other by name (``Experiment.drives``); ``DeclaredInputs.routed``
-puts each signal on its input's channel.
+valve, the 5/3 valve, the rig's drive, a loop's set-point, the cylinder's load force and
+supply pressure) and the model lists them (``inputs()``, its drive first). An experiment
+drives the first by its quantity and any other by name (``Experiment.drives``);
+``DeclaredInputs.routed`` puts each signal on its input's channel, which must be one of
+the model's layout. An input on an extra channel that no experiment drives leaves it
+empty, and the component then holds what it holds without the input (the cylinder: its
+parameter ``p_supply``; ``core.signals.channel_driven`` tells the two apart).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ..errors import ArgumentError, ExperimentError
 
 if TYPE_CHECKING:
+    from .component import Part
     from .signals import Signal
 
-#: a model's channels, in order
+#: every model's channels, first and in this order
 CHANNELS = ("drive", "load_t", "load_x", "map_res", "map_atm")
-#: a closed loop's: its plant's, then its own
-LOOP_CHANNELS = (*CHANNELS, "setpoint", "feedforward", "disturbance")
+#: a closed loop's own channels, after its plant's
+LOOP_OWN = ("setpoint", "feedforward", "disturbance")
+#: a closed loop's around a plant without extra channels: its plant's, then its own
+LOOP_CHANNELS = (*CHANNELS, *LOOP_OWN)
 CH_DRIVE = LOOP_CHANNELS.index("drive")
 CH_LOAD_T = LOOP_CHANNELS.index("load_t")
 CH_LOAD_X = LOOP_CHANNELS.index("load_x")
@@ -47,6 +70,43 @@ N_CHANNELS = len(CHANNELS)
 N_LOOP_CHANNELS = len(LOOP_CHANNELS)
 #: [n_terms = 1, kind = PWL, n = 1, t0, value]: where a one-point channel holds its value
 INPUT_OFFSET = 4
+
+
+def channel_layout(extras: Iterable[str] = (), own: Iterable[str] = ()) -> tuple[str, ...]:
+    """A model's channels: ``CHANNELS``, then its components' ``extras`` in order, then
+    the model's ``own`` (a loop's ``LOOP_OWN``); one ArgumentError if a name is not an
+    identifier or appears twice (two components cannot share a channel)."""
+    layout = (*CHANNELS, *extras, *own)
+    for name in layout[len(CHANNELS):]:
+        if not (isinstance(name, str) and name.isidentifier()):
+            raise ArgumentError(f"channel {name!r}: a channel's name must be a name of "
+                                "letters, digits and underscores (it names the kernel "
+                                "constant CH_<NAME>)")
+    twice = sorted({name for name in layout if layout.count(name) > 1})
+    if twice:
+        raise ArgumentError(f"channels {twice} are declared twice in the layout "
+                            f"{list(layout)}: each channel belongs to one component")
+    return layout
+
+
+def parts_layout(parts: Iterable[Part], own: Iterable[str] = ()) -> tuple[str, ...]:
+    """The layout of a model of ``parts`` (their ``channels``) with its ``own`` channels."""
+    return channel_layout((name for part in parts for name in part.channels), own)
+
+
+def channel_constant(name: str) -> str:
+    """The kernel constant holding channel ``name``'s index: ``CH_<NAME>``."""
+    return f"CH_{name.upper()}"
+
+
+def layout_constants(layout: tuple[str, ...]) -> list[tuple[str, int]]:
+    """(``CH_<NAME>``, index) for each channel of ``layout`` past ``CHANNELS``, where the
+    layout is not a prefix of ``LOOP_CHANNELS`` (whose indices the static constants
+    give): nothing for a model without extras, whose kernel text stays as it was."""
+    if layout == LOOP_CHANNELS[:len(layout)]:
+        return []
+    return [(channel_constant(name), index) for index, name in enumerate(layout)
+            if index >= len(CHANNELS)]
 
 
 def in_order(named: Mapping[str, Any], names: tuple[str, ...] = CHANNELS) -> list[Any]:
@@ -66,8 +126,8 @@ class InputChannel:
     unit; values outside [``low``, ``high``] are refused; ``acts_within`` is a narrower span
     where the component acts (beyond it the value is clipped: a regulator's set-point);
     ``record_signals`` are the record signals that drive it, its own first; ``channel`` the
-    kernel channel that carries it (one of ``LOOP_CHANNELS``: the drive's, or a load's,
-    ...). A refusal
+    kernel channel that carries it (one of its model's layout: the drive's, a load's, or
+    an extra its component declares, ``Part.channels``). A refusal
     says ``"{where}: its {label} spans a to b; {rule}"`` with the values (and ``{low}``,
     ``{high}`` in ``rule``) shown in ``shown_in`` (unit, factor), or, where the owner
     gives ``check_value`` (a pressure's check, whose hint names a unit mistake), that
@@ -95,9 +155,10 @@ class InputChannel:
         if not self.low < self.high:
             raise ArgumentError(f"InputChannel {self.name!r}: low = {self.low!r}, high = "
                                 f"{self.high!r}: low must be below high")
-        if self.channel not in LOOP_CHANNELS:
+        if not (isinstance(self.channel, str) and self.channel.isidentifier()):
             raise ArgumentError(f"InputChannel {self.name!r}: channel = {self.channel!r}: "
-                                f"must be one of {', '.join(LOOP_CHANNELS)}")
+                                f"must be a channel's name: one of {', '.join(LOOP_CHANNELS)}"
+                                ", or an extra one its component declares (Part.channels)")
 
     @property
     def record_signal(self) -> str:
@@ -137,9 +198,27 @@ class DeclaredInputs:
     declared ``inputs()`` (the first is its drive): one place says name, unit, range and
     record signal."""
 
+    #: channels the model adds after its components' (a closed loop's ``LOOP_OWN``)
+    own_channels: ClassVar[tuple[str, ...]] = ()
+
     def inputs(self) -> tuple[InputChannel, ...]:
         """The inputs this model declares, its drive first."""
         raise NotImplementedError
+
+    def parts(self) -> tuple[Part, ...]:
+        """The model's components (``core.component.Part``)."""
+        raise NotImplementedError
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The model's channels in kernel order (``parts_layout``): ``CHANNELS``, its
+        components' extras, its own; found once per model (a model does not change, and
+        every run packs its channels by it)."""
+        found = self.__dict__.get("_channel_names")
+        if found is None:
+            found = parts_layout(self.parts(), self.own_channels)
+            object.__setattr__(self, "_channel_names", found)
+        return found
 
     @property
     def drive_input(self) -> InputChannel:
@@ -189,7 +268,8 @@ class DeclaredInputs:
     def routed(self, drive: Signal, drives: Mapping[str, Signal] | None = None
                ) -> dict[str, Signal]:
         """Channel name -> signal: ``drive`` on its drive's channel and each of ``drives``
-        (input name -> signal) on the channel its declared input names."""
+        (input name -> signal) on the channel its declared input names (one of
+        ``channel_names``)."""
         routed = {self.drive_input.channel: drive}
         for name, signal in (drives or {}).items():
             if name == self.drive_quantity:

@@ -99,7 +99,10 @@ class Part:
     and ``units`` their units where they depend on the model (a gain's on the plant).
     ``templates`` are kernel templates of the component's own (a friction law's functions
     on its slice of the state vector), bound before the model's templates and visible to
-    a closed loop's plant.
+    a closed loop's plant. ``channels`` are the kernel channels the component reads
+    beyond the fixed ones (``core.channels``: the cylinder's supply pressure), placed after
+    them in the order of the model's parts; the kernel holds each one's index as
+    ``CH_<NAME>``, which the template hands to the component's functions.
     """
 
     role: str
@@ -114,6 +117,7 @@ class Part:
     values: Mapping[str, float] = field(default_factory=dict)
     units: Mapping[str, str] = field(default_factory=dict)
     instance: str = ""
+    channels: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.instance and not self.instance.isidentifier():

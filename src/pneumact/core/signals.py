@@ -36,6 +36,13 @@ KIND_SINE = 1
 
 
 @njit(cache=True, inline="always")
+def channel_driven(sig, ptr, ch):  # pragma: no cover - compiled
+    """Whether channel ``ch`` holds a signal (an empty channel, ``None`` when packed, has
+    no terms): a component whose input no experiment drives holds its own value."""
+    return sig[ptr[ch]] > 0.0
+
+
+@njit(cache=True, inline="always")
 def channel_eval(sig, ptr, ch, s, s_seg):  # pragma: no cover - compiled
     """Value and slope of channel ``ch`` at ``s``; the segment is the one holding ``s_seg``."""
     i = ptr[ch]

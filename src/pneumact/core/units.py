@@ -24,6 +24,7 @@ SIGNAL_UNITS: dict[str, str] = {
     "command": "1",
     "spool": "1",  # a 5/3 valve's spool command, in [-1, 1]
     "load": "N",  # an external load force (a cylinder's input)
+    "supply": "Pa",  # a 5/3 valve's supply pressure, absolute (a cylinder's input)
 }
 
 _DRIVE_UNITS: dict[str, str] = {"force": "N", "velocity": "m/s", "position": "m",

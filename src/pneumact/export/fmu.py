@@ -52,7 +52,7 @@ from numba.core import types
 from ..core.assembly import Assembly, assemble
 from ..core.c_source import translate
 from ..core.channels import INPUT_OFFSET
-from ..core.signals import Constant, pack_channels
+from ..core.signals import Constant, Signal, pack_channels
 from ..errors import ArgumentError, ExportError
 from ..files import atomic_write
 from ..models.fmu_interface import FORCE_INPUT, FmuInput, FmuModel
@@ -235,6 +235,14 @@ def nominal_of(value: float) -> float | None:
     return abs(value) if value != 0.0 and np.isfinite(value) else None
 
 
+def fmu_drives(model: FmuModel, starts: Mapping[str, float]) -> dict[str, Signal]:
+    """The declared inputs the FMU's inputs fill beside the drive (a cylinder's supply
+    pressure), each a one-point channel at its start value, which the FMU's input then
+    writes: by name, as an experiment drives them."""
+    return {entry.declared: Constant(starts[entry.name])
+            for entry in model.fmu_interface().inputs if entry.declared}
+
+
 def input_starts(model: FmuModel, inputs: Mapping[str, float] | None) -> dict[str, float]:
     """The start value of each FMU input: ``inputs`` (checked: a name the FMU has, an
     absolute pressure, a value in the input's range, a finite force), else the model's
@@ -257,17 +265,20 @@ def checked_start(entry: FmuInput, value: float) -> float:
 
     where = "export_fmu inputs"
     if entry.pressure:
-        return check_absolute_pressure(entry.name, value, where=where)
+        value = check_absolute_pressure(entry.name, value, where=where)
     if entry.minimum is not None and entry.maximum is not None:
         return check_range(entry.name, value, entry.minimum, entry.maximum, where=where)
     return check_finite(entry.name, value, where=where)
 
 
-def input_variables(model: FmuModel, ptr: np.ndarray, starts: Mapping[str, float]
-                    ) -> list[FmuVariable]:
-    """The model's FMU inputs (the drive, the external force) on their signal entries,
-    with their hard ranges and nominal magnitudes (``fmu_interface``)."""
-    return [FmuVariable(entry.name, "input", "input", int(ptr[entry.channel]) + INPUT_OFFSET,
+def input_variables(model: FmuModel, asm: Assembly, ptr: np.ndarray,
+                    starts: Mapping[str, float]) -> list[FmuVariable]:
+    """The model's FMU inputs (the drive, the external force, a declared input such as a
+    cylinder's supply pressure) on their signal entries (their channels where the
+    assembly places them), with their hard ranges and nominal magnitudes
+    (``fmu_interface``)."""
+    return [FmuVariable(entry.name, "input", "input",
+                        int(ptr[asm.channel_index(entry.channel)]) + INPUT_OFFSET,
                         entry.unit, entry.description, start=starts[entry.name],
                         minimum=entry.minimum, maximum=entry.maximum, nominal=entry.nominal)
             for entry in model.fmu_interface().inputs]
@@ -309,7 +320,7 @@ def all_variables(model: FmuModel, asm: Assembly, kernel: ModuleType, vec: np.nd
     nominals = np.zeros(len(asm.states))
     kernel.state_scales(vec, nominals)
     nominals = np.where(np.isfinite(nominals) & (nominals > 0.0), nominals, 1.0)
-    head = parameter_variables(model, asm, vec) + input_variables(model, ptr, starts)
+    head = parameter_variables(model, asm, vec) + input_variables(model, asm, ptr, starts)
     states, derivatives = state_variables(asm, nominals, first=len(head) + 1)
     return head + states + derivatives + output_variables(asm)
 
@@ -519,7 +530,7 @@ def export_fmu(model, path: str | os.PathLike[str], *,
     asm = assemble(fmu_model)
     kernel = asm.numba_kernel  # the C back end translates the numba kernel
     vec = asm.pack()
-    sig, ptr = pack_channels(fmu_model.channels(Constant(0.0)))
+    sig, ptr = pack_channels(fmu_model.channels(Constant(0.0), fmu_drives(fmu_model, starts)))
     variables = all_variables(fmu_model, asm, kernel, vec, ptr, starts)
     for v in variables:
         if v.kind == "input":

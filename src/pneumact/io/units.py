@@ -42,6 +42,7 @@ _TARGETS: dict[str, tuple[str, str]] = {
     "command": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
     "spool": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
     "load": ("N", "a force unit such as N, kN or lbf"),
+    "supply": ("Pa", _PRESSURE),
 }
 #: Known signal names -> (SI unit label, pint target unit, what the user may give); the
 #: SI label is the one of ``core.units`` (one unit per signal name everywhere).

@@ -29,13 +29,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, ClassVar
 
+from ..checks import MAX_ABSOLUTE_PRESSURE
 from ..core.channels import CH_DRIVE, DeclaredInputs, InputChannel, in_order
 from ..core.component import Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
-from ..core.signals import Constant, Signal, channel_eval
+from ..core.signals import Constant, Signal, channel_driven, channel_eval
 from ..parameters.catalogue import (
     ParameterSpec,
     declare,
@@ -44,7 +45,13 @@ from ..parameters.catalogue import (
     declare_relation,
     declare_renamed,
 )
-from .fmu_interface import FmuInterface, drive_input, force_input, refuse_load_against_time
+from .fmu_interface import (
+    FmuInterface,
+    declared_fmu_input,
+    drive_input,
+    force_input,
+    refuse_load_against_time,
+)
 from .friction import FrictionModel, LuGre
 from .mechanics import explicit_step, stop_force, stop_force_params
 from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
@@ -260,12 +267,13 @@ def rest_pressure(p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
 
 
 @njit(cache=True)
-def rest_pressures(u, p, o):  # pragma: no cover - compiled
-    """(p_a, p_b) at which each chamber's flows balance at spool command u."""
+def rest_pressures(u, p_sup, p, o):  # pragma: no cover - compiled
+    """(p_a, p_b) at which each chamber's flows balance at spool command u and supply
+    pressure p_sup."""
     fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    p_exh = p[o + CY_PATM]
     return (rest_pressure(p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam, temperature),
             rest_pressure(p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam, temperature))
 
@@ -283,13 +291,36 @@ def spool_command(t, ts, sig, ptr):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
-    """Net mass flows into A and B at spool position u and their slopes (ṁ_a, ∂ṁ_a/∂p_a,
-    ṁ_b, ∂ṁ_b/∂p_b)."""
+def driven_supply(t, ts, sig, ptr, ch):  # pragma: no cover - compiled
+    """The input ``supply`` on channel ``ch`` (a call of its own: the evaluation of a
+    signal stays out of the equations that read the parameter where it is not driven)."""
+    return channel_eval(sig, ptr, ch, t, ts)[0]
+
+
+@njit(cache=True, inline="always")
+def supply_pressure(t, ts, p, o, sig, ptr, ch):  # pragma: no cover - compiled
+    """The supply pressure p_sup [Pa absolute]: the input ``supply`` on channel ``ch``
+    where an experiment drives it, else the parameter p_supply."""
+    if channel_driven(sig, ptr, ch):
+        return driven_supply(t, ts, sig, ptr, ch)
+    return p[o + CY_PSUP]
+
+
+@njit(cache=True, inline="always")
+def supply_held(sig, ptr, ch):  # pragma: no cover - compiled
+    """Whether the supply pressure is the parameter p_supply (no experiment drives the
+    input ``supply`` on channel ``ch``): only then does p_supply act on the run."""
+    return not channel_driven(sig, ptr, ch)
+
+
+@njit(cache=True)
+def chamber_flows(u, p_sup, pa, pb, p, o):  # pragma: no cover - compiled
+    """Net mass flows into A and B at spool position u and supply pressure p_sup, and
+    their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b, ∂ṁ_b/∂p_b)."""
     fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    p_exh = p[o + CY_PATM]
     flow_a = chamber_inflow(pa, p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam,
                             temperature)
     flow_b = chamber_inflow(pb, p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam,
@@ -298,13 +329,13 @@ def chamber_flows(u, pa, pb, p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def chamber_flow_slopes(u, pa, pb, p, o):  # pragma: no cover - compiled
-    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u (slopes from above at the edges of the
-    band; none beyond ±1, where the spool is on its stop)."""
+def chamber_flow_slopes(u, p_sup, pa, pb, p, o):  # pragma: no cover - compiled
+    """(∂ṁ_a/∂u, ∂ṁ_b/∂u) at spool position u and supply pressure p_sup (slopes from
+    above at the edges of the band; none beyond ±1, where the spool is on its stop)."""
     d_extend, d_retract, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
     c = p[o + CY_C]
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    p_exh = p[o + CY_PATM]
     fill_a = iso_flow(p_sup, pa, b, m, r_lam, temperature)[0]
     vent_a = iso_flow(pa, p_exh, b, m, r_lam, temperature)[0]
     fill_b = iso_flow(p_sup, pb, b, m, r_lam, temperature)[0]
@@ -332,9 +363,9 @@ def piston_force(x, v, pa, pb, p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def cylinder_rates(x, v, pa, pb, u, f_fric, f_load, p, o):  # pragma: no cover - compiled
+def cylinder_rates(x, v, pa, pb, u, p_sup, f_fric, f_load, p, o):  # pragma: no cover
     """(dv/dt, dp_a/dt, dp_b/dt)."""
-    mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
+    mdot_a, _, mdot_b, _ = chamber_flows(u, p_sup, pa, pb, p, o)
     vol_a, vol_b = chamber_volumes(x, p, o)
     n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
@@ -354,14 +385,15 @@ def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
 
 
 @njit(cache=True)
-def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p,
-                   o, g):  # pragma: no cover - compiled
+def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c,
+                   p_sup, held, p, o, g):  # pragma: no cover - compiled
     """g[row, o + k] = ∂ṗ/∂θ_k of one chamber for the flow entries of the block (the
-    volume's entries are the caller's): valve_C, valve_leak, spool_overlap, p_supply,
-    p_atm, iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths'
-    fractions, ``e_fill``, ``e_vent`` their slopes in the overlap."""
+    volume's entries are the caller's): valve_C, valve_leak, spool_overlap, p_supply
+    (only where it is ``held``: a driven supply pressure p_sup does not read it), p_atm,
+    iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions,
+    ``e_fill``, ``e_vent`` their slopes in the overlap."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_sup, p_exh = p[o + CY_PSUP], p[o + CY_PATM]
+    p_exh = p[o + CY_PATM]
     n, r_gas = p[o + CY_N], p[o + CY_R]
     rt = r_gas * temperature
     mdot, _, d_sup, d_exh, q_in, q_out = chamber_inflow(
@@ -372,7 +404,7 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_ve
     g[row, o + CY_C] = k * (u_fill * q_in - u_vent * q_out)
     g[row, o + CY_LEAK] = k * c * (q_in - q_out)
     g[row, o + CY_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
-    g[row, o + CY_PSUP] = k * d_sup
+    g[row, o + CY_PSUP] = k * d_sup if held else 0.0
     g[row, o + CY_PATM] = k * d_exh
     g[row, o + CY_B] = k * d_b
     g[row, o + CY_MEXP] = k * d_m
@@ -383,9 +415,11 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_ve
 
 
 @njit(cache=True)
-def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # pragma: no cover
+def cylinder_params(x, v, pa, pb, u, p_sup, held, net, p, o, g, row_v, row_a,
+                    row_b):  # pragma: no cover - compiled
     """The cylinder block's columns of ∂f/∂θ: the velocity row (dv/dt = net/m) and both
-    chambers' rows (``g`` zeroed by the caller)."""
+    chambers' rows (``g`` zeroed by the caller), at supply pressure p_sup (``held``:
+    the parameter p_supply's)."""
     m_mass = p[o + CY_M]
     p_atm = p[o + CY_PATM]
     area_a, area_b = p[o + CY_AA], p[o + CY_AB]
@@ -403,11 +437,11 @@ def cylinder_params(x, v, pa, pb, u, net, p, o, g, row_v, row_a, row_b):  # prag
     vol_a, vol_b = chamber_volumes(x, p, o)
     n = p[o + CY_N]
     _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
-    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, e_extend, e_retract, c, p,
-                   o, g)
-    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, e_retract, e_extend, c, p,
-                   o, g)
-    mdot_a, _, mdot_b, _ = chamber_flows(u, pa, pb, p, o)
+    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, e_extend, e_retract, c,
+                   p_sup, held, p, o, g)
+    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, e_retract, e_extend, c,
+                   p_sup, held, p, o, g)
+    mdot_a, _, mdot_b, _ = chamber_flows(u, p_sup, pa, pb, p, o)
     rt = p[o + CY_R] * p[o + CY_T]
     rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
     rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)
@@ -621,15 +655,16 @@ def node_inflow(p_node, t_node, pressure, temp, b, m, r_lam):  # pragma: no cove
 
 
 @njit(cache=True)
-def thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h, p,
-                    o):  # pragma: no cover - compiled
+def thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h, p_sup,
+                    p, o):  # pragma: no cover - compiled
     """One chamber's energy equation: (dp/dt, dT/dt, ṁ) and their partials in p, T, V,
     dV/dt; and per unit conductance of its supply and exhaust paths the mass inflows and
-    T_up·q (for the spool's slope). ``fill``, ``vent`` are the paths' fractions of C."""
+    T_up·q (for the spool's slope). ``fill``, ``vent`` are the paths' fractions of C,
+    ``p_sup`` the supply pressure."""
     c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
     b, m, r_lam, t_wall = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    q_s, e_s, qs_p, es_p, qs_t, es_t = node_inflow(p[o + CY_PSUP], t_wall, pressure, temp,
-                                                   b, m, r_lam)
+    q_s, e_s, qs_p, es_p, qs_t, es_t = node_inflow(p_sup, t_wall, pressure, temp, b, m,
+                                                   r_lam)
     q_e, e_e, qe_p, ee_p, qe_t, ee_t = node_inflow(p[o + CY_PATM], t_wall, pressure, temp,
                                                    b, m, r_lam)
     k_s, k_e = c * fill, c * vent
@@ -661,51 +696,53 @@ def thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimete
 
 
 @njit(cache=True)
-def thermal_pair(x, v, pa, pb, ta, tb, u, p, o, h):  # pragma: no cover - compiled
-    """Both chambers' ``thermal_chamber`` at piston (x, v) and spool position u; the
-    chambers' wetted perimeters are the bore's (A) and the bore's and the rod's (B)."""
+def thermal_pair(x, v, pa, pb, ta, tb, u, p_sup, p, o, h):  # pragma: no cover - compiled
+    """Both chambers' ``thermal_chamber`` at piston (x, v), spool position u and supply
+    pressure p_sup; the chambers' wetted perimeters are the bore's (A) and the bore's and
+    the rod's (B)."""
     fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
     vol_a, vol_b = chamber_volumes(x, p, o)
     area_a, area_b = p[o + CY_AA], p[o + CY_AB]
     bore, rod = p[o + CY_BORE], p[o + CY_ROD]
     return (thermal_chamber(pa, ta, vol_a, area_a * v, fill_a, vent_a, area_a,
-                            math.pi * bore, h, p, o),
+                            math.pi * bore, h, p_sup, p, o),
             thermal_chamber(pb, tb, vol_b, -area_b * v, fill_b, vent_b, area_b,
-                            math.pi * (bore + rod), h, p, o))
+                            math.pi * (bore + rod), h, p_sup, p, o))
 
 
 @njit(cache=True)
-def polytropic_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+def polytropic_rates(x, v, pa, pb, y, s, u, p_sup, p, o, oh, dydt, row_a,
                      row_b):  # pragma: no cover - compiled
     pass
 
 
 @njit(cache=True)
-def heat_rates(x, v, pa, pb, y, s, u, p, o, oh, dydt, row_a,
+def heat_rates(x, v, pa, pb, y, s, u, p_sup, p, o, oh, dydt, row_a,
                row_b):  # pragma: no cover - compiled
     """The chambers' pressure rates from their energy equations (replacing the polytropic
     ones in rows ``row_a``, ``row_b``) and their temperature rates."""
-    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p_sup, p, o, p[oh + TH_H])
     dydt[row_a], dydt[row_b] = ra[0], rb[0]
     dydt[s], dydt[s + 1] = ra[1], rb[1]
 
 
 @njit(cache=True)
-def polytropic_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a,
+def polytropic_flows(x, pa, pb, y, s, u, p_sup, p, o, oh, out, i_a,
                      i_b):  # pragma: no cover - compiled
     pass
 
 
 @njit(cache=True)
-def heat_flows(x, pa, pb, y, s, u, p, o, oh, out, i_a, i_b):  # pragma: no cover - compiled
+def heat_flows(x, pa, pb, y, s, u, p_sup, p, o, oh, out, i_a,
+               i_b):  # pragma: no cover - compiled
     """The net mass flows into A and B (outflows at the chambers' temperatures) into
     out[i_a], out[i_b]."""
-    ra, rb = thermal_pair(x, 0.0, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    ra, rb = thermal_pair(x, 0.0, pa, pb, y[s], y[s + 1], u, p_sup, p, o, p[oh + TH_H])
     out[i_a], out[i_b] = ra[2], rb[2]
 
 
 @njit(cache=True)
-def polytropic_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+def polytropic_partials(x, v, pa, pb, y, s, u, p_sup, p, o, oh, jac, row_a, row_b,
                         col_u):  # pragma: no cover - compiled
     pass
 
@@ -733,11 +770,11 @@ def heat_chamber_partials(rates, row_p, row_t, d_vol, d_fill, d_vent, volume, pr
 
 
 @njit(cache=True)
-def heat_partials(x, v, pa, pb, y, s, u, p, o, oh, jac, row_a, row_b,
+def heat_partials(x, v, pa, pb, y, s, u, p_sup, p, o, oh, jac, row_a, row_b,
                   col_u):  # pragma: no cover - compiled
     """The pressure rows (replacing the polytropic ones) and the temperature rows of ∂f/∂y
     in x, v, p, T and the spool's position (column ``col_u`` when it is a state)."""
-    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p, o, p[oh + TH_H])
+    ra, rb = thermal_pair(x, v, pa, pb, y[s], y[s + 1], u, p_sup, p, o, p[oh + TH_H])
     d_ext, d_ret, _, _ = spool_fraction_slopes(u, p[o + CY_OVERLAP])
     vol_a, vol_b = chamber_volumes(x, p, o)
     heat_chamber_partials(ra, row_a, s, p[o + CY_AA], d_ext, d_ret, vol_a, pa, y[s], p, o,
@@ -772,14 +809,15 @@ def flow_column(g, row_p, row_t, column, m_th, e_th, q_th, volume, kt, k_p, k_t,
 
 @njit(cache=True)
 def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area, perimeter,
-                        fill, vent, e_fill, e_vent, geometry, p, o, oh,
+                        fill, vent, e_fill, e_vent, geometry, p_sup, held, p, o, oh,
                         h):  # pragma: no cover - compiled
     """One chamber's pressure and temperature rows of ∂f/∂θ (the pressure row's cylinder
     entries rewritten); ``e_fill``, ``e_vent`` are the paths' slopes in the overlap,
     ``geometry`` (columns of its area, dead volume and stroke (−1: none), ∂V/∂area,
-    ∂(dV/dt)/∂area, ∂P/∂D_bore, ∂P/∂d_rod)."""
+    ∂(dV/dt)/∂area, ∂P/∂D_bore, ∂P/∂d_rod), ``p_sup`` the supply pressure (``held``: the
+    parameter p_supply's, whose column is written only then)."""
     rates = thermal_chamber(pressure, temp, volume, vol_rate, fill, vent, area, perimeter, h,
-                            p, o)
+                            p_sup, p, o)
     mdot = rates[2]
     q_s, e_s, q_e, e_e = rates[11], rates[12], rates[13], rates[14]
     c, gamma, r_gas = p[o + CY_C], p[o + CY_GAMMA], p[o + CY_R]
@@ -789,7 +827,7 @@ def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area,
     energy = k_s * e_s + k_e * e_e
     wall = 2.0 * area + perimeter * volume / area
     heat = h * wall * (t_wall - temp)
-    sup = node_inflow_params(p[o + CY_PSUP], t_wall, pressure, temp, b, m, r_lam)
+    sup = node_inflow_params(p_sup, t_wall, pressure, temp, b, m, r_lam)
     exh = node_inflow_params(p[o + CY_PATM], t_wall, pressure, temp, b, m, r_lam)
     for k in range(CYLINDER_SIZE):
         g[row_p, o + k] = 0.0
@@ -801,8 +839,9 @@ def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area,
                 kt, k_p, k_t, g1)
     flow_column(g, row_p, row_t, o + CY_OVERLAP, c * (e_fill * q_s + e_vent * q_e),
                 c * (e_fill * e_s + e_vent * e_e), 0.0, volume, kt, k_p, k_t, g1)
-    flow_column(g, row_p, row_t, o + CY_PSUP, k_s * sup[0], k_s * sup[1], 0.0, volume, kt,
-                k_p, k_t, g1)
+    if held:
+        flow_column(g, row_p, row_t, o + CY_PSUP, k_s * sup[0], k_s * sup[1], 0.0, volume,
+                    kt, k_p, k_t, g1)
     flow_column(g, row_p, row_t, o + CY_PATM, k_e * exh[0], k_e * exh[1], 0.0, volume, kt,
                 k_p, k_t, g1)
     flow_column(g, row_p, row_t, o + CY_T, k_s * sup[2] + k_e * exh[2],
@@ -839,13 +878,14 @@ def heat_chamber_params(g, row_p, row_t, pressure, temp, volume, vol_rate, area,
 
 
 @njit(cache=True)
-def polytropic_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a,
+def polytropic_params(x, v, pa, pb, y, s, u, p_sup, held, p, o, oh, g, row_a,
                       row_b):  # pragma: no cover - compiled
     pass
 
 
 @njit(cache=True)
-def heat_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a, row_b):  # pragma: no cover
+def heat_params(x, v, pa, pb, y, s, u, p_sup, held, p, o, oh, g, row_a,
+                row_b):  # pragma: no cover - compiled
     """The chambers' pressure rows of ∂f/∂θ (replacing the polytropic ones) and their
     temperature rows, the heat transfer coefficient's column included."""
     fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
@@ -855,11 +895,11 @@ def heat_params(x, v, pa, pb, y, s, u, p, o, oh, g, row_a, row_b):  # pragma: no
     bore, rod, h = p[o + CY_BORE], p[o + CY_ROD], p[oh + TH_H]
     heat_chamber_params(g, row_a, s, pa, y[s], vol_a, area_a * v, area_a, math.pi * bore,
                         fill_a, vent_a, e_extend, e_retract,
-                        (CY_AA, CY_VDA, -1, x, v, math.pi, 0.0), p, o, oh, h)
+                        (CY_AA, CY_VDA, -1, x, v, math.pi, 0.0), p_sup, held, p, o, oh, h)
     heat_chamber_params(g, row_b, s + 1, pb, y[s + 1], vol_b, -area_b * v, area_b,
                         math.pi * (bore + rod), fill_b, vent_b, e_retract, e_extend,
                         (CY_AB, CY_VDB, CY_XMAX, p[o + CY_XMAX] - x, -v, math.pi, math.pi),
-                        p, o, oh, h)
+                        p_sup, held, p, o, oh, h)
 
 
 @njit(cache=True)
@@ -921,6 +961,23 @@ LOAD_INPUT = InputChannel(
                              "[{low:g}, {high:g}] N (is it in N?)")
 
 
+#: the channel of the supply pressure: the cylinder's own, after the fixed ones
+#: (``core.channels``), read by the template as ``CH_SUPPLY``
+SUPPLY_CHANNEL = "supply"
+
+#: the 5/3 valve's supply pressure [Pa absolute]: an input on the cylinder's own channel;
+#: where no experiment drives it, the parameter p_supply holds it (a record's ``supply``
+#: column drives it). Its range starts at the cylinder's p_atm (``Cylinder.inputs``):
+#: below the atmosphere the supply would draw air out of the chambers.
+SUPPLY_INPUT = InputChannel(
+    "supply", "Pa", 1e5, MAX_ABSOLUTE_PRESSURE, record_signals=("supply",),
+    channel=SUPPLY_CHANNEL, description="supply pressure of the 5/3 valve (absolute)",
+    label="supply pressure", rule="a 5/3 valve's supply pressure must stay within "
+                                  "[{low:g}, {high:g}] Pa absolute (from the atmosphere "
+                                  "p_atm up; in Pa: 6 bar is 6e5)",
+    shown_in=("Pa", 1.0))
+
+
 @dataclass(frozen=True, eq=False)
 class Cylinder(DeclaredInputs):
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
@@ -977,8 +1034,15 @@ class Cylinder(DeclaredInputs):
     # -- the model protocol (``simulation.Model``) -----------------------------------------
     def inputs(self) -> tuple[InputChannel, ...]:
         """Its 5/3 valve's spool command u in [-1, 1] (``SPOOL_INPUT``), then its load
-        force (``LOAD_INPUT``) unless the cylinder holds one (``load=``)."""
-        return (SPOOL_INPUT,) if self.load is not None else (SPOOL_INPUT, LOAD_INPUT)
+        force (``LOAD_INPUT``) unless the cylinder holds one (``load=``), then its supply
+        pressure (``SUPPLY_INPUT``, from its p_atm up); found once (every run asks)."""
+        found = self.__dict__.get("_inputs")
+        if found is None:
+            supply = replace(SUPPLY_INPUT, low=float(self.params["p_atm"]))
+            load = () if self.load is not None else (LOAD_INPUT,)
+            found = (SPOOL_INPUT, *load, supply)
+            object.__setattr__(self, "_inputs", found)
+        return found
 
     def declared_input(self, name: str, who: str) -> InputChannel:
         """Its input named ``name``; the load of a cylinder that holds one is refused
@@ -1041,17 +1105,21 @@ class Cylinder(DeclaredInputs):
             role="cylinder", block=CYLINDER_BLOCK,
             states=(StateSpec("position", "m"), StateSpec("velocity", "m/s"),
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
-            settings=self.chamber.settings(), label="double-acting cylinder")
+            settings=self.chamber.settings(), label="double-acting cylinder",
+            channels=(SUPPLY_CHANNEL,))
         return (cylinder, chamber_part("chamber_a", "cap-side chamber A"),
                 chamber_part("chamber_b", "rod-side chamber B"), self.friction.part(),
                 spool_part(self.spool_lag), thermal_part(self.chamber))
 
     def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
                  ) -> list[Signal | None]:
-        """The spool command ``drive`` and the inputs ``drives`` names (its load) on their
-        channels; the load it holds, or none, where no experiment drives it."""
+        """The spool command ``drive`` and the inputs ``drives`` names (its load, its
+        supply pressure) on their channels; the load it holds, or none, where no
+        experiment drives it; the supply's channel empty where none drives it (the kernel
+        then reads p_supply)."""
         load = self.load if self.load is not None else Constant(0.0)
-        return in_order({LOAD_INPUT.channel: load, **self.routed(drive, drives)})
+        return in_order({LOAD_INPUT.channel: load, **self.routed(drive, drives)},
+                        self.channel_names)
 
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Cylinder:
@@ -1062,7 +1130,8 @@ class Cylinder(DeclaredInputs):
 
     def fmu_interface(self) -> FmuInterface:
         """The spool command u in [-1, 1] (starting centred), the external force (nominal:
-        the supply's force on the piston, (p_supply - p_atm)·A_a), no end-stop check
+        the supply's force on the piston, (p_supply - p_atm)·A_a), the supply pressure
+        ``supply`` [Pa absolute] (starting at p_supply, from p_atm up), no end-stop check
         (``stop_check.c.j2`` is the diaphragm's: a preload and a spring) and the Euler
         step its stops allow resting under that force."""
         p = self.params
@@ -1070,7 +1139,10 @@ class Cylinder(DeclaredInputs):
         spool = drive_input("spool_command", SPOOL_INPUT.unit, SPOOL_INPUT.description, 0.0,
                             1.0, SPOOL_INPUT.low, SPOOL_INPUT.high)
         step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
-        return FmuInterface((spool, force_input(push)), None, step)
+        declared = next(i for i in self.inputs() if i.name == SUPPLY_INPUT.name)
+        supply = declared_fmu_input(SUPPLY_INPUT.name, declared, float(p["p_supply"]),
+                                    pressure=True)
+        return FmuInterface((spool, force_input(push), supply), None, step)
 
     def describe(self) -> str:
         return (f"Cylinder(friction={self.friction!r}, "

@@ -7,7 +7,10 @@ friction block | spool block | heat transfer block]; the generator binds the fri
 law, the spool (``spool_*``: direct, lagged or second-order) and the chambers
 (``thermal_*``: polytropic, whose functions do nothing, or with heat transfer, whose
 energy equations replace the pressure rates, rows and columns the polytropic code
-wrote). The equations are ``models.cylinder``'s.
+wrote). The equations are ``models.cylinder``'s. The supply pressure is the input
+``supply`` on the cylinder's own channel (``CH_SUPPLY``, generated) where an experiment
+drives it, else the parameter p_supply (``_supply``); only then do the parameters'
+partials include p_supply's column.
 """
 
 from pneumact.core import kernel
@@ -32,6 +35,8 @@ from pneumact.models.cylinder import (
     end_stop_guards,
     piston_force,
     rest_pressures,
+    supply_held,
+    supply_pressure,
 )
 from pneumact.models.mechanics import load_against_time, rest_position
 
@@ -55,6 +60,7 @@ S_PRESSURE_B = 3
 S_FRICTION = 4
 S_VALVE = 5
 S_THERMAL = 6
+CH_SUPPLY = None  # generated: the supply channel's index (``core.channels``)
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool", "mass_flow_a",
@@ -69,6 +75,12 @@ OUT_MASS_FLOW_A = OUT_MASS_FLOW_B = None
 def _spool(t, ts, y, prm, sig, ptr):
     """The spool's position u: its command, or its lagged state."""
     return spool_position(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr)
+
+
+@kernel(inline="always")
+def _supply(t, ts, prm, sig, ptr):
+    """The supply pressure: its input where driven, else p_supply."""
+    return supply_pressure(t, ts, prm, CYLINDER_LO, sig, ptr, CH_SUPPLY)
 
 
 @kernel()
@@ -92,13 +104,14 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
     pb = y[S_PRESSURE_B]
     f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
     u = _spool(t, ts, y, prm, sig, ptr)
+    p_sup = _supply(t, ts, prm, sig, ptr)
     accel, rate_a, rate_b = cylinder_rates(
-        x, v, pa, pb, u, f_fric, load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
+        x, v, pa, pb, u, p_sup, f_fric, load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
     dydt[S_POSITION] = v
     dydt[S_VELOCITY] = accel
     dydt[S_PRESSURE_A] = rate_a
     dydt[S_PRESSURE_B] = rate_b
-    thermal_rates(x, v, pa, pb, y, S_THERMAL, u, prm, CYLINDER_LO, THERMAL_LO, dydt,
+    thermal_rates(x, v, pa, pb, y, S_THERMAL, u, p_sup, prm, CYLINDER_LO, THERMAL_LO, dydt,
                   S_PRESSURE_A, S_PRESSURE_B)
     friction_store(z_rates, dydt, S_FRICTION)
     spool_rates(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, dydt)
@@ -118,7 +131,8 @@ def jac(t, ts, y, prm, sig, ptr, out):
     _, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
     _, _, ds_dx, ds_dv = piston_force(x, v, pa, pb, prm, o)
     u = _spool(t, ts, y, prm, sig, ptr)
-    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(u, pa, pb, prm, o)
+    p_sup = _supply(t, ts, prm, sig, ptr)
+    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(u, p_sup, pa, pb, prm, o)
     vol_a, vol_b = chamber_volumes(x, prm, o)
     out[S_POSITION, S_VELOCITY] = 1.0
     out[S_VELOCITY, S_POSITION] = ds_dx / m
@@ -135,11 +149,12 @@ def jac(t, ts, y, prm, sig, ptr, out):
     out[S_PRESSURE_B, S_VELOCITY] = d_v
     out[S_PRESSURE_B, S_PRESSURE_B] = d_p
     if SPOOL_STATE >= 0:  # the flows follow the lagged spool
-        dma_du, dmb_du = chamber_flow_slopes(u, pa, pb, prm, o)
+        dma_du, dmb_du = chamber_flow_slopes(u, p_sup, pa, pb, prm, o)
         out[S_PRESSURE_A, S_VALVE + SPOOL_STATE] = n / vol_a * rt * dma_du
         out[S_PRESSURE_B, S_VALVE + SPOOL_STATE] = n / vol_b * rt * dmb_du
-    thermal_partials(x, v, pa, pb, y, S_THERMAL, u, prm, o, THERMAL_LO, out, S_PRESSURE_A,
-                     S_PRESSURE_B, S_VALVE + SPOOL_STATE if SPOOL_STATE >= 0 else -1)
+    thermal_partials(x, v, pa, pb, y, S_THERMAL, u, p_sup, prm, o, THERMAL_LO, out,
+                     S_PRESSURE_A, S_PRESSURE_B,
+                     S_VALVE + SPOOL_STATE if SPOOL_STATE >= 0 else -1)
     spool_partials(prm, VALVE_LO, out, S_VALVE)
 
 
@@ -156,10 +171,13 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     f_fric = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, prm, CYLINDER_LO)
     net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
-    cylinder_params(x, v, pa, pb, _spool(t, ts, y, prm, sig, ptr), net, prm, CYLINDER_LO, g,
-                    S_VELOCITY, S_PRESSURE_A, S_PRESSURE_B)
-    thermal_params(x, v, pa, pb, y, S_THERMAL, _spool(t, ts, y, prm, sig, ptr), prm,
-                   CYLINDER_LO, THERMAL_LO, g, S_PRESSURE_A, S_PRESSURE_B)
+    u = _spool(t, ts, y, prm, sig, ptr)
+    p_sup = _supply(t, ts, prm, sig, ptr)
+    held = supply_held(sig, ptr, CH_SUPPLY)
+    cylinder_params(x, v, pa, pb, u, p_sup, held, net, prm, CYLINDER_LO, g, S_VELOCITY,
+                    S_PRESSURE_A, S_PRESSURE_B)
+    thermal_params(x, v, pa, pb, y, S_THERMAL, u, p_sup, held, prm, CYLINDER_LO, THERMAL_LO,
+                   g, S_PRESSURE_A, S_PRESSURE_B)
     spool_params(t, ts, y, S_VALVE, prm, VALVE_LO, sig, ptr, g)
     friction_param_partials(v, y, S_FRICTION, prm, FRICTION_LO, g, S_VELOCITY)
     m = prm[CYLINDER_LO + CY_M]
@@ -175,7 +193,8 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     u = _spool(t, ts, y, prm, sig, ptr)
     f_press, f_stop, _, _ = piston_force(x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
                                          CYLINDER_LO)
-    mdot_a, _, mdot_b, _ = chamber_flows(u, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
+    p_sup = _supply(t, ts, prm, sig, ptr)
+    mdot_a, _, mdot_b, _ = chamber_flows(u, p_sup, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
                                          CYLINDER_LO)
     out[OUT_FRICTION] = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
     out[OUT_PRESSURE_FORCE] = f_press
@@ -184,8 +203,8 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     out[OUT_SPOOL] = u
     out[OUT_MASS_FLOW_A] = mdot_a
     out[OUT_MASS_FLOW_B] = mdot_b
-    thermal_flows(x, y[S_PRESSURE_A], y[S_PRESSURE_B], y, S_THERMAL, u, prm, CYLINDER_LO,
-                  THERMAL_LO, out, OUT_MASS_FLOW_A, OUT_MASS_FLOW_B)
+    thermal_flows(x, y[S_PRESSURE_A], y[S_PRESSURE_B], y, S_THERMAL, u, p_sup, prm,
+                  CYLINDER_LO, THERMAL_LO, out, OUT_MASS_FLOW_A, OUT_MASS_FLOW_B)
 
 
 @kernel()
@@ -215,7 +234,8 @@ def initial_state(t, ts, prm, sig, ptr, y0):
         y0[i] = 0.0
     o = CYLINDER_LO
     spool_start(t, ts, prm, VALVE_LO, sig, ptr, y0, S_VALVE)
-    pa, pb = rest_pressures(_spool(t, ts, y0, prm, sig, ptr), prm, o)
+    pa, pb = rest_pressures(_spool(t, ts, y0, prm, sig, ptr), _supply(t, ts, prm, sig, ptr),
+                            prm, o)
     f_press = piston_force(0.0, 0.0, pa, pb, prm, o)[0]
     net0 = f_press - load_against_time(t, ts, sig, ptr)
     y0[S_POSITION] = rest_position(net0, 0.0, prm[o + CY_KSTOP], prm[o + CY_XMAX])

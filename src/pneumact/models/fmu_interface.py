@@ -11,11 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
-from ..core.channels import CH_DRIVE, CH_LOAD_T
-
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
+    from ..core.channels import InputChannel
     from ..core.signals import Signal
     from ..parameters.parameter_set import ParameterSet
 
@@ -24,21 +23,30 @@ FORCE_INPUT = ("external_force", "N", "external force on the rod (opposes motion
                                       "larger x)")
 
 
+#: the channels the drive and the external force ride on (``core.channels``)
+DRIVE_CHANNEL = "drive"
+LOAD_CHANNEL = "load_t"
+
+
 @dataclass(frozen=True)
 class FmuInput:
-    """One FMU input: a one-point input channel of the packed signals, with its unit,
-    start value, hard range (None: unbounded) and nominal magnitude. ``pressure``: an
-    absolute pressure (a start value is checked as one)."""
+    """One FMU input: a one-point input channel of the packed signals (``channel``, its
+    name: the assembly says where it sits), with its unit, start value, hard range (None:
+    unbounded) and nominal magnitude. ``pressure``: an absolute pressure (a start value is
+    checked as one). ``declared``: the model's declared input that fills the channel
+    (driven by name with the start value when the FMU is packed; '' for the drive and
+    the external force, whose channels the model fills itself)."""
 
     name: str
     unit: str
     description: str
-    channel: int
+    channel: str
     start: float
     nominal: float
     minimum: float | None = None
     maximum: float | None = None
     pressure: bool = False
+    declared: str = ""
 
 
 @dataclass(frozen=True)
@@ -57,7 +65,7 @@ def drive_input(name: str, unit: str, description: str, start: float, nominal: f
                 minimum: float | None, maximum: float | None, pressure: bool = False
                 ) -> FmuInput:
     """The drive's FMU input (the drive channel)."""
-    return FmuInput(name, unit, description, CH_DRIVE, start, nominal, minimum, maximum,
+    return FmuInput(name, unit, description, DRIVE_CHANNEL, start, nominal, minimum, maximum,
                     pressure)
 
 
@@ -74,7 +82,15 @@ def refuse_load_against_time(kind: str, load) -> None:
 
 def force_input(nominal: float) -> FmuInput:
     """The external force's FMU input (the load-against-time channel), starting at 0."""
-    return FmuInput(*FORCE_INPUT, channel=CH_LOAD_T, start=0.0, nominal=nominal)
+    return FmuInput(*FORCE_INPUT, channel=LOAD_CHANNEL, start=0.0, nominal=nominal)
+
+
+def declared_fmu_input(name: str, declared: InputChannel, start: float, *,
+                       pressure: bool = False) -> FmuInput:
+    """An FMU input of a declared input beside the drive (a cylinder's supply pressure):
+    on its channel, starting at ``start`` (nominal too), within its declared range."""
+    return FmuInput(name, declared.unit, declared.description, declared.channel, start,
+                    abs(start) or 1.0, declared.low, declared.high, pressure, declared.name)
 
 
 class FmuModel(Protocol):

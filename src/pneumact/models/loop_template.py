@@ -5,7 +5,9 @@ The plant's own template is bound under the prefix ``plant_`` (``codegen.Child``
 states come first in the loop's state vector and its functions read them where they
 always do. The controller (``pneumact.models.controllers``; states after the plant's,
 settings in the ``controller`` block) computes the plant's input from the position
-set-point (channel CH_SETPOINT), the measured position and velocity, a cylinder's
+set-point (channel CH_SETPOINT: after the plant's channels, so where the plant declares
+channels of its own, ``core.channels``, the generator sets CH_SETPOINT, CH_FEEDFORWARD
+and CH_DISTURBANCE in the kernel), the measured position and velocity, a cylinder's
 pressure difference (``plant_pressure_feedback``, under PRESSURE_FEEDBACK) and its own
 states.
 Before every call of a plant function the loop writes that input into the plant's

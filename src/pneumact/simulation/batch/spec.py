@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...core.channels import LOOP_CHANNELS
 from ...core.features import (
     FEATURE_UNITS,
     FEATURES,
@@ -63,8 +62,7 @@ class BatchSpec:
                 "parameter_set": getattr(model.params, "name", "custom"),
                 "values": _hash_array(assembly.pack()),
                 "channels": {name: None if c is None else _hash_array(c.encode())
-                             # a plant has the first of LOOP_CHANNELS, a loop all
-                             for name, c in zip(LOOP_CHANNELS, channels, strict=False)
+                             for name, c in zip(assembly.channels, channels, strict=True)
                              if name != "drive"},
             },
             "experiment": {
