@@ -42,6 +42,12 @@ REFUSED = {
                                               r"from a pa.Actuator or a pa.Cylinder"),
     ("loop", "export_fmu"): (pa.ArgumentError, r"model = ClosedLoop; an FMU is exported "
                                                r"from a pa.Actuator or a pa.Cylinder"),
+    ("two_valves", "linearise"): (pa.ParameterError, r"linearise: plant = Cylinder\(.*"
+                                                     r"valves='two-3/2'\); allowed: .*a "
+                                                     r"Cylinder fed by its 5/3 valve"),
+    ("two_valves", "export_fmu"): (pa.ArgumentError, r"model = Cylinder\(valves='two-3/2'\); "
+                                                     r"an FMU is exported from a pa.Actuator or "
+                                                     r"a pa.Cylinder fed by its 5/3 valve"),
 }
 
 
@@ -83,13 +89,20 @@ def _make(kind: str) -> Case:
         spool = PiecewiseLinear([0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
         return Case(cylinder, Experiment(spool, "spool", 0.3, n_points=301),
                     "top_speed_out", _cylinder_loop(cylinder).holding_input(0.1), 0.1)
+    if kind == "two_valves":  # as "cylinder", through a 3/2 valve per chamber: u_b = -u_a
+        model = pa.Cylinder(load_quietly("iso15552-32"), valves="two-3/2")
+        times, command = [0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3]
+        drives = {"command_b": PiecewiseLinear(times, [-u for u in command])}
+        return Case(model, Experiment(PiecewiseLinear(times, command), "command_a", 0.3,
+                                      n_points=301, drives=drives),
+                    "top_speed_out", 0.0, 0.1)
     # held at 90 mm, then a 20 mm ramp over 50 ms
     return Case(_cylinder_loop(cylinder, _cylinder_loop(cylinder).holding_input(0.09)),
                 SetpointRamp(0.09, 0.11, 0.05, t_start=0.05, t_end=0.5, n_points=501),
                 "top_speed_out", 0.0, None)
 
 
-KINDS = ("actuator", "rig", "cylinder", "loop")
+KINDS = ("actuator", "rig", "cylinder", "two_valves", "loop")
 
 
 @pytest.fixture(scope="module")
@@ -165,12 +178,18 @@ def _sensitivities(case: Case, tmp_path) -> None:
 
 
 def _record(case: Case):
-    """The nominal run as a record: its position and the signal that drives the model."""
+    """The nominal run as a record: its position, the signal that drives the model and
+    those of the inputs beside it that the experiment drives (their record signals)."""
     run = pa.simulate(case.model, case.experiment)
     drive = case.model.input_signal
     values = run[drive] if drive in run else run[f"drive_{case.experiment.quantity}"]
-    return pa.Record.from_arrays(run.time, {"position": run["position"], drive: values},
-                                 {"position": "m", drive: case.experiment.unit}, "nominal")
+    signals, units = {"position": run["position"], drive: values}, {"position": "m",
+                                                                     drive: case.experiment.unit}
+    for name in case.experiment.drives:
+        declared = case.model.declared_input(name, "the record")
+        signals[declared.record_signal] = run[declared.record_signal]
+        units[declared.record_signal] = declared.unit
+    return pa.Record.from_arrays(run.time, signals, units, "nominal")
 
 
 def _fit(case: Case, tmp_path) -> None:
@@ -290,7 +309,8 @@ def _declaring_models() -> dict[str, Model]:
                for name, cls in VALVES.items()},
             "actuator-load": pa.Actuator(vgt, load=LOAD_INPUT),
             **{f"rig-{drive}": pa.FrictionRig(canudas, drive=drive) for drive in DRIVES},
-            "cylinder": cylinder, "loop-cylinder": _cylinder_loop(cylinder),
+            "cylinder": cylinder, "cylinder-two-3/2": _make("two_valves").model,
+            "loop-cylinder": _cylinder_loop(cylinder),
             "loop-rig": ClosedLoop(force_rig, PID(kp=1.0))}
 
 
@@ -301,7 +321,8 @@ DECLARED_RANGES = {
     "actuator-load": (1e3, 10e6),
     "rig-force": (-np.inf, np.inf), "rig-spring": (-np.inf, np.inf),
     "rig-velocity": (-np.inf, np.inf), "rig-position": (-np.inf, np.inf),
-    "cylinder": (-1.0, 1.0), "loop-cylinder": None, "loop-rig": (-np.inf, np.inf),
+    "cylinder": (-1.0, 1.0), "cylinder-two-3/2": (-1.0, 1.0), "loop-cylinder": None,
+    "loop-rig": (-np.inf, np.inf),
 }
 
 

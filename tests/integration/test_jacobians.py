@@ -195,6 +195,27 @@ def test_cylinder_jacobian(spool_lag):
                 _param_fd_check(prep, 0.3, 0.5, y, label)
 
 
+def test_cylinder_jacobian_with_two_3_2_valves():
+    """The cylinder fed by a 3/2 valve per chamber (Cylinder(valves="two-3/2")): each
+    valve's command either way, inside its overlap's band (A) or its underlap's (B), and
+    fully open; ∂f/∂θ includes each valve's own C, leak and overlap columns."""
+    params = load_quietly("iso15552-32").replace({
+        "iso_b": 0.25, "iso_m": 0.6, "valve_a.overlap": 0.1, "valve_b.overlap": -0.1,
+        "valve_b.C": 0.7 * load_quietly("iso15552-32")["valve_a.C"]})
+    model = Cylinder(params, chamber=Adiabatic(), load=Ramp(0.0, 80.0, duration=1.0),
+                     valves="two-3/2")
+    for ua, ub in ((0.45, -0.8), (-0.7, 0.05), (0.05, 1.0), (-1.0, -0.04)):
+        experiment = Experiment(Constant(ua), "command_a", t_end=1.0,
+                                drives={"command_b": Constant(ub)})
+        prep = prepare(model, experiment, Rodas4())
+        for x, v, z in CYLINDER_MECHANICAL:
+            for pa, pb in CYLINDER_PRESSURES:
+                y = np.array([x, v, pa, pb, z])
+                label = f"cylinder 3/2 valves u_a={ua} u_b={ub}"
+                _fd_check(prep, 0.3, 0.5, y, label, CYLINDER_SCALES[:5])
+                _param_fd_check(prep, 0.3, 0.5, y, label)
+
+
 @pytest.mark.parametrize("overlap", [0.1, -0.1], ids=["overlap", "underlap"])
 def test_cylinder_jacobian_with_an_overlap(overlap):
     """The 5/3 valve's overlap and underlap: ∂f/∂u (the lagged spool's column) and

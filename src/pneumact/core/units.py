@@ -23,6 +23,8 @@ SIGNAL_UNITS: dict[str, str] = {
     "friction": "N",
     "command": "1",
     "spool": "1",  # a 5/3 valve's spool command, in [-1, 1]
+    "command_a": "1",  # chamber A's 3/2 valve command, in [-1, 1] (a cylinder's input)
+    "command_b": "1",  # chamber B's 3/2 valve command, in [-1, 1] (a cylinder's input)
     "load": "N",  # an external load force (a cylinder's input)
     "supply": "Pa",  # a 5/3 valve's supply pressure, absolute (a cylinder's input)
 }

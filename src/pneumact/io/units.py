@@ -41,6 +41,8 @@ _TARGETS: dict[str, tuple[str, str]] = {
     "friction": ("N", "a force unit such as N or kN"),
     "command": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
     "spool": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
+    "command_a": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
+    "command_b": ("dimensionless", "a dimensionless unit: 1, - or % (or no unit)"),
     "load": ("N", "a force unit such as N, kN or lbf"),
     "supply": ("Pa", _PRESSURE),
 }

@@ -1,4 +1,5 @@
-"""A double-acting pneumatic cylinder fed by a 5/3 proportional valve (issue 41, item 4).
+"""A double-acting pneumatic cylinder fed by a 5/3 proportional valve (issue 41, item 4),
+or by a proportional 3/2 valve per chamber (``valves="two-3/2"``, issue 41 items 1-2).
 
     m·dv/dt = (p_a − p_atm)·A_a − (p_b − p_atm)·A_b − F_f − F_load(t) + F_stop(x, v)
     dp_a/dt = n/V_a·(R·T·ṁ_a − p_a·A_a·v),   V_a = chamber_a.V_dead + A_a·x
@@ -34,7 +35,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 from ..checks import MAX_ABSOLUTE_PRESSURE
 from ..core.channels import CH_DRIVE, DeclaredInputs, InputChannel, in_order
-from ..core.component import Block, Part, StateSpec, required_parameters
+from ..core.component import SETTING, Block, Part, StateSpec, required_parameters
 from ..core.jit import njit
 from ..core.signals import Constant, Signal, channel_driven, channel_eval
 from ..parameters.catalogue import (
@@ -97,6 +98,22 @@ declare_kind("chamber", P("V_dead", "m^3", "dead volume of a cylinder chamber wh
 declare_instances("chamber", chamber_a="chamber A, the cap side, empty at x = 0",
                   chamber_b="chamber B, the rod side, empty at x = x_max")
 declare_renamed(V_dead_a="chamber_a.V_dead", V_dead_b="chamber_b.V_dead")
+#: a proportional 3/2 valve feeding one chamber (Cylinder(valves="two-3/2")), placed as
+#: valve_a and valve_b: its parameters, declared once (those of one chamber's two paths
+#: of the 5/3 valve: valve_C, valve_leak, spool_overlap)
+declare_kind(
+    "valve_3_2",
+    P("C", "m^3/(s*Pa)", "ISO 6358 sonic conductance of each path of a 3/2 valve (supply "
+      "to its chamber, its chamber to the exhaust), fully open (|u| = 1)", None, 0.0,
+      False, 1e-3, group="cylinder", plausible=(1e-10, 1e-6)),
+    P("leak", "", "closed-position leakage of each path of a 3/2 valve, as a fraction of "
+      "its C", 0.0, 0.0, False, 1.0, group="cylinder", plausible=(0.0, 0.1)),
+    P("overlap", "", "overlap of a 3/2 valve's spool over its ports, as a fraction of its "
+      "travel: no path opens until |u| exceeds it; negative: an underlap, both paths open "
+      "around the centre (0: critical centre)", 0.0, -0.5, False, 0.5, group="cylinder",
+      plausible=(-0.2, 0.3)))
+declare_instances("valve_3_2", valve_a="the 3/2 valve of chamber A (command_a)",
+                  valve_b="the 3/2 valve of chamber B (command_b)")
 declare_relation(("d_rod", "D_bore"), lambda rod, bore: rod < bore,
                  lambda rod, bore: f"must be < D_bore = {bore:g} m (the rod passes "
                                    "through the piston)")
@@ -111,6 +128,11 @@ CYLINDER_BLOCK = Block.of(
     settings=("chamber_n_offset", "chamber_n_gamma"),
     derived=("n_poly", "area_a", "area_b", "dead_volume_a", "dead_volume_b"),
 )
+#: the cylinder's block where two 3/2 valves feed it: the same entries at the same
+#: indices, the 5/3 valve's three settings there (its functions never read them)
+FIVE_THREE_ENTRIES = ("valve_C", "valve_leak", "spool_overlap")
+VALVES_CYLINDER_BLOCK = Block(tuple((name, SETTING if name in FIVE_THREE_ENTRIES else kind)
+                                    for name, kind in CYLINDER_BLOCK.entries))
 CY_M = CYLINDER_BLOCK.index("m")
 CY_BORE = CYLINDER_BLOCK.index("D_bore")
 CY_ROD = CYLINDER_BLOCK.index("d_rod")
@@ -450,6 +472,144 @@ def cylinder_params(x, v, pa, pb, u, p_sup, held, net, p, o, g, row_v, row_a,
     g[row_b, o + CY_VDB] = -rate_b / vol_b
     g[row_b, o + CY_AB] = -rate_b / vol_b * (p[o + CY_XMAX] - x) + n / vol_b * pb * v
     g[row_b, o + CY_XMAX] = -rate_b / vol_b * area_b
+
+
+# ------------------------------------------- two proportional 3/2 valves, one per chamber
+#: a 3/2 valve's block (the kind ``valve_3_2``, placed as valve_a and valve_b): the
+#: conductance of each of its paths fully open, its leakage and its spool's overlap
+VALVE32_BLOCK = Block.of("C", "leak", "overlap")
+V32_C = VALVE32_BLOCK.index("C")
+V32_LEAK = VALVE32_BLOCK.index("leak")
+V32_OVERLAP = VALVE32_BLOCK.index("overlap")
+
+
+@njit(cache=True)
+def valve32_fractions(u, leak, overlap):  # pragma: no cover - compiled
+    """Openings of a 3/2 valve's two paths as fractions of its C at command u (clipped to
+    [−1, 1]), each with the leakage: (supply → chamber, chamber → exhaust); the same
+    arithmetic as ``spool_fractions``' paths of chamber A."""
+    spool = min(max(u, -1.0), 1.0)
+    return path_opening(spool, overlap) + leak, path_opening(-spool, overlap) + leak
+
+
+@njit(cache=True)
+def valve32_conductances(u, p, ov):  # pragma: no cover - compiled
+    """(c_fill, c_vent) of the 3/2 valve whose block is at offset ``ov``, at command u."""
+    fill, vent = valve32_fractions(u, p[ov + V32_LEAK], p[ov + V32_OVERLAP])
+    c = p[ov + V32_C]
+    return c * fill, c * vent
+
+
+@njit(cache=True)
+def valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob):  # pragma: no cover - compiled
+    """Net mass flows into A and B through their own 3/2 valves (blocks at ``oa``, ``ob``)
+    at commands ua, ub and supply pressure p_sup, and their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b,
+    ∂ṁ_b/∂p_b)."""
+    fill_a, vent_a = valve32_conductances(ua, p, oa)
+    fill_b, vent_b = valve32_conductances(ub, p, ob)
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_exh = p[o + CY_PATM]
+    flow_a = chamber_inflow(pa, p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature)
+    flow_b = chamber_inflow(pb, p_sup, p_exh, fill_b, vent_b, b, m, r_lam, temperature)
+    return flow_a[0], flow_a[1], flow_b[0], flow_b[1]
+
+
+@njit(cache=True)
+def valves_rates(x, v, pa, pb, ua, ub, p_sup, f_fric, f_load, p, o, oa,
+                 ob):  # pragma: no cover - compiled
+    """(dv/dt, dp_a/dt, dp_b/dt) of the cylinder fed by two 3/2 valves."""
+    mdot_a, _, mdot_b, _ = valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
+    f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
+    return ((f_press - f_fric - f_load + f_stop) / p[o + CY_M],
+            chamber_pressure_rate(pa, vol_a, p[o + CY_AA] * v, mdot_a, n, rt),
+            chamber_pressure_rate(pb, vol_b, -p[o + CY_AB] * v, mdot_b, n, rt))
+
+
+@njit(cache=True)
+def valves_rest_pressures(ua, ub, p_sup, p, o, oa, ob):  # pragma: no cover - compiled
+    """(p_a, p_b) at which each chamber's flows through its valve balance."""
+    fill_a, vent_a = valve32_conductances(ua, p, oa)
+    fill_b, vent_b = valve32_conductances(ub, p, ob)
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_exh = p[o + CY_PATM]
+    return (rest_pressure(p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature),
+            rest_pressure(p_sup, p_exh, fill_b, vent_b, b, m, r_lam, temperature))
+
+
+@njit(cache=True)
+def valve32_chamber_params(row, pressure, volume, vol_rate, u, p_sup, held, p, o, ov,
+                           g):  # pragma: no cover - compiled
+    """g[row, ·] = ∂ṗ/∂θ of one chamber fed by its 3/2 valve (block at ``ov``): the
+    valve's C, leak and overlap, and the cylinder block's flow entries p_supply (only
+    where ``held``), p_atm, iso_b, iso_m, r_lin, R, T, n_poly (the volume's entries are
+    the caller's)."""
+    overlap = p[ov + V32_OVERLAP]
+    u_fill, u_vent = valve32_fractions(u, p[ov + V32_LEAK], overlap)
+    spool = min(max(u, -1.0), 1.0)
+    _, e_fill = path_opening_slopes(spool, overlap)
+    _, e_vent = path_opening_slopes(-spool, overlap)
+    c = p[ov + V32_C]
+    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
+    p_exh = p[o + CY_PATM]
+    n, r_gas = p[o + CY_N], p[o + CY_R]
+    rt = r_gas * temperature
+    mdot, _, d_sup, d_exh, q_in, q_out = chamber_inflow(
+        pressure, p_sup, p_exh, c * u_fill, c * u_vent, b, m, r_lam, temperature)
+    d_b, d_m, d_lam, d_t = chamber_inflow_params(pressure, p_sup, p_exh, c * u_fill,
+                                                 c * u_vent, b, m, r_lam, temperature)
+    k = n / volume * rt  # ∂ṗ/∂ṁ
+    g[row, ov + V32_C] = k * (u_fill * q_in - u_vent * q_out)
+    g[row, ov + V32_LEAK] = k * c * (q_in - q_out)
+    g[row, ov + V32_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
+    g[row, o + CY_PSUP] = k * d_sup if held else 0.0
+    g[row, o + CY_PATM] = k * d_exh
+    g[row, o + CY_B] = k * d_b
+    g[row, o + CY_MEXP] = k * d_m
+    g[row, o + CY_RLIN] = k * d_lam
+    g[row, o + CY_R] = n / volume * temperature * mdot
+    g[row, o + CY_T] = n / volume * r_gas * mdot + k * d_t
+    g[row, o + CY_N] = (rt * mdot - pressure * vol_rate) / volume
+
+
+@njit(cache=True)
+def valves_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row_v, row_a,
+                  row_b):  # pragma: no cover - compiled
+    """``cylinder_params`` of the cylinder fed by two 3/2 valves: the velocity row, both
+    chambers' rows in the cylinder block's and each valve's own columns."""
+    m_mass = p[o + CY_M]
+    p_atm = p[o + CY_PATM]
+    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
+    dks, dcs, dxmax = stop_force_params(x, v, p[o + CY_KSTOP], p[o + CY_CSTOP],
+                                        p[o + CY_XMAX])
+    g[row_v, o + CY_M] = -net / (m_mass * m_mass)
+    g[row_v, o + CY_AA] = (pa - p_atm) / m_mass
+    g[row_v, o + CY_AB] = (p_atm - pb) / m_mass
+    g[row_v, o + CY_PATM] = (area_b - area_a) / m_mass
+    g[row_v, o + CY_KSTOP] = dks / m_mass
+    g[row_v, o + CY_CSTOP] = dcs / m_mass
+    g[row_v, o + CY_XMAX] = dxmax / m_mass
+    vol_a, vol_b = chamber_volumes(x, p, o)
+    n = p[o + CY_N]
+    valve32_chamber_params(row_a, pa, vol_a, area_a * v, ua, p_sup, held, p, o, oa, g)
+    valve32_chamber_params(row_b, pb, vol_b, -area_b * v, ub, p_sup, held, p, o, ob, g)
+    mdot_a, _, mdot_b, _ = valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+    rt = p[o + CY_R] * p[o + CY_T]
+    rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
+    rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)
+    g[row_a, o + CY_VDA] = -rate_a / vol_a
+    g[row_a, o + CY_AA] = -rate_a / vol_a * x - n / vol_a * pa * v
+    g[row_b, o + CY_VDB] = -rate_b / vol_b
+    g[row_b, o + CY_AB] = -rate_b / vol_b * (p[o + CY_XMAX] - x) + n / vol_b * pb * v
+    g[row_b, o + CY_XMAX] = -rate_b / vol_b * area_b
+
+
+@njit(cache=True, inline="always")
+def valve_command(t, ts, sig, ptr, ch):  # pragma: no cover - compiled
+    """A 3/2 valve's command on channel ``ch`` (an empty channel reads 0: closed)."""
+    return channel_eval(sig, ptr, ch, t, ts)[0]
+
 
 
 # ------------------------------------------------------------------ the spool: direct or lagged
@@ -950,6 +1110,36 @@ SPOOL_INPUT = InputChannel(
                                 "(1 extends, -1 retracts, 0 closes the centre)")
 
 
+#: the two 3/2 valves' commands (Cylinder(valves="two-3/2")): each on the channel its
+#: valve declares (``valve32_part``), u in [-1, 1]: 1 fills the chamber from the supply,
+#: -1 vents it to the exhaust, 0 closes it
+def _valve_command_input(chamber: str) -> InputChannel:
+    name = f"command_{chamber.lower()}"
+    return InputChannel(
+        name, "1", -1.0, 1.0, record_signals=(name,), channel=name,
+        description=f"command of chamber {chamber}'s 3/2 valve (1 supply to {chamber}, 0 "
+                    f"closed, -1 {chamber} to exhaust)",
+        label=f"3/2 valve command {name}",
+        rule="a 3/2 valve's command must stay within [{low:g}, {high:g}] (1 fills its "
+             "chamber from the supply, -1 vents it, 0 closes it)")
+
+
+COMMAND_A_INPUT = _valve_command_input("A")
+COMMAND_B_INPUT = _valve_command_input("B")
+
+#: how the cylinder is fed: one 5/3 valve (the spool command) or a 3/2 valve per chamber
+FIVE_THREE = "5/3"
+TWO_THREE_TWO = "two-3/2"
+VALVES_CHOICES = (FIVE_THREE, TWO_THREE_TWO)
+
+
+def valve32_part(instance: str, command: InputChannel, label: str) -> Part:
+    """One chamber's 3/2 valve, placed under ``instance`` (valve_a, valve_b), reading its
+    command on the channel of ``command``."""
+    return Part(role="valve", instance=instance, block=VALVE32_BLOCK, label=label,
+                channels=(command.channel,))
+
+
 #: the external load force on the rod, against extension: an input beside the spool
 #: command, on the load-against-time channel the template reads; a record's ``load``
 #: drives it (a cylinder's run writes its load under that name). 1 MN bounds what a
@@ -988,19 +1178,24 @@ class Cylinder(DeclaredInputs):
     input ``load``, which an experiment drives by name, zero where it does not);
     ``spool_lag`` the order of the spool's dynamics: 0 (or False, the default) follows the
     command at once, 1 (or True) with the time constant ``spool_tau`` (a state), 2 as a
-    second-order system (``spool_omega``, ``spool_zeta``; two states)."""
+    second-order system (``spool_omega``, ``spool_zeta``; two states). ``valves``: "5/3"
+    (the default) or "two-3/2": a proportional 3/2 valve per chamber instead (instances
+    ``valve_a``, ``valve_b`` of one kind, parameters ``valve_a.C`` ...), driven by the
+    inputs ``command_a`` and ``command_b`` in [−1, 1] (1 fills the chamber from the
+    supply, −1 vents it, 0 closes it); its valves follow their commands at once into
+    polytropic chambers (``valves_*``, ``cylinder_valves_template``)."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
     spool_lag: bool | int = 0
-    template: ClassVar[str] = "pneumact.models.cylinder_template"
+    valves: str = FIVE_THREE
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
                      chamber: ChamberLaw = ..., load: Signal | None = ...,
-                     spool_lag: bool | int = ...) -> None: ...
+                     spool_lag: bool | int = ..., valves: str = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance, check_type
@@ -1024,7 +1219,30 @@ class Cylinder(DeclaredInputs):
         if self.spool_lag not in _SPOOL_KINDS:
             raise ArgumentError(f"Cylinder: spool_lag = {self.spool_lag!r}: must be "
                                 f"{SPOOL_LAG_CHOICES}")
+        if self.valves not in VALVES_CHOICES:
+            raise ArgumentError(f"Cylinder: valves = {self.valves!r}: must be "
+                                f"{FIVE_THREE!r} (one 5/3 valve, the spool command) or "
+                                f"{TWO_THREE_TWO!r} (a 3/2 valve per chamber, command_a and "
+                                "command_b)")
+        if self.two_valves and (self.spool_lag or self.chamber.temperature_state):
+            raise ArgumentError(
+                f"Cylinder: valves = {self.valves!r} with spool_lag = {self.spool_lag!r} and "
+                f"chamber = {type(self.chamber).__name__}: the 3/2 valves follow their "
+                "commands at once and their chambers are polytropic (spool_lag=0 and "
+                "Isothermal, Adiabatic or Polytropic); a spool's lag and HeatTransfer() "
+                "are the 5/3 valve's")
         self.params.require(self.required, "Cylinder")
+
+    @property
+    def two_valves(self) -> bool:
+        """Whether a 3/2 valve feeds each chamber (``valves="two-3/2"``)."""
+        return self.valves == TWO_THREE_TWO
+
+    @property
+    def template(self) -> str:
+        """The kernel template: the 5/3 valve's or the two 3/2 valves'."""
+        return ("pneumact.models.cylinder_valves_template" if self.two_valves
+                else "pneumact.models.cylinder_template")
 
     @property
     def sensitivity_refusal(self) -> str | None:
@@ -1040,7 +1258,9 @@ class Cylinder(DeclaredInputs):
         if found is None:
             supply = replace(SUPPLY_INPUT, low=float(self.params["p_atm"]))
             load = () if self.load is not None else (LOAD_INPUT,)
-            found = (SPOOL_INPUT, *load, supply)
+            commands = ((COMMAND_A_INPUT, COMMAND_B_INPUT) if self.two_valves
+                        else (SPOOL_INPUT,))
+            found = (*commands, *load, supply)
             object.__setattr__(self, "_inputs", found)
         return found
 
@@ -1057,24 +1277,25 @@ class Cylinder(DeclaredInputs):
 
     @property
     def input_signals(self) -> tuple[str, ...]:
-        return SPOOL_INPUT.record_signals
+        return self.drive_input.record_signals
 
     def driven_by(self, signal: str) -> Cylinder:
-        """This cylinder, when ``signal`` is its spool command (its only input)."""
+        """This cylinder, when ``signal`` is its drive (the spool command, or valve A's
+        command with two 3/2 valves)."""
         from ..errors import DataError
 
-        if signal not in SPOOL_INPUT.record_signals:
-            raise DataError(f"a Cylinder is driven by a record's spool command, not its "
-                            f"{signal}")
+        if signal not in self.drive_input.record_signals:
+            what = "valve A's command" if self.two_valves else "spool command"
+            raise DataError(f"a Cylinder is driven by a record's {what}, not its {signal}")
         return self
 
     @property
     def plant_kind(self) -> str:
-        return SPOOL_INPUT.name
+        return self.drive_input.name
 
     @property
     def drive_label(self) -> str:
-        return "5/3 valve"
+        return "two 3/2 valves" if self.two_valves else "5/3 valve"
 
     #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
     summary_kind: ClassVar[str] = "motion"
@@ -1107,16 +1328,24 @@ class Cylinder(DeclaredInputs):
                     StateSpec("pressure_a", "Pa"), StateSpec("pressure_b", "Pa")),
             settings=self.chamber.settings(), label="double-acting cylinder",
             channels=(SUPPLY_CHANNEL,))
-        return (cylinder, chamber_part("chamber_a", "cap-side chamber A"),
-                chamber_part("chamber_b", "rod-side chamber B"), self.friction.part(),
-                spool_part(self.spool_lag), thermal_part(self.chamber))
+        chambers = (chamber_part("chamber_a", "cap-side chamber A"),
+                    chamber_part("chamber_b", "rod-side chamber B"))
+        if self.two_valves:
+            cylinder = replace(cylinder, block=VALVES_CYLINDER_BLOCK, settings={
+                **cylinder.settings, **dict.fromkeys(FIVE_THREE_ENTRIES, 0.0)})
+            return (cylinder, *chambers, self.friction.part(),
+                    valve32_part("valve_a", COMMAND_A_INPUT, "3/2 valve of chamber A"),
+                    valve32_part("valve_b", COMMAND_B_INPUT, "3/2 valve of chamber B"))
+        return (cylinder, *chambers, self.friction.part(), spool_part(self.spool_lag),
+                thermal_part(self.chamber))
 
     def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
                  ) -> list[Signal | None]:
         """The spool command ``drive`` and the inputs ``drives`` names (its load, its
         supply pressure) on their channels; the load it holds, or none, where no
         experiment drives it; the supply's channel empty where none drives it (the kernel
-        then reads p_supply)."""
+        then reads p_supply). With two 3/2 valves ``drive`` is command_a; command_b's
+        channel, where no experiment drives it, is empty: read as 0, valve B closed."""
         load = self.load if self.load is not None else Constant(0.0)
         return in_order({LOAD_INPUT.channel: load, **self.routed(drive, drives)},
                         self.channel_names)
@@ -1124,7 +1353,14 @@ class Cylinder(DeclaredInputs):
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Cylinder:
         """This cylinder as its FMU runs it (its load channel is there already; a load
-        against time is refused: in the FMU it is the input)."""
+        against time is refused: in the FMU it is the input); one fed by two 3/2 valves
+        is refused (its FMU's second command is not built yet)."""
+        if self.two_valves:
+            from ..errors import ArgumentError
+
+            raise ArgumentError(f"export_fmu: model = Cylinder(valves={self.valves!r}); an "
+                                "FMU is exported from a pa.Actuator or a pa.Cylinder fed by "
+                                "its 5/3 valve (valves='5/3')")
         refuse_load_against_time("cylinder", self.load)
         return self
 
@@ -1145,5 +1381,7 @@ class Cylinder(DeclaredInputs):
         return FmuInterface((spool, force_input(push), supply), None, step)
 
     def describe(self) -> str:
+        valves = f", valves={self.valves!r}" if self.two_valves else ""
         return (f"Cylinder(friction={self.friction!r}, "
-                f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag})")
+                f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag}"
+                f"{valves})")

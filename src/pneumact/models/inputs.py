@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..core.channels import InputChannel
 from ..errors import DataError
 from .actuator import LOAD_INPUT as ACTUATOR_LOAD_INPUT
-from .cylinder import LOAD_INPUT, SPOOL_INPUT, SUPPLY_INPUT
+from .cylinder import COMMAND_A_INPUT, COMMAND_B_INPUT, LOAD_INPUT, SPOOL_INPUT, SUPPLY_INPUT
 from .rig import DRIVE_INPUTS
 from .valves import VALVES, PressureRegulator, PressureSource, Valve
 
@@ -17,11 +17,12 @@ __all__ = ["DECLARED_INPUTS", "DEFAULT_INPUT", "INPUTS", "INPUT_SIGNALS", "input
 
 #: every input a component of the package declares (a valve's, the 5/3 valve's spool
 #: command, the rig's drives, the cylinder's and the actuator's load forces, the
-#: cylinder's supply pressure): the
+#: cylinder's supply pressure, its two 3/2 valves' commands): the
 #: quantities an experiment may name, with their units
 DECLARED_INPUTS: tuple[InputChannel, ...] = (
     *dict.fromkeys(cls.declared for cls in VALVES.values()), *DRIVE_INPUTS.values(),
-    SPOOL_INPUT, LOAD_INPUT, ACTUATOR_LOAD_INPUT, SUPPLY_INPUT)
+    SPOOL_INPUT, LOAD_INPUT, ACTUATOR_LOAD_INPUT, SUPPLY_INPUT, COMMAND_A_INPUT,
+    COMMAND_B_INPUT)
 
 #: The record signal that drives each valve (by its ``cli_name``), in the order a record's
 #: input is chosen when it carries several: a logged set-point first (the record was made
