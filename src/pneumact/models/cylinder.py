@@ -414,6 +414,16 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_ve
     (only where it is ``held``: a driven supply pressure p_sup does not read it), p_atm,
     iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions,
     ``e_fill``, ``e_vent`` their slopes in the overlap."""
+    flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p_sup,
+                held, p, o, g, o + CY_C, o + CY_LEAK, o + CY_OVERLAP)
+
+
+@njit(cache=True)
+def flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p_sup,
+                held, p, o, g, col_c, col_leak, col_overlap):  # pragma: no cover - compiled
+    """``chamber_params`` with the valve's C, leakage and overlap written in the columns
+    ``col_c``, ``col_leak``, ``col_overlap`` (the 5/3 valve's in the cylinder block, a 3/2
+    valve's in its own block), the others in the cylinder block at ``o``."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     n, r_gas = p[o + CY_N], p[o + CY_R]
@@ -423,9 +433,9 @@ def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_ve
     d_b, d_m, d_lam, d_t = chamber_inflow_params(pressure, p_sup, p_exh, c * u_fill,
                                                  c * u_vent, b, m, r_lam, temperature)
     k = n / volume * rt  # ∂ṗ/∂ṁ
-    g[row, o + CY_C] = k * (u_fill * q_in - u_vent * q_out)
-    g[row, o + CY_LEAK] = k * c * (q_in - q_out)
-    g[row, o + CY_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
+    g[row, col_c] = k * (u_fill * q_in - u_vent * q_out)
+    g[row, col_leak] = k * c * (q_in - q_out)
+    g[row, col_overlap] = k * c * (e_fill * q_in - e_vent * q_out)
     g[row, o + CY_PSUP] = k * d_sup if held else 0.0
     g[row, o + CY_PATM] = k * d_exh
     g[row, o + CY_B] = k * d_b
@@ -550,27 +560,9 @@ def valve32_chamber_params(row, pressure, volume, vol_rate, u, p_sup, held, p, o
     spool = min(max(u, -1.0), 1.0)
     _, e_fill = path_opening_slopes(spool, overlap)
     _, e_vent = path_opening_slopes(-spool, overlap)
-    c = p[ov + V32_C]
-    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_exh = p[o + CY_PATM]
-    n, r_gas = p[o + CY_N], p[o + CY_R]
-    rt = r_gas * temperature
-    mdot, _, d_sup, d_exh, q_in, q_out = chamber_inflow(
-        pressure, p_sup, p_exh, c * u_fill, c * u_vent, b, m, r_lam, temperature)
-    d_b, d_m, d_lam, d_t = chamber_inflow_params(pressure, p_sup, p_exh, c * u_fill,
-                                                 c * u_vent, b, m, r_lam, temperature)
-    k = n / volume * rt  # ∂ṗ/∂ṁ
-    g[row, ov + V32_C] = k * (u_fill * q_in - u_vent * q_out)
-    g[row, ov + V32_LEAK] = k * c * (q_in - q_out)
-    g[row, ov + V32_OVERLAP] = k * c * (e_fill * q_in - e_vent * q_out)
-    g[row, o + CY_PSUP] = k * d_sup if held else 0.0
-    g[row, o + CY_PATM] = k * d_exh
-    g[row, o + CY_B] = k * d_b
-    g[row, o + CY_MEXP] = k * d_m
-    g[row, o + CY_RLIN] = k * d_lam
-    g[row, o + CY_R] = n / volume * temperature * mdot
-    g[row, o + CY_T] = n / volume * r_gas * mdot + k * d_t
-    g[row, o + CY_N] = (rt * mdot - pressure * vol_rate) / volume
+    flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent,
+                p[ov + V32_C], p_sup, held, p, o, g, ov + V32_C, ov + V32_LEAK,
+                ov + V32_OVERLAP)
 
 
 @njit(cache=True)
