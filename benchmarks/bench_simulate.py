@@ -336,7 +336,8 @@ def main(argv: list[str] | None = None) -> None:
         run_pneumact(case)  # warm-up (loads/compiles the kernel, numba dispatch)
         ref_x, ref_p, ref_steps, _, _ = run_pneumact(case, REF_RTOL)
         rad_x, rad_p, _, _, _ = run_scipy(case, "Radau", REF_RTOL, REF_ATOL_FACTOR)
-        print(f"[{case.label}] kernel {kernel.__name__}; reference Rodas4 rtol={REF_RTOL:g} "
+        name = getattr(kernel, "__name__", type(kernel).__name__)  # a C library has none
+        print(f"[{case.label}] kernel {name}; reference Rodas4 rtol={REF_RTOL:g} "
               f"({ref_steps} steps) vs Radau rtol={REF_RTOL:g}, atol={REF_ATOL_FACTOR:g}×: "
               f"max |dx| = {1e6 * max_err(ref_x, rad_x):.3g} µm"
               + (f", max |dp| = {max_err(ref_p, rad_p):.3g} Pa" if ref_p is not None else ""))
