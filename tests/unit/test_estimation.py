@@ -127,6 +127,26 @@ def test_piecewise_linear_input_keeps_steps_and_removes_noise():
     assert np.allclose(np.interp(t, same_t, same_v), clean, rtol=1e-12)
 
 
+def test_a_noiseless_set_point_keeps_its_corners_between_samples():
+    """Issue 38: a regulator's set-point (exact, as commanded) sampled at 123 Hz has its
+    ramps' corners between samples; rebuilt, the corners are where the lines meet, so
+    the signal equals the commanded one between the samples too (a line across the
+    straddling interval cut each corner: the truth's own model then missed a drawn
+    actuator's resampled ramps by 6-8 noise deviations). Corners on samples: unchanged."""
+    corners_t = [0.0, 0.30, 1.2071, 1.5, 2.4033, 3.0]
+    corners_v = [8e4, 8e4, 3e4, 3e4, 8e4, 8e4]
+    t = np.arange(0.0, 3.0, 1 / 123.0)
+    knots_t, knots_v = piecewise_linear_input(t, np.interp(t, corners_t, corners_v))
+    fine = np.linspace(0.0, t[-1], 20001)
+    np.testing.assert_allclose(np.interp(fine, knots_t, knots_v),
+                               np.interp(fine, corners_t, corners_v), rtol=0, atol=1e-8)
+    on = np.arange(3001) * 1e-3  # every corner on a sample: the corners are the knots
+    sampled = [0.0, 0.3, 1.207, 1.5, 2.403, 3.0]
+    knots_t, knots_v = piecewise_linear_input(on, np.interp(on, sampled, corners_v))
+    np.testing.assert_array_equal(knots_t, sampled)
+    np.testing.assert_array_equal(knots_v, corners_v)
+
+
 def test_a_sampled_step_is_rebuilt_as_a_step_at_the_sample_that_shows_it():
     """A spool logged as commanded (1 kHz, the step at a sample): rebuilt, smoothed or
     not, it equals the commanded step between the samples too (a line across the

@@ -582,3 +582,25 @@ def test_the_refit_judges_a_campaign_whose_slow_end_alone_is_missed():
     assert not _slow_end_only(records, [True, False, True, False, True])  # a steady one
     assert not _slow_end_only(records, [False, False, True, True, True])  # the sweep
     assert not _slow_end_only(records, [True, False, False, False, True])  # none fitted
+
+
+def test_a_presliding_test_too_slow_for_the_stuck_mode_gives_sigma0_no_interval(vgt):
+    """Issue 38: a presliding test sampled below two samples per period of the stuck
+    mode aliases it (a drawn actuator at 1.5: σ0 −0.15 % at ±0.05 %): σ0 and σ1 then
+    get no interval; at 5.9 (only noted: fewer than ten) they keep theirs."""
+    import pandas as pd
+
+    from pneumact.identification.faults import undersampled_presliding
+    from pneumact.identification.paper import _undersampled
+
+    stuck = np.sqrt((vgt["k"] + vgt["sigma0"]) / vgt["m"]) / (2 * np.pi)
+    table = pd.DataFrame({"record": ["presliding", "ramp"], "kind": ["presliding", "ramp"],
+                          "sample_rate": [1.5 * stuck, 1.5 * stuck]})
+    assert undersampled_presliding(table, vgt) == pytest.approx(1.5 * stuck)
+    refused = _undersampled(table, vgt, {"sigma1": "held"})
+    assert list(refused) == ["sigma0"] and "aliases" in refused["sigma0"]
+    noted = table.assign(sample_rate=5.9 * stuck)
+    assert undersampled_presliding(noted, vgt) == pytest.approx(5.9 * stuck)  # the note
+    assert not _undersampled(noted, vgt, {})
+    fast = table.assign(sample_rate=20.0 * stuck)
+    assert undersampled_presliding(fast, vgt) is None and not _undersampled(fast, vgt, {})

@@ -57,6 +57,8 @@ __all__ = [
     "LAG_BOUND_MARGIN",
     "LAG_GAIN",
     "OFFSET_SIGMAS",
+    "PRESLIDING_ALIASED",
+    "PRESLIDING_SAMPLES_PER_PERIOD",
     "REGULATOR_RATIO",
     "PositionZero",
     "PressureSide",
@@ -68,6 +70,7 @@ __all__ = [
     "quantised_records",
     "regulator_check",
     "sensor_notes",
+    "undersampled_presliding",
     "viscous_lag_bound",
     "without_lag",
 ]
@@ -404,17 +407,38 @@ def sensor_notes(records: Sequence[Record], kinds: Sequence[str], params
             "on the estimates (its unknown phase, drawn) is in their intervals",
             "a finer position sensor or ADC (or dither) for the presliding test"))
     stuck = _stuck_frequency(params)
-    presliding = table[table["kind"] == "presliding"]
-    if len(presliding) and np.isfinite(stuck):
-        rate = float(presliding["sample_rate"].min())
-        if rate < 10.0 * stuck:
-            notes.append(Diagnostic(
-                "warning", "bench", f"the presliding record is sampled at {rate:.3g} Hz, "
-                f"less than ten samples per period of the stuck mode ({stuck:.3g} Hz at the "
-                "prior's σ0 and m): its steps and ringing fall between samples, so σ1 "
-                "rests on little", f"sample the presliding test at {20 * stuck:.3g} Hz or "
-                "faster (pneumact campaign --plan sets the rate)"))
+    rate = undersampled_presliding(table, params)
+    if rate is not None:
+        notes.append(Diagnostic(
+            "warning", "bench", f"the presliding record is sampled at {rate:.3g} Hz, "
+            f"less than ten samples per period of the stuck mode ({stuck:.3g} Hz at the "
+            "prior's σ0 and m): its steps and ringing fall between samples, so σ1 "
+            "rests on little", f"sample the presliding test at {20 * stuck:.3g} Hz or "
+            "faster (pneumact campaign --plan sets the rate)"))
     return notes, table
+
+
+#: A presliding test resolves its steps and ringing with at least this many samples per
+#: period of the stuck mode (fewer: a note, σ1 rests on little) ...
+PRESLIDING_SAMPLES_PER_PERIOD = 10.0
+#: ... and below this many (the sampling theorem's two) the stuck mode aliases: σ0 and
+#: σ1 get no interval (a drawn actuator at 1.5 samples per period: σ0 −0.15 % at
+#: ±0.05 %; at 5.9 its σ0 and σ1 held within 0.2 %)
+PRESLIDING_ALIASED = 2.0
+
+
+def undersampled_presliding(table: pd.DataFrame, params,
+                            per_period: float = PRESLIDING_SAMPLES_PER_PERIOD
+                            ) -> float | None:
+    """The sample rate [Hz] of the slowest presliding record of ``table``
+    (``sensor_notes``) where it is below ``per_period`` samples per period of the stuck
+    mode at ``params``, else None."""
+    stuck = _stuck_frequency(params)
+    presliding = table[table["kind"] == "presliding"]
+    if not len(presliding) or not np.isfinite(stuck):
+        return None
+    rate = float(presliding["sample_rate"].min())
+    return rate if rate < per_period * stuck else None
 
 
 def _micrometres(noise: pd.Series) -> str:

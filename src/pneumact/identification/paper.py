@@ -61,6 +61,7 @@ from .diagnostics import (
 from .estimates import Estimates
 from .faults import (
     LAG_GAIN,
+    PRESLIDING_ALIASED,
     lag_search,
     position_zero,
     pressure_side,
@@ -68,6 +69,7 @@ from .faults import (
     quantised_records,
     regulator_check,
     sensor_notes,
+    undersampled_presliding,
     viscous_lag_bound,
 )
 from .fit import FitResult, one_blas_thread
@@ -985,6 +987,20 @@ def _slow_end_only(records: Sequence[Record], fits: Sequence[bool]) -> bool:
     return bool(speeds[True]) and (not speeds[False] or max(speeds[False]) < min(speeds[True]))
 
 
+def _undersampled(sensors: pd.DataFrame, params, refused) -> dict[str, str]:
+    """σ0 and σ1 (those not in ``refused``) where the presliding test is sampled below
+    twice the stuck mode's frequency, which then aliases (``faults.PRESLIDING_ALIASED``):
+    name -> why. (Slow
+    ramps are not judged so: the paper's own campaign slides through them steadily at
+    100 Hz, and its Fs and vs hold.)"""
+    rate = undersampled_presliding(sensors, params, PRESLIDING_ALIASED)
+    if rate is None:
+        return {}
+    why = (f"the presliding test is sampled at {rate:.3g} Hz, under "
+           f"{PRESLIDING_ALIASED:g} samples per stuck-mode period: it aliases")
+    return {n: why for n in PRESLIDING_PARAMETERS if n not in refused}
+
+
 def _resting_on_misfits(kinds, residuals, refused: dict[str, str]
                         ) -> dict[str, str]:
     """σ0 and σ1 rest on the presliding tests: where the model fits none of them, the
@@ -1214,6 +1230,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         judged, no_interval = _stribeck_dip_check(kinds["ramp"], residuals, estimate,
                                                   judged, diagnostics)
         unfitted = _resting_on_misfits(kinds, residuals, {n: "" for n in held})
+        unfitted.update(_undersampled(sensors, params, {**unfitted, **held}))
         judged = [Verdict(v.parameter, POORLY, unfitted[v.parameter], MISFIT_REMEDY)
                   if v.parameter in unfitted and v.identified else v for v in judged]
         no_interval += list(unfitted)
