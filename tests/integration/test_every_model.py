@@ -45,12 +45,6 @@ REFUSED = {
     ("two_valves", "linearise"): (pa.ParameterError, r"linearise: plant = Cylinder\(.*"
                                                      r"valves='two-3/2'\); allowed: .*a "
                                                      r"Cylinder fed by its 5/3 valve"),
-    ("two_valves", "export_fmu"): (pa.ArgumentError, r"model = Cylinder\(valves='two-3/2'\); "
-                                                     r"an FMU is exported from a pa.Actuator or "
-                                                     r"a pa.Cylinder fed by its 5/3 valve"),
-    ("mirrored", "export_fmu"): (pa.ArgumentError, r"model = Cylinder\(valves='two-3/2'\); "
-                                                   r"an FMU is exported from a pa.Actuator or "
-                                                   r"a pa.Cylinder fed by its 5/3 valve"),
 }
 
 

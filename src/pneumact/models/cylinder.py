@@ -47,6 +47,7 @@ from ..parameters.catalogue import (
     declare_renamed,
 )
 from .fmu_interface import (
+    FmuInput,
     FmuInterface,
     declared_fmu_input,
     drive_input,
@@ -1378,14 +1379,7 @@ class Cylinder(DeclaredInputs):
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Cylinder:
         """This cylinder as its FMU runs it (its load channel is there already; a load
-        against time is refused: in the FMU it is the input); one fed by two 3/2 valves
-        is refused (its FMU's second command is not built yet)."""
-        if self.two_valves:
-            from ..errors import ArgumentError
-
-            raise ArgumentError(f"export_fmu: model = Cylinder(valves={self.valves!r}); an "
-                                "FMU is exported from a pa.Actuator or a pa.Cylinder fed by "
-                                "its 5/3 valve (valves='5/3')")
+        against time is refused: in the FMU it is the input)."""
         refuse_load_against_time("cylinder", self.load)
         return self
 
@@ -1397,13 +1391,22 @@ class Cylinder(DeclaredInputs):
         step its stops allow resting under that force."""
         p = self.params
         push = (float(p["p_supply"]) - float(p["p_atm"])) * QUARTER_PI * float(p["D_bore"]) ** 2
-        spool = drive_input("spool_command", SPOOL_INPUT.unit, SPOOL_INPUT.description, 0.0,
-                            1.0, SPOOL_INPUT.low, SPOOL_INPUT.high)
+        if self.two_valves and not self.mirrored:  # each valve's command, on its channel:
+            # command_a the drive (the model fills its channel), command_b by name
+            # (named valve_a_command, valve_b_command: command_a, command_b are outputs)
+            commands: tuple[FmuInput, ...] = (
+                replace(declared_fmu_input("valve_a_command", COMMAND_A_INPUT, 0.0),
+                        declared=""),
+                declared_fmu_input("valve_b_command", COMMAND_B_INPUT, 0.0))
+        else:  # the spool command (mirrored 3/2 valves: u, u_a = u and u_b = -u)
+            drive = self.drive_input
+            commands = (drive_input("spool_command", drive.unit, drive.description, 0.0, 1.0,
+                                    drive.low, drive.high),)
         step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
         declared = next(i for i in self.inputs() if i.name == SUPPLY_INPUT.name)
         supply = declared_fmu_input(SUPPLY_INPUT.name, declared, float(p["p_supply"]),
                                     pressure=True)
-        return FmuInterface((spool, force_input(push), supply), None, step)
+        return FmuInterface((*commands, force_input(push), supply), None, step)
 
     def describe(self) -> str:
         valves = f", valves={self.valves!r}" if self.two_valves else ""
