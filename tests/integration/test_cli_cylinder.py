@@ -283,3 +283,42 @@ def test_simulate_batch_and_sensitivity_load_the_cylinder_with_a_load_step(tmp_p
                          str(tmp_path / "refused"))
         assert refused.exit_code != 0 and "give --model cylinder" in refused.output
     assert not (tmp_path / "refused").exists()
+
+
+def _read_run(folder) -> pd.DataFrame:
+    """simulation.csv with its columns named without units."""
+    frame = pd.read_csv(folder / "simulation.csv")
+    return frame.rename(columns=lambda column: column.split(" [")[0])
+
+
+def test_simulate_runs_the_cylinder_on_two_3_2_valves(tmp_path):
+    """--valves two-3/2: command_a steps as the spool does and command_b mirrors it; the
+    shipped set's two 3/2 valves are the 5/3 valve's paths, so the run is the 5/3 run bit
+    for bit, and the API's two-valve run; a valving not there, and --valves on the
+    actuator, are refused in one line naming the option, the value and the choices."""
+    t_end = 0.3
+    five, two = tmp_path / "five", tmp_path / "two"
+    for folder, valves in ((five, "5/3"), (two, "two-3/2")):
+        result = invoke("simulate", "--model", "cylinder", "--valves", valves, "--t-end",
+                        str(t_end), "--out", str(folder))
+        assert result.exit_code == 0, result.output
+    cli_five, cli_two = _read_run(five), _read_run(two)
+    assert np.ptp(cli_two["position"]) > 0.1, "the piston must travel for this to bite"
+    np.testing.assert_array_equal(cli_two["command_a"], cli_five["spool"])
+    np.testing.assert_array_equal(cli_two["command_b"], -cli_five["spool"])
+    step = Step(0.1, -1.0, 0.5)
+    api = pa.simulate(pa.Cylinder(load_quietly("iso15552-32"), valves="two-3/2"),
+                      pa.Experiment(step, "command_a", t_end,
+                                    drives={"command_b": Step(0.1, 1.0, -0.5)}))
+    for name in ("position", "velocity", "pressure_a", "pressure_b"):
+        np.testing.assert_allclose(cli_two[name], cli_five[name], err_msg=name,
+                                   rtol=ref.CYLINDER_VALVES_5_3_RTOL, atol=0.0)
+        scale = np.ptp(api[name])
+        assert np.abs(cli_two[name] - api[name]).max() <= ref.CLI_CHUNKED_RUN_RTOL * scale
+    for args, said in ((("--model", "cylinder", "--valves", "3/3"),
+                        "--valves 3/3: must be one of 5/3, two-3/2"),
+                       (("--valves", "two-3/2"), "--valves two-3/2 is the cylinder's")):
+        refused = invoke("simulate", *args, "--out", str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in " ".join(refused.output.split()), (
+            refused.output)
+        assert not (tmp_path / "refused").exists()

@@ -167,3 +167,77 @@ def test_a_closed_loop_around_two_valves_is_refused(params):
     with pytest.raises(pa.ParameterError, match=r"valves='two-3/2'\); allowed: .*a Cylinder "
                                                 r"fed by its 5/3 valve"):
         ClosedLoop(pa.Cylinder(params, valves=TWO), PID(kp=60.0, u_min=-1.0, u_max=1.0))
+
+
+# ------------------------------------------- mirrored: one command, u_a = u and u_b = -u
+#: a 20 mm set-point step from 90 mm: PID with integral action, and state feedback with
+#: pressure feedback (u = kp·(r − x) − kd·v − kdp·Δp), both limited to [-1, 1]
+LOOP_CONTROLLERS = {
+    "pid": {"kp": 60.0, "ki": 300.0, "kd": 0.5},
+    "pressure_feedback": {"kp": 100.0, "kd": 0.5, "kdp": 3e-6},
+}
+
+
+def _pair(params) -> tuple[pa.Cylinder, pa.Cylinder]:
+    """(the 5/3 cylinder, the cylinder of two identical 3/2 valves driven mirrored)."""
+    return pa.Cylinder(params), pa.Cylinder(params, valves=TWO, mirrored=True)
+
+
+def test_mirrored_valves_are_the_5_3_cylinder(params):
+    """mirrored=True: one declared drive, the spool command's, feeding valve A with u and
+    valve B with −u inside the kernel: the 5/3 cylinder's run bit for bit; mirrored
+    without two 3/2 valves is refused naming both options."""
+    five, mirrored = _pair(params)
+    assert [i.name for i in mirrored.inputs()] == ["spool", "load", "supply"]
+    spool = Experiment(PiecewiseLinear(TIMES, COMMAND), "spool", 0.3, n_points=301)
+    runs = [pa.simulate(model, spool) for model in (five, mirrored)]
+    assert np.ptp(runs[0]["position"]) > 0.05, "the piston must travel for this test to bite"
+    for signal in (*SIGNALS, "velocity", "mass_flow_a", "mass_flow_b"):
+        np.testing.assert_allclose(runs[1][signal], runs[0][signal], err_msg=signal,
+                                   rtol=ref.CYLINDER_VALVES_5_3_RTOL, atol=0.0)
+    np.testing.assert_array_equal(runs[1]["command_a"], runs[0]["spool"])
+    np.testing.assert_array_equal(runs[1]["command_b"], -runs[0]["spool"])
+    with pytest.raises(pa.ArgumentError, match=r"mirrored = True with valves = '5/3'.*"
+                                               r"give valves='two-3/2'"):
+        pa.Cylinder(params, mirrored=True)
+
+
+@pytest.mark.parametrize("controller", sorted(LOOP_CONTROLLERS))
+def test_mirrored_valves_in_a_loop_are_the_5_3_loop(params, controller):
+    """Position control through the valve command (the PID; state feedback with pressure
+    feedback): the mirrored two-valve loop is the 5/3 loop, its holding input and every
+    signal bit for bit."""
+    from pneumact.control import PID, ClosedLoop
+    from pneumact.experiments import SetpointStep
+
+    def loop(cylinder, bias: float = 0.0) -> ClosedLoop:
+        return ClosedLoop(cylinder, PID(**LOOP_CONTROLLERS[controller], derivative="velocity",
+                                        u_min=-1.0, u_max=1.0), bias=bias)
+
+    step = SetpointStep(0.09, 0.11, t_step=0.05, t_end=0.4, n_points=401)
+    holds = [loop(model).holding_input(0.09) for model in _pair(params)]
+    assert holds[1] == holds[0]
+    five, mirrored = (pa.simulate(loop(model, hold), step)
+                      for model, hold in zip(_pair(params), holds, strict=True))
+    assert np.ptp(five["position"]) > 0.015, "the loop must move the piston to bite"
+    for signal in (*SIGNALS, "velocity", "command", "plant_input", "mass_flow_a",
+                   "mass_flow_b"):
+        np.testing.assert_allclose(mirrored[signal], five[signal], err_msg=signal,
+                                   rtol=ref.CYLINDER_VALVES_5_3_RTOL, atol=0.0)
+
+
+def test_mirrored_valves_linearise_as_the_5_3_cylinder(params):
+    """Linearised mid-stroke at the command that balances the chambers there: the 5/3
+    cylinder's A, B, C, D."""
+    from pneumact.control import PID, ClosedLoop, linearise
+
+    plants = []
+    for model in _pair(params):
+        held = ClosedLoop(model, PID(kp=100.0, kd=0.5, derivative="velocity", u_min=-1.0,
+                                     u_max=1.0)).holding_input(0.1)
+        plants.append(linearise(model, held, position=0.1))
+    assert plants[1].input_name == plants[0].input_name == "spool"
+    for name in ("A", "B", "C", "D"):
+        np.testing.assert_allclose(getattr(plants[1], name), getattr(plants[0], name),
+                                   rtol=ref.CYLINDER_VALVES_5_3_RTOL, atol=0.0, err_msg=name)
+    assert np.abs(plants[0].B).max() > 0, "the valve command must act for this to bite"

@@ -473,3 +473,38 @@ def test_fmi3_runs_like_fmi2(cosimulation, tmp_path):
     run = pa.simulate(model, down, t_eval=me["time"])
     rms = np.sqrt(np.mean((me["position"] - run["position"]) ** 2))
     assert rms <= ref.FMU_POSITION_RMS_OF_STROKE * float(model.params["x_max"])
+
+
+def test_the_two_valve_cylinder_fmu_has_both_commands_as_inputs(tmp_path):
+    """Cylinder(valves="two-3/2"): its FMU has the inputs valve_a_command and
+    valve_b_command in [-1, 1] (command_a and command_b, each on its valve's channel; the
+    outputs command_a, command_b keep their names), starting closed; valve A stepped open to the
+    supply and valve B to the exhaust (command_b mirrored) runs as pa.simulate runs the
+    same commands, within what the ME FMU is held to, and far from the run with valve B
+    left closed."""
+    from pneumact.core.signals import Step
+
+    model = pa.Cylinder(load_quietly("iso15552-32"), valves="two-3/2")
+    fmu = pa.export_fmu(model, tmp_path / "two.fmu", kind="me")
+    for name in ("valve_a_command", "valve_b_command"):
+        variable = next(v for v in fmu.variables if v.name == name)
+        assert (variable.causality, variable.minimum, variable.maximum, variable.start) == (
+            "input", -1.0, 1.0, 0.0), name
+    table = np.array([(0.0, -1.0, 1.0), (0.1, -1.0, 1.0), (0.1, 0.5, -0.5), (1.0, 0.5, -0.5)],
+                     dtype=[("time", float), ("valve_a_command", float),
+                            ("valve_b_command", float)])
+    out = fmpy.simulate_fmu(str(fmu.path), fmi_type="ModelExchange", stop_time=1.0,
+                            input=table, start_values={"valve_a_command": -1.0,
+                                          "valve_b_command": 1.0},
+                            relative_tolerance=ref.FMU_RTOL, output_interval=1e-3,
+                            output=["position"])
+    mirrored = pa.Experiment(Step(0.1, -1.0, 0.5), "command_a", 1.0,
+                             drives={"command_b": Step(0.1, 1.0, -0.5)})
+    run = pa.simulate(model, mirrored)
+    position = np.interp(run.time, out["time"], out["position"])
+    allowed = ref.FMU_POSITION_RMS_OF_STROKE * float(np.ptp(run["position"]))
+    assert np.sqrt(np.mean((position - run["position"]) ** 2)) <= allowed
+    closed_b = pa.simulate(model, pa.Experiment(Step(0.1, -1.0, 0.5), "command_a", 1.0,
+                                                drives={"command_b": Step(0.1, 1.0, 0.0)}))
+    changed = np.sqrt(np.mean((closed_b["position"] - run["position"]) ** 2))
+    assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed

@@ -166,6 +166,7 @@ class ModelOptions:
     elements: int | None = None
     spool_lag: int = 0
     load_step: str | None = None
+    valves: str = "5/3"
 
 
 def executor_of(workers: int | None, scheduler: str | None, chunk_size: int | None = None):
@@ -248,6 +249,9 @@ def build_model(options: ModelOptions, params=None):
 
     if options.load_step is not None:
         refuse_load_step(options.load_step, "--model cylinder")
+    if options.valves != ModelOptions.valves:
+        raise ArgumentError(f"--valves {options.valves} is the cylinder's valving (--model "
+                            "cylinder); the diaphragm actuator has its --valve: drop --valves")
     if options.spool_lag != 0:
         raise ArgumentError(f"--spool-lag {options.spool_lag} is the cylinder's 5/3 valve's "
                             "spool (--model cylinder); the diaphragm actuator's valves have "
@@ -270,8 +274,14 @@ class ModelKind(StrEnum):
 
 ModelOption = Annotated[ModelKind, typer.Option(
     "--model", help="actuator: the diaphragm actuator behind --valve; cylinder: the "
-                    "double-acting cylinder behind its 5/3 valve (--params default "
-                    "iso15552-32, a spool step from -1 to 0.5 at 0.1 s).")]
+                    "double-acting cylinder behind its 5/3 valve or two 3/2 valves "
+                    "(--valves; --params default iso15552-32, a spool step from -1 to 0.5 "
+                    "at 0.1 s).")]
+ValvesOption = Annotated[str, typer.Option(
+    "--valves", help="--model cylinder: 5/3 (one 5/3 valve, its spool command) or two-3/2 "
+                     "(a proportional 3/2 valve per chamber, inputs command_a and command_b; "
+                     "by default command_a steps from -1 to 0.5 at 0.1 s and command_b "
+                     "mirrors it, from 1 to -0.5: the spool step's equivalent).")]
 SpoolLagOption = Annotated[int, typer.Option(
     "--spool-lag", help="--model cylinder: the 5/3 valve's spool dynamics, 0 (it follows "
                         "its command), 1 (a first-order lag, spool_tau) or 2 (second "
@@ -293,6 +303,9 @@ def build_model_of(kind: ModelKind, options: ModelOptions):
 CYLINDER_SET = "iso15552-32"
 #: the default spool step's duration [s] (the spool steps at 0.1 s)
 CYLINDER_T_END = 1.0
+#: the default spool step: (before, after, t_step [s]); command_b mirrors it with two
+#: 3/2 valves
+SPOOL_STEP = (-1.0, 0.5, 0.1)
 
 
 def build_cylinder(options: ModelOptions, params=None):
@@ -318,20 +331,39 @@ def build_cylinder(options: ModelOptions, params=None):
         raise ArgumentError(f"--spool-lag {options.spool_lag}: the spool's dynamics are of "
                             "order 0 (it follows its command), 1 (spool_tau) or 2 "
                             "(spool_omega, spool_zeta)")
+    check_valves(options.valves)
     return params, Cylinder(params, friction=friction,
                             chamber=build_chamber(options.chamber, options.exponent, True),
-                            spool_lag=options.spool_lag)
+                            spool_lag=options.spool_lag, valves=options.valves)
+
+
+def check_valves(valves: str) -> None:
+    """--valves one of the cylinder's valvings (``Cylinder``'s ``valves``)."""
+    from pneumact.models.cylinder import VALVES_CHOICES
+
+    if valves not in VALVES_CHOICES:
+        raise ArgumentError(f"--valves {valves}: must be one of "
+                            f"{', '.join(VALVES_CHOICES)} (one 5/3 valve, or a 3/2 valve "
+                            "per chamber)")
 
 
 def cylinder_experiment(options: ModelOptions, params, cylinder):
-    """The input CSV (a spool column, optionally a load: the columns ``cylinder``'s inputs
-    declare), or a spool step from -1 to 0.5 at 0.1 s lasting --t-end (default 1 s)."""
+    """The input CSV (a spool column, or command_a and command_b with two 3/2 valves,
+    optionally a load: the columns ``cylinder``'s inputs declare), or a spool step from -1
+    to 0.5 at 0.1 s lasting --t-end (default 1 s); with two 3/2 valves its equivalent,
+    command_a stepping so and command_b mirrored (from 1 to -0.5)."""
     import pneumact as pa
 
     if options.input_csv is not None:
         return build_experiment(options, params, cylinder)
     t_end = CYLINDER_T_END if options.t_end is None else options.t_end
-    return pa.experiments.SpoolStep(t_end=t_end)
+    before, after, t_step = SPOOL_STEP
+    step = pa.experiments.SpoolStep(before, after, t_step, t_end=t_end)
+    if not cylinder.two_valves:
+        return step
+    return pa.Experiment(step.drive, "command_a", t_end, n_points=step.n_points,
+                         name="SpoolStep (two 3/2 valves, mirrored)", drives={
+                             "command_b": pa.experiments.Step(t_step, -before, -after)})
 
 
 LoadStepOption = Annotated[str | None, typer.Option(

@@ -28,6 +28,7 @@ from pneumact.cli.common import (
     ParamsOption,
     SpoolLagOption,
     ValveOption,
+    ValvesOption,
     build_model_of,
     out_console,
     user_errors,
@@ -52,6 +53,7 @@ def export_fmu_command(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    valves: ValvesOption = "5/3",
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -88,7 +90,7 @@ def export_fmu_command(
             target = check_out_dir("--out", target) / name
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag)
+                               elements=elements, spool_lag=spool_lag, valves=valves)
         _, built, _ = build_model_of(model, options)
         fmu = export_fmu(built, target, binary=binary, compiler=compiler,
                          kind=FmuKind(kind).value, fmi=fmi)

@@ -31,6 +31,7 @@ from pneumact.cli.common import (
     SchedulerOption,
     SpoolLagOption,
     ValveOption,
+    ValvesOption,
     WorkersOption,
     build_chamber,
     build_model_of,
@@ -508,6 +509,7 @@ def fit_command(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    valves: ValvesOption = "5/3",
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
     decaying_damping: DecayingDampingOption = DEFAULT_DECAYING_DAMPING,
@@ -575,7 +577,7 @@ def fit_command(
         parameter_set, built, _ = build_model_of(model, ModelOptions(
             params=params, valve=valve, friction=friction, chamber=chamber, rtol=rtol,
             exponent=exponent, decaying_damping=decaying_damping, elements=elements,
-            spool_lag=spool_lag))
+            spool_lag=spool_lag, valves=valves))
         recs = read_records(records, p_atm=parameter_set["p_atm"])
         result = fit_with_progress(lambda report: fit(
             built, recs, free_names, per_record=names(per_record, "--per-record") or (),

@@ -40,6 +40,7 @@ from pneumact.cli.common import (
     TEndOption,
     Valve,
     ValveOption,
+    ValvesOption,
     WorkersOption,
     batch_progress,
     build_model_of,
@@ -111,6 +112,7 @@ def sensitivity(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    valves: ValvesOption = "5/3",
     load_step: LoadStepOption = None,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
@@ -165,7 +167,7 @@ def sensitivity(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, exponent=exponent,
                                decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag,
+                               elements=elements, spool_lag=spool_lag, valves=valves,
                                load_step=load_step)
         parameter_set, actuator, experiment = build_model_of(model, options)
         if conditions and model is ModelKind.cylinder:

@@ -33,6 +33,7 @@ from pneumact.cli.common import (
     SpoolLagOption,
     TEndOption,
     ValveOption,
+    ValvesOption,
     build_experiment,
     build_model,
     build_model_of,
@@ -49,6 +50,7 @@ def simulate(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    valves: ValvesOption = "5/3",
     out: Annotated[Path, typer.Option(help="Output directory (simulation.csv, "
                                            "hysteresis.png).")] = Path("pneumact-out"),
     input_csv: InputOption = None,
@@ -73,7 +75,8 @@ def simulate(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag, load_step=load_step)
+                               elements=elements, spool_lag=spool_lag, valves=valves,
+                               load_step=load_step)
         if model is ModelKind.cylinder:
             _simulate_cylinder(options, out)
             return
@@ -153,7 +156,8 @@ def _simulate_cylinder(options: ModelOptions, out: Path) -> None:
     from pneumact.plotting import off_screen, plot_time_series
 
     with off_screen():  # written, never shown: no pyplot
-        figure = plot_time_series(result, ["spool", "position", "velocity", "pressure_a",
+        commands = ["command_a", "command_b"] if cylinder.two_valves else ["spool"]
+        figure = plot_time_series(result, [*commands, "position", "velocity", "pressure_a",
                                            "pressure_b"])
     written = _write_run(out, result, figure, "response.png")
     _print_cylinder_summary(result, float(parameter_set["x_max"]), written)

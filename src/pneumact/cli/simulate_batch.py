@@ -43,6 +43,7 @@ from pneumact.cli.common import (
     SpoolLagOption,
     TEndOption,
     ValveOption,
+    ValvesOption,
     WorkersOption,
     batch_progress,
     build_model_of,
@@ -100,6 +101,7 @@ def simulate_batch(
     params: ParamsOption = "vgt-paper",
     model: ModelOption = ModelKind.actuator,
     spool_lag: SpoolLagOption = 0,
+    valves: ValvesOption = "5/3",
     load_step: LoadStepOption = None,
     valve: ValveOption = DEFAULT_VALVE,
     friction: FrictionOption = DEFAULT_FRICTION,
@@ -131,7 +133,7 @@ def simulate_batch(
         options = ModelOptions(params=params, valve=valve, friction=friction, chamber=chamber,
                                t_end=t_end, low_kpa=low, input_csv=input_csv, rtol=rtol,
                                exponent=exponent, decaying_damping=decaying_damping,
-                               elements=elements, spool_lag=spool_lag,
+                               elements=elements, spool_lag=spool_lag, valves=valves,
                                load_step=load_step)
         _, built, experiment = build_model_of(model, options)
         with batch_progress() as progress:

@@ -22,7 +22,8 @@ CONTROLLABLE = {channel.name: channel.unit for channel in (
     DRIVE_INPUTS["force"], PRESSURE_INPUT, COMMAND_INPUT, SPOOL_INPUT)}
 ALLOWED = ("an Actuator, a Cylinder, or a FrictionRig with drive='force' (a kinematic "
            "drive has no input to act on); a Cylinder fed by its 5/3 valve (one input, the "
-           "spool command; two 3/2 valves take two)")
+           "spool command; two 3/2 valves take two, unless mirrored=True drives both by "
+           "it)")
 
 
 def input_kind(plant, who: str) -> str:

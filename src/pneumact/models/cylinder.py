@@ -47,6 +47,7 @@ from ..parameters.catalogue import (
     declare_renamed,
 )
 from .fmu_interface import (
+    FmuInput,
     FmuInterface,
     declared_fmu_input,
     drive_input,
@@ -1124,12 +1125,23 @@ FIVE_THREE = "5/3"
 TWO_THREE_TWO = "two-3/2"
 VALVES_CHOICES = (FIVE_THREE, TWO_THREE_TWO)
 
+#: the drive of two mirrored 3/2 valves (``Cylinder(valves="two-3/2", mirrored=True)``):
+#: one command u in [-1, 1] on the drive channel, u_a = u and u_b = -u, as a pair of 3/2
+#: valves replaces a 5/3 valve; its name is the spool command's (an experiment and a
+#: position controller drive it as they drive the 5/3 valve's spool); a record drives it
+#: by its ``command_a`` (what its runs write: valve A's command is u) or a ``spool``
+MIRRORED_INPUT = replace(
+    SPOOL_INPUT, record_signals=("command_a", "spool"),
+    description="command u of the mirrored 3/2 valves (valve A's command u, valve B's -u: 1 "
+                "extends, -1 retracts, 0 closes both)",
+    label="mirrored 3/2 valves' command")
 
-def valve32_part(instance: str, command: InputChannel, label: str) -> Part:
+
+def valve32_part(instance: str, command: InputChannel | None, label: str) -> Part:
     """One chamber's 3/2 valve, placed under ``instance`` (valve_a, valve_b), reading its
-    command on the channel of ``command``."""
+    command on the channel of ``command`` (None: the drive channel, mirrored valves)."""
     return Part(role="valve", instance=instance, block=VALVE32_BLOCK, label=label,
-                channels=(command.channel,))
+                channels=() if command is None else (command.channel,))
 
 
 #: the external load force on the rod, against extension: an input beside the spool
@@ -1175,7 +1187,10 @@ class Cylinder(DeclaredInputs):
     ``valve_a``, ``valve_b`` of one kind, parameters ``valve_a.C`` ...), driven by the
     inputs ``command_a`` and ``command_b`` in [−1, 1] (1 fills the chamber from the
     supply, −1 vents it, 0 closes it); its valves follow their commands at once into
-    polytropic chambers (``valves_*``, ``cylinder_valves_template``)."""
+    polytropic chambers (``valves_*``, ``cylinder_valves_template``). ``mirrored`` (with
+    two 3/2 valves only): one command u drives both, u_a = u and u_b = −u (how a pair of
+    3/2 valves replaces a 5/3 valve), its input the spool command's (``spool``), so that
+    a closed loop and ``linearise`` act on it as on the 5/3 valve."""
 
     params: ParameterSet
     friction: FrictionModel = field(default_factory=LuGre)
@@ -1183,11 +1198,13 @@ class Cylinder(DeclaredInputs):
     load: Signal | None = None
     spool_lag: bool | int = 0
     valves: str = FIVE_THREE
+    mirrored: bool = False
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
         def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
                      chamber: ChamberLaw = ..., load: Signal | None = ...,
-                     spool_lag: bool | int = ..., valves: str = ...) -> None: ...
+                     spool_lag: bool | int = ..., valves: str = ...,
+                     mirrored: bool = ...) -> None: ...
 
     def __post_init__(self):
         from ..checks import as_instance, check_type
@@ -1223,6 +1240,11 @@ class Cylinder(DeclaredInputs):
                 "commands at once and their chambers are polytropic (spool_lag=0 and "
                 "Isothermal, Adiabatic or Polytropic); a spool's lag and HeatTransfer() "
                 "are the 5/3 valve's")
+        check_type("mirrored", self.mirrored, bool, where="Cylinder", what="True or False")
+        if self.mirrored and not self.two_valves:
+            raise ArgumentError(f"Cylinder: mirrored = True with valves = {self.valves!r}: "
+                                "mirrored drives two 3/2 valves by one command (u_a = u, "
+                                f"u_b = -u); give valves={TWO_THREE_TWO!r}")
         self.params.require(self.required, "Cylinder")
 
     @property
@@ -1250,7 +1272,8 @@ class Cylinder(DeclaredInputs):
         if found is None:
             supply = replace(SUPPLY_INPUT, low=float(self.params["p_atm"]))
             load = () if self.load is not None else (LOAD_INPUT,)
-            commands = ((COMMAND_A_INPUT, COMMAND_B_INPUT) if self.two_valves
+            commands = ((MIRRORED_INPUT,) if self.mirrored else
+                        (COMMAND_A_INPUT, COMMAND_B_INPUT) if self.two_valves
                         else (SPOOL_INPUT,))
             found = (*commands, *load, supply)
             object.__setattr__(self, "_inputs", found)
@@ -1277,7 +1300,8 @@ class Cylinder(DeclaredInputs):
         from ..errors import DataError
 
         if signal not in self.drive_input.record_signals:
-            what = "valve A's command" if self.two_valves else "spool command"
+            what = ("valve A's command" if self.two_valves and not self.mirrored
+                    else "spool command")
             raise DataError(f"a Cylinder is driven by a record's {what}, not its {signal}")
         return self
 
@@ -1287,6 +1311,8 @@ class Cylinder(DeclaredInputs):
 
     @property
     def drive_label(self) -> str:
+        if self.mirrored:
+            return "two mirrored 3/2 valves"
         return "two 3/2 valves" if self.two_valves else "5/3 valve"
 
     #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
@@ -1297,8 +1323,14 @@ class Cylinder(DeclaredInputs):
     pressure_feedback: ClassVar[bool] = True
 
     def kernel_constants(self) -> dict[str, object]:
-        """The cylinder has no compile-time switches beyond its parts."""
-        return {}
+        """No compile-time switches for the 5/3 valve; two 3/2 valves: the sign of valve
+        B's command (-1 mirrored: both read the drive channel, u_b = -u)."""
+        if not self.two_valves:
+            return {}
+        if self.mirrored:
+            return {"CH_COMMAND_A": CH_DRIVE, "CH_COMMAND_B": CH_DRIVE,
+                    "COMMAND_B_SIGN": -1.0}
+        return {"COMMAND_B_SIGN": 1.0}
 
     @property
     def stroke(self) -> float | None:
@@ -1325,9 +1357,11 @@ class Cylinder(DeclaredInputs):
         if self.two_valves:
             cylinder = replace(cylinder, block=VALVES_CYLINDER_BLOCK, settings={
                 **cylinder.settings, **dict.fromkeys(FIVE_THREE_ENTRIES, 0.0)})
+            command_a, command_b = ((None, None) if self.mirrored
+                                    else (COMMAND_A_INPUT, COMMAND_B_INPUT))
             return (cylinder, *chambers, self.friction.part(),
-                    valve32_part("valve_a", COMMAND_A_INPUT, "3/2 valve of chamber A"),
-                    valve32_part("valve_b", COMMAND_B_INPUT, "3/2 valve of chamber B"))
+                    valve32_part("valve_a", command_a, "3/2 valve of chamber A"),
+                    valve32_part("valve_b", command_b, "3/2 valve of chamber B"))
         return (cylinder, *chambers, self.friction.part(), spool_part(self.spool_lag),
                 thermal_part(self.chamber))
 
@@ -1345,14 +1379,7 @@ class Cylinder(DeclaredInputs):
     # -- the FMU exporter's protocol (``models.fmu_interface``) ---------------------------
     def fmu_form(self) -> Cylinder:
         """This cylinder as its FMU runs it (its load channel is there already; a load
-        against time is refused: in the FMU it is the input); one fed by two 3/2 valves
-        is refused (its FMU's second command is not built yet)."""
-        if self.two_valves:
-            from ..errors import ArgumentError
-
-            raise ArgumentError(f"export_fmu: model = Cylinder(valves={self.valves!r}); an "
-                                "FMU is exported from a pa.Actuator or a pa.Cylinder fed by "
-                                "its 5/3 valve (valves='5/3')")
+        against time is refused: in the FMU it is the input)."""
         refuse_load_against_time("cylinder", self.load)
         return self
 
@@ -1364,16 +1391,26 @@ class Cylinder(DeclaredInputs):
         step its stops allow resting under that force."""
         p = self.params
         push = (float(p["p_supply"]) - float(p["p_atm"])) * QUARTER_PI * float(p["D_bore"]) ** 2
-        spool = drive_input("spool_command", SPOOL_INPUT.unit, SPOOL_INPUT.description, 0.0,
-                            1.0, SPOOL_INPUT.low, SPOOL_INPUT.high)
+        if self.two_valves and not self.mirrored:  # each valve's command, on its channel:
+            # command_a the drive (the model fills its channel), command_b by name
+            # (named valve_a_command, valve_b_command: command_a, command_b are outputs)
+            commands: tuple[FmuInput, ...] = (
+                replace(declared_fmu_input("valve_a_command", COMMAND_A_INPUT, 0.0),
+                        declared=""),
+                declared_fmu_input("valve_b_command", COMMAND_B_INPUT, 0.0))
+        else:  # the spool command (mirrored 3/2 valves: u, u_a = u and u_b = -u)
+            drive = self.drive_input
+            commands = (drive_input("spool_command", drive.unit, drive.description, 0.0, 1.0,
+                                    drive.low, drive.high),)
         step = explicit_step(float(p["m"]), 0.0, push, float(p["k_stop"]), float(p["c_stop"]))
         declared = next(i for i in self.inputs() if i.name == SUPPLY_INPUT.name)
         supply = declared_fmu_input(SUPPLY_INPUT.name, declared, float(p["p_supply"]),
                                     pressure=True)
-        return FmuInterface((spool, force_input(push), supply), None, step)
+        return FmuInterface((*commands, force_input(push), supply), None, step)
 
     def describe(self) -> str:
         valves = f", valves={self.valves!r}" if self.two_valves else ""
+        valves += ", mirrored=True" if self.mirrored else ""
         return (f"Cylinder(friction={self.friction!r}, "
                 f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag}"
                 f"{valves})")

@@ -52,6 +52,9 @@ S_FRICTION = 4
 CH_SUPPLY = None  # generated: the supply channel's index (``core.channels``)
 CH_COMMAND_A = None  # generated: valve A's command channel
 CH_COMMAND_B = None  # generated: valve B's command channel
+#: bound by the model: 1.0, or -1.0 where the valves are mirrored (``mirrored=True``: both
+#: read the drive channel, u_a = u and u_b = -u; ``Cylinder.kernel_constants``)
+COMMAND_B_SIGN = 1.0
 # ------------------------------------------------------------------------------------------
 
 OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "command_a", "command_b",
@@ -89,7 +92,7 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
     pb = y[S_PRESSURE_B]
     f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
     ua = valve_command(t, ts, sig, ptr, CH_COMMAND_A)
-    ub = valve_command(t, ts, sig, ptr, CH_COMMAND_B)
+    ub = COMMAND_B_SIGN * valve_command(t, ts, sig, ptr, CH_COMMAND_B)
     p_sup = _supply(t, ts, prm, sig, ptr)
     accel, rate_a, rate_b = valves_rates(
         x, v, pa, pb, ua, ub, p_sup, f_fric, load_against_time(t, ts, sig, ptr), prm,
@@ -115,7 +118,7 @@ def jac(t, ts, y, prm, sig, ptr, out):
     _, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
     _, _, ds_dx, ds_dv = piston_force(x, v, pa, pb, prm, o)
     ua = valve_command(t, ts, sig, ptr, CH_COMMAND_A)
-    ub = valve_command(t, ts, sig, ptr, CH_COMMAND_B)
+    ub = COMMAND_B_SIGN * valve_command(t, ts, sig, ptr, CH_COMMAND_B)
     p_sup = _supply(t, ts, prm, sig, ptr)
     mdot_a, dma_dpa, mdot_b, dmb_dpb = valves_flows(ua, ub, p_sup, pa, pb, prm, o,
                                                     VALVE_A_LO, VALVE_B_LO)
@@ -150,7 +153,7 @@ def param_jac(t, ts, y, prm, sig, ptr, g, needed):
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, prm, CYLINDER_LO)
     net = f_press - f_fric - load_against_time(t, ts, sig, ptr) + f_stop
     ua = valve_command(t, ts, sig, ptr, CH_COMMAND_A)
-    ub = valve_command(t, ts, sig, ptr, CH_COMMAND_B)
+    ub = COMMAND_B_SIGN * valve_command(t, ts, sig, ptr, CH_COMMAND_B)
     p_sup = _supply(t, ts, prm, sig, ptr)
     held = supply_held(sig, ptr, CH_SUPPLY)
     valves_params(x, v, pa, pb, ua, ub, p_sup, held, net, prm, CYLINDER_LO, VALVE_A_LO,
@@ -167,7 +170,7 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
     ua = valve_command(t, ts, sig, ptr, CH_COMMAND_A)
-    ub = valve_command(t, ts, sig, ptr, CH_COMMAND_B)
+    ub = COMMAND_B_SIGN * valve_command(t, ts, sig, ptr, CH_COMMAND_B)
     f_press, f_stop, _, _ = piston_force(x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
                                          CYLINDER_LO)
     p_sup = _supply(t, ts, prm, sig, ptr)
@@ -209,7 +212,8 @@ def initial_state(t, ts, prm, sig, ptr, y0):
         y0[i] = 0.0
     o = CYLINDER_LO
     pa, pb = valves_rest_pressures(valve_command(t, ts, sig, ptr, CH_COMMAND_A),
-                                   valve_command(t, ts, sig, ptr, CH_COMMAND_B),
+                                   COMMAND_B_SIGN * valve_command(t, ts, sig, ptr,
+                                                                  CH_COMMAND_B),
                                    _supply(t, ts, prm, sig, ptr), prm, o, VALVE_A_LO,
                                    VALVE_B_LO)
     f_press = piston_force(0.0, 0.0, pa, pb, prm, o)[0]
