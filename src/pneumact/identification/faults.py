@@ -407,10 +407,10 @@ def sensor_notes(records: Sequence[Record], kinds: Sequence[str], params
             "on the estimates (its unknown phase, drawn) is in their intervals",
             "a finer position sensor or ADC (or dither) for the presliding test"))
     stuck = _stuck_frequency(params)
-    rate = undersampled_presliding(table, params)
-    if rate is not None:
+    slowest = undersampled_presliding(table, params)
+    if slowest is not None:
         notes.append(Diagnostic(
-            "warning", "bench", f"the presliding record is sampled at {rate:.3g} Hz, "
+            "warning", "bench", f"the presliding record is sampled at {slowest:.3g} Hz, "
             f"less than ten samples per period of the stuck mode ({stuck:.3g} Hz at the "
             "prior's σ0 and m): its steps and ringing fall between samples, so σ1 "
             "rests on little", f"sample the presliding test at {20 * stuck:.3g} Hz or "
