@@ -990,9 +990,8 @@ def _slow_end_only(records: Sequence[Record], fits: Sequence[bool]) -> bool:
 def _undersampled(sensors: pd.DataFrame, params, refused) -> dict[str, str]:
     """σ0 and σ1 (those not in ``refused``) where the presliding test is sampled below
     twice the stuck mode's frequency, which then aliases (``faults.PRESLIDING_ALIASED``):
-    name -> why. (Slow
-    ramps are not judged so: the paper's own campaign slides through them steadily at
-    100 Hz, and its Fs and vs hold.)"""
+    name -> why. Slow ramps are not judged so: the paper's own campaign slides through
+    them steadily at 100 Hz, and its Fs and vs hold."""
     rate = undersampled_presliding(sensors, params, PRESLIDING_ALIASED)
     if rate is None:
         return {}
