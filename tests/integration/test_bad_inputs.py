@@ -85,9 +85,11 @@ BAD_VALUES: dict[str, list[str]] = {
     "--chamber": ["adiabatic", "heat-transfer"],
     "--exponent": ["0.5", "1.3"],  # out of [1, γ]; not --chamber polytropic
     "--spool-lag": ["1", "3"],  # the cylinder's spool: not the actuator's valves
-    "--valves": ["3/3", "two-3/2"],  # the cylinder's valving: not the actuator's
-    # the cylinder's load, not the actuator's nor the regulator loop's (test_cli_cylinder)
-    "--load-step": ["300,0.2"],
+    # the cylinder's valving: not the actuator's (nor the regulator loop's)
+    "--valves": ["3/3", "two-3/2"],
+    # no TIME; beyond the actuator's load input (±1 MN); before the run
+    # (test_cli_cylinder, test_cli_actuator_load)
+    "--load-step": ["300", "3e6,0.2", "300,-1"],
     "--decaying-damping": [],
     "--elements": ["0", "4"],  # with the default --friction lugre: not a GMS
     "--chunk-size": ["0"],

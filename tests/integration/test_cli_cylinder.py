@@ -107,6 +107,35 @@ def test_fit_runs_the_cylinder_on_its_record(tmp_path):
         assert found[name] == pytest.approx(value, rel=ref.META_FIT_RTOL), name
 
 
+def test_fit_runs_the_two_valve_cylinder_on_the_record_simulate_writes(tmp_path):
+    """``simulate --model cylinder --valves two-3/2`` driven by a CSV of both valves'
+    commands (valve A's ramp, valve B's its mirror) writes a record that ``fit --model
+    cylinder --valves two-3/2`` reads as it is (both commands as its inputs, from their
+    columns): Fc and σ2 found again from the set's values moved by --params."""
+    time = np.linspace(0.0, 0.3, 301)
+    command_a = np.interp(time, [0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
+    drive = tmp_path / "drive.csv"
+    pd.DataFrame({"time [s]": time, "command_a [1]": command_a,
+                  "command_b [1]": -command_a}).to_csv(drive, index=False)
+    two = ("--model", "cylinder", "--valves", "two-3/2")
+    result = invoke("simulate", *two, "--input-csv", str(drive), "--out",
+                    str(tmp_path / "run"))
+    assert result.exit_code == 0, result.output
+    record = tmp_path / "run" / "simulation.csv"
+    assert np.ptp(pd.read_csv(record)["position [m]"]) > 0.05, "the piston must travel"
+    params = load_quietly("iso15552-32")
+    truth = {"Fc": float(params["Fc"]), "sigma2": float(params["sigma2"])}
+    start_file = tmp_path / "start.toml"
+    pa.write_params(params.replace(Fc=1.3 * truth["Fc"], sigma2=0.7 * truth["sigma2"]),
+                    start_file)
+    result = invoke("fit", str(record), *two, "--params", str(start_file), "--free",
+                    "Fc,sigma2", "--out", str(tmp_path / "fit"))
+    assert result.exit_code == 0, result.output
+    found = pd.read_csv(tmp_path / "fit" / "estimates.csv").set_index("parameter")["value"]
+    for name, value in truth.items():
+        assert found[name] == pytest.approx(value, rel=ref.META_FIT_RTOL), name
+
+
 def test_export_fmu_writes_the_cylinder(tmp_path):
     result = invoke("export", "fmu", "--model", "cylinder", "--no-binary", "--out",
                     str(tmp_path))
@@ -117,16 +146,79 @@ def test_export_fmu_writes_the_cylinder(tmp_path):
 
 def test_control_step_holds_the_cylinder_at_its_start(tmp_path):
     """--plant cylinder: the piston placed at --start (it rests on a stop wherever its
-    chambers balance), then stepped."""
-    result = invoke("control", "step", "--plant", "cylinder", "--start", "90", "--stop",
-                    "110", "--kd", "0.5", "--derivative", "velocity", "--t-end", "0.5",
-                    "--out", str(tmp_path))
-    assert result.exit_code == 0, result.output
-    signals = pd.read_csv(tmp_path / "signals.csv")
+    chambers balance), then stepped; --valves two-3/2, the one command mirrored to both
+    valves (``Cylinder(valves="two-3/2", mirrored=True)``), is the 5/3 loop bit for bit,
+    its metrics the same, valve A driven by the command and valve B by its negative; a
+    valving not there, and --valves on the actuator's loop, are refused in one line naming
+    the option, the value and what is allowed, nothing written."""
+    step = ("control", "step", "--plant", "cylinder", "--start", "90", "--stop", "110",
+            "--kd", "0.5", "--derivative", "velocity", "--t-end", "0.5")
+    runs = {}
+    for valves in ("5/3", "two-3/2"):
+        out = tmp_path / valves.replace("/", "_")
+        result = invoke(*step, "--valves", valves, "--out", str(out))
+        assert result.exit_code == 0, result.output
+        runs[valves] = (pd.read_csv(out / "signals.csv"), pd.read_csv(out / "metrics.csv"))
+    signals, metrics = runs["5/3"]
     position = signals["position [m]"].to_numpy()
     before = signals["time [s]"].to_numpy() < 0.1  # the step is at 0.1 s
     assert np.abs(position[before] - 0.09).max() < ref.CYLINDER_LOOP_STEP * 0.01
     assert abs(position[-1] - 0.11) < ref.CYLINDER_LOOP_BAND * ref.CYLINDER_LOOP_STEP
+    two_signals, two_metrics = runs["two-3/2"]
+    pd.testing.assert_frame_equal(two_metrics, metrics, check_exact=True)
+    for name in ("position [m]", "velocity [m/s]", "pressure_a [Pa]", "pressure_b [Pa]",
+                 "command [1]"):
+        np.testing.assert_allclose(two_signals[name], signals[name], err_msg=name,
+                                   rtol=ref.CYLINDER_VALVES_5_3_RTOL, atol=0.0)
+    np.testing.assert_array_equal(two_signals["command_a [1]"], signals["spool [1]"])
+    np.testing.assert_array_equal(two_signals["command_b [1]"], -signals["spool [1]"])
+    for args, said in ((("--plant", "cylinder", "--valves", "3/3"),
+                        "--valves 3/3: must be one of 5/3, two-3/2"),
+                       (("--valves", "two-3/2"), "--valves two-3/2 is the cylinder's "
+                                                 "valving (--plant cylinder); --plant "
+                                                 "regulator has no cylinder")):
+        refused = invoke("control", "step", *args, "--out", str(tmp_path / "refused"))
+        assert refused.exit_code != 0 and said in " ".join(refused.output.split()), (
+            refused.output)
+    assert not (tmp_path / "refused").exists()
+
+
+def test_control_tune_and_compare_run_the_two_valve_cylinder(tmp_path):
+    """--valves two-3/2 on control tune (one evaluation, no round: its gains and every
+    move's metrics those of the 5/3 cylinder, exactly) and control compare (its linear
+    design the API's on the 5/3 loop, the mirrored plant linearising as the 5/3 one, run
+    on the nonlinear two-valve loop)."""
+    from pneumact.control import PID, ClosedLoop, Specs, linear_design
+
+    tune = ("control", "tune", "--plant", "cylinder", "--n-global", "0",
+            "--max-evaluations", "1", "--rounds", "0", "--workers", "1")
+    tuned = {}
+    for valves in ("5/3", "two-3/2"):
+        out = tmp_path / f"tune_{valves.replace('/', '_')}"
+        result = invoke(*tune, "--valves", valves, "--out", str(out))
+        # one evaluation does not meet the default specs: exit 3, the files written
+        assert result.exit_code == 3, result.output
+        tuned[valves] = [pd.read_csv(out / name) for name in ("gains.csv", "metrics.csv")]
+    for two, five in zip(tuned["two-3/2"], tuned["5/3"], strict=True):
+        pd.testing.assert_frame_equal(two, five, check_exact=True)
+    out = tmp_path / "compare"
+    result = invoke("control", "compare", "--plant", "cylinder", "--valves", "two-3/2",
+                    "--out", str(out))
+    assert result.exit_code == 0, result.output
+    summary = pd.read_csv(out / "summary.csv")  # a valve command: no static force map,
+    # so the linear PID alone (friction_designs), on the four reference moves
+    assert list(summary["design"]) == ["linear (python-control)"]
+    assert list(summary["moves"]) == [4]
+    gains = pd.read_csv(out / "linear_gains.csv").set_index("gain")["value"]
+    params = load_quietly("iso15552-32")
+    at = 0.5 * float(params["x_max"])  # the default operating point: mid-stroke
+    pid = PID(kp=60.0, ki=300.0, u_min=-1.0, u_max=1.0)
+    five = pa.Cylinder(params)
+    loop = ClosedLoop(five, pid, bias=ClosedLoop(five, pid).holding_input(at))
+    design = linear_design(loop, Specs.parse("settling=0.3,overshoot=5%,error=20um,"
+                                             "no-hunting"), at=at).controller
+    for name in ("kp", "ki", "kd", "filter_time"):
+        assert gains[name] == getattr(design, name), name
 
 
 @pytest.mark.parametrize(("command", "words"), [
@@ -179,8 +271,9 @@ def test_simulate_drives_the_cylinder_from_a_csv_of_spool_and_load(tmp_path):
 
 def test_simulate_loads_the_cylinder_with_a_load_step(tmp_path):
     """--load-step 300,0.3: the API's run of ``Cylinder(load=Step(0.3, 0, 300))`` (rtol
-    apart: the CLI runs in chunks); a force beyond 1 MN, a time outside the run, a load
-    column beside it and the actuator are refused in one line, nothing written."""
+    apart: the CLI runs in chunks); a force beyond 1 MN, a time outside the run and a load
+    column beside it are refused in one line, nothing written; on the actuator the force
+    is checked against its own load input (test_cli_actuator_load.py runs it)."""
     out = tmp_path / "out"
     result = invoke("simulate", "--model", "cylinder", "--load-step", "300,0.3", "--t-end",
                     "0.6", "--out", str(out))
@@ -202,8 +295,10 @@ def test_simulate_loads_the_cylinder_with_a_load_step(tmp_path):
         refused = invoke("simulate", "--model", "cylinder", *args, "--out",
                          str(tmp_path / "refused"))
         assert refused.exit_code != 0 and said in refused.output, refused.output
-    refused = invoke("simulate", "--load-step", "300,0.2", "--out", str(tmp_path / "refused"))
-    assert refused.exit_code != 0 and "give --model cylinder" in refused.output
+    refused = invoke("simulate", "--load-step", "3e6,0.2", "--out", str(tmp_path / "refused"))
+    said = " ".join(refused.output.split())
+    assert refused.exit_code != 0 and "a load force on a diaphragm actuator must stay within "\
+        "[-1e+06, 1e+06] N" in said, said  # the actuator's own load input
     assert not (tmp_path / "refused").exists()
 
 
@@ -237,8 +332,8 @@ def test_control_step_rejects_a_load_step_on_the_held_cylinder(tmp_path):
 
 
 def test_the_load_step_of_control_is_refused_as_simulate_refuses_it(tmp_path):
-    """The same parser and messages as ``simulate --load-step``; on a plant other than
-    the cylinder it names --plant cylinder; nothing written."""
+    """The same parser and messages as ``simulate --load-step``; on the rig, which has no
+    load input, it names the plants that have one; nothing written."""
     profile = tmp_path / "profile.csv"
     profile.write_text("time [s],reference [mm]\n0,90\n0.5,110\n", encoding="utf-8")
     cylinder = ["--plant", "cylinder"]
@@ -247,9 +342,11 @@ def test_the_load_step_of_control_is_refused_as_simulate_refuses_it(tmp_path):
             (["step", *cylinder, "--load-step", "150,2"],
              "--load-step TIME = 2 s: must be in (0, 1)"),
             (["step", *cylinder, "--load-step", "150"], "give FORCE,TIME"),
-            (["step", "--load-step", "150,0.3"], "give --plant cylinder"),
+            (["step", "--plant", "rig", "--load-step", "150,0.3"],
+             "give --plant cylinder, regulator, command or source"),
             (["step", *cylinder, "--start", "90", "--stop", "90"], "or a --load-step"),
-            (["profile", str(profile), "--load-step", "150,0.3"], "give --plant cylinder"),
+            (["profile", str(profile), "--plant", "rig", "--load-step", "150,0.3"],
+             "give --plant cylinder, regulator, command or source"),
             (["profile", str(profile), *cylinder, "--load-step", "150,0.5"],
              "--load-step TIME = 0.5 s: must be in (0, 0.5)")):
         refused = invoke("control", *args, "--out", str(tmp_path / "refused"))
@@ -260,8 +357,9 @@ def test_the_load_step_of_control_is_refused_as_simulate_refuses_it(tmp_path):
 
 def test_simulate_batch_and_sensitivity_load_the_cylinder_with_a_load_step(tmp_path):
     """--load-step on the batch: each row the API's batch of the loaded cylinder (slower
-    out than without the load); on the actuator of either command, refused naming
-    --model cylinder."""
+    out than without the load); on the actuator, its force checked against the
+    actuator's own load input; with sensitivity's --conditions (which vary the pressure
+    cycle under a load fixed in time) refused; one line each, nothing written."""
     table = tmp_path / "table.csv"
     table.write_text("Fc,sigma2\n20,50\n15,80\n", encoding="utf-8")
     result = invoke("simulate-batch", str(table), "--model", "cylinder", "--t-end", T_END,
@@ -278,10 +376,16 @@ def test_simulate_batch_and_sensitivity_load_the_cylinder_with_a_load_step(tmp_p
         np.testing.assert_allclose(cli[name], api[name], rtol=ref.META_BATCH_RTOL,
                                    err_msg=name)
     assert (api["top_speed_out"] < free["top_speed_out"]).all()  # the load slows the rod
-    for command in (["simulate-batch", str(table)], ["sensitivity", "src"]):
-        refused = invoke(*command, "--load-step", "300,0.2", "--out",
-                         str(tmp_path / "refused"))
-        assert refused.exit_code != 0 and "give --model cylinder" in refused.output
+    for command, said in (
+            (["simulate-batch", str(table), "--load-step", "3e6,0.2"],
+             "a load force on a diaphragm actuator must stay within"),
+            (["sensitivity", "src", "--load-step", "3e6,0.2"],
+             "a load force on a diaphragm actuator must stay within"),
+            (["sensitivity", "src", "--t-end", "2", "--conditions", "period=1,2",
+              "--load-step", "5,0.5"], "--load-step 5,0.5 with --conditions")):
+        refused = invoke(*command, "--out", str(tmp_path / "refused"))
+        flat = " ".join(refused.output.split())
+        assert refused.exit_code != 0 and said in flat, flat
     assert not (tmp_path / "refused").exists()
 
 

@@ -508,3 +508,43 @@ def test_the_two_valve_cylinder_fmu_has_both_commands_as_inputs(tmp_path):
                                                 drives={"command_b": Step(0.1, 1.0, 0.0)}))
     changed = np.sqrt(np.mean((closed_b["position"] - run["position"]) ** 2))
     assert changed > ref.FMU_PARAMETER_EFFECT_FACTOR * allowed, changed
+
+
+def test_the_two_valve_cylinder_s_cs_fmu_steps_like_pa_simulate(tmp_path):
+    """``pneumact export fmu --model cylinder --valves two-3/2 --kind cs``: FMPy steps its
+    Co-Simulation FMU at 1 ms on valve A stepped open to the supply and valve B to the
+    exhaust (command_b mirrored), each held over the step, as pa.simulate runs the same
+    two staircases (command_a the drive, command_b by name), within what the CS FMUs are
+    held to; FMPy's validation passes."""
+    from pneumact.core.signals import Step
+
+    result = CliRunner().invoke(app, ["export", "fmu", "--model", "cylinder", "--valves",
+                                      "two-3/2", "--kind", "cs", "--out",
+                                      str(tmp_path / "two.fmu")])
+    assert result.exit_code == 0, result.output
+    path = tmp_path / "two.fmu"
+    assert [v.name for v in read_model_description(str(path)).modelVariables
+            if v.causality == "input"][:2] == ["valve_a_command", "valve_b_command"]
+    step, t_end = ref.CS_STEPS[0], 0.5
+    grid = np.linspace(0.0, t_end, round(t_end / step) + 1)
+    command_a = Step(0.1, -1.0, 0.5)(grid)
+    command_b = Step(0.1, 1.0, -0.5)(grid)
+    table = np.array(list(zip(grid, command_a, command_b, strict=True)),
+                     dtype=[("time", float), ("valve_a_command", float),
+                            ("valve_b_command", float)])
+    out = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=t_end, input=table,
+                            start_values={"valve_a_command": -1.0, "valve_b_command": 1.0},
+                            step_size=step, output_interval=step, output=["position"])
+    assert np.allclose(out["time"], grid, rtol=0, atol=1e-9 * t_end)
+    held_a = staircase(pa.Experiment(Step(0.1, -1.0, 0.5), "command_a", t_end), grid,
+                       command_a)
+    held_b = staircase(held_a, grid, command_b).drive
+    model = pa.Cylinder(load_quietly("iso15552-32"), valves="two-3/2")
+    run = pa.simulate(model, pa.Experiment(held_a.drive, "command_a", t_end,
+                                           n_points=grid.size,
+                                           drives={"command_b": held_b}), t_eval=grid)
+    travel = float(np.ptp(run["position"]))
+    assert travel > 0.2 * float(model.params["x_max"])  # the piston does move
+    rms = np.sqrt(np.mean((out["position"] - run["position"]) ** 2))
+    assert rms <= ref.CS_POSITION_RMS_OF_TRAVEL * travel, rms
+    assert validate_fmu(str(path)) == []

@@ -27,7 +27,7 @@ _CYLINDER = ("pneumact.models:Cylinder", "pneumact.experiments:SpoolStep")
 _FRICTION_TEST = ("pneumact.analysis.friction_tests:run_friction_test",)
 _CONTROL = ("pneumact.control:ClosedLoop", "pneumact.control:PID", "pneumact.control:Cascade",
             "pneumact.control.study:run_loop", "pneumact.models:Actuator",
-            "pneumact.simulation:Rodas4")
+            "pneumact.models:Cylinder", "pneumact.simulation:Rodas4")
 
 #: command (its words joined by spaces) -> the API it calls and the objects it builds
 API: dict[str, tuple[str, ...]] = {

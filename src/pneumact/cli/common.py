@@ -247,8 +247,6 @@ def build_model(options: ModelOptions, params=None):
     """(parameter set, Actuator) the options describe."""
     from pneumact.models import VALVES, Actuator
 
-    if options.load_step is not None:
-        refuse_load_step(options.load_step, "--model cylinder")
     if options.valves != ModelOptions.valves:
         raise ArgumentError(f"--valves {options.valves} is the cylinder's valving (--model "
                             "cylinder); the diaphragm actuator has its --valve: drop --valves")
@@ -296,7 +294,8 @@ def build_model_of(kind: ModelKind, options: ModelOptions):
         experiment = cylinder_experiment(options, params, model)
         return params, with_load_step(model, experiment, options), experiment
     params, model = build_model(options)
-    return params, model, build_experiment(options, params)
+    experiment = build_experiment(options, params)
+    return params, with_load_step(model, experiment, options), experiment
 
 
 #: the parameter set of ``--model cylinder`` when --params keeps the actuator's default
@@ -366,23 +365,41 @@ def cylinder_experiment(options: ModelOptions, params, cylinder):
                              "command_b": pa.experiments.Step(t_step, -before, -after)})
 
 
+#: what --load-step does to each model, said once for both options' help
+_LOAD_STEP_HELP = ("a load force stepping from 0 to FORCE [N] at TIME [s], given as FORCE,TIME "
+                   "(e.g. 300,0.3), within +-1 MN: on the cylinder's rod, against extension "
+                   "(FORCE > 0 pushes the rod in); on the diaphragm actuator, against larger "
+                   "x as its spring is (FORCE > 0 moves its rest by -FORCE/k)")
 LoadStepOption = Annotated[str | None, typer.Option(
-    "--load-step", help="--model cylinder: a load force against extension stepping from 0 "
-                        "to FORCE [N] at TIME [s], given as FORCE,TIME (e.g. 300,0.3).")]
-#: --load-step as the control commands word it (the cylinder is their --plant)
+    "--load-step", help=f"--model cylinder or actuator: {_LOAD_STEP_HELP}.")]
+#: --load-step as the control commands word it (the plant's load, a disturbance)
 PlantLoadStepOption = Annotated[str | None, typer.Option(
-    "--load-step", help="--plant cylinder: a load force against extension stepping from 0 "
-                        "to FORCE [N] at TIME [s], given as FORCE,TIME (e.g. 300,0.6): the "
-                        "loop's load-disturbance rejection.")]
+    "--load-step", help=f"--plant cylinder, regulator, command or source: {_LOAD_STEP_HELP}: "
+                        "the loop's load-disturbance rejection.")]
 
 
-def load_step_of(text: str, experiment, input_csv: Path | None = None):
-    """The load step --load-step FORCE,TIME gives (``Cylinder.load``): a force [N] within
-    the load input's range, from a time [s] within the run of ``experiment``, and no load
+def load_input_of(model):
+    """The input channel a model declares (or would declare) for its load force: the
+    cylinder's ``models.cylinder.LOAD_INPUT``, the diaphragm actuator's
+    ``models.actuator.LOAD_INPUT`` (its range and rule the messages quote); ``model``: a
+    model or its class."""
+    from pneumact.models import Cylinder
+    from pneumact.models.actuator import LOAD_INPUT as ACTUATOR_LOAD
+    from pneumact.models.cylinder import LOAD_INPUT as CYLINDER_LOAD
+
+    cylinder = model is Cylinder or isinstance(model, Cylinder)
+    return CYLINDER_LOAD if cylinder else ACTUATOR_LOAD
+
+
+def load_step_of(text: str, experiment, input_csv: Path | None = None, load_input=None):
+    """The load step --load-step FORCE,TIME gives (``Cylinder.load``, ``Actuator.load``): a
+    force [N] within the range of ``load_input`` (the model's load input, ``load_input_of``;
+    default the cylinder's), from a time [s] within the run of ``experiment``, and no load
     column of ``input_csv`` (--input-csv) beside it."""
     from pneumact.core.signals import Step
     from pneumact.models.cylinder import LOAD_INPUT
 
+    load_input = LOAD_INPUT if load_input is None else load_input
     parts = text.split(",")
     try:
         force, time = (float(part) for part in parts)
@@ -391,29 +408,29 @@ def load_step_of(text: str, experiment, input_csv: Path | None = None):
                             "[s] it steps on, e.g. 300,0.3") from None
     check_range("--load-step TIME", time, experiment.t_start, experiment.t_end, unit="s",
                 low_open=True, high_open=True, hint="the load steps within the run")
-    LOAD_INPUT.check(min(force, 0.0), max(force, 0.0), where=f"--load-step {text}")
-    if LOAD_INPUT.name in experiment.drives:
+    load_input.check(min(force, 0.0), max(force, 0.0), where=f"--load-step {text}")
+    if load_input.name in experiment.drives:
         raise ArgumentError(f"--load-step {text} and the load column of --input-csv "
                             f"{input_csv} both drive the load; drop one")
     return Step(time, 0.0, force)
 
 
-def refuse_load_step(text: str, cylinder: str) -> None:
-    """--load-step given where no cylinder runs: one line naming the option (``cylinder``)
-    that runs one."""
-    raise ArgumentError(f"--load-step {text}: loads the double-acting cylinder's rod; give "
-                        f"{cylinder}")
+def refuse_load_step(text: str, plants: str) -> None:
+    """--load-step given where no model with a load input runs: one line naming the
+    options (``plants``) that run one."""
+    raise ArgumentError(f"--load-step {text}: loads a cylinder's rod or a diaphragm "
+                        f"actuator's diaphragm; give {plants}")
 
 
-def with_load_step(cylinder, experiment, options: ModelOptions):
-    """``cylinder`` loaded by --load-step (``Cylinder(load=Step(TIME, 0, FORCE))``) where
-    it is given, else as it is."""
+def with_load_step(model, experiment, options: ModelOptions):
+    """``model`` (a Cylinder or an Actuator) loaded by --load-step (its ``load`` the step
+    ``Step(TIME, 0, FORCE)``) where it is given, else as it is."""
     from dataclasses import replace
 
     if options.load_step is None:
-        return cylinder
-    return replace(cylinder, load=load_step_of(options.load_step, experiment,
-                                               options.input_csv))
+        return model
+    return replace(model, load=load_step_of(options.load_step, experiment,
+                                            options.input_csv, load_input_of(model)))
 
 
 def _check_friction_parameters(friction, params, options: ModelOptions) -> None:

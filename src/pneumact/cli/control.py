@@ -27,7 +27,9 @@ from pneumact.cli.common import (
     RtolOption,
     SchedulerOption,
     WorkersOption,
+    check_valves,
     executor_of,
+    load_input_of,
     load_quietly,
     load_step_of,
     out_console,
@@ -84,7 +86,12 @@ PlantOption = Annotated[Plant, typer.Option(
     help="regulator / command / source: the vgt actuator behind that valve (the input is "
          "the pressure set-point, the valve command or the chamber pressure); rig: a mass "
          "with friction and a force actuator; cylinder: the double-acting cylinder behind "
-         "its 5/3 valve (the spool command, --params default iso15552-32).")]
+         "its 5/3 valve or two 3/2 valves (--valves; the spool command, --params default "
+         "iso15552-32).")]
+PlantValvesOption = Annotated[str, typer.Option(
+    "--valves", help="--plant cylinder: 5/3 (one 5/3 valve, its spool command) or two-3/2 "
+                     "(a proportional 3/2 valve per chamber, both driven by the one command "
+                     "mirrored: valve A's u, valve B's -u).")]
 ControllerOption = Annotated[Structure, typer.Option(
     "--controller", help="pid, or cascade (outer P on position --kx, inner PI on velocity "
                          "--kv, --ki).")]
@@ -201,23 +208,50 @@ def plant_params(plant: Plant, params_name: str):
     return load_quietly(params_name)
 
 
-def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
-               start: float, gains: Path | None = None, load: Signal | None = None):
-    """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0; the
-    controller of a ``gains`` file (``control tune``) if given; ``load``: the cylinder's
-    external load (``Cylinder.load``, --load-step)."""
-    from pneumact.control import ClosedLoop
+#: the cylinder's default valving (``Cylinder.valves``, --valves)
+CYLINDER_VALVES = "5/3"
+
+
+def check_plant_valves(plant: Plant, valves: str) -> None:
+    """--valves one of the cylinder's valvings, and given (other than 5/3) only with
+    --plant cylinder."""
+    if valves == CYLINDER_VALVES:
+        return
+    if plant is not Plant.cylinder:
+        raise ParameterError(f"--valves {valves} is the cylinder's valving (--plant "
+                             f"cylinder); --plant {plant.value} has no cylinder: drop "
+                             "--valves")
+    check_valves(valves)
+
+
+def build_plant(plant: Plant, params, friction: str, load: Signal | None = None,
+                valves: str = CYLINDER_VALVES) -> FrictionRig | Actuator | Cylinder:
+    """The plant --plant names: the rig, the cylinder (behind its 5/3 valve, or two 3/2
+    valves driven mirrored by the one command: ``Cylinder(valves="two-3/2",
+    mirrored=True)``) or the actuator behind its valve; ``load``: the cylinder's or the
+    actuator's external load (``Cylinder.load``, ``Actuator.load``, --load-step)."""
     from pneumact.models import VALVES, Actuator, Cylinder, FrictionRig, friction_models
 
-    params = plant_params(plant, params_name)
+    check_plant_valves(plant, valves)
     law = friction_models()[str(friction)]()
-    model: FrictionRig | Actuator | Cylinder
     if plant is Plant.rig:
-        model = FrictionRig(params, law, drive="force")
-    elif plant is Plant.cylinder:
-        model = Cylinder(params, law, load=load)
-    else:
-        model = Actuator(params, law, valve=VALVES[plant.value]())
+        return FrictionRig(params, law, drive="force")
+    if plant is Plant.cylinder:
+        return Cylinder(params, law, load=load, valves=valves,
+                        mirrored=valves != CYLINDER_VALVES)
+    return Actuator(params, law, valve=VALVES[plant.value](), load=load)
+
+
+def build_loop(plant: Plant, params_name: str, friction: str, options: ControllerOptions,
+               start: float, gains: Path | None = None, load: Signal | None = None,
+               valves: str = CYLINDER_VALVES):
+    """(parameter set, ClosedLoop) holding the plant at ``start`` [m] at t = 0; the
+    controller of a ``gains`` file (``control tune``) if given; ``load``: the plant's
+    external load (--load-step); ``valves``: the cylinder's valving (``build_plant``)."""
+    from pneumact.control import ClosedLoop
+
+    params = plant_params(plant, params_name)
+    model = build_plant(plant, params, friction, load, valves)
     if gains is not None:
         from pneumact.control import load_gains
 
@@ -231,13 +265,17 @@ def build_loop(plant: Plant, params_name: str, friction: str, options: Controlle
 
 
 def _load_step(plant: Plant, text: str | None, experiment) -> Signal | None:
-    """The cylinder's load of --load-step FORCE,TIME within the run of ``experiment``
-    (``common.load_step_of``); refused for any plant but the cylinder."""
+    """The plant's load of --load-step FORCE,TIME within the run of ``experiment``
+    (``common.load_step_of``, within the range of the plant's load input: the cylinder's
+    or the actuator's); refused for the rig, which has none."""
+    from pneumact.models import Actuator, Cylinder
+
     if text is None:
         return None
-    if plant is not Plant.cylinder:
-        refuse_load_step(text, "--plant cylinder")
-    return load_step_of(text, experiment)
+    if plant is Plant.rig:
+        refuse_load_step(text, "--plant cylinder, regulator, command or source")
+    kind = Cylinder if plant is Plant.cylinder else Actuator
+    return load_step_of(text, experiment, load_input=load_input_of(kind))
 
 
 def _check_setpoints(plant: Plant, params_name: str, **positions_mm: float) -> None:
@@ -382,6 +420,7 @@ def step_command(
     t_step: Annotated[float, typer.Option(help="Time of the step [s].")] = 0.1,
     t_end: Annotated[float, typer.Option(help="Duration [s].")] = 1.0,
     plant: PlantOption = Plant.regulator,
+    valves: PlantValvesOption = CYLINDER_VALVES,
     params: ParamsOption = "vgt-paper",
     friction: FrictionOption = Friction.lugre,
     controller: ControllerOption = Structure.pid,
@@ -399,8 +438,9 @@ def step_command(
     out: OutOption = Path("pneumact-control-step"),
 ) -> None:
     """A position set-point step: rise and settling time, overshoot, steady-state
-    error, stick phases and control effort; with --load-step, the cylinder's rod loaded
-    by a force step (--start = --stop: the load alone, its rejection)."""
+    error, stick phases and control effort; with --load-step, the plant (the cylinder's
+    rod, the actuator's diaphragm) loaded by a force step (--start = --stop: the load
+    alone, its rejection)."""
     with user_errors():
         from pneumact.experiments import SetpointStep
 
@@ -415,7 +455,7 @@ def step_command(
         load = _load_step(plant, load_step, experiment)
         _check_setpoints(plant, params, **{"--start": start, "--stop": stop})
         _, loop = build_loop(plant, params, friction, options, start * 1e-3, gains_file,
-                             load)
+                             load, valves)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position step {start:g} → {stop:g} mm ({plant.value})",
                        start=start * 1e-3 if plant is Plant.cylinder else None)
@@ -430,6 +470,7 @@ def profile_command(
     column: Annotated[str | None, typer.Option(
         help="The set-point column (default: reference, else position).")] = None,
     plant: PlantOption = Plant.regulator,
+    valves: PlantValvesOption = CYLINDER_VALVES,
     params: ParamsOption = "vgt-paper",
     friction: FrictionOption = Friction.lugre,
     controller: ControllerOption = Structure.pid,
@@ -446,7 +487,8 @@ def profile_command(
     out: OutOption = Path("pneumact-control-profile"),
 ) -> None:
     """Follow a measured or designed position profile (piecewise linear between its
-    samples); with --load-step, the cylinder's rod loaded by a force step on the way."""
+    samples); with --load-step, the plant (the cylinder's rod, the actuator's diaphragm)
+    loaded by a force step on the way."""
     with user_errors():
         import numpy as np
 
@@ -472,7 +514,7 @@ def profile_command(
             f"{profile.name}: highest set-point": float(np.max(positions)) * 1e3})
         options = _options(ctx)
         _, loop = build_loop(plant, params, friction, options, float(positions[0]),
-                             load=load)
+                             load=load, valves=valves)
         _run_and_write(ctx, loop, experiment, out, rtol,
                        f"Position profile {profile.name} ({plant.value})", tracking=True,
                        start=float(positions[0]) if plant is Plant.cylinder else None)
@@ -514,6 +556,7 @@ def tune_command(
              "variation=…, band=2%, fraction=95% (of the uncertainty samples).")
     ] = "settling=0.3,overshoot=5%,error=20um,no-hunting",
     plant: PlantOption = Plant.regulator,
+    valves: PlantValvesOption = CYLINDER_VALVES,
     params: ParamsOption = "vgt-paper",
     friction: FrictionOption = Friction.lugre,
     kp: KpOption = None, ki: KiOption = None,
@@ -571,7 +614,8 @@ def tune_command(
             _check_setpoints(plant, params, **{"--at": at})
         start = None if at is None else at * 1e-3
         _, loop = build_loop(plant, params, friction, options,
-                             start if start is not None else _mid(plant, params))
+                             start if start is not None else _mid(plant, params),
+                             valves=valves)
         moves = default_moves(loop, specs, start)
         result = run_with_progress(lambda report: tune(
             loop, specs, moves=moves, gains=names, uncertainty=samples, spread=gain_spread,
@@ -594,6 +638,7 @@ def compare_command(
         help="Specifications, as for 'control tune' (settling, overshoot, error, "
              "no-hunting, band).")] = "settling=0.3,overshoot=5%,error=20um,no-hunting",
     plant: PlantOption = Plant.regulator,
+    valves: PlantValvesOption = CYLINDER_VALVES,
     params: ParamsOption = "vgt-paper",
     friction: FrictionOption = Friction.lugre,
     u_min: UMinOption = None, u_max: UMaxOption = None,
@@ -625,7 +670,7 @@ def compare_command(
         options = ControllerOptions(Structure.pid, None, None, 0.0, "measurement", 1e-3,
                                     50.0, 1e4, u_min, u_max, "back-calculation", None, None,
                                     "measured", None, None, False, 0.0)
-        _, loop = build_loop(plant, params, friction, options, start)
+        _, loop = build_loop(plant, params, friction, options, start, valves=valves)
         if velocity is not None:
             check_range("--velocity", velocity, 0.0, unit="mm/s", low_open=True)
         speed = None if velocity is None else velocity * 1e-3

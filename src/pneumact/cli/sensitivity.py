@@ -174,6 +174,10 @@ def sensitivity(
             raise ArgumentError("--conditions varies the actuator's pressure cycle (period, "
                                 "amplitude, valve); --model cylinder steps its spool: drop "
                                 "--conditions")
+        if conditions and load_step is not None:
+            raise ArgumentError(f"--load-step {load_step} with --conditions: the conditions "
+                                "vary the pressure cycle (its period among them) under a "
+                                "load stepping at one fixed time; drop one of them")
         if features is None:
             features = DEFAULT_FEATURES[actuator.summary_kind]
         feature_names = names(features, "--features") or []

@@ -34,8 +34,6 @@ from pneumact.cli.common import (
     TEndOption,
     ValveOption,
     ValvesOption,
-    build_experiment,
-    build_model,
     build_model_of,
     fmt,
     out_console,
@@ -66,7 +64,8 @@ def simulate(
     load_step: LoadStepOption = None,
 ) -> None:
     """Simulate the actuator (write simulation.csv in SI and hysteresis.png) or the
-    cylinder (simulation.csv and response.png)."""
+    cylinder (simulation.csv and response.png); with --load-step, either loaded by a force
+    step (``Actuator.load``, ``Cylinder.load``)."""
     with user_errors():
         import pneumact as pa
         from pneumact.simulation.simulate import check_drive_while_building
@@ -80,8 +79,7 @@ def simulate(
         if model is ModelKind.cylinder:
             _simulate_cylinder(options, out)
             return
-        parameter_set, actuator = build_model(options)
-        experiment = build_experiment(options, parameter_set)
+        parameter_set, actuator, experiment = build_model_of(ModelKind.actuator, options)
         solver = pa.Rodas4(rtol=rtol)
         # a clear error before any progress display; the kernel's compiler runs meanwhile
         check_drive_while_building(actuator, experiment)
