@@ -34,12 +34,15 @@ from pneumact.cli.common import (
     TEndOption,
     ValveOption,
     ValvesOption,
+    build_experiment,
+    build_model,
     build_model_of,
     fmt,
     out_console,
     run_with_progress,
     use_agg,
     user_errors,
+    with_load_step,
     write_outputs,
 )
 
@@ -79,7 +82,9 @@ def simulate(
         if model is ModelKind.cylinder:
             _simulate_cylinder(options, out)
             return
-        parameter_set, actuator, experiment = build_model_of(ModelKind.actuator, options)
+        parameter_set, actuator = build_model(options)
+        experiment = build_experiment(options, parameter_set)
+        actuator = with_load_step(actuator, experiment, options)
         solver = pa.Rodas4(rtol=rtol)
         # a clear error before any progress display; the kernel's compiler runs meanwhile
         check_drive_while_building(actuator, experiment)
