@@ -183,11 +183,13 @@ def test_control_step_holds_the_cylinder_at_its_start(tmp_path):
     assert not (tmp_path / "refused").exists()
 
 
-def test_control_tune_and_compare_run_the_two_valve_cylinder(tmp_path):
+def test_control_tune_and_compare_run_the_two_valve_cylinder(tmp_path, monkeypatch):
     """--valves two-3/2 on control tune (one evaluation, no round: its gains and every
     move's metrics those of the 5/3 cylinder, exactly) and control compare (its linear
     design the API's on the 5/3 loop, the mirrored plant linearising as the 5/3 one, run
-    on the nonlinear two-valve loop)."""
+    on the nonlinear two-valve loop); each on ``Cylinder(valves="two-3/2",
+    mirrored=True)``, as its report (tune) and the loop it compares on (compare) say."""
+    from pneumact.cli import control
     from pneumact.control import PID, ClosedLoop, Specs, linear_design
 
     tune = ("control", "tune", "--plant", "cylinder", "--n-global", "0",
@@ -201,10 +203,21 @@ def test_control_tune_and_compare_run_the_two_valve_cylinder(tmp_path):
         tuned[valves] = [pd.read_csv(out / name) for name in ("gains.csv", "metrics.csv")]
     for two, five in zip(tuned["two-3/2"], tuned["5/3"], strict=True):
         pd.testing.assert_frame_equal(two, five, check_exact=True)
+    report = (tmp_path / "tune_two-3_2" / "report.html").read_text(encoding="utf-8")
+    assert "valves=&#39;two-3/2&#39;, mirrored=True" in report
+    plants = []
+
+    def compare(loop, *args):
+        plants.append(loop.plant)
+        return original(loop, *args)
+
+    original = control._compare
+    monkeypatch.setattr(control, "_compare", compare)
     out = tmp_path / "compare"
     result = invoke("control", "compare", "--plant", "cylinder", "--valves", "two-3/2",
                     "--out", str(out))
     assert result.exit_code == 0, result.output
+    assert [(p.valves, p.mirrored) for p in plants] == [("two-3/2", True)]
     summary = pd.read_csv(out / "summary.csv")  # a valve command: no static force map,
     # so the linear PID alone (friction_designs), on the four reference moves
     assert list(summary["design"]) == ["linear (python-control)"]
