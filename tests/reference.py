@@ -907,3 +907,7 @@ STEP_FIT_SPOOL_NOISE = 0.01
 #: against p_atm, relative (measured 0.0 and 1.8e-15 at Rodas4 rtol 1e-10)
 CYLINDER_VALVES_5_3_RTOL = 0.0
 CYLINDER_VALVES_REST_RTOL = 1e-9
+
+#: test_signature: a prior whose σ2 at the sweep's speed makes this many times the truth's
+#: Fc, more than the whole friction level the branches show
+SIGNATURE_SIGMA2_EXCESS = 3.0

@@ -138,6 +138,44 @@ def test_a_position_offset_on_a_signature_is_read_on_the_stop_and_taken_off(case
         assert table.loc[name, "truth_in_ci95"], table
 
 
+def test_a_pressure_offset_on_a_signature_is_read_from_the_set_point_and_taken_off(cases):
+    """A pressure sensor that reads ``ref.BENCH_PRESSURE_OFFSET`` high on a regulator's
+    sweep (set-point and pressure logged): the offset is read from the pair
+    (``ref.BENCH_SIZE_RTOL``), named and taken off, and F0, k are identified and
+    covered; left on, F0 would be offset·A_d off (3-16 % on the drawn bench)."""
+    truth, prior, records = cases[0]
+    offset = ref.BENCH_PRESSURE_OFFSET
+    shifted = [pa.Record.from_arrays(r.time, {**r.signals, "pressure": r["pressure"] + offset},
+                                     r.units, r.source, r.meta) for r in records]
+    result = identify_signature(shifted, prior)
+    bench = result.bench_table().set_index("parameter")
+    assert bench.loc["pressure_offset", "value"] == pytest.approx(
+        offset, rel=ref.BENCH_SIZE_RTOL), bench
+    assert any("pressure sensor reads" in d.message for d in result.diagnostics)
+    table = result.to_pandas(truth=truth)
+    for name in ("F0", "k"):
+        assert table.loc[name, "verdict"] == "identified", table
+        assert table.loc[name, "truth_in_ci95"], table
+
+
+def test_a_level_the_prior_s_sigma2_takes_whole_leaves_fc_untold(cases):
+    """A prior whose σ2·|v| at the sweep's speed exceeds the measured friction level
+    (``ref.SIGNATURE_SIGMA2_EXCESS`` times Fc): no Coulomb friction is left to tell, so Fc
+    is not identifiable, with the reason, and held at the prior's (a negative Fc
+    refused the whole result before)."""
+    truth, prior, records = cases[0]
+    record = records[0]
+    speed = 2 * np.ptp(record["position"]) / (record.time[-1] - record.time[0])
+    prior = prior.replace(sigma2=ref.SIGNATURE_SIGMA2_EXCESS * truth["Fc"] / speed)
+    result = identify_signature(records, prior)
+    table = result.to_pandas(truth=truth)
+    assert table.loc["Fc", "verdict"] == "not identifiable", table
+    assert "no Coulomb friction is left" in table.loc["Fc", "reason"]
+    assert result.parameter_set(partial=True)["Fc"] == prior["Fc"]
+    for name in ("F0", "k"):
+        assert table.loc[name, "verdict"] == "identified", table
+
+
 def test_static_friction_in_the_level_widens_fc_not_biases_it(cases):
     """A deep Stribeck dip (Fs = 2·Fc, δ = 1) with vs at the top of the prior's range:
     a sweep at 2·vs, where the dip still adds 13 % of Fc to the level. Fc

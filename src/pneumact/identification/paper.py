@@ -1470,7 +1470,9 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     prior's values, named as not identifiable from a signature with the test that would
     tell each; and the valve engineer's numbers (bench set, spring rate, friction band,
     dead band). A position sensor's offset is read where a sweep starts at rest on the
-    lower stop and taken off (``faults.position_zero``, in ``bench_table()``)."""
+    lower stop, a pressure sensor's from a sweep that logged its regulator's set-point,
+    and each is taken off (``faults.position_zero``, ``faults.pressure_side``; in
+    ``bench_table()``)."""
     from ..io.records import as_records
     from ..parameters import as_parameter_set
     from ..version import __version__
@@ -1489,10 +1491,13 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     check_progress(progress, "identify_signature")
     notify(progress, "signature", 0.0, 1.0)
     zero = position_zero(records, params, prior_spread)  # a sweep starts on the stop
-    records = zero.records
+    # a regulator's sweep logs set-point and pressure: a pressure sensor's offset moves
+    # the spring line by offset·A_d (F0 wrong by 3-16 % at 0.5-2 kPa on the family)
+    side = pressure_side(zero.records, params)
+    records = side.records
     kinds = [record_kind(r) for r in records]
     sweeps = signature_records(records, kinds)
-    diagnostics: list[Diagnostic] = list(zero.diagnostics)
+    diagnostics: list[Diagnostic] = list(zero.diagnostics) + list(side.diagnostics)
     unused = [Path(r.source).name for r, k in zip(records, kinds, strict=True) if k != "sweep"]
     if unused:
         diagnostics.append(Diagnostic(
@@ -1528,5 +1533,6 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     return SignatureIdentification(
         {"signature": fitted.stage}, None, estimates, judged, diagnostics, pd.DataFrame(),
         identified, params, list(records), None, None,
-        {"friction": None, "chamber": None, "joint_failed": False, "position_zero": zero},
+        {"friction": None, "chamber": None, "joint_failed": False, "position_zero": zero,
+         "pressure_side": side},
         valve, fitted.structure)

@@ -99,6 +99,9 @@ class SignatureFit:
     stage: StageResult
     diagnostics: tuple[Diagnostic, ...]
     structure: float
+    #: the friction level less σ2·|v| (the prior's where σ2 is not fitted): what Fc and
+    #: the Stribeck term share; at or below zero Fc is not told
+    coulomb_room: float = np.inf
 
 
 def _structure(residual: np.ndarray) -> float:
@@ -157,7 +160,11 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
     slowest = float(low)
     mean_speed = float(np.mean(speed))
     level = est["friction_level"]
-    bound = stribeck_bound(params, slowest, spread, level)
+    # what the level leaves for Fc and the Stribeck term together: Fc ≥ 0 caps the
+    # Stribeck term at it (a sweep near the prior's highest vs: uncapped, the bound's
+    # midpoint put Fc below zero on 3 of 16 drawn actuators)
+    room = level - (0.0 if sigma2_fitted else prior_s2 * mean_speed)
+    bound = min(stribeck_bound(params, slowest, spread, level), max(room, 0.0))
     level_se = float(est.stderr[2])
     if sigma2_fitted:
         fc, s2 = level - bound / 2, est["sigma2"]
@@ -169,6 +176,9 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
         cov[:3, :3] = est.covariance
         cov[2, 2] += (mean_speed * prior_s2_sd) ** 2 + bound**2 / 12
         cov[3, 3] = np.inf
+    if room <= 0:  # no Coulomb friction left to tell: Fc held at the prior's
+        fc = params["Fc"]
+        cov[2, :] = cov[:, 2] = np.inf
     values = np.array([est["F0"], est["k"], fc, s2])
     fidelity = (MODEL_FIDELITY * values[:3]) ** 2
     cov[np.arange(3), np.arange(3)] += fidelity
@@ -194,7 +204,7 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
                         "position [mm]", "drive force (p_atm − p)·A_d − m·a [N]",
                         extra={"speed": mean_speed, "slowest": slowest})
     return SignatureFit(estimates, float(level), level_se, mean_speed, bound,
-                        sigma2_fitted, stage, tuple(notes), structure)
+                        sigma2_fitted, stage, tuple(notes), structure, float(room))
 
 
 def signature_verdicts(fit: SignatureFit, names: Sequence[str]) -> list[Verdict]:
@@ -216,6 +226,12 @@ def signature_verdicts(fit: SignatureFit, names: Sequence[str]) -> list[Verdict]
         judged["sigma2"] = Verdict("sigma2", NOT_IDENTIFIABLE, "the signature slides at one "
                                    "speed: σ2·|v| is a constant, which Fc absorbs",
                                    REMEDIES["sigma2"])
+    if fit.coulomb_room <= 0:
+        judged["Fc"] = Verdict("Fc", NOT_IDENTIFIABLE, f"the friction level on the branches "
+                               f"({fit.level:.3g} N) is no more than the prior's σ2·|v| at "
+                               f"the sweep's speed: no Coulomb friction is left to tell",
+                               "ramps at several steady speeds (pneumact campaign --plan), "
+                               "which tell σ2 and Fc apart")
     out = []
     for name in names:
         if name in judged:
