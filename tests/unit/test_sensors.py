@@ -7,9 +7,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import pneumact as pa
 import reference as ref
+from conftest import load_quietly
 from pneumact.errors import ParameterError
-from pneumact.models.sensors import SENSOR_PARAMETERS, Sensors, first_order_lag, lag_derivative
+from pneumact.models.cylinder import CYLINDER_SENSORS
+from pneumact.models.sensors import (
+    DEFAULT_SENSORS,
+    SENSOR_PARAMETERS,
+    Sensors,
+    first_order_lag,
+    lag_derivative,
+    sensor_names,
+)
 from pneumact.parameters import catalogue
 
 pytestmark = pytest.mark.unit
@@ -86,6 +96,77 @@ def test_each_sensor_parameter_has_its_catalogue_entry():
     for name, unit in units.items():
         spec = catalogue()[name]
         assert spec.unit == unit and spec.group == "sensors" and spec.default is None
+
+
+#: an instance parameter of the cylinder's sensors, and the default sensor's entry it takes
+#: its unit and ranges from
+INSTANCE_ENTRIES = {"sensor_position.offset": "position_offset",
+                    "sensor_position.lag": "position_lag",
+                    "sensor_position.resolution": "position_resolution",
+                    "sensor_pressure_a.offset": "pressure_offset",
+                    "sensor_pressure_a.lag": "pressure_lag",
+                    "sensor_pressure_b.offset": "pressure_offset",
+                    "sensor_pressure_b.lag": "pressure_lag"}
+
+
+def test_a_sensor_instance_s_parameter_has_its_kind_s_catalogue_entry():
+    """The cylinder's sensors, one per measured signal: sensor_<signal>.offset, .lag (and
+    the position's .resolution), each with the unit and ranges of the default sensor of
+    its signal's quantity, the instance named in its description."""
+    specs = catalogue()
+    assert {n for names in CYLINDER_SENSORS.values() for n in names if n} == set(
+        INSTANCE_ENTRIES)
+    for name, default in INSTANCE_ENTRIES.items():
+        spec, kind = specs[name], specs[default]
+        assert (spec.unit, spec.minimum, spec.strict_minimum, spec.maximum, spec.plausible,
+                spec.group) == (kind.unit, kind.minimum, kind.strict_minimum, kind.maximum,
+                                kind.plausible, kind.group), name
+        assert spec.description.startswith(kind.description)
+        assert name.split(".")[0].removeprefix("sensor_") in spec.description
+    assert "sensor_pressure_a.resolution" not in specs  # a pressure sensor has none
+    # the single-chamber actuator keeps its names: its default instances
+    assert sensor_names(pa.Actuator(load_quietly("vgt-paper"))) is DEFAULT_SENSORS
+    assert sensor_names(pa.Cylinder(load_quietly("iso15552-32"))) is CYLINDER_SENSORS
+
+
+def test_a_model_s_sensor_instances_read_their_own_parameters():
+    """Each pressure sensor of the cylinder lags and offsets its own signal; the default
+    names are not its sensors'."""
+    sensors = Sensors.from_params({"sensor_pressure_a.lag": 2e-3,
+                                   "sensor_pressure_b.offset": 300.0,
+                                   "sensor_position.resolution": 1e-5, "sample_rate": 1e3,
+                                   "chamber_a.V_dead": 1e-5}, CYLINDER_SENSORS)
+    assert not sensors.ideal and sensors.sample_rate == 1e3
+    assert (sensors.lag("pressure_a"), sensors.lag("pressure_b")) == (2e-3, 0.0)
+    time = np.linspace(0.0, 0.1, 201)
+    ramp = 2e5 + 1e6 * time
+    np.testing.assert_allclose(sensors.measure(time, "pressure_a", ramp),
+                               _ramp_seen_through_a_lag(time, 1e6, 2e-3) + 2e5,
+                               rtol=1e-12)
+    np.testing.assert_allclose(sensors.measure(time, "pressure_b", ramp), ramp + 300.0)
+    read = sensors.measure(time, "position", 0.01 * time)
+    np.testing.assert_allclose(read / 1e-5, np.round(read / 1e-5), atol=1e-9)
+    assert Sensors.from_params({}, CYLINDER_SENSORS).ideal
+
+
+@pytest.mark.parametrize(("params", "names", "refused"), [
+    ({"sensor_pressure_c.lag": 1e-3}, CYLINDER_SENSORS, "'sensor_pressure_c.lag' is"),
+    ({"position_lag": 1e-3}, CYLINDER_SENSORS, "'position_lag' is"),
+    ({"sensor_pressure_a.lag": 1e-3}, None, "'sensor_pressure_a.lag' is"),
+])
+def test_a_sensor_parameter_of_no_sensor_of_the_model_is_refused_naming_the_allowed(
+        params, names, refused):
+    allowed = ", ".join(n for sensor in (names or DEFAULT_SENSORS).values()
+                        for n in sensor if n)
+    with pytest.raises(ParameterError) as error:
+        Sensors.from_params(params, names)
+    assert f"{refused} no sensor parameter of this model; its sensors' parameters: " \
+           f"{allowed}, sample_rate" in str(error.value)
+
+
+def test_an_impossible_instance_lag_is_refused_by_its_name():
+    with pytest.raises(ParameterError, match=r"sensor_pressure_b\.lag = -0\.001"):
+        Sensors.from_params({"sensor_pressure_b.lag": -1e-3}, CYLINDER_SENSORS)
 
 
 class _HeldStill:

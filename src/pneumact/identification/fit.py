@@ -36,8 +36,14 @@ from scipy.optimize import least_squares
 from ..errors import DataError, ParameterError, PneumactError, SolverError
 from ..io.records import Record
 from ..io.report import ResultVocabulary
-from ..models.actuator import CHAMBER_PRESSURE
-from ..models.sensors import Sensors, first_order_lag, lag_derivative
+from ..models.sensors import (
+    DEFAULT_SENSORS,
+    Sensors,
+    first_order_lag,
+    is_sensor_parameter,
+    lag_derivative,
+    sensor_names,
+)
 from ..options import Bounds, Executor, Multistart, Offsets, Optimizer, Profile, Weights
 from ..plotting import tight_layout
 from ..progress import ProgressCallback, notify, stop_threads
@@ -52,8 +58,16 @@ if TYPE_CHECKING:
 
 __all__ = ["FitResult", "ProfileLikelihood", "fit"]
 
-#: the sensor lags a fit can free, and the signal each delays
-SENSOR_LAGS = {"position_lag": "position", "pressure_lag": CHAMBER_PRESSURE}
+#: the sensor lags a fit of the single-chamber actuator can free, and the signal each
+#: delays (a model that places its own sensors: ``sensor_lags``)
+SENSOR_LAGS = {names.lag: signal for signal, names in DEFAULT_SENSORS.items()}
+
+
+def sensor_lags(models: Sequence) -> dict[str, str]:
+    """The sensor lags a fit of ``models`` can free (``position_lag``,
+    ``sensor_pressure_a.lag``), and the signal each delays."""
+    return {names.lag: signal for model in models
+            for signal, names in sensor_names(model).items()}
 
 CHI2_95 = 3.841458820694124  # χ²(1) 95 % quantile: the profile-likelihood threshold
 
@@ -93,7 +107,7 @@ class _Problem:
         #: the parameters each record's model reads (a joint fit mixes valves)
         self.model_parameters = [_parameter_names(m) for m in self.models]
         #: the sensors each record's model states (lags held unless fitted)
-        self.sensors = [Sensors.from_params(getattr(m, "params", None)) for m in self.models]
+        self.sensors = [Sensors.of(m) for m in self.models]
         self.smooth_input = smooth_input
         self.experiments = [experiment_for(m, r, smooth_input)
                             for m, r in zip(self.models, self.records, strict=True)]
@@ -662,8 +676,8 @@ class FitResult(ResultVocabulary):
 
 # --------------------------------------------------------------------------- fitting
 def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
-             offsets: Sequence[str] = (), offset_records: Sequence[int] | None = None
-             ) -> list[_Column]:
+             offsets: Sequence[str] = (), offset_records: Sequence[int] | None = None,
+             lags: Mapping[str, str] = SENSOR_LAGS) -> list[_Column]:
     unknown = [n for n in per_record if n not in free]
     if unknown:
         raise ParameterError(f"fit: per_record names {unknown} are not among the free "
@@ -674,11 +688,11 @@ def _columns(free: Sequence[str], per_record: Sequence[str], n_records: int,
                              "or leave per_record out")
     cols = []
     for name in free:
-        if name in SENSOR_LAGS:
+        if name in lags:
             if name in per_record:
                 raise ParameterError(f"fit: per_record = [{name!r}]: a sensor's lag is "
                                      "one for every record")
-            cols.append(_Column(name, SENSOR_LAGS[name], None, lag=True))
+            cols.append(_Column(name, lags[name], None, lag=True))
         elif name in per_record:
             cols += [_Column(f"{name}[{i}]", name, i) for i in range(n_records)]
         else:
@@ -885,9 +899,17 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     base: dict[str, float] = {}
     for assembly in assemblies:
         base.update(assembly.values(assembly.pack()))
-    lags = [n for n in free if n in SENSOR_LAGS]
-    stated = Sensors.from_params(getattr(models[0], "params", None))
-    base.update({n: stated.lag(SENSOR_LAGS[n]) for n in lags})
+    freeable = sensor_lags(models)
+    foreign = [n for n in free if is_sensor_parameter(n) and n not in freeable]
+    if foreign:
+        described = (models[0].describe() if hasattr(models[0], "describe")
+                     else type(models[0]).__name__)
+        raise ParameterError(f"fit: free = {foreign}: no sensor lag of {described}; its "
+                             f"sensors' lags: {', '.join(freeable)} (an offset: "
+                             "offsets=[signal])")
+    lags = [n for n in free if n in freeable]
+    stated = Sensors.of(models[0])
+    base.update({n: stated.lag(freeable[n]) for n in lags})
     for names_, what in ((free, "fit"), (list(start or {}), "fit start")):
         unknown = [n for n in names_ if n not in base]
         if unknown:
@@ -896,11 +918,12 @@ def fit(model, records: Record | Sequence[Record], free: Sequence[str], *,
     if bad:
         raise ParameterError(f"fit: offsets for {bad}, which are not fitted signals "
                              f"({', '.join(signals)})")
-    bad = [n for n in lags if SENSOR_LAGS[n] not in signals]
+    bad = [n for n in lags if freeable[n] not in signals]
     if bad:
         raise ParameterError(f"fit: free = {bad}, the lag of a sensor whose signal is not "
                              f"fitted ({', '.join(signals)}); fit its signal too")
-    columns = _columns(free, per_record, len(records), offsets.signals, offsets.records)
+    columns = _columns(free, per_record, len(records), offsets.signals, offsets.records,
+                       freeable)
     theta0 = np.array([0.0 if c.offset else float((start or {}).get(c.label, base[c.label]))
                        if c.lag else float((start or {}).get(c.name, base[c.name]))
                        for c in columns])

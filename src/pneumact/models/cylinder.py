@@ -57,6 +57,7 @@ from .fmu_interface import (
 from .friction import FrictionModel, LuGre
 from .mechanics import explicit_step, stop_force, stop_force_params
 from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
+from .sensors import SensorNames, declare_sensors
 
 if TYPE_CHECKING:
     from ..parameters.files import ParameterSetLike
@@ -115,6 +116,9 @@ declare_kind(
       plausible=(-0.2, 0.3)))
 declare_instances("valve_3_2", valve_a="the 3/2 valve of chamber A (command_a)",
                   valve_b="the 3/2 valve of chamber B (command_b)")
+#: the bench's sensors, one per measured signal (``models.sensors``): sensor_position,
+#: sensor_pressure_a and sensor_pressure_b, parameters ``sensor_pressure_a.lag`` ...
+CYLINDER_SENSORS = declare_sensors(position="m", pressure_a="Pa", pressure_b="Pa")
 declare_relation(("d_rod", "D_bore"), lambda rod, bore: rod < bore,
                  lambda rod, bore: f"must be < D_bore = {bore:g} m (the rod passes "
                                    "through the piston)")
@@ -1314,6 +1318,9 @@ class Cylinder(DeclaredInputs):
         if self.mirrored:
             return "two mirrored 3/2 valves"
         return "two 3/2 valves" if self.two_valves else "5/3 valve"
+
+    #: the sensors of its measured signals, by signal (``models.sensors``)
+    sensor_names: ClassVar[Mapping[str, SensorNames]] = CYLINDER_SENSORS
 
     #: what ``Result.summary()`` computes of its runs: the piston's motion (a step)
     summary_kind: ClassVar[str] = "motion"
