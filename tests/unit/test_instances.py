@@ -14,6 +14,7 @@ import pytest
 import pneumact as pa
 from conftest import load_quietly
 from pneumact import sensitivity as sa
+from pneumact import simulation  # noqa: F401 - registers the catalogue's explanations
 from pneumact.core.assembly import Assembly
 from pneumact.core.component import Block, Part, required_parameters
 from pneumact.models.cylinder import CHAMBER_BLOCK, CYLINDER_BLOCK
