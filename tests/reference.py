@@ -920,3 +920,7 @@ CYLINDER_VALVES_REST_RTOL = 1e-9
 #: test_signature: a prior whose σ2 at the sweep's speed makes this many times the truth's
 #: Fc, more than the whole friction level the branches show
 SIGNATURE_SIGMA2_EXCESS = 3.0
+#: test_signature: the joint fit's standard error (relative) in the spring-line check, and
+#: a joint F0 this many standard deviations of the difference away from the truth
+SPRING_LINE_JOINT_RELATIVE_SE = 1e-4
+SPRING_LINE_DISAGREEMENT = 4.0

@@ -23,6 +23,9 @@ from pneumact.identification import (
     identify_signature,
     synthetic_campaign,
 )
+from pneumact.identification.diagnostics import Verdict
+from pneumact.identification.estimates import Estimates
+from pneumact.identification.signature import spring_line_check
 from pneumact.parameters.family import ActuatorFamily
 
 runner = CliRunner()
@@ -174,6 +177,32 @@ def test_a_level_the_prior_s_sigma2_takes_whole_leaves_fc_untold(cases):
     assert result.parameter_set(partial=True)["Fc"] == prior["Fc"]
     for name in ("F0", "k"):
         assert table.loc[name, "verdict"] == "identified", table
+
+
+def test_the_sweep_s_spring_line_vouches_for_f0_and_k_only_where_the_joint_fit_agrees(cases):
+    """A joint fit that could not vouch for F0 and k (poorly identified: a record it does
+    not follow): the sweep's spring line gives them, with its interval holding the truth,
+    where the joint estimates agree with it; a joint F0 ``ref.SPRING_LINE_DISAGREEMENT``
+    standard deviations away is not vouched for (one of the two estimators is wrong)."""
+    truth, prior, records = cases[0]
+    names = ("F0", "k", "Fc")
+    values = np.array([truth[n] for n in names])
+    stderr = ref.SPRING_LINE_JOINT_RELATIVE_SE * values
+    poorly = [Verdict(n, "poorly identified", "the model does not fit a ramp") for n in names]
+
+    def joint(shift: float) -> Estimates:
+        moved = values + np.array([shift * stderr[0] * np.sqrt(2), 0.0, 0.0])
+        return Estimates(names, moved, stderr, np.diag(stderr**2), 1000, ("N", "N/m", "N"))
+
+    line, vouched = spring_line_check(records, prior, 0.5, joint(0.0), poorly)
+    assert [v.parameter for v in vouched] == ["F0", "k"]
+    assert all(v.identified for v in vouched)
+    for name in ("F0", "k"):
+        low, high = line.interval(0.95)[line.names.index(name)]
+        assert low <= truth[name] <= high, (name, low, high)
+    _, vouched = spring_line_check(records, prior, 0.5, joint(ref.SPRING_LINE_DISAGREEMENT),
+                                   poorly)
+    assert [v.parameter for v in vouched] == ["k"]
 
 
 def test_static_friction_in_the_level_widens_fc_not_biases_it(cases):

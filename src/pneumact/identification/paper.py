@@ -1233,6 +1233,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         judged = [Verdict(v.parameter, POORLY, unfitted[v.parameter], MISFIT_REMEDY)
                   if v.parameter in unfitted and v.identified else v for v in judged]
         no_interval += list(unfitted)
+    final_values, judged, from_line = _spring_line(records, params, prior_spread,
+                                                   final_values, judged)
     if held:  # shown at the prior's values, with no interval
         judged += [Verdict(n, "not identifiable", why_not, REMEDIES[n]) for n in held]
         final_values = _with_held(final_values, list(held), staged)
@@ -1245,6 +1247,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     sources = {n: ("identified, joint refinement" if refine else
                    f"identified, stage {_stage_of(stages, n)}") for n in names}
     sources.update({n: "prior value, held: not identifiable" for n in held})
+    sources.update({n: "identified, the sweep's spring line" for n in from_line})
     identified = with_estimates(
         params, Estimates(tuple(names), final_values.values[idx], final_values.stderr[idx],
                           final_values.covariance[np.ix_(idx, idx)], final_values.dof,
@@ -1257,7 +1260,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
     return PaperIdentification(stages, joint, final_values, judged, diagnostics, residuals,
                                identified, params, records, input_noise, staged,
                                {"friction": friction, "chamber": chamber,
-                                "trusted": trusted, "no_interval": no_interval,
+                                "trusted": trusted + from_line, "no_interval": no_interval,
                                 "joint_failed": joint_failed,
                                 "pressure_side": side, "position_zero": zero,
                                 "sensors": sensors,
@@ -1300,6 +1303,33 @@ def _with_bench(identified, side, zero, sensors: pd.DataFrame):
         info[name] = ParameterInfo(number_text(name, value), source, note)
     return ParameterSet(values, name=identified.name, description=identified.description,
                         provenance=identified.provenance, info=info)
+
+
+def _spring_line(records: Sequence[Record], params, spread: float, estimates: Estimates,
+                 judged: list[Verdict]) -> tuple[Estimates, list[Verdict], list[str]]:
+    """F0 and k from the sweeps' spring line where the joint fit could not vouch for
+    them and agrees with it (``signature.spring_line_check``): their values, covariance
+    block (no correlation with the others kept) and verdicts replaced. Returns the
+    estimates, the verdicts and the names replaced."""
+    from .signature import signature_records, spring_line_check
+
+    kinds = [record_kind(r) for r in records]
+    sweeps = signature_records(records, kinds) if "sweep" in kinds else []
+    line, vouched = spring_line_check(sweeps, params, spread, estimates, judged)
+    if line is None:
+        return estimates, judged, []
+    values, cov = estimates.values.copy(), estimates.covariance.copy()
+    names = [v.parameter for v in vouched]
+    rows = [estimates.names.index(n) for n in names]
+    source = [line.names.index(n) for n in names]
+    values[rows] = line.values[source]
+    cov[rows, :] = 0.0
+    cov[:, rows] = 0.0
+    cov[np.ix_(rows, rows)] = line.covariance[np.ix_(source, source)]
+    replaced = Estimates(estimates.names, values, np.sqrt(np.diag(cov)), cov,
+                         estimates.dof, estimates.units)
+    by_name = {v.parameter: v for v in vouched}
+    return replaced, [by_name.get(v.parameter, v) for v in judged], names
 
 
 def _with_moves(estimates: Estimates, moves: dict[str, float]) -> Estimates:

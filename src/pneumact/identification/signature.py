@@ -50,8 +50,8 @@ from .estimates import Estimates, linear_least_squares
 from .inputs import noise_level, sensor_noise
 from .stages import StageResult, sliding_branches
 
-__all__ = ["SIGNATURE_PARAMETERS", "SPEED_RANGE", "SignatureFit", "signature_fit",
-           "valve_numbers"]
+__all__ = ["SIGNATURE_PARAMETERS", "SPEED_RANGE", "SPRING_LINE_AGREEMENT", "SignatureFit",
+           "signature_fit", "spring_line_check", "valve_numbers"]
 
 #: What a signature can determine; the other spring and friction parameters it cannot.
 SIGNATURE_PARAMETERS = ("F0", "k", "Fc", "sigma2")
@@ -241,6 +241,47 @@ def signature_verdicts(fit: SignatureFit, names: Sequence[str]) -> list[Verdict]
                                NOT_FROM_A_SIGNATURE.get(name, "not from a signature"),
                                REMEDIES.get(name, "")))
     return out
+
+
+#: The spring line of the sweep vouches for the joint fit's F0 or k where the two differ
+#: by less than this many standard deviations of their difference (95 %)
+SPRING_LINE_AGREEMENT = 1.96
+#: The parameters a sweep's spring line tells whatever the friction dynamics do
+SPRING_LINE = ("F0", "k")
+
+
+def spring_line_check(sweeps: Sequence[Record], params, spread: float, joint: Estimates,
+                      judged: Sequence[Verdict]) -> tuple[Estimates | None, list[Verdict]]:
+    """F0 and k from the sweeps' spring line where the joint fit could not vouch for
+    them (a record it does not follow, a misfit's influence): the spring line is the
+    mean of the two branches, which stick-slip and the friction's dynamics move little,
+    but it has failure modes of its own (stick-slip on the branches biases it by a
+    few standard errors). So it is taken only where its own fit holds (the branches'
+    structure, its verdict) and the joint estimate, made by output error from every
+    record, agrees with it within ``SPRING_LINE_AGREEMENT`` standard deviations of the
+    difference: two estimators that fail differently. Returns the spring line's
+    estimates (None where nothing was vouched for) and a verdict per vouched name."""
+    wanted = [v.parameter for v in judged if v.parameter in SPRING_LINE and not v.identified]
+    if not wanted or not sweeps:
+        return None, []
+    try:
+        fitted = signature_fit(sweeps, params, spread)
+    except DataError:  # a sweep without both branches off the stop
+        return None, []
+    own = {v.parameter: v for v in signature_verdicts(fitted, list(SPRING_LINE))}
+    est = fitted.estimates
+    out = []
+    for name in wanted:
+        j = joint.names.index(name)
+        se_joint, se_line = joint.stderr[j], est.stderr[est.names.index(name)]
+        if not (own[name].identified and np.isfinite(se_joint)):
+            continue
+        distance = abs(joint.values[j] - est[name]) / np.hypot(se_joint, se_line)
+        if distance <= SPRING_LINE_AGREEMENT:
+            out.append(Verdict(name, own[name].verdict, f"{own[name].reason}, from the "
+                               f"sweep's spring line (the joint fit, which could not vouch "
+                               f"for it, agrees within {distance:.2g} standard deviations)"))
+    return (est if out else None), out
 
 
 def _turns(record: Record) -> list[int]:
