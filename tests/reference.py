@@ -924,3 +924,5 @@ SIGNATURE_SIGMA2_EXCESS = 3.0
 #: a joint F0 this many standard deviations of the difference away from the truth
 SPRING_LINE_JOINT_RELATIVE_SE = 1e-4
 SPRING_LINE_DISAGREEMENT = 4.0
+#: test_signature: a position sensor's first-order lag [s] on a signature
+SIGNATURE_LAG = 5e-3

@@ -26,6 +26,7 @@ from pneumact.identification import (
 from pneumact.identification.diagnostics import Verdict
 from pneumact.identification.estimates import Estimates
 from pneumact.identification.signature import spring_line_check
+from pneumact.models.sensors import first_order_lag
 from pneumact.parameters.family import ActuatorFamily
 
 runner = CliRunner()
@@ -203,6 +204,22 @@ def test_the_sweep_s_spring_line_vouches_for_f0_and_k_only_where_the_joint_fit_a
     _, vouched = spring_line_check(records, prior, 0.5, joint(ref.SPRING_LINE_DISAGREEMENT),
                                    poorly)
     assert [v.parameter for v in vouched] == ["k"]
+
+
+def test_a_stated_position_lag_is_taken_off_the_friction_level(cases):
+    """A position sensor lagging ``ref.SIGNATURE_LAG``: it reads k·τ·|v| of friction on
+    the branches. Not stated, the result names what a lag would add; stated in the prior
+    (``position_lag``), it is taken off and Fc's interval holds the truth."""
+    truth, prior, records = cases[0]
+    lagged = [pa.Record.from_arrays(r.time, {**r.signals, "position": first_order_lag(
+        r.time, r["position"], ref.SIGNATURE_LAG)}, r.units, r.source, r.meta)
+        for r in records]
+    unstated = identify_signature(lagged, prior)
+    assert any("reads as friction" in d.message for d in unstated.diagnostics)
+    stated = identify_signature(lagged, prior.replace(position_lag=ref.SIGNATURE_LAG))
+    assert not any("reads as friction" in d.message for d in stated.diagnostics)
+    row = stated.to_pandas(truth=truth).loc["Fc"]
+    assert row["truth_in_ci95"], row
 
 
 def test_static_friction_in_the_level_widens_fc_not_biases_it(cases):

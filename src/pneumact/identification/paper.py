@@ -71,6 +71,7 @@ from .faults import (
     sensor_notes,
     undersampled_presliding,
     viscous_lag_bound,
+    without_lag,
 )
 from .fit import FitResult, one_blas_thread
 from .joint import (
@@ -1528,6 +1529,12 @@ def identify_signature(records: Sequence[Record], params, *, prior_spread: float
     kinds = [record_kind(r) for r in records]
     sweeps = signature_records(records, kinds)
     diagnostics: list[Diagnostic] = list(zero.diagnostics) + list(side.diagnostics)
+    lag = float(params["position_lag"]) if "position_lag" in params else 0.0
+    if lag > 0:  # a stated lag: k·τ·|v| of friction on the branches, and transients
+        sweeps = without_lag(sweeps, lag)
+        diagnostics.append(Diagnostic(
+            "note", "signature", f"the position sensor's stated lag of {lag * 1e3:.3g} ms "
+            "(position_lag) is undone on the sweeps before the spring line is fitted"))
     unused = [Path(r.source).name for r, k in zip(records, kinds, strict=True) if k != "sweep"]
     if unused:
         diagnostics.append(Diagnostic(

@@ -69,6 +69,10 @@ STRIBECK_DECAYED = 3.0
 #: a sine sweep); a window 4× longer has 8× less noise, and the margins keep the
 #: reversals, where a long window blurs, out of the fit.
 SIGNATURE_SMOOTHING = 4.0
+#: A signature names the friction a position sensor's lag would add (k·τ·|v|) where a
+#: lag of ``LAG_NOTE_LAG`` [s] (a potentiometer's filter) adds this share of Fc or more
+LAG_NOTE_LAG = 0.01
+LAG_NOTE_SHARE = 0.01
 #: The dead band is read where the position has left its turning value by this many
 #: position-noise standard deviations (a 5-σ move: noise alone never qualifies).
 DEAD_BAND_SIGMAS = 5.0
@@ -192,6 +196,17 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
             "note", "signature", f"the branches slide at one speed ({low * 1e3:.3g}-"
             f"{high * 1e3:.3g} mm/s): σ2 is held at the prior's {prior_s2:.3g} N·s/m and "
             f"its ±{100 * spread:.0f} % goes into Fc's interval", REMEDIES["sigma2"]))
+    # a position sensor's lag τ reads x − v·τ: k·τ·|v| of friction on the branches (its
+    # transients at the reversals aside); undone where the prior states it
+    # (``identify_signature``), else named
+    lagged = est["k"] * LAG_NOTE_LAG * mean_speed
+    if "position_lag" not in params and lagged >= LAG_NOTE_SHARE * abs(fc):
+        notes.append(Diagnostic(
+            "note", "signature", f"a position sensor's lag τ reads as friction, k·τ·|v|: "
+            f"{lagged:.3g} N for a {LAG_NOTE_LAG * 1e3:.3g} ms lag at the sweep's "
+            f"{mean_speed * 1e3:.3g} mm/s ({100 * lagged / abs(fc):.2g} % of Fc); Fc assumes "
+            "a sensor without lag", "state the sensor's lag (position_lag) in the prior, or "
+            "sweep more slowly"))
     if bound > IDENTIFIED_HALF_WIDTH * abs(fc):
         notes.append(Diagnostic(
             "warning", "signature", f"the sweep slides at {slowest * 1e3:.3g} mm/s, within "
@@ -258,8 +273,9 @@ def spring_line_check(sweeps: Sequence[Record], params, spread: float, joint: Es
     but it has failure modes of its own (stick-slip on the branches biases it by a
     few standard errors). So it is taken only where its own fit holds (the branches'
     structure, its verdict) and the joint estimate, made by output error from every
-    record, agrees with it within ``SPRING_LINE_AGREEMENT`` standard deviations of the
-    difference: two estimators that fail differently. Returns the spring line's
+    record, is precise (it would be identified but for the misfit) and agrees with it
+    within ``SPRING_LINE_AGREEMENT`` standard deviations of the difference: two
+    estimators that fail differently. Returns the spring line's
     estimates (None where nothing was vouched for) and a verdict per vouched name."""
     wanted = [v.parameter for v in judged if v.parameter in SPRING_LINE and not v.identified]
     if not wanted or not sweeps:
@@ -274,7 +290,10 @@ def spring_line_check(sweeps: Sequence[Record], params, spread: float, joint: Es
     for name in wanted:
         j = joint.names.index(name)
         se_joint, se_line = joint.stderr[j], est.stderr[est.names.index(name)]
-        if not (own[name].identified and np.isfinite(se_joint)):
+        # the joint estimate is precise enough to be identified but for what it could
+        # not vouch for: agreement with a wide one (two optima) would prove nothing
+        precise = 1.96 * se_joint <= IDENTIFIED_HALF_WIDTH * abs(joint.values[j])
+        if not (own[name].identified and precise):
             continue
         distance = abs(joint.values[j] - est[name]) / np.hypot(se_joint, se_line)
         if distance <= SPRING_LINE_AGREEMENT:
