@@ -433,12 +433,19 @@ def path_conductances(u, p, ov):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def chamber_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob):  # pragma: no cover - compiled
-    """Net mass flows into A and B, each through its own paths (at ``oa``, ``ob``) at its
-    command (ua, ub) and supply pressure p_sup, and their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b,
+def spool_conductances(u, p, o):  # pragma: no cover - compiled
+    """The 5/3 valve's paths' conductances at spool position u: (supply → A, A → exhaust,
+    supply → B, B → exhaust); B's at −u are A's swapped, so A's alone are evaluated."""
+    fill_a, vent_a = path_conductances(u, p, o + CY_PATHS)
+    return fill_a, vent_a, vent_a, fill_a
+
+
+@njit(cache=True)
+def chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p,
+                  o):  # pragma: no cover - compiled
+    """Net mass flows into A and B, each through its own paths of conductances (c_fill,
+    c_vent) at supply pressure p_sup, and their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b,
     ∂ṁ_b/∂p_b)."""
-    fill_a, vent_a = path_conductances(ua, p, oa)
-    fill_b, vent_b = path_conductances(ub, p, ob)
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     flow_a = chamber_inflow(pa, p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature)
@@ -447,11 +454,11 @@ def chamber_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob):  # pragma: no cover - co
 
 
 @njit(cache=True)
-def cylinder_rates(x, v, pa, pb, ua, ub, p_sup, f_fric, f_load, p, o, oa,
-                   ob):  # pragma: no cover - compiled
-    """(dv/dt, dp_a/dt, dp_b/dt), each chamber fed through its own paths
-    (``chamber_flows``)."""
-    mdot_a, _, mdot_b, _ = chamber_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+def cylinder_rates(x, v, pa, pb, fill_a, vent_a, fill_b, vent_b, p_sup, f_fric, f_load, p,
+                   o):  # pragma: no cover - compiled
+    """(dv/dt, dp_a/dt, dp_b/dt), each chamber fed through its own paths of conductances
+    (c_fill, c_vent) (``chamber_flows``)."""
+    mdot_a, _, mdot_b, _ = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p, o)
     vol_a, vol_b = chamber_volumes(x, p, o)
     n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
@@ -461,10 +468,9 @@ def cylinder_rates(x, v, pa, pb, ua, ub, p_sup, f_fric, f_load, p, o, oa,
 
 
 @njit(cache=True)
-def rest_pressures(ua, ub, p_sup, p, o, oa, ob):  # pragma: no cover - compiled
-    """(p_a, p_b) at which each chamber's flows through its own paths balance."""
-    fill_a, vent_a = path_conductances(ua, p, oa)
-    fill_b, vent_b = path_conductances(ub, p, ob)
+def rest_pressures(fill_a, vent_a, fill_b, vent_b, p_sup, p, o):  # pragma: no cover
+    """(p_a, p_b) at which each chamber's flows through its own paths of conductances
+    (c_fill, c_vent) balance."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     return (rest_pressure(p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature),
@@ -510,7 +516,9 @@ def cylinder_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row
     n = p[o + CY_N]
     path_params(row_a, pa, vol_a, area_a * v, ua, p_sup, held, p, o, oa, g)
     path_params(row_b, pb, vol_b, -area_b * v, ub, p_sup, held, p, o, ob, g)
-    mdot_a, _, mdot_b, _ = chamber_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+    fill_a, vent_a = path_conductances(ua, p, oa)
+    fill_b, vent_b = path_conductances(ub, p, ob)
+    mdot_a, _, mdot_b, _ = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p, o)
     rt = p[o + CY_R] * p[o + CY_T]
     rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
     rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)

@@ -2,13 +2,15 @@
 paths (supply → chamber, chamber → exhaust), by a 5/3 proportional valve or by a
 proportional 3/2 valve per chamber (``TWO_VALVES``, bound by the model).
 
-A chamber's flow reads its paths' C, leak and overlap at an offset (``_paths``: the 5/3
-valve's entries of the cylinder block for both chambers, or each 3/2 valve's own block,
-``VALVE_A_LO``, ``VALVE_B_LO``) at its own command (``_commands``: the 5/3 valve's spool
-position u for A and −u for B, its ports mirrored; or each 3/2 valve's command on its
-channel ``CH_COMMAND_A``, ``CH_COMMAND_B``, B's times ``COMMAND_B_SIGN``, −1 where the
-valves are mirrored and both read the drive). One set of equations thus serves both
-(``models.cylinder``: ``chamber_flows``, ``cylinder_rates``, ``cylinder_params``).
+Each chamber has its own command (``_commands``: the 5/3 valve's spool position u for A
+and −u for B, its ports mirrored; or each 3/2 valve's command on its channel
+``CH_COMMAND_A``, ``CH_COMMAND_B``, B's times ``COMMAND_B_SIGN``, −1 where the valves are
+mirrored and both read the drive) and its own paths, whose C, leak and overlap stand at
+an offset (``_paths``: the 5/3 valve's entries of the cylinder block for both chambers,
+or each 3/2 valve's own block, ``VALVE_A_LO``, ``VALVE_B_LO``); their conductances at the
+command (``_conductances``: the 5/3 valve's B paths are A's swapped, evaluated once) feed
+one set of equations for both (``models.cylinder``: ``chamber_flows``, ``cylinder_rates``,
+``rest_pressures``, ``cylinder_params``).
 
 States are [position, velocity, pressure_a, pressure_b | friction states | the spool's
 position (and velocity) when it lags | the chambers' temperatures with heat transfer],
@@ -47,8 +49,10 @@ from pneumact.models.cylinder import (
     cylinder_rates,
     derive_cylinder,
     end_stop_guards,
+    path_conductances,
     piston_force,
     rest_pressures,
+    spool_conductances,
     supply_held,
     supply_pressure,
     valve_command,
@@ -94,7 +98,7 @@ OUT_MASS_FLOW_A = OUT_MASS_FLOW_B = None
 OUT_SPOOL = OUT_COMMAND_A = OUT_COMMAND_B = -1  # generated where the model has them
 
 
-@kernel()
+@kernel(inline="always")
 def _commands(t, ts, y, prm, sig, ptr):
     """Each chamber's valve command (u_a, u_b): the 5/3 valve's spool position u (its
     command, or its lagged state) and −u, or each 3/2 valve's on its channel."""
@@ -112,6 +116,18 @@ def _paths():
     if TWO_VALVES:
         return VALVE_A_LO, VALVE_B_LO
     return CYLINDER_LO + CY_PATHS, CYLINDER_LO + CY_PATHS
+
+
+@kernel(inline="always")
+def _conductances(ua, ub, prm):
+    """Each chamber's supply and exhaust paths' conductances at its command (c_fill_a,
+    c_vent_a, c_fill_b, c_vent_b): each 3/2 valve's, or the 5/3 valve's (B's A's swapped:
+    one opening of each path, as the spool has)."""
+    if TWO_VALVES:
+        fill_a, vent_a = path_conductances(ua, prm, VALVE_A_LO)
+        fill_b, vent_b = path_conductances(ub, prm, VALVE_B_LO)
+        return fill_a, vent_a, fill_b, vent_b
+    return spool_conductances(ua, prm, CYLINDER_LO)
 
 
 @kernel(inline="always")
@@ -141,11 +157,11 @@ def rhs(t, ts, y, prm, sig, ptr, dydt):
     pb = y[S_PRESSURE_B]
     f_fric, z_rates = friction_rates(v, y, S_FRICTION, prm, FRICTION_LO)
     ua, ub = _commands(t, ts, y, prm, sig, ptr)
-    oa, ob = _paths()
+    fill_a, vent_a, fill_b, vent_b = _conductances(ua, ub, prm)
     p_sup = _supply(t, ts, prm, sig, ptr)
     accel, rate_a, rate_b = cylinder_rates(
-        x, v, pa, pb, ua, ub, p_sup, f_fric, load_against_time(t, ts, sig, ptr), prm,
-        CYLINDER_LO, oa, ob)
+        x, v, pa, pb, fill_a, vent_a, fill_b, vent_b, p_sup, f_fric,
+        load_against_time(t, ts, sig, ptr), prm, CYLINDER_LO)
     dydt[S_POSITION] = v
     dydt[S_VELOCITY] = accel
     dydt[S_PRESSURE_A] = rate_a
@@ -170,9 +186,10 @@ def jac(t, ts, y, prm, sig, ptr, out):
     _, df_dv, z_partials = friction_partials(v, y, S_FRICTION, prm, FRICTION_LO)
     _, _, ds_dx, ds_dv = piston_force(x, v, pa, pb, prm, o)
     ua, ub = _commands(t, ts, y, prm, sig, ptr)
-    oa, ob = _paths()
+    fill_a, vent_a, fill_b, vent_b = _conductances(ua, ub, prm)
     p_sup = _supply(t, ts, prm, sig, ptr)
-    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(ua, ub, p_sup, pa, pb, prm, o, oa, ob)
+    mdot_a, dma_dpa, mdot_b, dmb_dpb = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup,
+                                                     pa, pb, prm, o)
     vol_a, vol_b = chamber_volumes(x, prm, o)
     out[S_POSITION, S_VELOCITY] = 1.0
     out[S_VELOCITY, S_POSITION] = ds_dx / m
@@ -232,12 +249,12 @@ def outputs(t, ts, y, prm, sig, ptr, out):
     x = y[S_POSITION]
     v = y[S_VELOCITY]
     ua, ub = _commands(t, ts, y, prm, sig, ptr)
-    oa, ob = _paths()
+    fill_a, vent_a, fill_b, vent_b = _conductances(ua, ub, prm)
     f_press, f_stop, _, _ = piston_force(x, v, y[S_PRESSURE_A], y[S_PRESSURE_B], prm,
                                          CYLINDER_LO)
     p_sup = _supply(t, ts, prm, sig, ptr)
-    mdot_a, _, mdot_b, _ = chamber_flows(ua, ub, p_sup, y[S_PRESSURE_A], y[S_PRESSURE_B],
-                                         prm, CYLINDER_LO, oa, ob)
+    mdot_a, _, mdot_b, _ = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup,
+                                         y[S_PRESSURE_A], y[S_PRESSURE_B], prm, CYLINDER_LO)
     out[OUT_FRICTION] = friction_force(v, y, S_FRICTION, prm, FRICTION_LO)
     out[OUT_PRESSURE_FORCE] = f_press
     out[OUT_STOP_FORCE] = f_stop
@@ -281,8 +298,9 @@ def initial_state(t, ts, prm, sig, ptr, y0):
     o = CYLINDER_LO
     spool_start(t, ts, prm, VALVE_LO, sig, ptr, y0, S_VALVE)
     ua, ub = _commands(t, ts, y0, prm, sig, ptr)
-    oa, ob = _paths()
-    pa, pb = rest_pressures(ua, ub, _supply(t, ts, prm, sig, ptr), prm, o, oa, ob)
+    fill_a, vent_a, fill_b, vent_b = _conductances(ua, ub, prm)
+    pa, pb = rest_pressures(fill_a, vent_a, fill_b, vent_b, _supply(t, ts, prm, sig, ptr),
+                            prm, o)
     f_press = piston_force(0.0, 0.0, pa, pb, prm, o)[0]
     net0 = f_press - load_against_time(t, ts, sig, ptr)
     y0[S_POSITION] = rest_position(net0, 0.0, prm[o + CY_KSTOP], prm[o + CY_XMAX])
