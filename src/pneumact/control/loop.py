@@ -232,24 +232,30 @@ class ClosedLoop(DeclaredInputs):
                 "bias": float(self.bias), "comp_gain": self._compensation_gain() or 0.0}
         return (*self.plant.parts(), self.controller.part(loop, self.command_unit))
 
-    def _plant_module(self):
+    def _plant_outputs(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The plant's output names and units: its own where it says them (a cylinder's
+        depend on its valves), else its template's."""
         import importlib
 
-        return importlib.import_module(self.plant.template)
+        names = getattr(self.plant, "output_names", None)
+        units = getattr(self.plant, "output_units", None)
+        if names is not None and units is not None:
+            return tuple(names), tuple(units)
+        module = importlib.import_module(self.plant.template)
+        return tuple(module.OUTPUT_NAMES), tuple(module.OUTPUT_UNITS)
 
     @property
     def output_names(self) -> tuple[str, ...]:
         from ..models.loop_template import LOOP_OUTPUTS
 
         # the rig's "drive" output is the drive signal, here the controller's force
-        plant = tuple("drive_input" if n == "drive" else n
-                      for n in self._plant_module().OUTPUT_NAMES)
+        plant = tuple("drive_input" if n == "drive" else n for n in self._plant_outputs()[0])
         return plant + LOOP_OUTPUTS
 
     @property
     def output_units(self) -> tuple[str, ...]:
-        plant = tuple(self.input_unit if n == "drive" else u for n, u in zip(
-            self._plant_module().OUTPUT_NAMES, self._plant_module().OUTPUT_UNITS, strict=True))
+        plant = tuple(self.input_unit if n == "drive" else u
+                      for n, u in zip(*self._plant_outputs(), strict=True))
         return (*plant, "m", "m", self.command_unit, self.input_unit, "N")
 
     def _plant_states(self) -> int:
@@ -262,7 +268,7 @@ class ClosedLoop(DeclaredInputs):
 
     def kernel_constants(self) -> dict[str, object]:
         plant: dict[str, object] = dict(self.plant.kernel_constants())
-        n_plant_out = len(self._plant_module().OUTPUT_NAMES)
+        n_plant_out = len(self._plant_outputs()[0])
         return {**plant, **self.controller.switches(), "PLANT_NSTATE": self._plant_states(),
                 "PRESSURE_FEEDBACK": self.plant.pressure_feedback,
                 "PLANT_NOUT": n_plant_out, "NOUT": len(self.output_names),

@@ -219,10 +219,9 @@ def path_opening_slopes(travel, overlap):  # pragma: no cover - compiled
 @njit(cache=True)
 def spool_fractions(u, leak, overlap):  # pragma: no cover - compiled
     """Openings of the four paths as fractions of valve_C at spool position u (clipped to
-    [−1, 1]), each with the leakage: (supply → A, A → exhaust, supply → B, B → exhaust)."""
-    spool = min(max(u, -1.0), 1.0)
-    extend = path_opening(spool, overlap) + leak
-    retract = path_opening(-spool, overlap) + leak
+    [−1, 1]), each with the leakage: (supply → A, A → exhaust, supply → B, B → exhaust):
+    chamber A's paths at command u, B's the same two swapped (``path_fractions``)."""
+    extend, retract = path_fractions(u, leak, overlap)
     return extend, retract, retract, extend
 
 
@@ -294,18 +293,6 @@ def rest_pressure(p_supply, p_exhaust, c_fill, c_vent, b, m, r_lam,
 
 
 @njit(cache=True)
-def rest_pressures(u, p_sup, p, o):  # pragma: no cover - compiled
-    """(p_a, p_b) at which each chamber's flows balance at spool command u and supply
-    pressure p_sup."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
-    c = p[o + CY_C]
-    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_exh = p[o + CY_PATM]
-    return (rest_pressure(p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam, temperature),
-            rest_pressure(p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam, temperature))
-
-
-@njit(cache=True)
 def end_stop_guards(x, p, o):  # pragma: no cover - compiled
     """x and x_max − x: where the end-stop force switches on (> 0 off the stops)."""
     return x, p[o + CY_XMAX] - x
@@ -338,21 +325,6 @@ def supply_held(sig, ptr, ch):  # pragma: no cover - compiled
     """Whether the supply pressure is the parameter p_supply (no experiment drives the
     input ``supply`` on channel ``ch``): only then does p_supply act on the run."""
     return not channel_driven(sig, ptr, ch)
-
-
-@njit(cache=True)
-def chamber_flows(u, p_sup, pa, pb, p, o):  # pragma: no cover - compiled
-    """Net mass flows into A and B at spool position u and supply pressure p_sup, and
-    their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b, ∂ṁ_b/∂p_b)."""
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
-    c = p[o + CY_C]
-    b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
-    p_exh = p[o + CY_PATM]
-    flow_a = chamber_inflow(pa, p_sup, p_exh, c * fill_a, c * vent_a, b, m, r_lam,
-                            temperature)
-    flow_b = chamber_inflow(pb, p_sup, p_exh, c * fill_b, c * vent_b, b, m, r_lam,
-                            temperature)
-    return flow_a[0], flow_a[1], flow_b[0], flow_b[1]
 
 
 @njit(cache=True)
@@ -390,18 +362,6 @@ def piston_force(x, v, pa, pb, p, o):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def cylinder_rates(x, v, pa, pb, u, p_sup, f_fric, f_load, p, o):  # pragma: no cover
-    """(dv/dt, dp_a/dt, dp_b/dt)."""
-    mdot_a, _, mdot_b, _ = chamber_flows(u, p_sup, pa, pb, p, o)
-    vol_a, vol_b = chamber_volumes(x, p, o)
-    n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
-    f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
-    return ((f_press - f_fric - f_load + f_stop) / p[o + CY_M],
-            chamber_pressure_rate(pa, vol_a, p[o + CY_AA] * v, mdot_a, n, rt),
-            chamber_pressure_rate(pb, vol_b, -p[o + CY_AB] * v, mdot_b, n, rt))
-
-
-@njit(cache=True)
 def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
                 rt):  # pragma: no cover - compiled
     """(∂ṗ/∂x, ∂ṗ/∂v, ∂ṗ/∂p) of a chamber whose volume changes with x at dvol_dx and
@@ -412,23 +372,15 @@ def chamber_row(pressure, volume, dvol_dx, dvol_dv, v, mdot, dmdot_dp, n,
 
 
 @njit(cache=True)
-def chamber_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c,
-                   p_sup, held, p, o, g):  # pragma: no cover - compiled
-    """g[row, o + k] = ∂ṗ/∂θ_k of one chamber for the flow entries of the block (the
-    volume's entries are the caller's): valve_C, valve_leak, spool_overlap, p_supply
-    (only where it is ``held``: a driven supply pressure p_sup does not read it), p_atm,
-    iso_b, iso_m, r_lin, R, T, n_poly. ``u_fill``, ``u_vent`` are the paths' fractions,
-    ``e_fill``, ``e_vent`` their slopes in the overlap."""
-    flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p_sup,
-                held, p, o, g, o + CY_C, o + CY_LEAK, o + CY_OVERLAP)
-
-
-@njit(cache=True)
 def flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent, c, p_sup,
                 held, p, o, g, col_c, col_leak, col_overlap):  # pragma: no cover - compiled
-    """``chamber_params`` with the valve's C, leakage and overlap written in the columns
-    ``col_c``, ``col_leak``, ``col_overlap`` (the 5/3 valve's in the cylinder block, a 3/2
-    valve's in its own block), the others in the cylinder block at ``o``."""
+    """g[row, ·] = ∂ṗ/∂θ of one chamber for its flow's entries (the volume's are the
+    caller's): its paths' C, leakage and overlap in the columns ``col_c``, ``col_leak``,
+    ``col_overlap`` (the 5/3 valve's in the cylinder block, a 3/2 valve's in its own),
+    p_supply (only where it is ``held``: a driven supply pressure p_sup does not read it),
+    p_atm, iso_b, iso_m, r_lin, R, T and n_poly in the cylinder block at ``o``. ``u_fill``,
+    ``u_vent`` are the paths' fractions, ``e_fill``, ``e_vent`` their slopes in the
+    overlap."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     n, r_gas = p[o + CY_N], p[o + CY_R]
@@ -451,77 +403,53 @@ def flow_params(row, pressure, volume, vol_rate, u_fill, u_vent, e_fill, e_vent,
     g[row, o + CY_N] = (rt * mdot - pressure * vol_rate) / volume
 
 
-@njit(cache=True)
-def cylinder_params(x, v, pa, pb, u, p_sup, held, net, p, o, g, row_v, row_a,
-                    row_b):  # pragma: no cover - compiled
-    """The cylinder block's columns of ∂f/∂θ: the velocity row (dv/dt = net/m) and both
-    chambers' rows (``g`` zeroed by the caller), at supply pressure p_sup (``held``:
-    the parameter p_supply's)."""
-    m_mass = p[o + CY_M]
-    p_atm = p[o + CY_PATM]
-    area_a, area_b = p[o + CY_AA], p[o + CY_AB]
-    dks, dcs, dxmax = stop_force_params(x, v, p[o + CY_KSTOP], p[o + CY_CSTOP],
-                                        p[o + CY_XMAX])
-    g[row_v, o + CY_M] = -net / (m_mass * m_mass)
-    g[row_v, o + CY_AA] = (pa - p_atm) / m_mass
-    g[row_v, o + CY_AB] = (p_atm - pb) / m_mass
-    g[row_v, o + CY_PATM] = (area_b - area_a) / m_mass
-    g[row_v, o + CY_KSTOP] = dks / m_mass
-    g[row_v, o + CY_CSTOP] = dcs / m_mass
-    g[row_v, o + CY_XMAX] = dxmax / m_mass
-    fill_a, vent_a, fill_b, vent_b = spool_fractions(u, p[o + CY_LEAK], p[o + CY_OVERLAP])
-    c = p[o + CY_C]
-    vol_a, vol_b = chamber_volumes(x, p, o)
-    n = p[o + CY_N]
-    _, _, e_extend, e_retract = spool_fraction_slopes(u, p[o + CY_OVERLAP])
-    chamber_params(row_a, pa, vol_a, area_a * v, fill_a, vent_a, e_extend, e_retract, c,
-                   p_sup, held, p, o, g)
-    chamber_params(row_b, pb, vol_b, -area_b * v, fill_b, vent_b, e_retract, e_extend, c,
-                   p_sup, held, p, o, g)
-    mdot_a, _, mdot_b, _ = chamber_flows(u, p_sup, pa, pb, p, o)
-    rt = p[o + CY_R] * p[o + CY_T]
-    rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
-    rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)
-    g[row_a, o + CY_VDA] = -rate_a / vol_a
-    g[row_a, o + CY_AA] = -rate_a / vol_a * x - n / vol_a * pa * v
-    g[row_b, o + CY_VDB] = -rate_b / vol_b
-    g[row_b, o + CY_AB] = -rate_b / vol_b * (p[o + CY_XMAX] - x) + n / vol_b * pb * v
-    g[row_b, o + CY_XMAX] = -rate_b / vol_b * area_b
-
-
-# ------------------------------------------- two proportional 3/2 valves, one per chamber
+# ---------------------------------------------------- each chamber's own valve paths
 #: a 3/2 valve's block (the kind ``valve_3_2``, placed as valve_a and valve_b): the
 #: conductance of each of its paths fully open, its leakage and its spool's overlap
 VALVE32_BLOCK = Block.of("C", "leak", "overlap")
 V32_C = VALVE32_BLOCK.index("C")
 V32_LEAK = VALVE32_BLOCK.index("leak")
 V32_OVERLAP = VALVE32_BLOCK.index("overlap")
+#: where the 5/3 valve's (valve_C, valve_leak, spool_overlap) start in the cylinder block:
+#: in a 3/2 valve block's order, so that each chamber's flow reads the 5/3 valve's paths
+#: at o + CY_PATHS as it reads a 3/2 valve's at that valve's block (one code for both)
+CY_PATHS = CY_C
+if (CY_LEAK - CY_PATHS, CY_OVERLAP - CY_PATHS) != (V32_LEAK, V32_OVERLAP):
+    raise RuntimeError("the cylinder block's 5/3 valve entries must follow VALVE32_BLOCK")
 
 
 @njit(cache=True)
-def valve32_fractions(u, leak, overlap):  # pragma: no cover - compiled
-    """Openings of a 3/2 valve's two paths as fractions of its C at command u (clipped to
-    [−1, 1]), each with the leakage: (supply → chamber, chamber → exhaust); the same
-    arithmetic as ``spool_fractions``' paths of chamber A."""
+def path_fractions(u, leak, overlap):  # pragma: no cover - compiled
+    """Openings of one chamber's two paths as fractions of their C at its valve's command
+    u (clipped to [−1, 1]), each with the leakage: (supply → chamber, chamber →
+    exhaust). The 5/3 valve drives A's paths by its spool u and B's by −u."""
     spool = min(max(u, -1.0), 1.0)
     return path_opening(spool, overlap) + leak, path_opening(-spool, overlap) + leak
 
 
 @njit(cache=True)
-def valve32_conductances(u, p, ov):  # pragma: no cover - compiled
-    """(c_fill, c_vent) of the 3/2 valve whose block is at offset ``ov``, at command u."""
-    fill, vent = valve32_fractions(u, p[ov + V32_LEAK], p[ov + V32_OVERLAP])
+def path_conductances(u, p, ov):  # pragma: no cover - compiled
+    """(c_fill, c_vent) at command u of the paths whose C, leak and overlap stand at ``ov``
+    (a 3/2 valve's block, or the 5/3 valve's entries: o + CY_PATHS)."""
+    fill, vent = path_fractions(u, p[ov + V32_LEAK], p[ov + V32_OVERLAP])
     c = p[ov + V32_C]
     return c * fill, c * vent
 
 
 @njit(cache=True)
-def valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob):  # pragma: no cover - compiled
-    """Net mass flows into A and B through their own 3/2 valves (blocks at ``oa``, ``ob``)
-    at commands ua, ub and supply pressure p_sup, and their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b,
+def spool_conductances(u, p, o):  # pragma: no cover - compiled
+    """The 5/3 valve's paths' conductances at spool position u: (supply → A, A → exhaust,
+    supply → B, B → exhaust); B's at −u are A's swapped, so A's alone are evaluated."""
+    fill_a, vent_a = path_conductances(u, p, o + CY_PATHS)
+    return fill_a, vent_a, vent_a, fill_a
+
+
+@njit(cache=True)
+def chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p,
+                  o):  # pragma: no cover - compiled
+    """Net mass flows into A and B, each through its own paths of conductances (c_fill,
+    c_vent) at supply pressure p_sup, and their slopes (ṁ_a, ∂ṁ_a/∂p_a, ṁ_b,
     ∂ṁ_b/∂p_b)."""
-    fill_a, vent_a = valve32_conductances(ua, p, oa)
-    fill_b, vent_b = valve32_conductances(ub, p, ob)
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     flow_a = chamber_inflow(pa, p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature)
@@ -530,10 +458,11 @@ def valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob):  # pragma: no cover - com
 
 
 @njit(cache=True)
-def valves_rates(x, v, pa, pb, ua, ub, p_sup, f_fric, f_load, p, o, oa,
-                 ob):  # pragma: no cover - compiled
-    """(dv/dt, dp_a/dt, dp_b/dt) of the cylinder fed by two 3/2 valves."""
-    mdot_a, _, mdot_b, _ = valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+def cylinder_rates(x, v, pa, pb, fill_a, vent_a, fill_b, vent_b, p_sup, f_fric, f_load, p,
+                   o):  # pragma: no cover - compiled
+    """(dv/dt, dp_a/dt, dp_b/dt), each chamber fed through its own paths of conductances
+    (c_fill, c_vent) (``chamber_flows``)."""
+    mdot_a, _, mdot_b, _ = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p, o)
     vol_a, vol_b = chamber_volumes(x, p, o)
     n, rt = p[o + CY_N], p[o + CY_R] * p[o + CY_T]
     f_press, f_stop, _, _ = piston_force(x, v, pa, pb, p, o)
@@ -543,10 +472,9 @@ def valves_rates(x, v, pa, pb, ua, ub, p_sup, f_fric, f_load, p, o, oa,
 
 
 @njit(cache=True)
-def valves_rest_pressures(ua, ub, p_sup, p, o, oa, ob):  # pragma: no cover - compiled
-    """(p_a, p_b) at which each chamber's flows through its valve balance."""
-    fill_a, vent_a = valve32_conductances(ua, p, oa)
-    fill_b, vent_b = valve32_conductances(ub, p, ob)
+def rest_pressures(fill_a, vent_a, fill_b, vent_b, p_sup, p, o):  # pragma: no cover
+    """(p_a, p_b) at which each chamber's flows through its own paths of conductances
+    (c_fill, c_vent) balance."""
     b, m, r_lam, temperature = p[o + CY_B], p[o + CY_MEXP], p[o + CY_RLIN], p[o + CY_T]
     p_exh = p[o + CY_PATM]
     return (rest_pressure(p_sup, p_exh, fill_a, vent_a, b, m, r_lam, temperature),
@@ -554,14 +482,13 @@ def valves_rest_pressures(ua, ub, p_sup, p, o, oa, ob):  # pragma: no cover - co
 
 
 @njit(cache=True)
-def valve32_chamber_params(row, pressure, volume, vol_rate, u, p_sup, held, p, o, ov,
-                           g):  # pragma: no cover - compiled
-    """g[row, ·] = ∂ṗ/∂θ of one chamber fed by its 3/2 valve (block at ``ov``): the
-    valve's C, leak and overlap, and the cylinder block's flow entries p_supply (only
-    where ``held``), p_atm, iso_b, iso_m, r_lin, R, T, n_poly (the volume's entries are
-    the caller's)."""
+def path_params(row, pressure, volume, vol_rate, u, p_sup, held, p, o, ov,
+                g):  # pragma: no cover - compiled
+    """g[row, ·] = ∂ṗ/∂θ of one chamber fed through its paths (at ``ov``) at command u:
+    their C, leak and overlap, and the cylinder block's flow entries p_supply (only where
+    ``held``), p_atm, iso_b, iso_m, r_lin, R, T, n_poly (the volume's are the caller's)."""
     overlap = p[ov + V32_OVERLAP]
-    u_fill, u_vent = valve32_fractions(u, p[ov + V32_LEAK], overlap)
+    u_fill, u_vent = path_fractions(u, p[ov + V32_LEAK], overlap)
     spool = min(max(u, -1.0), 1.0)
     _, e_fill = path_opening_slopes(spool, overlap)
     _, e_vent = path_opening_slopes(-spool, overlap)
@@ -571,10 +498,12 @@ def valve32_chamber_params(row, pressure, volume, vol_rate, u, p_sup, held, p, o
 
 
 @njit(cache=True)
-def valves_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row_v, row_a,
-                  row_b):  # pragma: no cover - compiled
-    """``cylinder_params`` of the cylinder fed by two 3/2 valves: the velocity row, both
-    chambers' rows in the cylinder block's and each valve's own columns."""
+def cylinder_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row_v, row_a,
+                    row_b):  # pragma: no cover - compiled
+    """The cylinder block's and the paths' columns of ∂f/∂θ: the velocity row (dv/dt =
+    net/m) and both chambers' rows (``g`` zeroed by the caller), each chamber fed through
+    its own paths at its command, at supply pressure p_sup (``held``: the parameter
+    p_supply's)."""
     m_mass = p[o + CY_M]
     p_atm = p[o + CY_PATM]
     area_a, area_b = p[o + CY_AA], p[o + CY_AB]
@@ -589,9 +518,11 @@ def valves_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row_v
     g[row_v, o + CY_XMAX] = dxmax / m_mass
     vol_a, vol_b = chamber_volumes(x, p, o)
     n = p[o + CY_N]
-    valve32_chamber_params(row_a, pa, vol_a, area_a * v, ua, p_sup, held, p, o, oa, g)
-    valve32_chamber_params(row_b, pb, vol_b, -area_b * v, ub, p_sup, held, p, o, ob, g)
-    mdot_a, _, mdot_b, _ = valves_flows(ua, ub, p_sup, pa, pb, p, o, oa, ob)
+    path_params(row_a, pa, vol_a, area_a * v, ua, p_sup, held, p, o, oa, g)
+    path_params(row_b, pb, vol_b, -area_b * v, ub, p_sup, held, p, o, ob, g)
+    fill_a, vent_a = path_conductances(ua, p, oa)
+    fill_b, vent_b = path_conductances(ub, p, ob)
+    mdot_a, _, mdot_b, _ = chamber_flows(fill_a, vent_a, fill_b, vent_b, p_sup, pa, pb, p, o)
     rt = p[o + CY_R] * p[o + CY_T]
     rate_a = chamber_pressure_rate(pa, vol_a, area_a * v, mdot_a, n, rt)
     rate_b = chamber_pressure_rate(pb, vol_b, -area_b * v, mdot_b, n, rt)
@@ -606,7 +537,6 @@ def valves_params(x, v, pa, pb, ua, ub, p_sup, held, net, p, o, oa, ob, g, row_v
 def valve_command(t, ts, sig, ptr, ch):  # pragma: no cover - compiled
     """A 3/2 valve's command on channel ``ch`` (an empty channel reads 0: closed)."""
     return channel_eval(sig, ptr, ch, t, ts)[0]
-
 
 
 # ------------------------------------------------------------------ the spool: direct or lagged
@@ -1176,6 +1106,17 @@ SUPPLY_INPUT = InputChannel(
     shown_in=("Pa", 1.0))
 
 
+#: the cylinder's derived signals (its template's ``outputs``) and their units: the forces,
+#: the load, its valve's command (the 5/3 valve's spool u; two 3/2 valves': command_a and
+#: command_b) and the chambers' net mass flows
+SPOOL_OUTPUT_NAMES = ("friction", "pressure_force", "stop_force", "load", "spool",
+                      "mass_flow_a", "mass_flow_b")
+SPOOL_OUTPUT_UNITS = ("N", "N", "N", "N", "1", "kg/s", "kg/s")
+VALVES_OUTPUT_NAMES = (*SPOOL_OUTPUT_NAMES[:4], "command_a", "command_b",
+                       *SPOOL_OUTPUT_NAMES[5:])
+VALVES_OUTPUT_UNITS = (*SPOOL_OUTPUT_UNITS[:4], "1", "1", *SPOOL_OUTPUT_UNITS[5:])
+
+
 @dataclass(frozen=True, eq=False)
 class Cylinder(DeclaredInputs):
     """A double-acting cylinder (bore ``D_bore``, rod ``d_rod``, stroke ``x_max``) with a
@@ -1191,7 +1132,8 @@ class Cylinder(DeclaredInputs):
     ``valve_a``, ``valve_b`` of one kind, parameters ``valve_a.C`` ...), driven by the
     inputs ``command_a`` and ``command_b`` in [−1, 1] (1 fills the chamber from the
     supply, −1 vents it, 0 closes it); its valves follow their commands at once into
-    polytropic chambers (``valves_*``, ``cylinder_valves_template``). ``mirrored`` (with
+    polytropic chambers (each chamber's flow through its own valve's paths, one
+    template for both). ``mirrored`` (with
     two 3/2 valves only): one command u drives both, u_a = u and u_b = −u (how a pair of
     3/2 valves replaces a 5/3 valve), its input the spool command's (``spool``), so that
     a closed loop and ``linearise`` act on it as on the 5/3 valve."""
@@ -1256,11 +1198,18 @@ class Cylinder(DeclaredInputs):
         """Whether a 3/2 valve feeds each chamber (``valves="two-3/2"``)."""
         return self.valves == TWO_THREE_TWO
 
+    #: the kernel template, one for both valve arrangements (``kernel_constants`` tells
+    #: them apart)
+    template: ClassVar[str] = "pneumact.models.cylinder_template"
+
     @property
-    def template(self) -> str:
-        """The kernel template: the 5/3 valve's or the two 3/2 valves'."""
-        return ("pneumact.models.cylinder_valves_template" if self.two_valves
-                else "pneumact.models.cylinder_template")
+    def output_names(self) -> tuple[str, ...]:
+        """Its derived signals: the 5/3 valve's spool, or the two 3/2 valves' commands."""
+        return VALVES_OUTPUT_NAMES if self.two_valves else SPOOL_OUTPUT_NAMES
+
+    @property
+    def output_units(self) -> tuple[str, ...]:
+        return VALVES_OUTPUT_UNITS if self.two_valves else SPOOL_OUTPUT_UNITS
 
     @property
     def sensitivity_refusal(self) -> str | None:
@@ -1330,14 +1279,15 @@ class Cylinder(DeclaredInputs):
     pressure_feedback: ClassVar[bool] = True
 
     def kernel_constants(self) -> dict[str, object]:
-        """No compile-time switches for the 5/3 valve; two 3/2 valves: the sign of valve
-        B's command (-1 mirrored: both read the drive channel, u_b = -u)."""
+        """Whether a 3/2 valve feeds each chamber (``TWO_VALVES``: the template's chambers
+        then read their valves' blocks and commands); with two 3/2 valves the sign of
+        valve B's command (-1 mirrored: both read the drive channel, u_b = -u)."""
         if not self.two_valves:
-            return {}
+            return {"TWO_VALVES": False}
         if self.mirrored:
-            return {"CH_COMMAND_A": CH_DRIVE, "CH_COMMAND_B": CH_DRIVE,
+            return {"TWO_VALVES": True, "CH_COMMAND_A": CH_DRIVE, "CH_COMMAND_B": CH_DRIVE,
                     "COMMAND_B_SIGN": -1.0}
-        return {"COMMAND_B_SIGN": 1.0}
+        return {"TWO_VALVES": True, "COMMAND_B_SIGN": 1.0}
 
     @property
     def stroke(self) -> float | None:
@@ -1366,9 +1316,14 @@ class Cylinder(DeclaredInputs):
                 **cylinder.settings, **dict.fromkeys(FIVE_THREE_ENTRIES, 0.0)})
             command_a, command_b = ((None, None) if self.mirrored
                                     else (COMMAND_A_INPUT, COMMAND_B_INPUT))
+            # their spools follow the commands at once: the direct spool's functions fill
+            # the template's spool places (its position unread), as the polytropic
+            # chambers' fill its thermal ones
             return (cylinder, *chambers, self.friction.part(),
                     valve32_part("valve_a", command_a, "3/2 valve of chamber A"),
-                    valve32_part("valve_b", command_b, "3/2 valve of chamber B"))
+                    valve32_part("valve_b", command_b, "3/2 valve of chamber B"),
+                    replace(spool_part(0), label="", key="valves_3_2"),
+                    thermal_part(self.chamber))
         return (cylinder, *chambers, self.friction.part(), spool_part(self.spool_lag),
                 thermal_part(self.chamber))
 
