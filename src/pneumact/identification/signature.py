@@ -50,8 +50,8 @@ from .estimates import Estimates, linear_least_squares
 from .inputs import noise_level, sensor_noise
 from .stages import StageResult, sliding_branches
 
-__all__ = ["SIGNATURE_PARAMETERS", "SPEED_RANGE", "SPRING_LINE_AGREEMENT", "SignatureFit",
-           "signature_fit", "spring_line_check", "valve_numbers"]
+__all__ = ["SIGNATURE_PARAMETERS", "SPEED_RANGE", "SPRING_LINE_AGREEMENT", "UNSTATED_LAG",
+           "SignatureFit", "signature_fit", "spring_line_check", "valve_numbers"]
 
 #: What a signature can determine; the other spring and friction parameters it cannot.
 SIGNATURE_PARAMETERS = ("F0", "k", "Fc", "sigma2")
@@ -69,9 +69,11 @@ STRIBECK_DECAYED = 3.0
 #: a sine sweep); a window 4× longer has 8× less noise, and the margins keep the
 #: reversals, where a long window blurs, out of the fit.
 SIGNATURE_SMOOTHING = 4.0
-#: A signature names the friction a position sensor's lag would add (k·τ·|v|) where a
-#: lag of ``LAG_NOTE_LAG`` [s] (a potentiometer's filter) adds this share of Fc or more
-LAG_NOTE_LAG = 0.01
+#: A position sensor's lag the prior does not state (``position_lag``; 0 states none) is
+#: taken as uniform on [0, ``UNSTATED_LAG``] [s] (a potentiometer's filter, an LVDT's
+#: demodulator): it reads as k·τ·|v| of friction on the branches (k·τ on a fitted σ2)
+UNSTATED_LAG = 0.01
+#: ... and is named where it moves Fc by this share or more
 LAG_NOTE_SHARE = 0.01
 #: The dead band is read where the position has left its turning value by this many
 #: position-noise standard deviations (a 5-σ move: noise alone never qualifies).
@@ -169,16 +171,22 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
     # midpoint put Fc below zero on 3 of 16 drawn actuators)
     room = level - (0.0 if sigma2_fitted else prior_s2 * mean_speed)
     bound = min(stribeck_bound(params, slowest, spread, level), max(room, 0.0))
+    # an unstated lag's viscous share k·τ (uniform on [0, k·UNSTATED_LAG], no more than
+    # what it would read as): half taken off, the whole in the interval
+    lag_viscous = est["k"] * (UNSTATED_LAG if "position_lag" not in params else 0.0)
     level_se = float(est.stderr[2])
     if sigma2_fitted:
-        fc, s2 = level - bound / 2, est["sigma2"]
+        lag_viscous = min(lag_viscous, est["sigma2"])
+        fc, s2 = level - bound / 2, est["sigma2"] - lag_viscous / 2
         cov = est.covariance.copy()
         cov[2, 2] += bound**2 / 12  # the Stribeck term: uniform on [0, bound]
+        cov[3, 3] += lag_viscous**2 / 12
     else:  # σ2 held at the prior, its uncertainty carried into Fc's
-        fc, s2 = level - prior_s2 * mean_speed - bound / 2, prior_s2
+        lagged = min(lag_viscous * mean_speed, max(room, 0.0))
+        fc, s2 = level - prior_s2 * mean_speed - bound / 2 - lagged / 2, prior_s2
         cov = np.zeros((4, 4))
         cov[:3, :3] = est.covariance
-        cov[2, 2] += (mean_speed * prior_s2_sd) ** 2 + bound**2 / 12
+        cov[2, 2] += (mean_speed * prior_s2_sd) ** 2 + bound**2 / 12 + lagged**2 / 12
         cov[3, 3] = np.inf
     if room <= 0:  # no Coulomb friction left to tell: Fc held at the prior's
         fc = params["Fc"]
@@ -198,15 +206,15 @@ def signature_fit(sweeps: Sequence[Record], params, spread: float = 0.5) -> Sign
             f"its ±{100 * spread:.0f} % goes into Fc's interval", REMEDIES["sigma2"]))
     # a position sensor's lag τ reads x − v·τ: k·τ·|v| of friction on the branches (its
     # transients at the reversals aside); undone where the prior states it
-    # (``identify_signature``), else named
-    lagged = est["k"] * LAG_NOTE_LAG * mean_speed
+    # (``identify_signature``), else taken as up to UNSTATED_LAG and named
+    lagged = est["k"] * UNSTATED_LAG * mean_speed
     if "position_lag" not in params and lagged >= LAG_NOTE_SHARE * abs(fc):
         notes.append(Diagnostic(
-            "note", "signature", f"a position sensor's lag τ reads as friction, k·τ·|v|: "
-            f"{lagged:.3g} N for a {LAG_NOTE_LAG * 1e3:.3g} ms lag at the sweep's "
-            f"{mean_speed * 1e3:.3g} mm/s ({100 * lagged / abs(fc):.2g} % of Fc); Fc assumes "
-            "a sensor without lag", "state the sensor's lag (position_lag) in the prior, or "
-            "sweep more slowly"))
+            "note", "signature", f"the position sensor's lag is not stated: taken as 0-"
+            f"{UNSTATED_LAG * 1e3:.3g} ms, which reads as up to {lagged:.3g} N of friction "
+            f"at the sweep's {mean_speed * 1e3:.3g} mm/s ({100 * lagged / abs(fc):.2g} % of "
+            "Fc): half of it taken off, the whole in Fc's interval", "state the sensor's "
+            "lag in the prior (position_lag; 0 for none), or sweep more slowly"))
     if bound > IDENTIFIED_HALF_WIDTH * abs(fc):
         notes.append(Diagnostic(
             "warning", "signature", f"the sweep slides at {slowest * 1e3:.3g} mm/s, within "
