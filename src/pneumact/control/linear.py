@@ -372,6 +372,10 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
     from ..core.assembly import assemble
 
     kind = input_kind(plant, "linearise")
+    if getattr(plant, "placed_laws", False):  # its rest and words read one law's states
+        raise ParameterError(f"linearise: plant = {plant.describe()}; friction laws placed "
+                             "on the piston and the rod are not linearised yet; allowed: "
+                             "a Cylinder with one friction law (friction=pa.LuGre(), say)")
     if regime not in REGIMES:
         raise ParameterError(f"linearise: regime = {regime!r}; allowed: {', '.join(REGIMES)}")
     if regime == "sliding":
