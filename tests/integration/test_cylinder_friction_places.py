@@ -187,3 +187,26 @@ def test_unknown_places_and_names_are_refused_naming_the_allowed_ones(model, par
     with pytest.raises(pa.ParameterError, match=r"'friction_piston.dahl_alpha' is not a "
                                                 r"parameter of Cylinder"):
         pa.simulate(model, MOVE, values={"friction_piston.dahl_alpha": 1.0})
+
+
+def test_linearised_at_rest_each_law_is_a_spring_of_its_own_stiffness(model, params):
+    """At rest mid-stroke (v = 0, bristles undeflected) each law pulls on the velocity's row
+    through its own state with its own stiffness, −σ0/m (LuGre's σ1 term vanishes with
+    v), and the statement names the summed presliding stiffness; in steady sliding each
+    state is its own law's steady deflection."""
+    from pneumact.control import linearise
+
+    plant = linearise(model, 0.0, position=0.1)
+    row = plant.state_names.index("velocity")
+    for instance in ("friction_piston", "friction_rod"):
+        column = plant.state_names.index(f"{instance}_bristle")
+        assert plant.A[row, column] == pytest.approx(
+            -params[f"{instance}.sigma0"] / params["m"], rel=1e-12)
+    stiffness = params["friction_piston.sigma0"] + params["friction_rod.sigma0"]
+    assert f"presliding stiffness {stiffness:g} N/m" in plant.statement
+    sliding = linearise(model, 0.0, position=0.1, regime="sliding", velocity=0.1)
+    point = sliding.operating_point
+    assert point["friction_rod_bristle"] == pytest.approx(
+        params["friction_rod.Fc"] / params["friction_rod.sigma0"], rel=1e-12)
+    assert point["friction_piston_bristle"] == pytest.approx(
+        params["friction_piston.Fc"] / params["friction_piston.sigma0"], rel=1e-12)

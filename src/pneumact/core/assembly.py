@@ -124,12 +124,18 @@ class Assembly:
         return self.state_names.index(name)
 
     def role_states(self, role: str) -> tuple[int, ...]:
-        """Columns of the states of the component ``role`` (a friction law's: any number)."""
-        first = 0
+        """Columns of the states of the component ``role`` (a friction law's: any number),
+        or of its instances', in order, where the model places it under instance names
+        (two friction laws on the cylinder)."""
+        first, found = 0, list[int]()
         for part in self.parts:
             if part.name == role:
                 return tuple(range(first, first + len(part.states)))
+            if part.role == role and part.instance:
+                found.extend(range(first, first + len(part.states)))
             first += len(part.states)
+        if any(part.role == role and part.instance for part in self.parts):
+            return tuple(found)
         raise KeyError(f"{self.describe()} has no component {role!r}")
 
     def role_span(self, role: str) -> tuple[int, int, int]:
