@@ -31,6 +31,7 @@ from pneumact.simulation.simulate import Model
 pytestmark = pytest.mark.integration
 
 #: the friction parameters every kind has (its LuGre law's): varied, fitted, differenced
+#: (a Coulomb level, then a viscous coefficient; the two-law cylinder's are its laws')
 VARIED = ("Fc", "sigma2")
 ENTRY_POINTS = ("simulate", "simulate_batch", "sensitivities", "fit", "src", "linearise",
                 "export_fmu")
@@ -59,6 +60,7 @@ class Case:
     feature: str
     input_value: float
     position: float | None
+    varied: tuple[str, str] = VARIED
 
 
 #: the PID of the cylinder's loop tests
@@ -99,13 +101,25 @@ def _make(kind: str) -> Case:
         spool = PiecewiseLinear([0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
         return Case(model, Experiment(spool, "spool", 0.3, n_points=301), "top_speed_out",
                     _cylinder_loop(model).holding_input(0.1), 0.1)
+    if kind == "two_laws":  # as "cylinder", LuGre on the piston and Dahl on the rod;
+        # linearised at the one-law cylinder's holding command (friction at rest carries
+        # no force: the chambers alone balance)
+        params = load_quietly("iso15552-32")
+        values = {f"friction_piston.{n}": params[n] for n in pa.LuGre().block.parameters}
+        values.update({f"friction_rod.{n}": params[n] for n in ("sigma0", "Fc", "sigma2")})
+        model = pa.Cylinder(params.replace({**values, "friction_rod.dahl_alpha": 1.0}),
+                            friction={"piston": pa.LuGre(), "rod": pa.Dahl()})
+        spool = PiecewiseLinear([0.0, 0.05, 0.1, 0.3], [-1.0, -1.0, 0.3, 0.3])
+        return Case(model, Experiment(spool, "spool", 0.3, n_points=301), "top_speed_out",
+                    _cylinder_loop(cylinder).holding_input(0.1), 0.1,
+                    ("friction_rod.Fc", "friction_piston.sigma2"))
     # held at 90 mm, then a 20 mm ramp over 50 ms
     return Case(_cylinder_loop(cylinder, _cylinder_loop(cylinder).holding_input(0.09)),
                 SetpointRamp(0.09, 0.11, 0.05, t_start=0.05, t_end=0.5, n_points=501),
                 "top_speed_out", 0.0, None)
 
 
-KINDS = ("actuator", "rig", "cylinder", "two_valves", "mirrored", "loop")
+KINDS = ("actuator", "rig", "cylinder", "two_valves", "mirrored", "two_laws", "loop")
 
 
 @pytest.fixture(scope="module")
@@ -146,9 +160,10 @@ def _simulate(case: Case, tmp_path) -> None:
 def _simulate_batch(case: Case, tmp_path) -> None:
     """The nominal row's default features are the single run's summary; a changed Fc
     changes them."""
-    fc = float(case.model.params["Fc"])
+    coulomb = case.varied[0]
+    fc = float(case.model.params[coulomb])
     batch = pa.simulate_batch(case.model, case.experiment,
-                              pd.DataFrame({"Fc": [fc, 1.2 * fc]}), executor=1)
+                              pd.DataFrame({coulomb: [fc, 1.2 * fc]}), executor=1)
     assert list(batch.table["status"]) == ["ok", "ok"], batch.table["error"].tolist()
     summary = pa.simulate(case.model, case.experiment).summary()
     shared = [name for name in summary if name in batch.table]
@@ -165,10 +180,10 @@ def _sensitivities(case: Case, tmp_path) -> None:
     """∂position/∂θ against central differences (RMS within a fraction of its size, or
     within the differences' own noise)."""
     tight = pa.Rodas4(rtol=ref.SENS_REFERENCE_RTOL)
-    sens = pa.simulate_sensitivities(case.model, case.experiment, list(VARIED),
+    sens = pa.simulate_sensitivities(case.model, case.experiment, list(case.varied),
                                      pa.Rodas4(rtol=ref.SENS_RTOL))
     travel = float(np.ptp(sens.result["position"]))
-    for k, name in enumerate(VARIED):
+    for k, name in enumerate(case.varied):
         value = float(case.model.params[name])
         step = ref.SENS_FD_REL_STEP * value
         up, down = (pa.simulate(case.model, case.experiment, tight,
@@ -197,9 +212,10 @@ def _record(case: Case):
 
 def _fit(case: Case, tmp_path) -> None:
     """Started 30 % off, the fit finds the Fc and σ2 that made its record."""
-    truth = {name: float(case.model.params[name]) for name in VARIED}
-    result = pa.fit(case.model, [_record(case)], list(VARIED),
-                    start={"Fc": 1.3 * truth["Fc"], "sigma2": 0.7 * truth["sigma2"]},
+    coulomb, viscous = case.varied
+    truth = {name: float(case.model.params[name]) for name in case.varied}
+    result = pa.fit(case.model, [_record(case)], list(case.varied),
+                    start={coulomb: 1.3 * truth[coulomb], viscous: 0.7 * truth[viscous]},
                     smooth_input=False)
     found = result.to_pandas()["value"]
     for name, value in truth.items():
@@ -210,17 +226,18 @@ def _src(case: Case, tmp_path) -> None:
     """Standardised regression coefficients of the kind's feature on ±5 % of Fc and σ2:
     a near-linear response (R²), and Fc's coefficient has the sign of the feature's change
     with Fc."""
-    problem = sa.Problem.around(case.model.params, dict.fromkeys(VARIED, 0.05))
+    problem = sa.Problem.around(case.model.params, dict.fromkeys(case.varied, 0.05))
     evaluate = sa.model_outputs(case.model, case.experiment, problem, [case.feature],
                                 executor=1)
     study = sa.src(problem, evaluate, n=ref.META_SRC_N, seed=1)
     indices = study.indices.set_index("parameter")
     assert indices["R2"].iloc[0] >= ref.META_SRC_R2_MIN, indices
-    fc = float(case.model.params["Fc"])
+    coulomb = case.varied[0]
+    fc = float(case.model.params[coulomb])
     ends = pa.simulate_batch(case.model, case.experiment,
-                             pd.DataFrame({"Fc": [0.95 * fc, 1.05 * fc]}),
+                             pd.DataFrame({coulomb: [0.95 * fc, 1.05 * fc]}),
                              features=[case.feature], executor=1).table[case.feature]
-    assert np.sign(indices.loc["Fc", "SRC"]) == np.sign(ends.iloc[1] - ends.iloc[0])
+    assert np.sign(indices.loc[coulomb, "SRC"]) == np.sign(ends.iloc[1] - ends.iloc[0])
 
 
 def _linearise(case: Case, tmp_path) -> None:

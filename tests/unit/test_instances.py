@@ -134,7 +134,8 @@ def test_old_names_are_refused_by_studies_and_by_the_model(cylinder_set):
         Assembly(pa.Cylinder(cylinder_set)).check_parameters(["V_dead_a"], "free")
     with pytest.raises(pa.ParameterError, match=r"\(no component instance 'chamber_c'; "
                                                 r"instances: chamber_a, chamber_b, valve_a, "
-                                                r"valve_b, sensor_position, sensor_pressure_a, "
+                                                r"valve_b, friction_piston, friction_rod, "
+                                                r"sensor_position, sensor_pressure_a, "
                                                 r"sensor_pressure_b; did you mean "
                                                 r"'chamber_b.V_dead'\?\)"):
         Assembly(pa.Cylinder(cylinder_set)).check_parameters(["chamber_c.V_dead"], "free")

@@ -59,6 +59,7 @@ from pneumact.cli.common import (
 )
 from pneumact.errors import ArgumentError, ParameterError
 from pneumact.models.actuator import CHAMBER_PRESSURE
+from pneumact.models.friction import FrictionModel
 from pneumact.options import Checkpoint, Executor
 
 if TYPE_CHECKING:
@@ -331,7 +332,8 @@ class Study:
                        "loops.png": figure_writer(  # zoomed into an actuator's loops
                            lambda: study.plot_loops(zoom=CHAMBER_PRESSURE in study.signals))}
             # Fig. 3 of the varied parameters of the friction law (not the valve's, ...)
-            law = set(self.model.friction.required)
+            friction = self.model.friction  # one law (the command line places no two)
+            law = set(friction.required) if isinstance(friction, FrictionModel) else set()
             on_law = {name: amount for name, amount in
                       (_variations(self.variations) or sa.PAPER_VARIATIONS).items()
                       if name in law}

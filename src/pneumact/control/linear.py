@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -149,13 +149,25 @@ def _friction_takes_load(plant, kind, assembly, kernel, y, vec, sig, ptr, u) -> 
         "allowed: a smaller force, or regime='sliding'")
 
 
+def _friction_laws(plant) -> list[tuple[Any, Mapping[str, float]]]:
+    """(law, its parameters by their local names) of each friction law of the plant: its
+    one law's at the set's names, or each law a cylinder places at its instance's
+    (``friction_rod.Fc`` as ``Fc``)."""
+    laws = getattr(plant, "friction_laws", None) or {"friction": plant.friction}
+    if "friction" in laws:
+        return [(laws["friction"], plant.params)]
+    return [(law, {n: plant.params[f"{instance}.{n}"] for n in law.block.parameters})
+            for instance, law in laws.items()]
+
+
 def _friction_words(plant) -> str:
-    names = plant.friction.block.names
-    params = plant.params
-    stiffness = plant.friction.presliding_stiffness(params)
+    laws = _friction_laws(plant)
+    stiffness = sum(law.presliding_stiffness(params) for law, params in laws)
     if stiffness == 0.0:
         return "the static friction map acts as its slope at v = 0"
-    damping = sum(float(params[n]) for n in ("sigma1", "sigma2") if n in names)
+    names = {n for law, _ in laws for n in law.block.names}
+    damping = sum(float(params[n]) for law, params in laws for n in ("sigma1", "sigma2")
+                  if n in law.block.names)
     label = "σ1 + σ2" if "sigma1" in names else "σ2"
     return (f"the friction acts as a spring of its presliding stiffness {stiffness:g} N/m "
             f"with damping {label} = {damping:g} N·s/m")
@@ -418,7 +430,8 @@ def linearise(plant, input_value: float, *, regime: str = "presliding",
         assert velocity is not None  # regime 'sliding' checked it above
         v = float(velocity)
         y[iv] = v
-        y[friction_states] = plant.friction.steady_states(v, plant.params)[0]
+        y[friction_states] = np.concatenate([law.steady_states(v, params)[0]
+                                             for law, params in _friction_laws(plant)])
         steady = ", ".join(f"{names[i]} = {y[i]:.6g}" for i in friction_states)
         steady = f": {steady}" if steady else ""
         statement = (f"Linearised about steady sliding at v = {v:g} m/s (friction states at "

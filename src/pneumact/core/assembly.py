@@ -124,13 +124,32 @@ class Assembly:
         return self.state_names.index(name)
 
     def role_states(self, role: str) -> tuple[int, ...]:
-        """Columns of the states of the component ``role`` (a friction law's: any number)."""
-        first = 0
+        """Columns of the states of the component ``role`` (a friction law's: any number),
+        or of its instances', in order, where the model places it under instance names
+        (two friction laws on the cylinder)."""
+        first, found = 0, list[int]()
         for part in self.parts:
             if part.name == role:
                 return tuple(range(first, first + len(part.states)))
+            if part.role == role and part.instance:
+                found.extend(range(first, first + len(part.states)))
             first += len(part.states)
+        if any(part.role == role and part.instance for part in self.parts):
+            return tuple(found)
         raise KeyError(f"{self.describe()} has no component {role!r}")
+
+    def role_span(self, role: str) -> tuple[int, int, int]:
+        """(first slot, end slot, first state) of the instances of ``role``, placed one
+        after another: a model's ``spanned_roles`` are read under the role's own constants
+        (``FRICTION_LO``, ``FRICTION_HI``, ``S_FRICTION``) by a template written for one
+        component of that role (the cylinder's, for two friction laws)."""
+        placed = [i for i, part in enumerate(self.parts) if part.role == role and part.instance]
+        if not placed or placed != list(range(placed[0], placed[-1] + 1)):
+            raise ComponentError(f"{self.describe()}: the instances of {role!r} must be "
+                                 "placed one after another to be read as one span")
+        names = [self.parts[i].name for i in placed]
+        start = sum(len(part.states) for part in self.parts[:placed[0]])
+        return self.block_ranges[names[0]][0], self.block_ranges[names[-1]][1], start
 
     def channel_index(self, name: str) -> int:
         """Where channel ``name`` sits in the packed channels; one ComponentError naming
@@ -260,6 +279,10 @@ class Assembly:
         for part in self.parts:  # where each component's states start (even if it has none)
             constants.append((f"S_{part.name.upper()}", first))
             first += len(part.states)
+        for role in getattr(self.model, "spanned_roles", ()):
+            lo, hi, start = self.role_span(role)
+            constants += [(f"{role.upper()}_LO", lo), (f"{role.upper()}_HI", hi),
+                          (f"S_{role.upper()}", start)]
         constants += [(f"S_{s.name.upper()}", i) for i, s in enumerate(self.states)]
         constants += [(output_constant(name), i) for i, name in enumerate(self.output_names)]
         constants.append(("MONOTONE", tuple(bool(s.monotone) for s in self.states)))

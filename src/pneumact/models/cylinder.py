@@ -45,6 +45,7 @@ from ..parameters.catalogue import (
     declare_kind,
     declare_relation,
     declare_renamed,
+    instances_of,
 )
 from .fmu_interface import (
     FmuInput,
@@ -60,6 +61,8 @@ from .pneumatics import ChamberLaw, Isothermal, iso_flow, iso_flow_params
 from .sensors import SensorNames, declare_sensors
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from ..parameters.files import ParameterSetLike
     from ..parameters.parameter_set import ParameterSet
 
@@ -116,6 +119,13 @@ declare_kind(
       plausible=(-0.2, 0.3)))
 declare_instances("valve_3_2", valve_a="the 3/2 valve of chamber A (command_a)",
                   valve_b="the 3/2 valve of chamber B (command_b)")
+#: the places of a friction law on the cylinder where two share it (Cylinder(friction=
+#: {"piston": ..., "rod": ...})): the kind "friction" (every law's parameters) placed as
+#: friction_piston and friction_rod, parameters ``friction_rod.Fc`` ...
+declare_instances("friction", friction_piston="the friction law of the piston's seal",
+                  friction_rod="the friction law of the rod's seal")
+#: the kernel template of two laws placed on one body (``models.friction.placed_laws``)
+PLACED_LAWS = "pneumact.models.friction.placed_laws"
 #: the bench's sensors, one per measured signal (``models.sensors``): sensor_position,
 #: sensor_pressure_a and sensor_pressure_b, parameters ``sensor_pressure_a.lag`` ...
 CYLINDER_SENSORS = declare_sensors(position="m", pressure_a="Pa", pressure_b="Pa")
@@ -182,6 +192,56 @@ def chamber_dead_volume(p, o):  # pragma: no cover - compiled
 def chamber_part(instance: str, label: str) -> Part:
     """One chamber of the cylinder, placed under ``instance`` (chamber_a, chamber_b)."""
     return Part(role="chamber", instance=instance, block=CHAMBER_BLOCK, label=label)
+
+
+def friction_place_parts(placed: Mapping[str, FrictionModel]) -> tuple[Part, ...]:
+    """Friction laws placed on the cylinder by place (piston, rod): each law's block and
+    states under its instance (``friction_rod.Fc``, state ``friction_rod_bristle``), its
+    functions a child kernel (``Cylinder.kernel_children``), and the template that sums
+    them (``placed_laws``), which the cylinder's template calls as its one law."""
+    parts = tuple(Part(role="friction", instance=f"friction_{place}", block=law.block,
+                       states=tuple(replace(state, name=f"friction_{place}_{state.name}")
+                                    for state in law.states),
+                       label=f"{law!r} on the {place}", key=f"{place}_{law.law}")
+                  for place, law in placed.items())
+    places = " and ".join(placed)
+    return (*parts, Part(role="friction_laws", block=Block(), templates=(PLACED_LAWS,),
+                         label=f"the friction laws of the {places}"))
+
+
+def friction_places() -> tuple[str, ...]:
+    """The places a friction law may take where laws share the cylinder (the declared
+    instances of the kind friction, friction_piston ..., less their prefix)."""
+    return tuple(i.removeprefix("friction_") for i in instances_of("friction"))
+
+
+def placed_friction(given: Mapping, examples: str) -> dict[str, FrictionModel]:
+    """``{"piston": law, "rod": law}`` checked: every place named once, in the declared
+    order, each a law that can share the body (refused naming the places otherwise)."""
+    from ..checks import as_instance
+    from ..errors import ArgumentError
+
+    places = friction_places()
+    listed = ", ".join(repr(p) for p in places)
+    unknown = [key for key in given if key not in places]
+    if unknown:
+        raise ArgumentError(
+            f"Cylinder: friction = {dict(given)!r}: {unknown[0]!r} is no place of a friction "
+            f"law; places: {listed} (instances "
+            f"{', '.join(f'friction_{p}' for p in places)})")
+    if set(given) != set(places):
+        raise ArgumentError(
+            f"Cylinder: friction = {dict(given)!r}: a mapping places a law on each of "
+            f"{listed}; one law on the piston alone: friction=pa.LuGre() (say)")
+    placed = {}
+    for place in places:
+        law = as_instance(f"friction[{place!r}]", given[place], FrictionModel,
+                          where="Cylinder", examples=examples)
+        if law.placed_alone is not None:
+            raise ArgumentError(f"Cylinder: friction[{place!r}] = {law!r}: placed alone, not "
+                                f"beside another law: {law.placed_alone}")
+        placed[place] = law
+    return placed
 
 
 @njit(cache=True)
@@ -1136,10 +1196,13 @@ class Cylinder(DeclaredInputs):
     template for both). ``mirrored`` (with
     two 3/2 valves only): one command u drives both, u_a = u and u_b = −u (how a pair of
     3/2 valves replaces a 5/3 valve), its input the spool command's (``spool``), so that
-    a closed loop and ``linearise`` act on it as on the 5/3 valve."""
+    a closed loop and ``linearise`` act on it as on the 5/3 valve. ``friction``: one law
+    on the piston (parameters ``Fc`` ...), or ``{"piston": law, "rod": law}``: two laws
+    whose forces add, each an instance of the kind friction with its own states and
+    parameters (``friction_piston.Fc``, ``friction_rod.sigma0``: ``placed_laws``)."""
 
     params: ParameterSet
-    friction: FrictionModel = field(default_factory=LuGre)
+    friction: FrictionModel | Mapping[str, FrictionModel] = field(default_factory=LuGre)
     chamber: ChamberLaw = field(default_factory=Isothermal)
     load: Signal | None = None
     spool_lag: bool | int = 0
@@ -1147,7 +1210,8 @@ class Cylinder(DeclaredInputs):
     mirrored: bool = False
 
     if TYPE_CHECKING:  # the constructor takes a set's name or path too (loaded in it)
-        def __init__(self, params: ParameterSetLike, friction: FrictionModel = ...,
+        def __init__(self, params: ParameterSetLike,
+                     friction: FrictionModel | Mapping[str, FrictionModel] = ...,
                      chamber: ChamberLaw = ..., load: Signal | None = ...,
                      spool_lag: bool | int = ..., valves: str = ...,
                      mirrored: bool = ...) -> None: ...
@@ -1159,10 +1223,13 @@ class Cylinder(DeclaredInputs):
 
         set_ = object.__setattr__
         set_(self, "params", as_parameter_set(self.params, "Cylinder"))
-        set_(self, "friction", as_instance(
-            "friction", self.friction, FrictionModel, where="Cylinder",
-            examples="pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
-                     "pa.StribeckMap()"))
+        examples = ("pa.LuGre(), pa.Dahl(), pa.BoucWen(), pa.CoulombViscous() or "
+                    "pa.StribeckMap()")
+        if isinstance(self.friction, Mapping):  # laws placed on the piston and the rod
+            set_(self, "friction", placed_friction(self.friction, examples))
+        else:
+            set_(self, "friction", as_instance("friction", self.friction, FrictionModel,
+                                               where="Cylinder", examples=examples))
         set_(self, "chamber", as_instance(
             "chamber", self.chamber, ChamberLaw, where="Cylinder",
             examples="pa.Isothermal(), pa.Adiabatic(), pa.Polytropic(exponent) or "
@@ -1212,9 +1279,56 @@ class Cylinder(DeclaredInputs):
         return VALVES_OUTPUT_UNITS if self.two_valves else SPOOL_OUTPUT_UNITS
 
     @property
+    def friction_laws(self) -> dict[str, FrictionModel]:
+        """Its friction laws by instance: {"friction_piston": ..., "friction_rod": ...}
+        where laws share the rod (``friction={...}``), else {"friction": its one law},
+        whose parameters are unprefixed (``Fc``)."""
+        if isinstance(self.friction, FrictionModel):
+            return {"friction": self.friction}
+        return {f"friction_{place}": law for place, law in self.friction.items()}
+
+    @property
+    def placed_laws(self) -> bool:
+        """Whether several friction laws share the rod (placed as instances)."""
+        return not isinstance(self.friction, FrictionModel)
+
+    def steady_friction(self, v) -> np.ndarray:
+        """The total friction in steady sliding at velocities ``v`` [N]: the sum of its
+        laws' steady forces, each at its own parameters (numpy, no simulation)."""
+        import numpy as np
+
+        from ..core.component import instance_entry
+
+        forces = []
+        for instance, law in self.friction_laws.items():
+            params = self.params if not self.placed_laws else {
+                name: self.params[instance_entry(instance, name)]
+                for name in law.block.parameters}
+            forces.append(law.steady_force(v, params))
+        return np.sum(forces, axis=0)
+
+    @property
     def sensitivity_refusal(self) -> str | None:
-        """Why forward sensitivities are refused: the friction law's reason, if any."""
-        return self.friction.sensitivity_refusal
+        """Why forward sensitivities are refused: a friction law's reason, if any."""
+        return next((law.sensitivity_refusal for law in self.friction_laws.values()
+                     if law.sensitivity_refusal is not None), None)
+
+    @property
+    def spanned_roles(self) -> tuple[str, ...]:
+        """Laws placed on the piston and the rod are read as one friction law's slice
+        and block (``Assembly.role_span``): FRICTION_LO, FRICTION_HI, S_FRICTION."""
+        return ("friction",) if self.placed_laws else ()
+
+    def kernel_children(self) -> tuple:
+        """Each placed law's own slice functions, a kernel of its template and functions,
+        bound under its place (``piston_friction_rates`` ...: ``placed_laws``)."""
+        if isinstance(self.friction, FrictionModel):
+            return ()
+        from ..core.codegen import Child, KernelSpec
+
+        return tuple(Child(f"{place}_", KernelSpec(
+            f"friction_{law.law}", (), tuple(law.functions().items()), (),
+            components=(law.template,))) for place, law in self.friction.items())
 
     # -- the model protocol (``simulation.Model``) -----------------------------------------
     def inputs(self) -> tuple[InputChannel, ...]:
@@ -1319,13 +1433,19 @@ class Cylinder(DeclaredInputs):
             # their spools follow the commands at once: the direct spool's functions fill
             # the template's spool places (its position unread), as the polytropic
             # chambers' fill its thermal ones
-            return (cylinder, *chambers, self.friction.part(),
+            return (cylinder, *chambers, *self._friction_parts(),
                     valve32_part("valve_a", command_a, "3/2 valve of chamber A"),
                     valve32_part("valve_b", command_b, "3/2 valve of chamber B"),
                     replace(spool_part(0), label="", key="valves_3_2"),
                     thermal_part(self.chamber))
-        return (cylinder, *chambers, self.friction.part(), spool_part(self.spool_lag),
+        return (cylinder, *chambers, *self._friction_parts(), spool_part(self.spool_lag),
                 thermal_part(self.chamber))
+
+    def _friction_parts(self) -> tuple[Part, ...]:
+        """Its one law's part, or the placed laws' (``friction_place_parts``)."""
+        if isinstance(self.friction, FrictionModel):
+            return (self.friction.part(),)
+        return friction_place_parts(self.friction)
 
     def channels(self, drive: Signal, drives: Mapping[str, Signal] | None = None
                  ) -> list[Signal | None]:
@@ -1373,6 +1493,8 @@ class Cylinder(DeclaredInputs):
     def describe(self) -> str:
         valves = f", valves={self.valves!r}" if self.two_valves else ""
         valves += ", mirrored=True" if self.mirrored else ""
-        return (f"Cylinder(friction={self.friction!r}, "
+        friction = (self.friction if isinstance(self.friction, FrictionModel)
+                    else dict(self.friction))
+        return (f"Cylinder(friction={friction!r}, "
                 f"chamber={type(self.chamber).__name__}, spool_lag={self.spool_lag}"
                 f"{valves})")

@@ -41,7 +41,9 @@ __all__ = [
     "declare_kind",
     "declare_relation",
     "declare_renamed",
+    "declared",
     "explain_unknown",
+    "instances_of",
     "relations",
 ]
 
@@ -205,6 +207,7 @@ def declare_instances(kind: str, **instances: str) -> tuple[str, ...]:
         raise RuntimeError(f"declare_instances: kind {kind!r} is not declared "
                            f"(declare_kind first); kinds: {sorted(_KINDS)}")
     names = []
+    local_names = set(_KINDS[kind])
     for instance, what in instances.items():
         if _INSTANCES.setdefault(instance, kind) != kind:
             raise RuntimeError(f"instance {instance!r} declared of kinds "
@@ -213,7 +216,26 @@ def declare_instances(kind: str, **instances: str) -> tuple[str, ...]:
             name = instance_entry(instance, local)
             declare(replace(spec, name=name, description=f"{spec.description}; {what}"))
             names.append(name)
+        # the kind's relations between its own parameters hold in each instance (a
+        # friction law's Fs >= Fc: friction_rod.Fs >= friction_rod.Fc)
+        for relation in tuple(_RELATIONS):
+            if set(relation.names) <= local_names:
+                declare_relation(tuple(instance_entry(instance, n) for n in relation.names),
+                                 relation.holds, relation.explain)
     return tuple(names)
+
+
+def declared(name: str) -> ParameterSpec:
+    """The spec declared so far under ``name``, without loading the declaring modules (a
+    module that declares a kind from parameters other modules declared before it)."""
+    return _SPECS[name]
+
+
+def instances_of(kind: str) -> tuple[str, ...]:
+    """The instance names declared of ``kind``, in declaration order (what a model that
+    places it may name: a message refusing another names these)."""
+    _load()
+    return tuple(instance for instance, of in _INSTANCES.items() if of == kind)
 
 
 def declare_renamed(**renamed: str) -> None:

@@ -55,4 +55,18 @@ def friction_law(spec: str | FrictionModel) -> FrictionModel:
     return GMS(n_elements=int(count))
 
 
+def _declare_kind() -> None:
+    """The kind ``friction``: the parameters of every law that may be placed beside
+    another (``placed_laws``), under their own names, so that a model placing laws as
+    instances (``friction_piston.Fc``) reads each with its law's catalogue entry."""
+    from ...core.component import Block
+    from ...parameters.catalogue import declare_kind, declared
+
+    names = dict.fromkeys(name for law in registered().values()
+                          if isinstance(law.block, Block) and law.placed_alone is None
+                          for name in law.block.parameters)
+    declare_kind("friction", *(declared(name) for name in names))
+
+
 friction_models()  # every law module declares its parameters on import (the catalogue)
+_declare_kind()

@@ -167,6 +167,9 @@ class FrictionModel:
     compiled: ClassVar[tuple[str, ...]] = ("", "_params", "_scales", "_bound")
     #: why a run of the law cannot carry forward sensitivities (None: it can)
     sensitivity_refusal: ClassVar[str | None] = None
+    #: why the law cannot share a body with another law placed beside it (None: it can;
+    #: ``placed_laws``): a law whose template holds model-level functions (events)
+    placed_alone: ClassVar[str | None] = None
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -116,6 +116,9 @@ class GMS(FrictionModel):
         "the GMS stick/slip switches are state events: a sensitivity crossing one jumps by "
         "the saltation term (f⁻ − f⁺)·dτ/dθ, which the integrator does not apply yet")
     template: ClassVar[str] = "pneumact.models.friction.gms_law"
+    placed_alone: ClassVar[str | None] = (
+        "its stick/slip switches are the model's events (event_guards, event_switch), "
+        "which one law alone defines")
 
     def comparison_parameters(self) -> tuple[str, ...]:
         """The blocks' stiffnesses, C and the Stribeck curve; the shares νᵢ stay as set
