@@ -284,6 +284,26 @@ def test_the_presliding_window_starts_after_a_stick_slipping_approach():
     assert presliding_window(record, params) > slides[-1][1]
 
 
+def test_a_presliding_record_that_ends_at_its_approach_is_refused_not_fitted():
+    """A presliding record whose approach ends at its last samples (no settled part left
+    after ``SETTLE_PERIODS`` stuck periods): stage (d) refuses it with one DataError that
+    names the record and the fix (a drawn bench's campaign crashed the whole procedure
+    with a fit window that ended before it began); the joint fit judges it whole."""
+    from pneumact.errors import DataError
+    from pneumact.identification.stages import settled_part, stage_presliding
+
+    params = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0]
+    time = np.arange(0.0, 1.0, 1e-3)
+    x = 1e-3 * np.clip((time - 0.5) / 0.49, 0.0, 1.0)  # the approach ends at the end
+    x += np.random.default_rng(0).normal(0.0, 1e-7, x.size)
+    record = Record.from_arrays(time, {"position": x, "pressure": np.full(x.size, 9e4)},
+                                source="presliding_short")
+    assert settled_part(record, params) is None
+    with pytest.raises(DataError, match=r"presliding_short: the record ends within .* hold "
+                                        r"each step longer"):
+        stage_presliding([record], params)
+
+
 def test_the_lag_search_stops_at_the_lag_stage_c_allows(vgt, monkeypatch):
     """Stage (c) reads a position lag τ as viscous friction k·τ, so the staged σ2 bounds
     the lag: the search re-stages only lags up to that bound, and none below one sample

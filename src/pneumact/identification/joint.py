@@ -43,7 +43,7 @@ from .optima import (
     spread_starts,
     stuck_reason,
 )
-from .stages import PRIOR_FACTOR, presliding_window, prior_bounds, within
+from .stages import PRIOR_FACTOR, prior_bounds, settled_part, within
 
 __all__ = ["ADMIT_RATIO", "CHAOS_AMPLIFICATION", "JOINT_RTOL", "MAX_EVALUATIONS", "MAX_ROUNDS",
            "SPRING_AND_FRICTION", "amplification", "bench_model", "feasible",
@@ -306,8 +306,9 @@ def prediction_ratio(record: Record, kind: str, params, friction=None, chamber=N
     seen = Sensors.from_params(params).measure(record.time, "position", result["position"],
                                                  quantise=False)
     error = seen - record["position"]
-    if kind == "presliding" and "setpoint" not in record:
-        error = error[record.time >= presliding_window(record, params)]
+    part = settled_part(record, params) if kind == "presliding" else None
+    if part is not None and "setpoint" not in record:  # unsettled: judged whole
+        error = error[record.time >= part[0]]
         error = error - error.mean()
     noise = sensor_noise(record["position"])
     return float(np.sqrt(np.mean(error**2)) / noise) if noise > 0 else np.inf
@@ -349,8 +350,9 @@ def _fit_records(records: Sequence[Record], kinds: Sequence[str], params, *, fri
     windows: list[tuple[float, float] | None] = []
     for i, (record, kind) in enumerate(zip(records, kinds, strict=True)):
         models.append(bench_model(record, params, friction, chamber))
-        if kind == "presliding" and "setpoint" not in record:
-            windows.append((presliding_window(record, params), float(record.time[-1])))
+        part = settled_part(record, params) if kind == "presliding" else None
+        if part is not None and "setpoint" not in record:  # unsettled: fitted whole
+            windows.append(part)
             offset_records.append(i)
         else:
             windows.append(None)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -47,10 +48,10 @@ from .optima import cover_optima, restarted, stuck_reason
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range", "presliding_window",
-           "prior_bounds", "segments_of", "sliding_and_stribeck", "sliding_branches",
-           "sliding_remedy", "stage_presliding", "stage_sliding", "stage_spring",
-           "stage_stribeck", "within"]
+__all__ = ["PRESLIDING_MIN_SAMPLES", "PRIOR_FACTOR", "STAGES", "StageResult", "presliding_range",
+           "presliding_window", "prior_bounds", "segments_of", "settled_part",
+           "sliding_and_stribeck", "sliding_branches", "sliding_remedy", "stage_presliding",
+           "stage_sliding", "stage_spring", "stage_stribeck", "within"]
 
 STAGES = {
     "spring": "(a) spring: F0, k from the quasi-static sweep",
@@ -480,6 +481,21 @@ def presliding_window(record: Record, params) -> float:
     return float(kin.time[min(i1, kin.time.size - 1)] + SETTLE_PERIODS * stuck_period(params))
 
 
+#: A presliding record is fitted from its settled part on only where that part holds at
+#: least this many samples (a record that ends within ``SETTLE_PERIODS`` stuck periods of
+#: its approach has none: the drawn bench's family-7-26 crashed the procedure)
+PRESLIDING_MIN_SAMPLES = 10
+
+
+def settled_part(record: Record, params) -> tuple[float, float] | None:
+    """(start, end) [s] of ``record``'s presliding part (``presliding_window`` to its
+    end), or None where it holds fewer than ``PRESLIDING_MIN_SAMPLES`` samples."""
+    start = presliding_window(record, params)
+    if np.count_nonzero(record.time >= start) < PRESLIDING_MIN_SAMPLES:
+        return None
+    return start, float(record.time[-1])
+
+
 def prior_bounds(prior, names: Sequence[str]) -> dict[str, tuple[float, float]]:
     """Search bounds of each parameter: ``PRIOR_FACTOR`` either side of its prior value
     (a guess off by more than that is not a prior; a fit that wanders there meets a
@@ -506,7 +522,15 @@ def stage_presliding(records: Sequence[Record], params, friction=None, solver=No
     bounds = prior_bounds(params if prior is None else prior, free)
     start = within({n: params[n] for n in free}, bounds)
     model = Actuator(params, friction=friction or LuGre(), valve=PressureSource())
-    windows = [(presliding_window(r, params), r.time[-1]) for r in records]
+    parts = [settled_part(r, params) for r in records]
+    short = [Path(r.source).name for r, part in zip(records, parts, strict=True) if part is None]
+    if short:
+        raise DataError(
+            f"{', '.join(short)}: the record ends within {SETTLE_PERIODS:g} stuck-mode "
+            f"periods ({SETTLE_PERIODS * stuck_period(params) * 1e3:.3g} ms at the current "
+            "σ0 and m) of its approach, so no settled presliding part is left to fit; hold "
+            "each step longer after the approach")
+    windows = [part for part in parts if part is not None]
 
     def solve(values: np.ndarray):
         return fit(model, records, free, offsets=["position"], window=windows,
