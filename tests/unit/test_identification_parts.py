@@ -605,9 +605,10 @@ def test_the_refit_judges_a_campaign_whose_slow_end_alone_is_missed():
 
 
 def test_a_presliding_test_too_slow_for_the_stuck_mode_gives_sigma0_no_interval(vgt):
-    """Issue 38: a presliding test sampled below two samples per period of the stuck
-    mode aliases it (a drawn actuator at 1.5: σ0 −0.15 % at ±0.05 %): σ0 and σ1 then
-    get no interval; at 5.9 (only noted: fewer than ten) they keep theirs."""
+    """Issue 38: a presliding test sampled below three samples per period of the stuck
+    mode (a drawn actuator at 1.5: σ0 −0.15 % at ±0.05 %; another at 2.2: σ0 −17 % at
+    ±6.7 %) gives σ0 and σ1 no interval; at 5.9 (only noted: fewer than ten) they keep
+    theirs. The stuck mode is taken at the stiffer of the prior's σ0 and the estimate's."""
     import pandas as pd
 
     from pneumact.identification.faults import undersampled_presliding
@@ -619,6 +620,13 @@ def test_a_presliding_test_too_slow_for_the_stuck_mode_gives_sigma0_no_interval(
     assert undersampled_presliding(table, vgt) == pytest.approx(1.5 * stuck)
     refused = _undersampled(table, vgt, {"sigma1": "held"})
     assert list(refused) == ["sigma0"] and "aliases" in refused["sigma0"]
+    near = table.assign(sample_rate=2.2 * stuck)  # the sampling theorem's two is not enough
+    assert set(_undersampled(near, vgt, {})) == {"sigma0", "sigma1"}
+    above = table.assign(sample_rate=3.5 * stuck)
+    assert not _undersampled(above, vgt, {})
+    stiffer = {"sigma0": 2.0 * vgt["sigma0"]}  # the estimate's stuck mode is higher
+    assert set(_undersampled(above, vgt, {}, stiffer)) == {"sigma0", "sigma1"}
+    assert not _undersampled(above, vgt, {}, {"sigma0": 0.5 * vgt["sigma0"]})
     noted = table.assign(sample_rate=5.9 * stuck)
     assert undersampled_presliding(noted, vgt) == pytest.approx(5.9 * stuck)  # the note
     assert not _undersampled(noted, vgt, {})

@@ -988,12 +988,17 @@ def _slow_end_only(records: Sequence[Record], fits: Sequence[bool]) -> bool:
     return bool(speeds[True]) and (not speeds[False] or max(speeds[False]) < min(speeds[True]))
 
 
-def _undersampled(sensors: pd.DataFrame, params, refused) -> dict[str, str]:
+def _undersampled(sensors: pd.DataFrame, params, refused,
+                  estimate: dict[str, float] | None = None) -> dict[str, str]:
     """σ0 and σ1 (those not in ``refused``) where the presliding test is sampled below
-    twice the stuck mode's frequency, which then aliases (``faults.PRESLIDING_ALIASED``):
-    name -> why. Slow ramps are not judged so: the paper's own campaign slides through
-    them steadily at 100 Hz, and its Fs and vs hold."""
-    rate = undersampled_presliding(sensors, params, PRESLIDING_ALIASED)
+    ``faults.PRESLIDING_ALIASED`` samples per period of the stuck mode, at the prior's
+    σ0 or at the ``estimate``'s, whichever is stiffer (a prior is a guess): name -> why.
+    Slow ramps are not judged so: the paper's own campaign slides through them steadily
+    at 100 Hz, and its Fs and vs hold."""
+    stiffer = params
+    if estimate and estimate.get("sigma0", 0.0) > params["sigma0"]:
+        stiffer = params.with_values({"sigma0": estimate["sigma0"]})
+    rate = undersampled_presliding(sensors, stiffer, PRESLIDING_ALIASED)
     if rate is None:
         return {}
     why = (f"the presliding test is sampled at {rate:.3g} Hz, under "
@@ -1230,7 +1235,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
         judged, no_interval = _stribeck_dip_check(kinds["ramp"], residuals, estimate,
                                                   judged, diagnostics)
         unfitted = _resting_on_misfits(kinds, residuals, {n: "" for n in held})
-        unfitted.update(_undersampled(sensors, params, {**unfitted, **held}))
+        unfitted.update(_undersampled(sensors, params, {**unfitted, **held}, estimate))
         judged = [Verdict(v.parameter, POORLY, unfitted[v.parameter], MISFIT_REMEDY)
                   if v.parameter in unfitted and v.identified else v for v in judged]
         no_interval += list(unfitted)
