@@ -180,3 +180,53 @@ def test_restarts_go_on_while_a_start_finds_a_lower_cost(monkeypatch, gain, runs
     assert RESTART_RETURNS == 2
     assert [s["k"] for s in seen] == [400.0, 300.0, 500.0][:runs]
     assert reason.endswith(f"after {runs + 1} starts")
+
+
+def test_cover_values_reaches_every_other_estimate_whatever_its_cost():
+    """Estimates the records cannot be told from (refits with a held parameter
+    elsewhere): each interval reaches each of them and its noise, none is filtered out."""
+    from pneumact.identification.optima import cover_values
+
+    cov = np.diag([0.01, 1.0])
+    wide, which = cover_values(cov, np.zeros(2), [np.array([1.0, 0.5]),
+                                                   np.array([-2.0, 0.0])])
+    assert which.tolist() == [True, False]
+    assert 1.96 * np.sqrt(wide[0, 0]) == pytest.approx(2.0 + 0.196)
+    assert wide[1, 1] == pytest.approx(1.0)
+
+
+def test_a_parameter_held_at_a_guess_widens_what_moves_when_it_is_refitted_elsewhere(
+        monkeypatch):
+    """Issue 38: σ0 held at the prior's +39 % took vs to +10.7 % at ±1.9 % on a drawn
+    actuator, the linear share of the held value having added ±0.2 %. The joint fit is
+    refitted with each held parameter at either end of its 95 % range; an estimate that
+    moves beyond its interval there is widened to reach it, the others are left, a
+    refit that fails is skipped, and a warning names what moved."""
+    from types import SimpleNamespace
+
+    import pneumact.identification.paper as paper
+    from pneumact.identification.estimates import Estimates
+
+    estimates = Estimates(("Fs", "vs", "offset_position[0]"), np.array([1.2, 3.8e-3, 0.0]),
+                          np.array([1e-3, 3e-5, 1e-7]), np.diag([1e-6, 9e-10, 1e-14]), 100)
+    joint = SimpleNamespace(base_values={"sigma0": 1e6, "sigma1": 100.0},
+                            records=[object()] * 3)
+    asked = []
+
+    def refit(fit, keep, held=None):
+        assert fit is joint and keep == [True] * 3
+        asked.append(held)
+        if held == {"sigma1": 100.0 - 1.96 * 25.0}:
+            return None  # a refit that fails says nothing
+        moved = 3.4e-3 if held.get("sigma0", 1e6) < 1e6 else 3.8e-3
+        return SimpleNamespace(values={"Fs": 1.2, "vs": moved, "offset_position[0]": 5.0})
+
+    monkeypatch.setattr(paper, "refit_without", refit)
+    wide, found = paper._covering_held(joint, estimates, {"sigma0": 2.5e5, "sigma1": 25.0}, 1)
+    assert asked == [{"sigma0": 1e6 - 1.96 * 2.5e5}, {"sigma0": 1e6 + 1.96 * 2.5e5},
+                     {"sigma1": 100.0 - 1.96 * 25.0}, {"sigma1": 100.0 + 1.96 * 25.0}]
+    half = 1.96 * wide.stderr
+    assert half[1] == pytest.approx(0.4e-3 + 1.96 * 3e-5)  # vs reaches 3.4e-3 and its noise
+    assert half[0] == pytest.approx(1.96 * 1e-3)  # Fs did not move
+    assert len(found) == 1 and found[0].message.startswith("vs moves with the value")
+    assert "sigma0, sigma1 are held" in found[0].message

@@ -190,12 +190,16 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
 
 def refit_without(joint: FitResult, keep: Sequence[bool],
                   max_evaluations: int = MAX_EVALUATIONS,
-                  start: dict[str, float] | None = None) -> FitResult | None:
+                  start: dict[str, float] | None = None,
+                  held: dict[str, float] | None = None) -> FitResult | None:
     """The ``joint`` fit again on the records ``keep`` marks, from its optimum (or from
     ``start`` where it names a value), with its models, windows, weights, offsets and
     bounds: what the records the model fits say without the others
-    (``diagnostics.misfit_influence``). None when fewer than ``MIN_RECORDS`` sweeps or
+    (``diagnostics.misfit_influence``), or, with ``held``, what they say with those
+    parameters held at other values. None when fewer than ``MIN_RECORDS`` sweeps or
     ramps would be left, or the fit fails."""
+    from dataclasses import replace
+
     from ..simulation import Rodas4
 
     kept = [i for i, ok in enumerate(keep) if ok]
@@ -207,8 +211,12 @@ def refit_without(joint: FitResult, keep: Sequence[bool],
     low, high = joint.bounds
     offset = [k for k, i in enumerate(kept)
               if f"offset_position[{i}]" in joint.estimates.names]
+    models = [joint.models[i] for i in kept]
+    if held:
+        models = [replace(m, params=m.params.with_values(
+            {n: v for n, v in held.items() if n in m.params.values})) for m in models]
     try:
-        return fit([joint.models[i] for i in kept], [joint.records[i] for i in kept], names,
+        return fit(models, [joint.records[i] for i in kept], names,
                    window=[joint.windows[i] for i in kept],
                    offsets=Offsets(["position"] if offset else (), offset),
                    solver=Rodas4(rtol=JOINT_RTOL),

@@ -31,6 +31,7 @@ __all__ = [
     "Restarted",
     "at_bound",
     "cover_optima",
+    "cover_values",
     "restarted",
     "restarted_least_squares",
     "spread_starts",
@@ -166,6 +167,15 @@ def widen_for_optima(values: np.ndarray, half_widths: np.ndarray, best_cost: flo
         half = np.where(apart, np.maximum(half, reach), half)
         widened |= apart
     return half, widened
+
+
+def cover_values(covariance: np.ndarray, values: np.ndarray,
+                 others: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """``covariance`` scaled so that each 95 % interval (1.96 standard errors) about
+    ``values`` reaches each of ``others`` and its interval of the same width: estimates
+    the records cannot be told from (refits with a held parameter elsewhere in its
+    range). Returns (covariance, which estimates were widened)."""
+    return cover_optima(covariance, values, 0.0, [(o, 0.0) for o in others], 1.0)
 
 
 def cover_optima(covariance: np.ndarray, values: np.ndarray, best_cost: float,
