@@ -109,6 +109,7 @@ def test_signals_on_requested_grid_match_simulate():
     np.testing.assert_array_equal(batch.signals["pressure"][1], r["pressure"])
 
 
+@pytest.mark.numba
 def test_a_read_only_time_grid_runs_the_integrator_already_compiled():
     """numba types a read-only array apart from a writeable one: a Record's time (read
     only) as t_eval must run the kernel's integrator compiled for writeable times, not

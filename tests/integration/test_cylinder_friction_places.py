@@ -153,6 +153,7 @@ def test_a_fit_finds_the_rod_s_coulomb_force(model, params):
     assert found == pytest.approx(truth, rel=ref.META_FIT_RTOL)
 
 
+@pytest.mark.numba
 def test_the_c_engine_runs_both_laws_as_numba(model):
     """The C back end translates the placed laws' child kernels with the rest: every
     signal as numba's (to ENGINE_AGREEMENT of its range)."""

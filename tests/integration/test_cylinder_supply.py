@@ -261,6 +261,7 @@ def test_a_closed_loop_drives_its_plant_s_supply_by_name(cylinder_set):
     assert abs(lower["position"][-1] - 0.11) < ref.CYLINDER_LOOP_LOAD_RETURN_ATOL
 
 
+@pytest.mark.numba
 def test_the_c_engine_follows_numba_with_a_driven_supply(cylinder_set):
     """The C back end translates the same kernel: a run with the supply driven equals
     numba's to ``ENGINE_AGREEMENT`` of each signal's range."""

@@ -58,6 +58,7 @@ def _models() -> dict[str, tuple[object, pa.Experiment]]:
     }
 
 
+@pytest.mark.numba
 @needs_compiler
 @pytest.mark.parametrize("name", ["source", "command", "regulator", "iso6358", "gms",
                                   "cylinder", "rig", "loop", "cylinder loop"])
@@ -76,6 +77,7 @@ def test_the_c_engine_follows_numba(name):
     assert worst <= ref.ENGINE_AGREEMENT, (name, worst)
 
 
+@pytest.mark.numba
 @needs_compiler
 def test_sensitivities_are_the_same_on_both_engines():
     """Forward sensitivities (their own library, built on first use) equal numba's, the
@@ -107,6 +109,7 @@ def _loops(rng: np.random.Generator, count: int):
         yield t, p, x, np.gradient(x, t) if n > 1 else x
 
 
+@pytest.mark.numba
 @needs_compiler
 def test_the_shared_functions_on_c_are_numba_s_bit_for_bit():
     """Signal evaluation and every loop feature (``core.c_common``: the library all models
@@ -137,6 +140,7 @@ def test_the_shared_functions_on_c_are_numba_s_bit_for_bit():
                               c["motion_onset"](p, x, threshold), equal_nan=True)
 
 
+@pytest.mark.numba
 @needs_compiler
 def test_signals_evaluate_the_same_on_both_engines():
     """A signal of every kind of term (ramps, a sine, jumps) read on either engine."""
@@ -214,6 +218,7 @@ def test_without_a_compiler_auto_runs_numba_and_says_why(monkeypatch):
         engine_kernel(spec, "c")
 
 
+@pytest.mark.numba
 @needs_compiler
 def test_a_batch_gives_the_same_table_on_both_engines():
     """simulate_batch on C and on numba: the same features, row by row."""
@@ -229,6 +234,7 @@ def test_a_batch_gives_the_same_table_on_both_engines():
     pd.testing.assert_frame_equal(c, numba, check_exact=False, rtol=ref.ENGINE_AGREEMENT)
 
 
+@pytest.mark.numba
 def test_the_command_line_chooses_the_engine(tmp_path, monkeypatch):
     """``pneumact --engine numba simulate`` runs numba (the CSV says nothing else: the run
     equals the API's); an unknown engine is refused before anything runs."""
@@ -248,6 +254,7 @@ def test_the_command_line_chooses_the_engine(tmp_path, monkeypatch):
     assert os.environ["PNEUMACT_ENGINE"] == "numba"
 
 
+@pytest.mark.numba
 @needs_compiler
 def test_a_model_the_back_end_cannot_translate_runs_on_numba_naming_the_construct(
         monkeypatch, tmp_path):
@@ -280,9 +287,9 @@ def _output_signal(model, experiment) -> str:
 
 @pytest.mark.parametrize(("name", "engine", "solver"), [
     pytest.param("command", "c", pa.Rodas4(), marks=needs_compiler),
-    ("command", "numba", pa.Rodas4()),
+    pytest.param("command", "numba", pa.Rodas4(), marks=pytest.mark.numba),
     pytest.param("loop", "c", pa.Rodas4(), marks=needs_compiler),
-    ("rig", "numba", pa.DormandPrince())])
+    pytest.param("rig", "numba", pa.DormandPrince(), marks=pytest.mark.numba)])
 def test_a_batch_that_keeps_states_only_skips_the_outputs_bit_for_bit(name, engine, solver,
                                                                       monkeypatch):
     """Features that read states only (the command valve's position, velocity and

@@ -291,6 +291,7 @@ class _State(ctypes.Structure):
                 ("strides", ctypes.c_int64 * 1)]
 
 
+@pytest.mark.numba
 def test_the_c_integrator_is_the_compiled_one(cosimulation, tmp_path):
     """The FMU's model.c (its integrator translated from core/integrators.py), built here
     and called on a whole regulator cycle, gives the numba kernel's run: the same step
