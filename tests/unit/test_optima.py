@@ -213,7 +213,7 @@ def test_a_parameter_held_at_a_guess_widens_what_moves_when_it_is_refitted_elsew
                             records=[object()] * 3)
     asked = []
 
-    def refit(fit, keep, held=None):
+    def refit(fit, keep, max_evaluations, held=None):
         assert fit is joint and keep == [True] * 3
         asked.append(held)
         if held == {"sigma1": 100.0 - 1.96 * 25.0}:
