@@ -206,14 +206,18 @@ def test_the_sweep_s_spring_line_vouches_for_f0_and_k_only_where_the_joint_fit_a
     assert [v.parameter for v in vouched] == ["k"]
 
 
+def _lagged(records, tau: float) -> list:
+    """``records`` as a position sensor with a first-order lag ``tau`` [s] reads them."""
+    return [pa.Record.from_arrays(r.time, {**r.signals, "position": first_order_lag(
+        r.time, r["position"], tau)}, r.units, r.source, r.meta) for r in records]
+
+
 def test_a_stated_position_lag_is_taken_off_the_friction_level(cases):
     """A position sensor lagging ``ref.SIGNATURE_LAG``: it reads k·τ·|v| of friction on
     the branches. Not stated, the result names what a lag would add; stated in the prior
     (``position_lag``), it is taken off and Fc's interval holds the truth."""
     truth, prior, records = cases[0]
-    lagged = [pa.Record.from_arrays(r.time, {**r.signals, "position": first_order_lag(
-        r.time, r["position"], ref.SIGNATURE_LAG)}, r.units, r.source, r.meta)
-        for r in records]
+    lagged = _lagged(records, ref.SIGNATURE_LAG)
     unstated = identify_signature(lagged, prior)
     assert any("lag is not stated" in d.message for d in unstated.diagnostics)
     stated = identify_signature(lagged, prior.replace(position_lag=ref.SIGNATURE_LAG))
@@ -229,10 +233,8 @@ def test_an_unstated_lag_moves_the_spring_line_inside_its_interval(cases):
     moves them by is half taken off and the whole in their intervals: each is refused
     or holds the truth, here under a lag beyond the one assumed."""
     for truth, prior, records in cases:
-        lagged = [pa.Record.from_arrays(r.time, {**r.signals, "position": first_order_lag(
-            r.time, r["position"], ref.SIGNATURE_LONG_LAG)}, r.units, r.source, r.meta)
-            for r in records]
-        table = identify_signature(lagged, prior).to_pandas(truth=truth).loc[["F0", "k"]]
+        result = identify_signature(_lagged(records, ref.SIGNATURE_LONG_LAG), prior)
+        table = result.to_pandas(truth=truth).loc[["F0", "k"]]
         assert ((table["verdict"] != "identified") | table["truth_in_ci95"]).all(), table
 
 
