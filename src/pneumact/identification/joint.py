@@ -191,13 +191,16 @@ def joint_refinement(records: Sequence[Record], kinds: Sequence[str], params, *,
 def refit_without(joint: FitResult, keep: Sequence[bool],
                   max_evaluations: int = MAX_EVALUATIONS,
                   start: dict[str, float] | None = None,
-                  held: dict[str, float] | None = None) -> FitResult | None:
+                  held: dict[str, float] | None = None,
+                  freed: dict[str, tuple[float, float, float]] | None = None
+                  ) -> FitResult | None:
     """The ``joint`` fit again on the records ``keep`` marks, from its optimum (or from
     ``start`` where it names a value), with its models, windows, weights, offsets and
     bounds: what the records the model fits say without the others
     (``diagnostics.misfit_influence``), or, with ``held``, what they say with those
-    parameters held at other values. None when fewer than ``MIN_RECORDS`` sweeps or
-    ramps would be left, or the fit fails."""
+    parameters held at other values, or, with ``freed`` (name -> (start, low, high)),
+    with those freed too (a sensor's lag the joint fit held at zero). None when fewer
+    than ``MIN_RECORDS`` sweeps or ramps would be left, or the fit fails."""
     from dataclasses import replace
 
     from ..simulation import Rodas4
@@ -215,16 +218,19 @@ def refit_without(joint: FitResult, keep: Sequence[bool],
     if held:
         models = [replace(m, params=m.params.with_values(
             {n: v for n, v in held.items() if n in m.params.values})) for m in models]
+    bounds = {n: (low[j], high[j]) for n, j in where.items()}
+    starts = {n: float(np.clip((start or {}).get(n, joint.values[n]), low[j], high[j]))
+              for n, j in where.items()}
+    for name, (value, lowest, highest) in (freed or {}).items():
+        bounds[name], starts[name] = (lowest, highest), value
     try:
-        return fit(models, [joint.records[i] for i in kept], names,
+        return fit(models, [joint.records[i] for i in kept], [*names, *(freed or {})],
                    window=[joint.windows[i] for i in kept],
                    offsets=Offsets(["position"] if offset else (), offset),
                    solver=Rodas4(rtol=JOINT_RTOL),
                    weights=Weights(records=[joint.record_weights[i] for i in kept]),
                    optimizer=Optimizer(max_nfev=max_evaluations),
-                   bounds={n: (low[j], high[j]) for n, j in where.items()},
-                   start={n: float(np.clip((start or {}).get(n, joint.values[n]),
-                                           low[j], high[j])) for n, j in where.items()})
+                   bounds=bounds, start=starts)
     except (DataError, SolverError):
         return None
 
@@ -251,11 +257,13 @@ def restart_at_bounds(joint: FitResult, prior, spread: float = RESTART_SPREAD,
     the others where the joint fit stopped), and keep the best optimum inside the bounds;
     stop once ``RESTART_RETURNS`` starts in a row ended at a bound again without a lower
     cost. Returns (the fit kept, the other optima inside the bounds, why it gave up: the
-    estimates still at a bound, "" if none)."""
-    stuck = stuck_at_bounds(joint)
+    estimates still at a bound, "" if none). An estimate the ``prior`` does not hold (a
+    sensor's lag it does not state) is not restarted: at its bound, the records say
+    there is none."""
+    names = joint.estimates.names
+    stuck = stuck_at_bounds(joint) & np.array([n in prior for n in names], bool)
     if not stuck.any():
         return joint, [], ""
-    names = joint.estimates.names
     base = joint.estimates.values.copy()
     base[stuck] = [prior[names[j]] for j in np.flatnonzero(stuck)]
     every = [True] * len(joint.records)
