@@ -666,7 +666,13 @@ BENCH_SIZE_RTOL = 0.05
 #: misses two since the end stop's damping changed (issue 39): vs in every run (0.070 %
 #: from the truth with ±0.048 %, under-covered on this actuator since stop 45) and σ2 at
 #: the edge (1.31 % with ±1.30 % before, 1.42 % after): left on issue 38 (vs coverage)
-BENCH_MAX_MISSES = {"quantisation": 1, "pressure offset": 2, "position offset": 1}
+BENCH_MAX_MISSES = {"quantisation": 1, "pressure offset": 2, "position offset": 1,
+                    "short lag": 1}
+#: a position-sensor lag [s] the prior does not state, short enough that the lag grid
+#: (whole sample periods, judged at half the error) finds none: before the joint fit
+#: freed one itself, only F0 and k were identified (Fs −19 %, vs +73 % refused); now all
+#: eight, the lag named as 0.996 ms [0.986, 1.006]
+BENCH_SHORT_LAG = 1e-3
 #: the sensor-model unit tests: a lag [s], the exactness of the filter on a ramp [m] and
 #: of its τ-derivative against central differences (relative)
 SENSOR_TEST_LAG = 4e-3

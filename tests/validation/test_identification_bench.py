@@ -92,6 +92,22 @@ def test_a_bench_fault_is_named_with_its_size(fault, actuator):
         assert "position sensor reads" not in lines, lines  # no offset invented
 
 
+def test_a_short_unstated_position_lag_is_named_and_the_friction_identified(actuator):
+    """A 1 ms position-sensor lag the prior does not state: the grid of whole sample
+    periods finds none that predicts the records at half the error, so the joint fit
+    frees one itself; the lag is named with its size, and every spring and friction
+    parameter is identified inside its tolerance, its interval holding the truth."""
+    truth, prior, plan = actuator
+    records = synthetic_campaign(truth, plan.tests, noise=Noise(lag=ref.BENCH_SHORT_LAG),
+                                 seed=ref.IDENT_SEED)
+    result = identify_paper(records, prior, replicates=ref.FAMILY_REPLICATES)
+    lines = _bench_lines(result)
+    found = float(re.search(r"a first-order lag of ([\d.]+) ms", lines).group(1)) * 1e-3
+    assert found == pytest.approx(ref.BENCH_SHORT_LAG, rel=ref.BENCH_SIZE_RTOL)
+    table = _right_and_covered(result, truth, ref.BENCH_MAX_MISSES["short lag"])
+    assert (table.loc[list(SPRING_AND_FRICTION), "verdict"] == "identified").all(), table
+
+
 def test_a_slow_regulator_is_named_with_how_much_later_it_follows(actuator):
     """A regulator four times slower than the model's: at the identified values (here the
     truth's) the regulator check names it and how much later the chamber follows; the

@@ -975,8 +975,10 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longe
     """Where the model does not fit: does a position-sensor lag explain it? The lag that
     predicts the records best (``faults.lag_search``) starts a joint fit that frees it
     (``position_lag``) from the stages run again on the records with that lag undone
-    (``restage``); kept only when the model with it fits every record. Lags up to
-    ``longest`` [s] are tried (``faults.viscous_lag_bound``). Returns
+    (``restage``); where no lag of the search predicts them much better, the joint fit
+    frees one from the staged values and half a sample period. Kept only when the model
+    with it fits every record and the lag's interval excludes none. Lags up to
+    ``longest`` [s] are searched (``faults.viscous_lag_bound``). Returns
     (outcome, its diagnostics, the staged values it started from, the free names,
     notes)."""
     outcome, found = first
@@ -992,16 +994,17 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longe
         # error, the joint fit that freed it found 9.1 ms and fitted every record)
         period = min(float(np.median(np.diff(r.time))) for r, kind in
                      zip(records, kinds, strict=True) if kind != "presliding")
-        lagged = staged.with_values({"position_lag": 0.5 * period})
+        tau, lagged = 0.0, staged.with_values({"position_lag": 0.5 * period})
         started = "the staged values and half a sample period of lag"
     lagged = lagged.with_values({n: staged[n] for n in options["held"]})
     with_lag = [*free, "position_lag"]
     again, found_again = _attempt(records, kinds, lagged, with_lag, options)
     if _misfits(again) > 0:
+        searched = f"a position-sensor lag of {tau * 1e3:.3g} ms predicts the records " \
+            "better than none, but " if tau > 0 else ""
         return outcome, found, staged, free, [Diagnostic(
-            "note", "bench", f"a position-sensor lag of {tau * 1e3:.3g} ms predicts the "
-            "records better than none, but the joint fit with it does not fit them all: "
-            "not taken for the cause")]
+            "note", "bench", f"{searched}the joint fit that frees a position-sensor lag "
+            "does not fit every record either: no lag taken for the cause")]
     assert again is not None  # it fits more records than the first attempt
     estimates = again[2]
     j = estimates.names.index("position_lag")
