@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import DataError, SolverError
 from ..io.records import Record
 from ..models.sensors import Sensors
-from ..options import Executor, Offsets, Optimizer, Weights
+from ..options import Bounds, Executor, Offsets, Optimizer, Weights
 from ..progress import ProgressCallback, notify
 from .bench import typical_speed
 from .fit import SENSOR_LAGS, FitResult, fit
@@ -199,8 +199,10 @@ def refit_without(joint: FitResult, keep: Sequence[bool],
     bounds: what the records the model fits say without the others
     (``diagnostics.misfit_influence``), or, with ``held``, what they say with those
     parameters held at other values, or, with ``freed`` (name -> (start, low, high)),
-    with those freed too (a sensor's lag the joint fit held at zero). None when fewer
-    than ``MIN_RECORDS`` sweeps or ramps would be left, or the fit fails."""
+    with those freed too, in linear scale (a sensor's lag the joint fit held at zero:
+    its bound at zero is reached in a step or two, where log scale walked to its floor
+    in 13-20 iterations). None when fewer than ``MIN_RECORDS`` sweeps or ramps would be
+    left, or the fit fails."""
     from dataclasses import replace
 
     from ..simulation import Rodas4
@@ -230,7 +232,7 @@ def refit_without(joint: FitResult, keep: Sequence[bool],
                    solver=Rodas4(rtol=JOINT_RTOL),
                    weights=Weights(records=[joint.record_weights[i] for i in kept]),
                    optimizer=Optimizer(max_nfev=max_evaluations),
-                   bounds=bounds, start=starts)
+                   bounds=Bounds(bounds, log=names), start=starts)
     except (DataError, SolverError):
         return None
 

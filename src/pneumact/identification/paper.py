@@ -85,7 +85,7 @@ from .joint import (
     stuck_at_bounds,
 )
 from .memo import remembered
-from .optima import cover_optima, cover_values
+from .optima import CHI2_95_1DOF, cover_optima, cover_values
 from .stages import (
     STAGES,
     StageResult,
@@ -912,12 +912,34 @@ def _covering_held(joint, estimates: Estimates, held: dict[str, float], workers:
 
 #: A position-sensor lag the prior does not state and the joint fit did not take is
 #: freed in one refit from the joint optimum (``_covering_lag``), started at half the
-#: finest sample period and searched in [``LAG_REFIT_RANGE``] [s]: on the 40-actuator
-#: study 17 lags of 0.5-15 ms were not found, and 21 intervals missed on them.
-LAG_REFIT_RANGE = (1e-5, 0.05)
+#: finest sample period and searched in [``LAG_REFIT_RANGE``] [s] (linear scale): on the
+#: 40-actuator study 17 lags of 0.5-15 ms were not found, and 21 intervals missed on them.
+LAG_REFIT_RANGE = (0.0, 0.05)
 
 
-def _covering_lag(joint, estimates: Estimates, workers: int
+def _freed_lag(joint, workers: int, refits: dict) -> FitResult | None:
+    """The ``joint`` fit refitted from its optimum with a position-sensor lag freed from
+    zero (``LAG_REFIT_RANGE``, ``HELD_REFIT_EVALUATIONS``), kept in ``refits`` by the
+    joint fit's identity (the lag hypothesis and the intervals ask the same)."""
+    from .fit import map_on_threads
+
+    kept = refits.get(id(joint))
+    if kept is None or kept[0] is not joint:  # the joint fit itself is kept: ids recur
+        every = [True] * len(joint.records)
+        kept = refits[id(joint)] = (joint, map_on_threads(workers, lambda _: refit_without(
+            joint, every, HELD_REFIT_EVALUATIONS,
+            freed={"position_lag": (0.0, *LAG_REFIT_RANGE)}), [0])[0])
+    return kept[1]
+
+
+def _lowers_cost(joint, refit) -> bool:
+    """Whether ``refit`` fits the records better than ``joint`` beyond the noise
+    (``optima.CHI2_95_1DOF`` in scaled cost)."""
+    variance = 2.0 * joint.cost / max(joint.estimates.dof, 1)
+    return bool(2.0 * (joint.cost - refit.cost) / variance > CHI2_95_1DOF)
+
+
+def _covering_lag(joint, estimates: Estimates, workers: int, refits: dict
                   ) -> tuple[Estimates, list[Diagnostic]]:
     """``estimates`` whose intervals reach the joint fit's optimum with a position-sensor
     lag freed (``LAG_REFIT_RANGE``) where that refit fits the records within the noise
@@ -926,13 +948,7 @@ def _covering_lag(joint, estimates: Estimates, workers: int
     transients: one the records barely tell from none moves σ2, vs and the spring line
     by more than their intervals (a drawn actuator, 0.62 ms at 461 Hz: vs −0.52 % at
     ±0.4 %)."""
-    from .fit import map_on_threads
-
-    period = min(float(np.median(np.diff(r.time))) for r in joint.records)
-    every = [True] * len(joint.records)
-    refit = map_on_threads(workers, lambda _: refit_without(
-        joint, every, HELD_REFIT_EVALUATIONS,
-        freed={"position_lag": (0.5 * period, *LAG_REFIT_RANGE)}), [0])[0]
+    refit = _freed_lag(joint, workers, refits)
     if refit is None:
         return estimates, []
     other = np.array([refit.values.get(n, v) for n, v in zip(
@@ -971,12 +987,16 @@ def _misfits(outcome) -> float:
     return float((~outcome[3]["fits"]).sum()) + (0.0 if outcome[0].success else 0.5)
 
 
-def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longest):
+def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longest,
+                    refits: dict):
     """Where the model does not fit: does a position-sensor lag explain it? The lag that
     predicts the records best (``faults.lag_search``) starts a joint fit that frees it
     (``position_lag``) from the stages run again on the records with that lag undone
-    (``restage``); where no lag of the search predicts them much better, the joint fit
-    frees one from the staged values and half a sample period. Kept only when the model
+    (``restage``); where no lag of the search predicts them much better but a refit of
+    the first joint fit that frees one (``_freed_lag``) fits them better beyond the
+    noise, a joint fit frees it from there (where the first joint fit could not run,
+    from the partial fit of the records the model follows, which is then returned
+    when no lag is taken). Kept only when the model
     with it fits every record and the lag's interval excludes none. Lags up to
     ``longest`` [s] are searched (``faults.viscous_lag_bound``). Returns
     (outcome, its diagnostics, the staged values it started from, the free names,
@@ -988,14 +1008,19 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longe
     started = "the stages on the records with the lag undone (stage (c) takes k·τ of a " \
         "lag for viscous friction)"
     if not (tau > 0 and error_with <= LAG_GAIN * error_without):
-        # no lag of the grid predicts the records much better: the joint fit frees one
-        # from half a sample period (a 9.4 ms lag under 26 µm quantisation at 253 Hz,
-        # which the staged σ2 had taken as k·τ: the grid's best predicted 0.74 of the
-        # error, the joint fit that freed it found 9.1 ms and fitted every record)
-        period = min(float(np.median(np.diff(r.time))) for r, kind in
-                     zip(records, kinds, strict=True) if kind != "presliding")
-        tau, lagged = 0.0, staged.with_values({"position_lag": 0.5 * period})
-        started = "the staged values and half a sample period of lag"
+        # no lag of the grid predicts the records much better (a 9.4 ms lag under 26 µm
+        # quantisation at 253 Hz, which the staged σ2 had taken as k·τ: the grid's best
+        # predicted 0.74 of the error); a joint fit that frees one fitted every record
+        if outcome is None:  # the partial answer the caller would fit next, asked here
+            outcome, partial_found = _attempt(records, kinds, staged, free,
+                                              {**options, "partial": True})
+            found = found + partial_found
+        refit = None if outcome is None else _freed_lag(
+            outcome[0], options["workers"] or 1, refits)
+        if refit is None or not _lowers_cost(outcome[0], refit):
+            return outcome, found, staged, free, []
+        tau, lagged = 0.0, staged.with_values(feasible(refit.values, staged))
+        started = "a refit of the first joint fit that freed it"
     lagged = lagged.with_values({n: staged[n] for n in options["held"]})
     with_lag = [*free, "position_lag"]
     again, found_again = _attempt(records, kinds, lagged, with_lag, options)
@@ -1234,6 +1259,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                        workers=workers, step=step, prior=params, held=held,
                        max_evaluations=max_evaluations)
         kind_list = [record_kind(r) for r in records]
+        lag_refits: dict[int, tuple[FitResult, FitResult | None]] = {}
         outcome, found = _attempt(records, kind_list, staged, free, options)
         if _misfits(outcome) and "position_lag" not in params:
             def restage(undone):
@@ -1245,7 +1271,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
             longest = viscous_lag_bound(staged) if "sliding" in stages else np.inf
             outcome, found, staged, free, note = _lag_hypothesis(
                 records, kind_list, staged, free, (outcome, found), options, restage,
-                longest)
+                longest, lag_refits)
             diagnostics += note
         diagnostics += found
         if _misfits(outcome):  # is it the regulator? asked at the best values there are
@@ -1267,7 +1293,8 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                                      pool.threads)
                 diagnostics += found
             if "position_lag" not in params and "position_lag" not in free:
-                final_values, found = _covering_lag(joint, final_values, pool.threads)
+                final_values, found = _covering_lag(joint, final_values, pool.threads,
+                                                    lag_refits)
                 diagnostics += found
     joint_failed = False
     converged = False
