@@ -264,9 +264,9 @@ def test_a_lag_the_prior_does_not_state_widens_what_moves_when_a_refit_frees_it(
 
     monkeypatch.setattr(paper, "refit_without", refit)
     refits: dict = {}
-    wide, found = paper._covering_lag(joint, estimates, 1, refits)
+    wide, found = paper._covering_lag(joint, estimates, refits)
     assert asked == [{"position_lag": (0.0, *paper.LAG_REFIT_RANGE)}]
-    assert paper._covering_lag(joint, estimates, 1, refits)[1] == found  # asked once
+    assert paper._covering_lag(joint, estimates, refits)[1] == found  # asked once
     assert len(asked) == 1
     half = 1.96 * wide.stderr
     if widened:

@@ -63,6 +63,7 @@ __all__ = [
     "PositionZero",
     "PressureSide",
     "SensorOffset",
+    "finest_sample_period",
     "lag_search",
     "position_zero",
     "pressure_side",
@@ -318,6 +319,13 @@ def without_lag(records: Sequence[Record], tau: float) -> list[Record]:
     return out
 
 
+def finest_sample_period(records: Sequence[Record], kinds: Sequence[str]) -> float:
+    """The shortest median sample period [s] of the sweeps and ramps (a sweep is often
+    logged slower than the ramps that resolve a lag)."""
+    return min(float(np.median(np.diff(r.time)))
+               for r, kind in zip(records, kinds, strict=True) if kind != "presliding")
+
+
 def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: ParameterSet,
                restage: Callable[[list[Record]], ParameterSet], friction=None,
                chamber=None, workers: int | None = 1, longest: float = np.inf
@@ -344,7 +352,7 @@ def lag_search(records: Sequence[Record], kinds: Sequence[str], staged: Paramete
     moving = [(r, k) for r, k in zip(records, kinds, strict=True) if k != "presliding"]
     if not moving:
         return 0.0, staged, np.inf, np.inf
-    period = min(float(np.median(np.diff(r.time))) for r, _ in moving)
+    period = finest_sample_period(records, kinds)
     grid = [n * period for n in LAG_GRID_SAMPLES if n * period <= longest]
 
     def ratios(at, which) -> np.ndarray:

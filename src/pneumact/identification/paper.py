@@ -62,6 +62,7 @@ from .estimates import Estimates
 from .faults import (
     LAG_GAIN,
     PRESLIDING_ALIASED,
+    finest_sample_period,
     lag_search,
     position_zero,
     pressure_side,
@@ -858,14 +859,19 @@ def _refine(records, kinds, staged, *, friction, chamber, free, replicates, seed
     return joint, noise, estimates, checks, diagnostics
 
 
+def _noise_variance(joint) -> float:
+    """The joint fit's residual variance in its scaled cost (2·cost/dof): the noise the
+    other optima and refits are judged against."""
+    return 2.0 * joint.cost / max(joint.estimates.dof, 1)
+
+
 def _covering(joint, estimates: Estimates, optima: list) -> tuple[Estimates, list[Diagnostic]]:
     """``estimates`` whose intervals reach every other optimum of the joint fit's restarts
     within the noise (``optima.cover_optima``; the noise variance is the joint fit's
     residual variance), and a warning that names the parameters so widened."""
-    variance = 2.0 * joint.cost / max(joint.estimates.dof, 1)
     covariance, widened = cover_optima(estimates.covariance, estimates.values, joint.cost,
                                        [(o.estimates.values, o.cost) for o in optima],
-                                       variance)
+                                       _noise_variance(joint))
     names = [n for n, w in zip(estimates.names, widened, strict=True) if w and "[" not in n]
     if not names:
         return estimates, []
@@ -911,9 +917,9 @@ def _covering_held(joint, estimates: Estimates, held: dict[str, float], workers:
 
 
 #: A position-sensor lag the prior does not state and the joint fit did not take is
-#: freed in one refit from the joint optimum (``_covering_lag``), started at half the
-#: finest sample period and searched in [``LAG_REFIT_RANGE``] [s] (linear scale): on the
-#: 40-actuator study 17 lags of 0.5-15 ms were not found, and 21 intervals missed on them.
+#: freed in one refit from the joint optimum (``_freed_lag``), started at zero and
+#: searched in [``LAG_REFIT_RANGE``] [s] (linear scale): on the 40-actuator study 17 lags
+#: of 0.5-15 ms were not found, and 21 intervals missed on them.
 LAG_REFIT_RANGE = (0.0, 0.05)
 #: The lag hypothesis fits a lag that refit found where it lowered the cost by this share
 #: at least: a 1 ms lag on a drawn actuator 95 %, a 9.4 ms lag under 26 µm steps 30 %;
@@ -921,18 +927,15 @@ LAG_REFIT_RANGE = (0.0, 0.05)
 LAG_COST_GAIN = 0.05
 
 
-def _freed_lag(joint, workers: int, refits: dict) -> FitResult | None:
+def _freed_lag(joint, refits: dict) -> FitResult | None:
     """The ``joint`` fit refitted from its optimum with a position-sensor lag freed from
     zero (``LAG_REFIT_RANGE``, ``HELD_REFIT_EVALUATIONS``), kept in ``refits`` by the
     joint fit's identity (the lag hypothesis and the intervals ask the same)."""
-    from .fit import map_on_threads
-
     kept = refits.get(id(joint))
     if kept is None or kept[0] is not joint:  # the joint fit itself is kept: ids recur
-        every = [True] * len(joint.records)
-        kept = refits[id(joint)] = (joint, map_on_threads(workers, lambda _: refit_without(
-            joint, every, HELD_REFIT_EVALUATIONS,
-            freed={"position_lag": (0.0, *LAG_REFIT_RANGE)}), [0])[0])
+        kept = refits[id(joint)] = (joint, refit_without(
+            joint, [True] * len(joint.records), HELD_REFIT_EVALUATIONS,
+            freed={"position_lag": (0.0, *LAG_REFIT_RANGE)}))
     return kept[1]
 
 
@@ -940,12 +943,11 @@ def _lowers_cost(joint, refit) -> bool:
     """Whether ``refit`` fits the records better than ``joint`` beyond the noise
     (``optima.CHI2_95_1DOF`` in scaled cost) and by at least ``LAG_COST_GAIN`` of the
     cost (a misfit's cost falls beyond the noise with any parameter freed)."""
-    variance = 2.0 * joint.cost / max(joint.estimates.dof, 1)
-    return bool(2.0 * (joint.cost - refit.cost) / variance > CHI2_95_1DOF
+    return bool(2.0 * (joint.cost - refit.cost) / _noise_variance(joint) > CHI2_95_1DOF
                 and refit.cost <= (1.0 - LAG_COST_GAIN) * joint.cost)
 
 
-def _covering_lag(joint, estimates: Estimates, workers: int, refits: dict
+def _covering_lag(joint, estimates: Estimates, refits: dict
                   ) -> tuple[Estimates, list[Diagnostic]]:
     """``estimates`` whose intervals reach the joint fit's optimum with a position-sensor
     lag freed (``LAG_REFIT_RANGE``) where that refit fits the records within the noise
@@ -954,14 +956,13 @@ def _covering_lag(joint, estimates: Estimates, workers: int, refits: dict
     transients: one the records barely tell from none moves σ2, vs and the spring line
     by more than their intervals (a drawn actuator, 0.62 ms at 461 Hz: vs −0.52 % at
     ±0.4 %)."""
-    refit = _freed_lag(joint, workers, refits)
+    refit = _freed_lag(joint, refits)
     if refit is None:
         return estimates, []
     other = np.array([refit.values.get(n, v) for n, v in zip(
         estimates.names, estimates.values, strict=True)])
-    variance = 2.0 * joint.cost / max(joint.estimates.dof, 1)
     covariance, widened = cover_optima(estimates.covariance, estimates.values, joint.cost,
-                                       [(other, refit.cost)], variance)
+                                       [(other, refit.cost)], _noise_variance(joint))
     names = [n for n, w in zip(estimates.names, widened, strict=True) if w and "[" not in n]
     if not names:
         return estimates, []
@@ -1003,8 +1004,8 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longe
     noise and by ``LAG_COST_GAIN``, a joint fit frees it from the staged values and half
     a sample period (where the first joint fit could not run, the refit is of the
     partial fit of the records the model follows, which is then returned when no lag is
-    taken). Kept only when the model
-    with it fits every record and the lag's interval excludes none. Lags up to
+    taken). Kept only when the model with it fits every record and the lag's interval
+    excludes none. Lags up to
     ``longest`` [s] are searched (``faults.viscous_lag_bound``). Returns
     (outcome, its diagnostics, the staged values it started from, the free names,
     notes)."""
@@ -1022,16 +1023,14 @@ def _lag_hypothesis(records, kinds, staged, free, first, options, restage, longe
             outcome, partial_found = _attempt(records, kinds, staged, free,
                                               {**options, "partial": True})
             found = found + partial_found
-        refit = None if outcome is None else _freed_lag(
-            outcome[0], options["workers"] or 1, refits)
+        refit = None if outcome is None else _freed_lag(outcome[0], refits)
         if refit is None or not _lowers_cost(outcome[0], refit):
             return outcome, found, staged, free, []
         # started from the staged values and half a sample period, not from the refit's
         # values: on two drawn campaigns (0.78 and 1.26 ms) the refit stopped at 8.8 and
         # 1.05 ms and the joint fit from there missed records; from the stages it fitted
-        period = min(float(np.median(np.diff(r.time))) for r, kind in
-                     zip(records, kinds, strict=True) if kind != "presliding")
-        tau, lagged = 0.0, staged.with_values({"position_lag": 0.5 * period})
+        tau, lagged = 0.0, staged.with_values(
+            {"position_lag": 0.5 * finest_sample_period(records, kinds)})
         started = "the staged values and half a sample period of lag"
     lagged = lagged.with_values({n: staged[n] for n in options["held"]})
     with_lag = [*free, "position_lag"]
@@ -1305,8 +1304,7 @@ def identify_paper(records: Sequence[Record], params, *, friction=None, chamber=
                                                      pool.threads)
                 diagnostics += found
             if "position_lag" not in params and "position_lag" not in free:
-                final_values, found = _covering_lag(joint, final_values, pool.threads,
-                                                    lag_refits)
+                final_values, found = _covering_lag(joint, final_values, lag_refits)
                 diagnostics += found
     joint_failed = False
     converged = False
