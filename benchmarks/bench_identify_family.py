@@ -1,12 +1,14 @@
 """Identification on a family of actuators: accuracy, verdicts, interval coverage, time.
 
 Run: python benchmarks/bench_identify_family.py [--actuators 40] [--seeds 2] [--seed 7]
-[--bench] [--rounds 2 [--together]] [--validation] [--keep DIR]
+[--family wide] [--bench] [--rounds 2 [--together]] [--validation] [--keep DIR]
 [--recombine DIR]
 
 Draws actuators from ``parameters.family.ActuatorFamily`` (the ranges of issue 18: Fc
 0.5-10 N, Fs/Fc 1.05-2, σ0 1e4-1e6 N/m, σ1 10-1000 N·s/m, σ2 0.5-30 N·s/m, vs 0.1-10
-mm/s, δ 1 or 2, realistic geometry), designs each one's bench campaign from a prior up
+mm/s, δ 1 or 2, realistic geometry; with ``--family wide``, ``ActuatorFamily.wide()``:
+diaphragms of 30-250 mm, strokes of 8-50 mm, 0.05-6 kg, Fc 0.3-300 N scaled with the
+size, Fs/Fc 1.05-2.2, vs 0.05-20 mm/s), designs each one's bench campaign from a prior up
 to ±50 % off, simulates it with sensor noise for each noise seed, identifies it from
 that prior (``identify_paper`` defaults), and prints:
 
@@ -18,10 +20,10 @@ that prior (``identify_paper`` defaults), and prints:
   median and largest wall time.
 
 With ``--bench`` each campaign also gets what a real bench adds, drawn per campaign
-(``bench_faults``): a pressure-sensor offset (±0-2 kPa), a position-sensor lag (none in
-a third of the campaigns, else 0.5-20 ms log-uniform), a position resolution (none in a
-third, else 2-50 µm) and a sample rate (none in half, else 100 Hz-1 kHz, the records
-resampled); the table then adds whether each fault was named.
+(``identification.BenchFamily``): a pressure-sensor offset (±0-2 kPa), a
+position-sensor lag (none in a third of the campaigns, else 0.5-20 ms log-uniform), a
+position resolution (none in a third, else 2-50 µm) and a sample rate (none in half,
+else 100 Hz-1 kHz, the records resampled); the table then adds whether each fault was named.
 
 With ``--rounds 2`` each campaign gets a second round designed from the first round's
 result (``PaperIdentification.next_round``), simulated on the same actuator (and bench),
@@ -59,12 +61,14 @@ import numpy as np
 import pandas as pd
 
 from pneumact.identification import (
+    BenchFamily,
     Noise,
     combine_rounds,
     design_campaign,
     identify_paper,
     synthetic_campaign,
 )
+from pneumact.identification.campaign import add_noise
 from pneumact.identification.combine import combined_table, round_estimates
 from pneumact.parameters.family import ActuatorFamily
 
@@ -81,35 +85,15 @@ def prior_of(truth, rng):
     return truth.replace(values)
 
 
-def bench_faults(rng) -> dict[str, float]:
-    """What one real bench adds (see the module docstring), drawn."""
-    def some(p_none, low, high):
-        return 0.0 if rng.uniform() < p_none else float(np.exp(rng.uniform(np.log(low),
-                                                                            np.log(high))))
-    return {"pressure_offset": float(rng.choice([-1, 1]) * rng.uniform(0, 2e3)),
-            "position_lag": some(1 / 3, 5e-4, 2e-2),
-            "position_resolution": some(1 / 3, 2e-6, 5e-5),
-            "sample_rate": some(1 / 2, 100.0, 1000.0)}
-
-
-def with_faults(exact, faults, seed: int):
-    """The campaign's exact records as the drawn bench sees them: sampled at its rate,
-    the position through its lag, then the sensors' noise (the default ``Noise``) and
-    the resolution (at least the default's), the pressure with its offset."""
-    from pneumact.identification.campaign import add_noise
-    from pneumact.io.records import Record
-
-    noise = Noise(resolution=max(faults["position_resolution"], Noise().resolution),
-                  lag=faults["position_lag"])
-    out = []
-    for i, rec in enumerate(exact):
-        rate = faults["sample_rate"]
-        if rate and rate < 1 / float(np.median(np.diff(rec.time))):
-            rec = rec.resample(1 / rate)
-        signals = {**rec.signals, "pressure": rec["pressure"] + faults["pressure_offset"]}
-        rec = Record.from_arrays(rec.time, signals, rec.units, rec.source, rec.meta)
-        out += add_noise([rec], noise, seed=seed * 1000 + i)
-    return out
+def bench_faults(noise: Noise | None) -> dict[str, float]:
+    """The drawn bench's faults as the table's columns (a resolution column of 0 where
+    the bench adds none to the default sensor's)."""
+    if noise is None:
+        return {}
+    return {"pressure_offset": noise.pressure_offset, "position_lag": noise.lag,
+            "position_resolution": noise.resolution
+            if noise.resolution > Noise().resolution else 0.0,
+            "sample_rate": noise.sample_rate}
 
 
 #: The validation test's setting (``--validation``): ramp pairs, input replicates.
@@ -121,25 +105,25 @@ def run_one(job):
     index, seed, truth, args = job
     rng = np.random.default_rng(args.seed * 1000 + index)
     prior = prior_of(truth, rng)
-    faults = bench_faults(np.random.default_rng([args.seed, index, seed])) if args.bench \
-        else None
+    bench = BenchFamily().sample(np.random.default_rng([args.seed, index, seed])) \
+        if args.bench else None
     setting = ({"ramps": VALIDATION_RAMPS}, {"replicates": VALIDATION_REPLICATES}) \
         if args.validation else ({}, {})
     tic = time.perf_counter()
     records = campaign_records(truth, design_campaign(prior, spread=SPREAD,
-                                                      **setting[0]).tests, faults, seed)
+                                                      **setting[0]).tests, bench, seed)
     result = identify_paper(records, prior, seed=seed, executor=1, **setting[1])
     wall = time.perf_counter() - tic
-    rows = rows_of(result, truth, seed, "1", wall, named(faults, result))
+    rows = rows_of(result, truth, seed, "1", wall, named(bench, result))
     summary = result.summary()
     if args.rounds == 2:  # designed from round 1's result, run on the same bench
         tic = time.perf_counter()
         plan = result.next_round(**setting[0])
-        second = campaign_records(truth, plan.tests, faults, seed + SECOND_ROUND_SEED)
+        second = campaign_records(truth, plan.tests, bench, seed + SECOND_ROUND_SEED)
         again = identify_paper((records if args.together else []) + second, plan.prior,
                                seed=seed, executor=1, **setting[1])
         rows += rows_of(again, truth, seed, "2", time.perf_counter() - tic,
-                        named(faults, again))
+                        named(bench, again))
         summary += "\n  round 2: " + again.headline()
         if args.keep:
             keep = args.keep / f"{truth.name}-seed{seed}.pickle"
@@ -148,18 +132,19 @@ def run_one(job):
                                                       round_estimates(again, 2))}))
         if not args.together:  # independent records: the rounds combine
             combined = combine_rounds(result, again)
-            rows += rows_of(combined, truth, seed, "1+2", 0.0, named(faults, again))
+            rows += rows_of(combined, truth, seed, "1+2", 0.0, named(bench, again))
             summary += "\n  rounds 1+2: " + combined.headline()
     return rows, summary
 
 
-def campaign_records(truth, tests, faults, seed: int):
-    """The ``tests`` run on ``truth``: with the default noise, or through the bench's
-    ``faults``."""
-    if faults:
-        return with_faults(synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0)),
-                           faults, seed)
-    return synthetic_campaign(truth, tests, seed=seed)
+def campaign_records(truth, tests, bench: Noise | None, seed: int):
+    """The ``tests`` run on ``truth``: with the default noise, or as the drawn ``bench``
+    logs them (each record's noise seeded on its own)."""
+    if bench is None:
+        return synthetic_campaign(truth, tests, seed=seed)
+    exact = synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0))
+    return [add_noise([record], bench, seed=seed * 1000 + i)[0]
+            for i, record in enumerate(exact)]
 
 
 #: The noise of a second round's records is drawn with the first's seed plus this.
@@ -182,16 +167,16 @@ def rows_of(result, truth, seed: int, round_number: str, wall: float, faults: di
     return rows
 
 
-def named(faults, result) -> dict:
+def named(bench: Noise | None, result) -> dict:
     """Each drawn fault and whether the result named it (a bench diagnostic)."""
-    if not faults:
+    if bench is None:
         return {}
-    bench = " ".join(d.message for d in result.diagnostics if d.stage == "bench")
-    return {**faults,
-            "offset_named": "pressure sensor reads" in bench,
-            "lag_named": "position sensor lags" in bench,
-            "quantisation_named": "quantised at" in bench,
-            "rate_named": "sampled at" in bench}
+    said = " ".join(d.message for d in result.diagnostics if d.stage == "bench")
+    return {**bench_faults(bench),
+            "offset_named": "pressure sensor reads" in said,
+            "lag_named": "position sensor lags" in said,
+            "quantisation_named": "quantised at" in said,
+            "rate_named": "sampled at" in said}
 
 
 def main() -> None:
@@ -200,6 +185,9 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--seed", type=int, default=7, help="seed of the family")
     parser.add_argument("--csv", type=Path, default=None, help="write every row here")
+    parser.add_argument("--family", choices=("default", "wide"), default="default",
+                        help="wide: ActuatorFamily.wide() (diaphragms of 30-250 mm, "
+                             "Fc 0.3-300 N, ...; friction scaled with the size)")
     parser.add_argument("--bench", action="store_true",
                         help="add a drawn bench (offset, lag, resolution, rate) per campaign")
     parser.add_argument("--rounds", type=int, choices=(1, 2), default=1,
@@ -222,7 +210,8 @@ def main() -> None:
         return recombine(args)
     if args.keep:
         args.keep.mkdir(parents=True, exist_ok=True)
-    family = ActuatorFamily().draw(args.actuators, seed=args.seed)
+    drawn = ActuatorFamily.wide() if args.family == "wide" else ActuatorFamily()
+    family = drawn.draw(args.actuators, seed=args.seed)
     jobs = [(i, i if args.validation else s, truth, args)
             for i, truth in enumerate(family)
             for s in range(1 if args.validation else args.seeds)]

@@ -442,6 +442,7 @@ MISSED_LOOP_FIT_PERCENT = 95.0
 # ------------------------------------------- identification on any actuator (issue 18)
 FAMILY_SEED = 7  # the seed of the drawn actuators (parameters.family.ActuatorFamily)
 FAMILY_SIZE = 20  # actuators of the family test (issue 18: at least 20)
+WIDE_FAMILY_DRAWS = 200  # draws of the unit tests of ActuatorFamily.wide and BenchFamily
 FAMILY_PRIOR_SPREAD = 0.5  # the prior: spring and friction each within ±50 % (issue 18)
 FAMILY_RAMPS = 6  # ramp pairs per designed campaign (the default 10 in the benchmark)
 FAMILY_REPLICATES = 16  # input-noise replicates (the default 64 in the benchmark)

@@ -208,6 +208,66 @@ def test_a_family_is_drawn_consistent_and_reproducible():
     assert isinstance(first[0], pa.ParameterSet)
 
 
+def test_a_wide_family_spans_its_ranges_with_friction_that_fits_the_size():
+    """Issue 38: diaphragms of 30-250 mm, Fc 0.3-300 N; friction drawn as a share of the
+    force the vacuum gives (a 300 N friction on a 30 mm diaphragm would never move)."""
+    from pneumact.parameters.family import FRICTION_SHARE
+
+    wide = ActuatorFamily.wide()
+    drawn = wide.draw(ref.WIDE_FAMILY_DRAWS, seed=ref.FAMILY_SEED)
+    assert drawn[0].name.startswith("wide-")
+    diameter = np.array([np.sqrt(4 * a["A_d"] / np.pi) for a in drawn])
+    fc = np.array([a["Fc"] for a in drawn])
+    share = np.array([a["Fc"] / (0.9 * (a["p_atm"] - a["p_res"]) * a["A_d"])
+                      for a in drawn])
+    for values, (low, high) in ((diameter, wide.diameter), (fc, wide.Fc)):
+        assert values.min() >= low and values.max() <= high
+        # the draws reach both ends of their range (a fifth of it in log scale)
+        assert np.log(values.min() / low) < 0.2 * np.log(high / low)
+        assert np.log(high / values.max()) < 0.2 * np.log(high / low)
+    assert share.min() >= FRICTION_SHARE[0] * (1 - 1e-12)
+    assert share.max() <= FRICTION_SHARE[1] * (1 + 1e-12)
+    for a in drawn:
+        assert a["k"] > 0 and a["Fs"] >= a["Fc"]
+        full = (a["F0"] + a["k"] * a["x_max"] + a["Fs"]) / a["A_d"]
+        assert full < a["p_atm"] - a["p_res"]
+    # the presliding deflection keeps the default family's spread (σ0 scaled with Fc)
+    deflection = np.array([a["Fs"] / a["sigma0"] for a in drawn])
+    default = ActuatorFamily().draw(ref.WIDE_FAMILY_DRAWS, seed=ref.FAMILY_SEED)
+    usual = np.array([a["Fs"] / a["sigma0"] for a in default])
+    assert abs(np.log(np.median(deflection) / np.median(usual))) < np.log(2.0)
+
+
+def test_a_drawn_bench_adds_its_faults_and_samples_at_its_rate(vgt):
+    """``Noise`` carries what a bench adds (offsets, lag, resolution, a slower rate);
+    ``BenchFamily`` draws them within their ranges, reproducibly."""
+    from pneumact.identification import BenchFamily, Noise, synthetic_campaign
+    from pneumact.identification.campaign import add_noise
+
+    benches = BenchFamily().draw(ref.WIDE_FAMILY_DRAWS, seed=ref.FAMILY_SEED)
+    assert benches == BenchFamily().draw(ref.WIDE_FAMILY_DRAWS, seed=ref.FAMILY_SEED)
+    lags = np.array([b.lag for b in benches])
+    rates = np.array([b.sample_rate for b in benches])
+    assert 0 < (lags == 0).mean() < 1 and lags.max() <= BenchFamily().lag[1]
+    assert 0 < (rates == 0).mean() < 1 and rates[rates > 0].min() >= 100.0
+    assert all(abs(b.pressure_offset) <= 2e3 and b.resolution >= Noise().resolution
+               for b in benches)
+    tests = [t for t in design_campaign(vgt, ramps=3).tests if t.kind == "ramp"][:1]
+    exact = synthetic_campaign(vgt, tests, noise=Noise(0.0, 0.0, 0.0))[0]
+    bench = Noise(0.0, 0.0, 0.0, pressure_offset=500.0, position_offset=20e-6,
+                  sample_rate=50.0)
+    seen = add_noise([exact], bench)[0]
+    assert np.median(np.diff(seen.time)) == pytest.approx(1 / 50.0)
+    at = np.interp(seen.time, exact.time, exact["pressure"])
+    assert np.allclose(seen["pressure"] - at, 500.0)
+    assert np.allclose(seen["position"] - np.interp(seen.time, exact.time, exact["position"]),
+                       20e-6)
+    faster = add_noise([exact], Noise(0.0, 0.0, 0.0, sample_rate=1e6))[0]
+    assert np.array_equal(faster.time, exact.time)  # a faster rate changes nothing
+    with pytest.raises(ExperimentError, match="Noise.lag = -0.001"):
+        Noise(lag=-1e-3)
+
+
 
 def test_identification_runs_blas_on_one_thread_and_restores_it():
     """While an identification runs (nested calls included) BLAS uses one thread; the

@@ -17,6 +17,7 @@
 """
 
 from .campaign import (
+    BenchFamily,
     BenchTest,
     CampaignPlan,
     Noise,
@@ -38,6 +39,7 @@ from .paper import (
 )
 
 __all__ = [
+    "BenchFamily",
     "BenchTest",
     "CampaignPlan",
     "CombinedIdentification",

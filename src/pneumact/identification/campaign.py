@@ -48,7 +48,7 @@ from ..plotting import tight_layout
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
+__all__ = ["BenchFamily", "BenchTest", "CampaignPlan", "Noise", "add_noise", "design_campaign",
            "paper_campaign", "read_plan", "regulator_reach", "synthetic_campaign"]
 
 KINDS = ("sweep", "ramp", "presliding")
@@ -72,25 +72,91 @@ class BenchTest:
 
 @dataclass(frozen=True)
 class Noise:
-    """Measurement effects: white noise (standard deviations, SI), the position sensor's
-    resolution [m] (0: none) and its first-order lag [s] (0: none)."""
+    """What the bench's sensors make of the actuator: white noise (standard deviations,
+    SI), the position sensor's resolution [m] (0: none) and first-order lag [s] (0:
+    none), the pressure and position sensors' offsets [Pa, m] (0: none), and the rate the
+    bench logs at [Hz] (0: each test's own; a rate above a test's own changes nothing)."""
 
     pressure: float = 20.0
     position: float = 1e-6
     resolution: float = 1e-6
     lag: float = 0.0
+    pressure_offset: float = 0.0
+    position_offset: float = 0.0
+    sample_rate: float = 0.0
+
+    def __post_init__(self):
+        for name in ("pressure", "position", "resolution", "lag", "sample_rate"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise ExperimentError(f"Noise.{name} = {value}; must be finite and >= 0")
+        for name in ("pressure_offset", "position_offset"):
+            if not np.isfinite(getattr(self, name)):
+                raise ExperimentError(f"Noise.{name} = {getattr(self, name)}; must be finite")
 
     def apply(self, rng: np.random.Generator, pressure: np.ndarray, position: np.ndarray,
               time: np.ndarray | None = None):
+        """(pressure, position) as the sensors read them: the position through the lag,
+        each with its offset and white noise, the position rounded to the resolution."""
         if self.lag > 0:
             if time is None:
                 raise ExperimentError("Noise.apply: a sensor lag needs the sample times")
             position = first_order_lag(time, position, self.lag)
+        if self.pressure_offset:
+            pressure = pressure + self.pressure_offset
+        if self.position_offset:
+            position = position + self.position_offset
         pressure = pressure + rng.normal(0.0, self.pressure, pressure.shape)
         position = position + rng.normal(0.0, self.position, position.shape)
         if self.resolution > 0:
             position = np.round(position / self.resolution) * self.resolution
         return pressure, position
+
+    def sampled(self, record: Record) -> Record:
+        """``record`` as the bench logs it: resampled at ``sample_rate`` where that is
+        slower than the record's own rate."""
+        if not self.sample_rate or self.sample_rate >= 1 / float(np.median(np.diff(
+                record.time))):
+            return record
+        return record.resample(1 / self.sample_rate)
+
+
+def _log_uniform_or_none(rng: np.random.Generator, none: float,
+                         span: tuple[float, float]) -> float:
+    """0 with probability ``none``, else log-uniform in ``span``."""
+    if rng.uniform() < none:
+        return 0.0
+    return float(np.exp(rng.uniform(np.log(span[0]), np.log(span[1]))))
+
+
+@dataclass(frozen=True)
+class BenchFamily:
+    """Ranges of what real benches add (issue 38): a pressure-sensor offset uniform in
+    ±``pressure_offset`` [Pa]; a position-sensor lag [s], resolution [m] and a logging
+    rate [Hz], each absent with its probability in ``absent`` and log-uniform in its
+    range otherwise. ``draw(n, seed)`` (or ``sample(rng)``) gives ``Noise`` objects:
+    with the default white noise, and a resolution no finer than the default's."""
+
+    pressure_offset: float = 2e3
+    lag: tuple[float, float] = (5e-4, 2e-2)
+    resolution: tuple[float, float] = (2e-6, 5e-5)
+    sample_rate: tuple[float, float] = (100.0, 1000.0)
+    absent: Mapping[str, float] = field(default_factory=lambda: {
+        "lag": 1 / 3, "resolution": 1 / 3, "sample_rate": 1 / 2})
+
+    def sample(self, rng: np.random.Generator) -> Noise:
+        """One bench, drawn with ``rng``."""
+        offset = float(rng.choice([-1, 1]) * rng.uniform(0, self.pressure_offset))
+        lag = _log_uniform_or_none(rng, self.absent["lag"], self.lag)
+        resolution = _log_uniform_or_none(rng, self.absent["resolution"], self.resolution)
+        rate = _log_uniform_or_none(rng, self.absent["sample_rate"], self.sample_rate)
+        return Noise(resolution=max(resolution, Noise().resolution), lag=lag,
+                     pressure_offset=offset, sample_rate=rate)
+
+    def draw(self, n: int, seed: int = 0) -> list[Noise]:
+        """``n`` benches, reproducible by ``seed``."""
+        rng = np.random.default_rng(seed)
+        return [self.sample(rng) for _ in range(n)]
 
 
 def _piecewise(points: Sequence[tuple[float, float]], rate: float) -> PiecewiseLinear:
@@ -492,11 +558,13 @@ def synthetic_campaign(params, tests: Sequence[BenchTest] | None = None,
 
 
 def add_noise(records: Sequence[Record], noise: Noise, seed: int = 0) -> list[Record]:
-    """The records with measurement ``noise`` on pressure and position, reproducible by
-    ``seed`` (one simulation serves many noise realisations)."""
+    """The records as a bench with ``noise`` logs them (its rate, its sensors' lag,
+    offsets, noise and resolution), reproducible by ``seed`` (one simulation serves many
+    noise realisations)."""
     rng = np.random.default_rng(seed)
     noisy = []
     for rec in records:
+        rec = noise.sampled(rec)
         pressure, position = noise.apply(rng, rec[PRESSURE_SIGNAL], rec["position"], rec.time)
         signals = {**rec.signals, PRESSURE_SIGNAL: pressure, "position": position}
         noisy.append(Record.from_arrays(rec.time, signals, rec.units, rec.source,
