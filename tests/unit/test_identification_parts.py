@@ -264,7 +264,7 @@ def test_a_drawn_bench_adds_its_faults_and_samples_at_its_rate(vgt):
                        20e-6)
     faster = add_noise([exact], Noise(0.0, 0.0, 0.0, sample_rate=1e6))[0]
     assert np.array_equal(faster.time, exact.time)  # a faster rate changes nothing
-    with pytest.raises(ExperimentError, match="Noise.lag = -0.001"):
+    with pytest.raises(ExperimentError, match=r"Noise\.lag = -0\.001"):
         Noise(lag=-1e-3)
 
 
