@@ -299,6 +299,39 @@ def test_identification_runs_blas_on_one_thread_and_restores_it():
         assert blas_threads() == original
 
 
+def test_repeated_approaches_do_not_make_eq_13_underdetermined():
+    """Each ramp test's approach repeats one motion: five segments at one speed and
+    position, and two ramps above it, were once all of eq. 13's data (four unknowns,
+    three distinct points: Fc ×6, σ2 = −5 402 N·s/m on a drawn 213 mm actuator). The
+    threshold comes down until the segments above it are five distinct points, two in
+    each direction; Fc and σ2 come out right."""
+    import pandas as pd
+
+    from pneumact.identification.stages import (
+        DISTINCT_SPEED,
+        distinct_threshold,
+        sliding_and_stribeck,
+    )
+
+    truth = ActuatorFamily().draw(1, seed=ref.FAMILY_SEED)[0].replace(vs=1e-4)
+    fc, fs, vs, s2, delta = (truth[n] for n in ("Fc", "Fs", "vs", "sigma2", "delta"))
+    rng = np.random.default_rng(1)
+    speeds = [10.81e-3] * 5 + [16.65e-3, -16.64e-3, 4.1e-3, -4.1e-3, 1.03e-3, -1.03e-3,
+                                1.02e-3, -1.02e-3]
+    rows = [{"record": "ramp", "t_start": 0.0, "t_end": 1.0, "velocity": v,
+             "samples": 100, "position": 4.1e-3 if abs(v) == 10.81e-3 else
+             rng.uniform(5e-3, 2e-2),
+             "friction": np.sign(v) * (fc + (fs - fc) * np.exp(-(abs(v) / vs) ** delta))
+             + s2 * v + rng.normal(0, 1e-3 * fc)} for v in speeds]
+    segments = pd.DataFrame(rows)
+    assert distinct_threshold(segments) == pytest.approx(4.1e-3 * (1 - DISTINCT_SPEED))
+    assert distinct_threshold(segments.iloc[:7]) == 0.0  # never five distinct points
+    sliding, _, notes = sliding_and_stribeck(segments, truth)
+    assert sliding is not None, notes
+    assert sliding.estimates["Fc"] == pytest.approx(fc, rel=0.01)
+    assert sliding.estimates["sigma2"] == pytest.approx(s2, abs=0.05 * fc / 4.1e-3)
+
+
 def test_stage_c_starts_again_when_the_prior_sends_vs_astray():
     """A Stribeck dip at vs = 0.05 mm/s and a prior that guesses 0.5 µm/s: from the prior's
     vs alone the fit of eq. 12 stops at 1-2 % of the true vs; with spread starts it

@@ -72,6 +72,11 @@ SWEEP_STEADY = 0.8
 MAX_THRESHOLD_ITERATIONS = 10
 #: Fewest steady segments eq. 13 needs (in both directions together).
 MIN_SLIDING_SEGMENTS = 5
+#: Segments in one direction whose speeds differ by less than this share are one point
+#: of eq. 13 (each ramp test's approach repeats one motion: on a drawn 213 mm actuator
+#: five approaches at 10.81 mm/s and two ramps at ±16.65 mm/s were all the segments
+#: above the threshold, and eq. 13's four unknowns came out Fc ×6, σ2 = −5 402 N·s/m).
+DISTINCT_SPEED = 0.02
 #: The presliding part of a record starts this many stuck-mode periods
 #: 2π·√(m/(k + σ0)) after the approach (its ringing has decayed to a few per cent).
 SETTLE_PERIODS = 5.0
@@ -373,6 +378,24 @@ def _needed_speed(sliding: StageResult, stribeck: StageResult, delta: float) -> 
     return float(vs * np.log(amplitude / fc_se) ** (1.0 / delta))
 
 
+def distinct_threshold(segments: pd.DataFrame) -> float:
+    """The highest sliding threshold [m/s] at which the segments at or above it give eq.
+    13 ``MIN_SLIDING_SEGMENTS`` distinct points, two in each direction at least (speeds
+    within ``DISTINCT_SPEED`` of each other in one direction are one point); 0 where
+    the segments never do."""
+    velocity = segments["velocity"].to_numpy()
+    points: list[tuple[float, float]] = []
+    for v in velocity[np.argsort(-np.abs(velocity))]:
+        if not any(np.sign(v) == sign and abs(abs(v) / speed - 1) < DISTINCT_SPEED
+                   for sign, speed in points):
+            points.append((float(np.sign(v)), abs(float(v))))
+        signs = [sign for sign, _ in points]
+        if len(points) >= MIN_SLIDING_SEGMENTS and signs.count(1.0) >= 2 and \
+                signs.count(-1.0) >= 2:
+            return abs(float(v)) * (1 - DISTINCT_SPEED)
+    return 0.0
+
+
 def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False,
                          sliding_speed: float | None = None
                          ) -> tuple[StageResult | None, StageResult | None, list[Diagnostic]]:
@@ -385,6 +408,7 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
 
     speeds = np.sort(np.abs(segments["velocity"].to_numpy()))
     min_slow = (3 if fit_delta else 2) + 2
+    distinct = distinct_threshold(segments) or np.inf
     notes: list[Diagnostic] = []
     if sliding_speed is None:
         if speeds.size < MIN_SLIDING_SEGMENTS + min_slow:
@@ -396,7 +420,7 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
             return None, None, notes
         threshold = float(speeds[-MIN_SLIDING_SEGMENTS:].min()) if \
             speeds.size < 2 * MIN_SLIDING_SEGMENTS else float(np.median(speeds))
-        threshold = max(threshold, float(speeds[min_slow]))
+        threshold = min(max(threshold, float(speeds[min_slow])), distinct)
     else:
         threshold = sliding_speed
     sliding = stribeck = None
@@ -431,7 +455,7 @@ def sliding_and_stribeck(segments: pd.DataFrame, params, fit_delta: bool = False
                 f"error); the records have {above.size} such segments "
                 f"(need {MIN_SLIDING_SEGMENTS})", sliding_remedy(needed, params)))
             break
-        new = float(max(above[0], speeds[min(min_slow, speeds.size - 1)]))
+        new = min(float(max(above[0], speeds[min(min_slow, speeds.size - 1)])), distinct)
         if new == threshold:
             notes.append(Diagnostic(
                 "note", "(b)", f"eq. 13 on {np.sum(speeds >= threshold)} segments at |v| ≥ "
