@@ -28,7 +28,7 @@ by the record the identification reads.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -86,13 +86,11 @@ class Noise:
     sample_rate: float = 0.0
 
     def __post_init__(self):
-        for name in ("pressure", "position", "resolution", "lag", "sample_rate"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise ExperimentError(f"Noise.{name} = {value}; must be finite and >= 0")
-        for name in ("pressure_offset", "position_offset"):
-            if not np.isfinite(getattr(self, name)):
-                raise ExperimentError(f"Noise.{name} = {getattr(self, name)}; must be finite")
+        for item in fields(self):  # offsets of either sign; the rest >= 0
+            value, signed = getattr(self, item.name), item.name.endswith("_offset")
+            if not np.isfinite(value) or (value < 0 and not signed):
+                raise ExperimentError(f"Noise.{item.name} = {value}; must be finite"
+                                      f"{'' if signed else ' and >= 0'}")
 
     def apply(self, rng: np.random.Generator, pressure: np.ndarray, position: np.ndarray,
               time: np.ndarray | None = None):
