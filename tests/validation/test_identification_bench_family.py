@@ -20,22 +20,14 @@ identifications take about 14 minutes of CPU); CI runs it with ``-m bench_family
 from __future__ import annotations
 
 import os
-import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
-from test_identification_family import family_table, prior_of
+from test_identification_family import family_table, identify_drawn
 
-import pneumact as pa
 import reference as ref
-from pneumact.identification import (
-    BenchFamily,
-    Noise,
-    design_campaign,
-    identify_paper,
-    synthetic_campaign,
-)
+from pneumact.identification import BenchFamily, Noise, synthetic_campaign
 from pneumact.identification.campaign import add_noise
 from pneumact.parameters.family import ActuatorFamily
 
@@ -47,20 +39,17 @@ def bench_of(index: int) -> Noise:
     return BenchFamily().sample(np.random.default_rng([ref.FAMILY_SEED, index, index]))
 
 
+def bench_records(truth, tests, index: int):
+    """The ``tests`` run on ``truth`` as actuator ``index``'s bench logs them (each
+    record's noise seeded on its own, as in the benchmark)."""
+    exact = synthetic_campaign(truth, tests, noise=Noise(0.0, 0.0, 0.0))
+    return [add_noise([record], bench_of(index), seed=index * 1000 + i)[0]
+            for i, record in enumerate(exact)]
+
+
 def identify_one(args):
     index, truth = args
-    rng = np.random.default_rng(ref.FAMILY_SEED * 1000 + index)
-    with warnings.catch_warnings():  # drawn σ1 often break the passivity bound
-        warnings.simplefilter("ignore", pa.PassivityWarning)
-        prior = prior_of(truth, rng)
-        plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.FAMILY_RAMPS)
-        exact = synthetic_campaign(truth, plan.tests, noise=Noise(0.0, 0.0, 0.0))
-        bench = bench_of(index)
-        records = [add_noise([record], bench, seed=index * 1000 + i)[0]
-                   for i, record in enumerate(exact)]  # each record's noise its own seed
-        return truth, bench, identify_paper(records, prior, seed=index, executor=1,
-                                            replicates=ref.FAMILY_REPLICATES,
-                                            max_evaluations=ref.FAMILY_EVALUATIONS)
+    return truth, bench_of(index), identify_drawn(index, truth, bench_records)
 
 
 @pytest.fixture(scope="module")

@@ -50,17 +50,25 @@ def prior_of(truth, rng: np.random.Generator):
     return truth.replace(values)
 
 
-def identify_one(args):
-    index, truth = args
+def identify_drawn(index: int, truth, records_of=None):
+    """Actuator ``index`` of a family identified from a prior-designed campaign, its
+    records made by ``records_of(truth, tests, index)`` (default: the default noise,
+    seeded by the index)."""
     rng = np.random.default_rng(ref.FAMILY_SEED * 1000 + index)
     with warnings.catch_warnings():  # drawn σ1 often break the passivity bound, as Table I's
         warnings.simplefilter("ignore", pa.PassivityWarning)
         prior = prior_of(truth, rng)
         plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.FAMILY_RAMPS)
-        records = synthetic_campaign(truth, plan.tests, seed=index)
-        return truth, identify_paper(records, prior, seed=index, executor=1,
-                                     replicates=ref.FAMILY_REPLICATES,
-                                     max_evaluations=ref.FAMILY_EVALUATIONS)
+        records = synthetic_campaign(truth, plan.tests, seed=index) if records_of is None \
+            else records_of(truth, plan.tests, index)
+        return identify_paper(records, prior, seed=index, executor=1,
+                              replicates=ref.FAMILY_REPLICATES,
+                              max_evaluations=ref.FAMILY_EVALUATIONS)
+
+
+def identify_one(args):
+    index, truth = args
+    return truth, identify_drawn(index, truth)
 
 
 @pytest.fixture(scope="module")

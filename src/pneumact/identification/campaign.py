@@ -100,10 +100,8 @@ class Noise:
             if time is None:
                 raise ExperimentError("Noise.apply: a sensor lag needs the sample times")
             position = first_order_lag(time, position, self.lag)
-        if self.pressure_offset:
-            pressure = pressure + self.pressure_offset
-        if self.position_offset:
-            position = position + self.position_offset
+        pressure = pressure + self.pressure_offset
+        position = position + self.position_offset
         pressure = pressure + rng.normal(0.0, self.pressure, pressure.shape)
         position = position + rng.normal(0.0, self.position, position.shape)
         if self.resolution > 0:

@@ -104,8 +104,8 @@ class ActuatorFamily:
         the ``available`` force, within the ``Fc`` range."""
         low = max(self.Fc[0], FRICTION_SHARE[0] * available)
         high = min(self.Fc[1], FRICTION_SHARE[1] * available)
-        if high <= low:  # a range that misses the size: its nearer end
-            return float(high if high < self.Fc[0] else low)
+        if high <= low:  # the Fc range misses the share: the share holds (it keeps the
+            return float(high if high < self.Fc[0] else low)  # actuator drawable)
         return float(np.exp(np.log(low) + unit * (np.log(high) - np.log(low))))
 
     def _one(self, rng: np.random.Generator, name: str) -> ParameterSet:
