@@ -71,6 +71,7 @@ from pneumact.identification import (
 from pneumact.identification.campaign import add_noise
 from pneumact.identification.combine import combined_table, round_estimates
 from pneumact.parameters.family import ActuatorFamily
+from pneumact.progress import stop_threads
 
 FREE = ("F0", "k", "Fc", "sigma2", "Fs", "vs", "sigma0", "sigma1")
 TOLERANCE = {"F0": 5.0, "k": 5.0, "Fc": 5.0, "sigma2": 5.0, "Fs": 5.0, "vs": 5.0,
@@ -217,7 +218,9 @@ def main() -> None:
             for s in range(1 if args.validation else args.seeds)]
     rows = []
     started = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+    # Ctrl-C: the identifications stop at their next simulation, no table is written
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool, \
+            stop_threads(pool):
         for (_index, seed, truth, *_), (result_rows, summary) in zip(
                 jobs, pool.map(run_one, jobs), strict=True):
             rows += result_rows
@@ -296,4 +299,7 @@ def report(table: pd.DataFrame, actuators: int, args, total: float) -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        sys.exit("stopped (Ctrl-C): no table written")
