@@ -460,7 +460,7 @@ FAMILY_MIN_INTERVALS = 60  # at least this many reported intervals make the cove
 # minority was judged by a refit (issue 38): 60.0 % (96 of 160), 93.1 % of 102 intervals
 # holding; benchmarks/README.md, "identification on a family", has the longer study.
 FAMILY_MIN_IDENTIFIED = 0.5
-# The wide family through a drawn bench (issue 38, item 6; its own tier, bench_family):
+# The wide family through a drawn bench (issue 38, item 6; the family tier):
 # ActuatorFamily.wide(), 20 actuators, BenchFamily per campaign, the setting above.
 # Measured (stop 57, `python benchmarks/bench_identify_family.py --family wide --bench
 # --validation --actuators 20`, the same draw): 23.8 % identified (38 of 160), none

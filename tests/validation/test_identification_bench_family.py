@@ -10,8 +10,8 @@ estimate out of its tolerance, the reported 95 % intervals' coverage, and the sh
 identified, each against what it measured (``reference.BENCH_FAMILY_*``). Every drawn
 pressure offset above 0.5 kPa is named.
 
-Its own tier (``bench_family``, left out of the default run: its twenty
-identifications take about 14 minutes of CPU); CI runs it with ``-m bench_family -n 0``
+Its own tier (``family``, with the default family's test, left out of the default run:
+its twenty identifications take about 14 minutes of CPU); CI runs it with ``-m family -n 0``
 (one process, the actuators on every core). The same draw and setting is
 ``python benchmarks/bench_identify_family.py --family wide --bench --validation
 --actuators 20``, whose table is in ``docs/identification.md``.
@@ -31,7 +31,7 @@ from pneumact.identification import BenchFamily, Noise, synthetic_campaign
 from pneumact.identification.campaign import add_noise
 from pneumact.parameters.family import ActuatorFamily
 
-pytestmark = [pytest.mark.bench_family, pytest.mark.long]
+pytestmark = [pytest.mark.family, pytest.mark.long]
 
 
 def bench_of(index: int) -> Noise:

@@ -12,9 +12,14 @@
   nothing: it identifies more, nothing wrongly, and the two rounds combined
   (``combine_rounds``) identify at least as many as either, nothing wrongly.
 
-Records its model cannot explain: ``test_identification_mismatch.py``. The family is this
-suite's longest computation: this module is marked ``long`` (it starts first in a parallel
-run) and the family runs its actuators on one thread there.
+Records its model cannot explain: ``test_identification_mismatch.py``. The family's two
+tests are the ``family`` tier (with the wide family through drawn benches,
+``test_identification_bench_family.py``), left out of the default run for their cost
+(twenty identifications, about 4 minutes of CPU): ``python -m pytest -m family -n 0``
+runs them, the actuators on every core; CI does. The thin campaign and the second round
+stay in the default run, each second round from its own actuator's first round (the
+family's, bit for bit: the same draw, prior, records and seed). This module is marked
+``long`` (it starts first in a parallel run).
 
 The longer study (more actuators and seeds) is ``benchmarks/bench_identify_family.py``;
 its table is in ``benchmarks/README.md``.
@@ -71,6 +76,11 @@ def identify_one(args):
     return truth, identify_drawn(index, truth)
 
 
+def drawn(index: int):
+    """Actuator ``index`` of the default family of the tests."""
+    return ActuatorFamily().draw(ref.FAMILY_SIZE, seed=ref.FAMILY_SEED)[index]
+
+
 @pytest.fixture(scope="module")
 def family_results():
     family = ActuatorFamily().draw(ref.FAMILY_SIZE, seed=ref.FAMILY_SEED)
@@ -95,6 +105,7 @@ def family_table(results) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+@pytest.mark.family
 def test_identified_parameters_are_right_on_a_family(family_results):
     table = family_table(family_results)
     identified = table[table["verdict"] == "identified"]
@@ -107,6 +118,7 @@ def test_identified_parameters_are_right_on_a_family(family_results):
     assert share >= ref.FAMILY_MIN_IDENTIFIED, (share, table.groupby("verdict").size())
 
 
+@pytest.mark.family
 def test_reported_intervals_cover_the_truth_on_a_family(family_results):
     table = family_table(family_results)
     reported = table[table["reported"]]
@@ -123,7 +135,7 @@ def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():
     and −16 % with ±1 % intervals, once printed as identified). They must not be called
     identified, whether or not this draw happens to land near the truth; the other
     parameters still are, correctly."""
-    truth = ActuatorFamily().draw(ref.FAMILY_SIZE, seed=ref.FAMILY_SEED)[ref.THIN_ACTUATOR]
+    truth = drawn(ref.THIN_ACTUATOR)
     prior = prior_of(truth, np.random.default_rng(ref.FAMILY_SEED * 1000 + ref.THIN_ACTUATOR))
     plan = design_campaign(prior, spread=ref.FAMILY_PRIOR_SPREAD, ramps=ref.THIN_RAMPS)
     records = synthetic_campaign(truth, plan.tests, seed=ref.THIN_ACTUATOR)
@@ -141,14 +153,15 @@ def test_fs_and_vs_are_not_trusted_when_the_slow_ramps_are_left_out():
 
 
 @pytest.mark.parametrize("index", ref.SECOND_ROUND_ACTUATORS)
-def test_a_second_round_identifies_what_the_first_could_not(index, family_results):
+def test_a_second_round_identifies_what_the_first_could_not(index):
     """Issue 38: an actuator whose first campaign, designed from a prior far off, left its
     friction unidentified (slow ramps that stick-slip, too few steady segments for stages
     (b, c)). The second round, designed from the first round's result
     (``next_round``: its estimates where they have an interval, the prior elsewhere, ramps
     above the speeds that stick-slipped) and identified from its records with the first
     round's estimates as the prior, identifies more, and nothing wrongly."""
-    truth, first = family_results[index]  # the family's own first round of this actuator
+    truth = drawn(index)
+    first = identify_drawn(index, truth)  # the family's own first round of this actuator
     plan = first.next_round(ramps=ref.FAMILY_RAMPS)
     assert all(t.name.endswith("_round2") for t in plan.tests)
     assert any("prior" in plan.prior.info[n].source for n in FREE
