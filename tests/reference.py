@@ -467,6 +467,15 @@ FAMILY_MIN_IDENTIFIED = 0.5
 # wrong, 93.0 % of 43 intervals holding (21.2 %, 92.3 % of 39 before stage (b)'s
 # distinct points); without the bench 31.9 %, 94.2 % of 52; the default family through
 # the same benches 45.6 %, 93.7 % of 79.
+# A sweep that a break-away swing would stop (campaign.SWEEP_REACH): the wide family's
+# actuator 6 (3.56 kg, 1.23 kN/m, Fs - Fc = 2.5 N, vs 0.052 mm/s, sigma2 47.7 N*s/m), its
+# prior's spring and friction off by these factors.
+BREAKAWAY_ACTUATOR = 6
+BREAKAWAY_PRIOR = {"k": 1.2, "F0": 0.85, "Fc": 0.6, "Fs": 0.6, "sigma2": 1.4, "vs": 0.6}
+BREAKAWAY_MIDDLE = 0.1  # the middle of a branch: its travel less this share at each end
+# the least speed in the middle, of the branch's median speed: measured 0.88, 0.90 (at
+# 3·vs: the diaphragm stops and swings back)
+BREAKAWAY_LEAST_SPEED = 0.3
 BENCH_FAMILY_MIN_IDENTIFIED = 0.18
 BENCH_FAMILY_MIN_INTERVALS = 30
 BENCH_FAMILY_COVERAGE = 0.90
