@@ -17,9 +17,9 @@ tests are the ``family`` tier (with the wide family through drawn benches,
 ``test_identification_bench_family.py``), left out of the default run for their cost
 (twenty identifications, about 4 minutes of CPU): ``python -m pytest -m family -n 0``
 runs them, the actuators on every core; CI does. The thin campaign and the second round
-stay in the default run, the second round from its own actuator's first round (the
-wide tier's, bit for bit, but for the bench: the same draw, prior and seed). This module is marked
-``long`` (it starts first in a parallel run).
+stay in the default run, the second round after its own first round (the wide tier's
+actuator, draw, prior and seed, with the default noise instead of a drawn bench). This
+module is marked ``long`` (it starts first in a parallel run).
 
 The longer study (more actuators and seeds) is ``benchmarks/bench_identify_family.py``;
 its table is in ``benchmarks/README.md``.
